@@ -1,0 +1,13 @@
+//! Triangle meshes and populations of registered meshes.
+
+pub mod obj;
+pub mod population;
+
+pub use population::{Normalization, Population};
+
+/// A triangle mesh: positions in file order (`v` order) and triangles as 0-based vertex indices.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Mesh {
+    pub positions: Vec<[f64; 3]>,
+    pub faces: Vec<[u32; 3]>,
+}

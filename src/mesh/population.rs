@@ -1,0 +1,281 @@
+//! A population: n_s >= 2 registered meshes with the same vertices (in correspondence) and the same faces,
+//! ordered by natural sort of their names, moved with ONE common offset and scale into the unit box.
+
+use super::Mesh;
+use crate::error::{Error, Result};
+
+/// unit = (original - offset) * scale. The same for every shape (per-shape scaling would break rigidity).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Normalization {
+    pub offset: [f64; 3],
+    pub scale: f64,
+}
+
+impl Normalization {
+    pub const IDENTITY: Normalization = Normalization { offset: [0.0; 3], scale: 1.0 };
+
+    pub fn to_unit(&self, p: [f64; 3]) -> [f64; 3] {
+        [(p[0] - self.offset[0]) * self.scale, (p[1] - self.offset[1]) * self.scale, (p[2] - self.offset[2]) * self.scale]
+    }
+
+    pub fn to_original(&self, p: [f64; 3]) -> [f64; 3] {
+        [p[0] / self.scale + self.offset[0], p[1] / self.scale + self.offset[1], p[2] / self.scale + self.offset[2]]
+    }
+}
+
+/// Registered shapes in unit-box coordinates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Population {
+    /// Shape names in the order used (natural sort).
+    pub names: Vec<String>,
+    /// Triangles shared by every shape.
+    pub faces: Vec<[u32; 3]>,
+    /// `shapes[i][j]`: vertex j of shape i, unit-box coordinates.
+    pub shapes: Vec<Vec<[f64; 3]>>,
+    /// How the original coordinates were mapped into the unit box.
+    pub normalization: Normalization,
+}
+
+/// Natural order of names: digit runs compare as numbers ("2.obj" < "10.obj"), the rest byte-wise,
+/// case-insensitively first.
+pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    use std::cmp::Ordering;
+    let (ab, bb) = (a.as_bytes(), b.as_bytes());
+    let (mut i, mut j) = (0, 0);
+    while i < ab.len() && j < bb.len() {
+        if ab[i].is_ascii_digit() && bb[j].is_ascii_digit() {
+            let si = i;
+            while i < ab.len() && ab[i].is_ascii_digit() {
+                i += 1;
+            }
+            let sj = j;
+            while j < bb.len() && bb[j].is_ascii_digit() {
+                j += 1;
+            }
+            let na = a[si..i].trim_start_matches('0');
+            let nb = b[sj..j].trim_start_matches('0');
+            let ord = na.len().cmp(&nb.len()).then_with(|| na.cmp(nb));
+            if ord != Ordering::Equal {
+                return ord;
+            }
+        } else {
+            let ord = ab[i].to_ascii_lowercase().cmp(&bb[j].to_ascii_lowercase());
+            if ord != Ordering::Equal {
+                return ord;
+            }
+            i += 1;
+            j += 1;
+        }
+    }
+    (ab.len() - i).cmp(&(bb.len() - j)).then_with(|| a.cmp(b))
+}
+
+impl Population {
+    pub fn n_shapes(&self) -> usize {
+        self.shapes.len()
+    }
+
+    pub fn n_vertices(&self) -> usize {
+        self.shapes.first().map_or(0, |s| s.len())
+    }
+
+    /// Validates, orders by natural sort of the names, and normalises into the unit box.
+    pub fn from_meshes(mut named: Vec<(String, Mesh)>) -> Result<Population> {
+        if named.len() < 2 {
+            let file = named.first().map_or_else(|| "(none)".to_string(), |n| n.0.clone());
+            return Err(Error::Population {
+                file,
+                message: format!(
+                    "a population needs at least 2 shapes, got {}; add more poses of the same mesh",
+                    named.len()
+                ),
+            });
+        }
+        named.sort_by(|a, b| natural_cmp(&a.0, &b.0));
+        let (first_name, first) = (&named[0].0, &named[0].1);
+        if first.positions.is_empty() {
+            return Err(Error::Population { file: first_name.clone(), message: "has no vertices".into() });
+        }
+        if first.faces.is_empty() {
+            return Err(Error::Population {
+                file: first_name.clone(),
+                message: "has no triangles; posemfa needs triangle meshes (f lines)".into(),
+            });
+        }
+        for (name, mesh) in &named[1..] {
+            if mesh.positions.len() != first.positions.len() {
+                return Err(Error::Population {
+                    file: name.clone(),
+                    message: format!(
+                        "has {} vertices but {} has {}; every shape must be the same mesh in another pose",
+                        mesh.positions.len(),
+                        first_name,
+                        first.positions.len()
+                    ),
+                });
+            }
+            if mesh.faces.len() != first.faces.len() {
+                return Err(Error::Population {
+                    file: name.clone(),
+                    message: format!(
+                        "has {} triangles but {} has {}; every shape must share the same faces",
+                        mesh.faces.len(),
+                        first_name,
+                        first.faces.len()
+                    ),
+                });
+            }
+            if let Some(k) = (0..mesh.faces.len()).find(|&k| mesh.faces[k] != first.faces[k]) {
+                return Err(Error::Population {
+                    file: name.clone(),
+                    message: format!(
+                        "triangle {} is {:?} but in {} it is {:?} (1-based); every shape must share the same faces",
+                        k + 1,
+                        mesh.faces[k].map(|x| x + 1),
+                        first_name,
+                        first.faces[k].map(|x| x + 1)
+                    ),
+                });
+            }
+        }
+        for (name, mesh) in &named {
+            if let Some(j) = mesh.positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+                return Err(Error::Population {
+                    file: name.clone(),
+                    message: format!("vertex {} has a non-finite coordinate; fix or remove it", j + 1),
+                });
+            }
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (_, mesh) in &named {
+            for p in &mesh.positions {
+                for d in 0..3 {
+                    lo[d] = lo[d].min(p[d]);
+                    hi[d] = hi[d].max(p[d]);
+                }
+            }
+        }
+        let side = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+        if !(side > 0.0) || !side.is_finite() {
+            return Err(Error::Population {
+                file: first_name.clone(),
+                message: "all vertices of all shapes are at one point (or the extent overflows); nothing to fit".into(),
+            });
+        }
+        let normalization = Normalization { offset: lo, scale: 1.0 / side };
+        let faces = first.faces.clone();
+        let mut names = Vec::with_capacity(named.len());
+        let mut shapes = Vec::with_capacity(named.len());
+        for (name, mesh) in named {
+            shapes.push(mesh.positions.iter().map(|&p| normalization.to_unit(p)).collect());
+            names.push(name);
+        }
+        Ok(Population { names, faces, shapes, normalization })
+    }
+
+    /// Parses every file (name, bytes) with the OBJ importer, then [`Population::from_meshes`].
+    /// The first file that fails stops the load; use [`Population::from_files_all_errors`] to list all.
+    pub fn from_files(files: Vec<(String, Vec<u8>)>) -> Result<Population> {
+        let mut named = Vec::with_capacity(files.len());
+        for (name, bytes) in files {
+            let mesh = super::obj::parse_obj(&name, &bytes)?;
+            named.push((name, mesh));
+        }
+        Population::from_meshes(named)
+    }
+
+    /// Like [`Population::from_files`] but reports every file's error, in natural order of the names.
+    pub fn from_files_all_errors(mut files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
+        files.sort_by(|a, b| natural_cmp(&a.0, &b.0));
+        let mut named = Vec::with_capacity(files.len());
+        let mut errors = Vec::new();
+        for (name, bytes) in files {
+            match super::obj::parse_obj(&name, &bytes) {
+                Ok(mesh) => named.push((name, mesh)),
+                Err(e) => errors.push(e),
+            }
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        Population::from_meshes(named).map_err(|e| vec![e])
+    }
+
+    /// Builds a population directly from unit-box shapes (generated data, tests).
+    pub fn from_unit_shapes(names: Vec<String>, faces: Vec<[u32; 3]>, shapes: Vec<Vec<[f64; 3]>>) -> Result<Population> {
+        let named = names
+            .into_iter()
+            .zip(shapes)
+            .map(|(n, positions)| (n, Mesh { positions, faces: faces.clone() }))
+            .collect();
+        Population::from_meshes(named)
+    }
+
+    /// Loads the OBJ files of a directory (every `*.obj`, any case) or an explicit list of files.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn from_paths<P: AsRef<std::path::Path>>(paths: &[P]) -> Result<Population> {
+        let mut files = Vec::new();
+        for p in paths {
+            let p = p.as_ref();
+            if p.is_dir() {
+                let rd = std::fs::read_dir(p).map_err(|e| Error::Io(format!("cannot read directory {}: {e}", p.display())))?;
+                for entry in rd {
+                    let entry = entry.map_err(|e| Error::Io(format!("cannot read directory {}: {e}", p.display())))?;
+                    let path = entry.path();
+                    if path.is_file() && path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+                        files.push(path);
+                    }
+                }
+            } else {
+                files.push(p.to_path_buf());
+            }
+        }
+        if files.is_empty() {
+            return Err(Error::Io("no .obj files found in the given paths; pass a folder of OBJ files or the files themselves".into()));
+        }
+        let mut loaded = Vec::with_capacity(files.len());
+        for f in files {
+            let bytes = std::fs::read(&f).map_err(|e| Error::Io(format!("cannot read {}: {e}", f.display())))?;
+            let name = f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            loaded.push((name, bytes));
+        }
+        Population::from_files(loaded)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(offset: f64) -> Mesh {
+        Mesh { positions: vec![[offset, 0.0, 0.0], [1.0 + offset, 0.0, 0.0], [0.0, 2.0, 0.0]], faces: vec![[0, 1, 2]] }
+    }
+
+    #[test]
+    fn natural_order() {
+        let mut v = vec!["10.obj", "2.obj", "1.obj", "reference.obj", "a10", "a9"];
+        v.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(v, vec!["1.obj", "2.obj", "10.obj", "a9", "a10", "reference.obj"]);
+    }
+
+    #[test]
+    fn one_common_scale_into_unit_box() {
+        let p = Population::from_meshes(vec![("b".into(), tri(1.0)), ("a".into(), tri(0.0))]).unwrap();
+        assert_eq!(p.names, vec!["a", "b"]);
+        let n = p.normalization;
+        assert!((n.scale - 0.5).abs() < 1e-12);
+        let back = n.to_original(p.shapes[1][1]);
+        assert!((back[0] - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rejects_mismatch_naming_file() {
+        let mut m = tri(0.0);
+        m.positions.push([0.0, 0.0, 1.0]);
+        let e = Population::from_meshes(vec![("a.obj".into(), tri(0.0)), ("b.obj".into(), m)]).unwrap_err();
+        assert!(e.to_string().contains("b.obj") && e.to_string().contains("4 vertices"), "{e}");
+        let e = Population::from_meshes(vec![("a.obj".into(), tri(0.0))]).unwrap_err();
+        assert!(e.to_string().contains("at least 2"), "{e}");
+    }
+}

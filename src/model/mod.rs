@@ -1,0 +1,27 @@
+//! The constrained mixture of factor analyzers (paper sections 3-4) and its fit.
+//!
+//! Component k: h = R_k Λ_k z + b_k + ε, z ~ N(0, I_3), R_k = [R_k^1; ...; R_k^ns] (each in SO(3)),
+//! Λ_k = diag(λ), Φ_k = diag(s_k^1 I_3, ..., s_k^ns I_3).
+//!
+//! - [`params`]: validated fit parameters, defaults in the doc comments.
+//! - [`component`]: one factor analyser: Woodbury log-density (eq 6), posterior of z (eq 8).
+//! - [`estep`]: responsibilities (eq 12) for all vertices and components, in log space.
+//! - [`cm`]: cycle 1 (π eq 13, b eq 14); cycle 2 (exact Λ, R by eq 19 + 31, Φ eq 16 isotropic).
+//! - [`init`]: k-means++ with restarts and the per-cluster Procrustes start.
+//! - [`aecm`]: a [`aecm::Fit`] in progress: `step()` (one AECM iteration), `run()`, trace, convergence.
+//! - [`hierarchy`]: Algorithm 1 (coarse, refinement, final), every stage kept.
+//! - [`result`]: the fitted [`Model`]: labels (eq 20), latent shape (eq 21), reconstruction (eq 22).
+
+pub mod aecm;
+pub mod cm;
+pub mod component;
+pub mod data;
+pub mod estep;
+pub mod hierarchy;
+pub mod init;
+pub mod params;
+pub mod result;
+
+pub use params::{LambdaRule, Params};
+pub use component::Component;
+pub use result::Model;
