@@ -6,6 +6,7 @@
 //! [`model`] (init, AECM, hierarchy) -> [`model::Model`] -> [`articulate`] (part graph, joints,
 //! interpolation, skinning) -> [`export`] (JSON, OBJ, glTF).
 
+pub mod clock;
 pub mod error;
 pub mod geometry;
 pub mod mesh;

@@ -1,1 +1,299 @@
-//! (being written)
+//! A fit in progress: Alternating Expectation-Conditional Maximisation with two cycles (paper section 3.2).
+//!
+//! One iteration ([`Fit::step`]): CM cycle 1 (π, b) on the current responsibilities, E-step, CM cycle 2
+//! (Λ, R, Φ), E-step. The last E-step gives the log-likelihood of the new parameters (the trace) and the
+//! responsibilities of the next cycle 1. Convergence: |ΔL| / n_v < tol; the iteration cap is reported as
+//! not converged and the best state seen is still returned.
+
+use super::cm;
+use super::component::Component;
+use super::data::Data;
+use super::estep::{e_step, flops_per_pair};
+use super::init;
+use super::params::{LambdaRule, Params};
+use super::result::Model;
+use crate::error::{Error, Result};
+use crate::geometry::Vec3;
+
+/// What one iteration did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepInfo {
+    pub iteration: usize,
+    pub log_likelihood: f64,
+    pub parts: usize,
+    pub dropped: usize,
+    pub converged: bool,
+}
+
+#[derive(Debug, Clone)]
+pub struct Fit {
+    data: Data,
+    comps: Vec<Component>,
+    gamma: Vec<f64>,
+    trace: Vec<f64>,
+    initial_ll: f64,
+    converged: bool,
+    tol: f64,
+    max_iter: usize,
+    floor: f64,
+    rule: LambdaRule,
+    min_mass: f64,
+    best: Option<(f64, Vec<Component>)>,
+    /// Floating-point operations and milliseconds spent in E-steps (for benchmarks).
+    pub estep_flops: f64,
+    pub estep_ms: f64,
+}
+
+impl Fit {
+    /// Starts from k-means++ (m = `params.parts`) with the per-cluster Procrustes initialisation.
+    pub fn new(data: Data, params: &Params) -> Result<Fit> {
+        params.validate()?;
+        check_data(&data, params.parts)?;
+        let labels = init::kmeans(&data, params.parts, params.seed, params.restarts);
+        Fit::from_labels(data, &labels, params)
+    }
+
+    /// Starts from a labelling (one component per distinct label).
+    pub fn from_labels(data: Data, labels: &[u32], params: &Params) -> Result<Fit> {
+        params.validate()?;
+        check_data(&data, 1)?;
+        if labels.len() != data.n_vertices {
+            return Err(Error::Request(format!("{} labels for {} vertices", labels.len(), data.n_vertices)));
+        }
+        let comps = init::components_from_labels(&data, labels, params.variance_floor);
+        Ok(Fit::from_components(data, comps, params))
+    }
+
+    pub fn from_components(data: Data, comps: Vec<Component>, params: &Params) -> Fit {
+        let mut fit = Fit {
+            data,
+            comps,
+            gamma: Vec::new(),
+            trace: Vec::new(),
+            initial_ll: f64::NEG_INFINITY,
+            converged: false,
+            tol: params.tol,
+            max_iter: params.max_iter,
+            floor: params.variance_floor,
+            rule: params.lambda_rule,
+            min_mass: params.min_part_vertices as f64,
+            best: None,
+            estep_flops: 0.0,
+            estep_ms: 0.0,
+        };
+        fit.initial_ll = fit.run_e_step();
+        fit
+    }
+
+    /// Overrides the iteration cap (the refinement uses a smaller one).
+    pub fn set_max_iter(&mut self, n: usize) {
+        self.max_iter = n.max(1);
+    }
+
+    fn run_e_step(&mut self) -> f64 {
+        let t0 = crate::clock::now_ms();
+        let ll = e_step(&self.data, &self.comps, &mut self.gamma);
+        self.estep_ms += crate::clock::now_ms() - t0;
+        self.estep_flops += (self.data.n_vertices * self.comps.len()) as f64 * flops_per_pair(self.data.n_shapes);
+        ll
+    }
+
+    /// One AECM iteration. Does nothing but report once converged or at the cap.
+    pub fn step(&mut self) -> StepInfo {
+        if self.is_finished() {
+            return self.info(0);
+        }
+        cm::cycle1(&self.data, &self.gamma, &mut self.comps);
+        self.run_e_step();
+        let masses = cm::cycle2(&self.data, &self.gamma, &mut self.comps, self.rule, self.floor);
+        // drop components whose responsibility mass fell below a few vertices (never the last one)
+        let before = self.comps.len();
+        if self.comps.len() > 1 {
+            let keep: Vec<bool> = masses.iter().map(|&n| n >= self.min_mass).collect();
+            if keep.iter().any(|&k| k) && keep.iter().any(|&k| !k) {
+                let mut idx = 0;
+                self.comps.retain(|_| {
+                    let k = keep[idx];
+                    idx += 1;
+                    k
+                });
+                let total: f64 = self.comps.iter().map(|c| c.weight).sum();
+                self.comps.iter_mut().for_each(|c| c.weight /= total);
+            }
+        }
+        let dropped = before - self.comps.len();
+        let ll = self.run_e_step();
+        let prev = self.trace.last().copied().unwrap_or(self.initial_ll);
+        self.trace.push(ll);
+        if ll.is_finite() && self.best.as_ref().is_none_or(|b| ll > b.0) {
+            self.best = Some((ll, self.comps.clone()));
+        }
+        if ((ll - prev) / self.data.n_vertices as f64).abs() < self.tol && dropped == 0 {
+            self.converged = true;
+        }
+        self.info(dropped)
+    }
+
+    fn info(&self, dropped: usize) -> StepInfo {
+        StepInfo {
+            iteration: self.trace.len(),
+            log_likelihood: self.trace.last().copied().unwrap_or(self.initial_ll),
+            parts: self.comps.len(),
+            dropped,
+            converged: self.converged,
+        }
+    }
+
+    pub fn is_finished(&self) -> bool {
+        self.converged || self.trace.len() >= self.max_iter
+    }
+
+    /// Steps until converged or at the cap; `observer` sees every iteration and returns false to stop.
+    pub fn run(&mut self, observer: &mut dyn FnMut(&StepInfo) -> bool) -> StepInfo {
+        let mut last = self.info(0);
+        while !self.is_finished() {
+            last = self.step();
+            if !observer(&last) {
+                break;
+            }
+        }
+        last
+    }
+
+    pub fn converged(&self) -> bool {
+        self.converged
+    }
+
+    pub fn iterations(&self) -> usize {
+        self.trace.len()
+    }
+
+    /// Log-likelihood after every iteration.
+    pub fn trace(&self) -> &[f64] {
+        &self.trace
+    }
+
+    /// Log-likelihood of the starting parameters.
+    pub fn initial_log_likelihood(&self) -> f64 {
+        self.initial_ll
+    }
+
+    pub fn components(&self) -> &[Component] {
+        &self.comps
+    }
+
+    pub fn n_parts(&self) -> usize {
+        self.comps.len()
+    }
+
+    pub fn data(&self) -> &Data {
+        &self.data
+    }
+
+    /// Current responsibilities, `gamma[j * parts + k]`.
+    pub fn responsibilities(&self) -> &[f64] {
+        &self.gamma
+    }
+
+    /// Mean variance of the components, weighted by their mass (Algorithm 1's err, mass-weighted).
+    pub fn mean_variance(&self) -> f64 {
+        let mut num = 0.0;
+        let mut den = 0.0;
+        for c in &self.comps {
+            let s: f64 = c.variances.iter().sum::<f64>() / c.variances.len() as f64;
+            num += c.weight * s;
+            den += c.weight;
+        }
+        num / den.max(f64::MIN_POSITIVE)
+    }
+
+    /// Labels of the current state: I_j = argmax_k γ_kj (eq 20).
+    pub fn labels(&self) -> Vec<u32> {
+        labels_from_gamma(&self.gamma, self.comps.len())
+    }
+
+    /// The model of the current state (converged) or of the best state seen (not converged, e.g. the literal
+    /// eq 18 cycling). Translations are returned in unit-box coordinates.
+    pub fn model(&self) -> Model {
+        let current_is_best = self.converged
+            || self.best.as_ref().is_none_or(|b| self.trace.last().is_some_and(|&l| l >= b.0));
+        if current_is_best {
+            self.model_of(&self.comps, &self.gamma)
+        } else {
+            let comps = self.best.as_ref().map(|b| b.1.clone()).unwrap_or_default();
+            let mut gamma = Vec::new();
+            e_step(&self.data, &comps, &mut gamma);
+            self.model_of(&comps, &gamma)
+        }
+    }
+
+    fn model_of(&self, comps: &[Component], gamma: &[f64]) -> Model {
+        let m = comps.len();
+        let labels = labels_from_gamma(gamma, m);
+        let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
+        let latent: Vec<Vec3> = (0..self.data.n_vertices)
+            .map(|j| {
+                let k = labels[j] as usize;
+                let e = comps[k].posterior_mean(&wbs[k], self.data.vertex(j));
+                [comps[k].lambda[0] * e[0], comps[k].lambda[1] * e[1], comps[k].lambda[2] * e[2]]
+            })
+            .collect();
+        let parts = comps
+            .iter()
+            .map(|c| {
+                let mut c = c.clone();
+                for (t, o) in c.translations.iter_mut().zip(&self.data.offsets) {
+                    *t = crate::geometry::add(*t, *o);
+                }
+                c
+            })
+            .collect();
+        Model {
+            n_shapes: self.data.n_shapes,
+            n_vertices: self.data.n_vertices,
+            parts,
+            labels,
+            latent,
+            log_likelihood: self.trace.clone(),
+            iterations: self.trace.len(),
+            converged: self.converged,
+        }
+    }
+}
+
+pub fn labels_from_gamma(gamma: &[f64], m: usize) -> Vec<u32> {
+    if m == 0 {
+        return Vec::new();
+    }
+    gamma
+        .chunks_exact(m)
+        .map(|row| {
+            let mut best = 0;
+            for k in 1..m {
+                if row[k] > row[best] {
+                    best = k;
+                }
+            }
+            best as u32
+        })
+        .collect()
+}
+
+fn check_data(data: &Data, parts: usize) -> Result<()> {
+    if data.n_shapes < 2 {
+        return Err(Error::Data(format!("{} shape(s); at least 2 poses are needed", data.n_shapes)));
+    }
+    if data.n_vertices < 3 {
+        return Err(Error::Data(format!("{} vertices; at least 3 are needed", data.n_vertices)));
+    }
+    if parts > data.n_vertices {
+        return Err(Error::Params(format!(
+            "parts = {parts} is more than the {} vertices; ask for fewer parts",
+            data.n_vertices
+        )));
+    }
+    if data.h.iter().any(|v| !v.is_finite()) {
+        return Err(Error::Data("non-finite coordinates".into()));
+    }
+    Ok(())
+}

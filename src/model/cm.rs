@@ -1,1 +1,198 @@
-//! (being written)
+//! The two CM steps of AECM.
+//!
+//! Cycle 1 (eqs 13-14): π_k = n_k / n_v, b_k = Σ_j γ_kj h_j / n_k.
+//!
+//! Cycle 2, in this order, each a conditional maximiser of the expected complete log-likelihood with the
+//! E-step statistics E[z|h_j] = M^-1 Λ y_j and E[z z^T|h_j] = M^-1 + E[z]E[z]^T held fixed:
+//! - Λ, exact (METHOD_NOTES item 1): λ_d = Σ_i (1/s_i) (R_i^T C_i)_dd / (w G_d), with
+//!   C_i = Σ_j γ_kj x_ji E[z_j]^T, x_ji = v_j^i - b^i, G_d = Σ_j γ_kj E[z_d² | h_j], w = Σ_i 1/s_i;
+//!   or the paper's literal eq 18 (Λ = sqrt of the shape-averaged eigenvalues of the per-shape covariances).
+//! - R_i (eq 19 with Lemma 1 / eq 31): the rotation maximising trace(R_i^T C_i Λ), by SVD, det +1.
+//! - Φ (eq 16 for isotropic per-shape noise, corrected, METHOD_NOTES item 2):
+//!   s_i = (S_i - 2 <R_i, C_i Λ> + Σ_d λ_d² G_d) / (3 n_k), S_i = Σ_j γ_kj |x_ji|², floored.
+
+use super::component::Component;
+use super::data::Data;
+use super::params::LambdaRule;
+use crate::geometry::procrustes::best_rotation;
+use crate::geometry::{Mat3, Vec3};
+
+/// Responsibilities below this are skipped in the accumulations (their contribution is below rounding).
+pub const GAMMA_SKIP: f64 = 1e-14;
+
+/// Smallest λ_d allowed (keeps M invertible and A = RΛ a proper, non-reflecting map).
+pub const LAMBDA_FLOOR: f64 = 1e-6;
+
+/// Cycle 1 CM step. Returns n_k (responsibility mass) per component. Components with no mass keep their b.
+pub fn cycle1(data: &Data, gamma: &[f64], comps: &mut [Component]) -> Vec<f64> {
+    let m = comps.len();
+    let ns = data.n_shapes;
+    let mut mass = vec![0.0; m];
+    let mut sums = vec![0.0; m * ns * 3];
+    for j in 0..data.n_vertices {
+        let h = &data.h[j * ns * 3..(j + 1) * ns * 3];
+        for k in 0..m {
+            let g = gamma[j * m + k];
+            if g < GAMMA_SKIP {
+                continue;
+            }
+            mass[k] += g;
+            let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
+            for (a, v) in acc.iter_mut().zip(h) {
+                *a += g * v;
+            }
+        }
+    }
+    let nv = data.n_vertices as f64;
+    for (k, c) in comps.iter_mut().enumerate() {
+        c.weight = mass[k] / nv;
+        if mass[k] > 0.0 {
+            for i in 0..ns {
+                for d in 0..3 {
+                    c.translations[i][d] = sums[(k * ns + i) * 3 + d] / mass[k];
+                }
+            }
+        }
+    }
+    mass
+}
+
+/// Sufficient statistics of one component for cycle 2.
+struct Stats {
+    n: f64,
+    /// S_i = Σ γ |x_i|²
+    sq: Vec<f64>,
+    /// C_i = Σ γ x_i E[z]^T
+    cross: Vec<Mat3>,
+    /// G_d = Σ γ E[z_d²]
+    second: Vec3,
+    /// Σ γ x_i x_i^T (only for the literal eq 18)
+    scatter: Vec<Mat3>,
+}
+
+fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, want_scatter: bool) -> Stats {
+    let ns = data.n_shapes;
+    let wb = c.woodbury();
+    let mut st = Stats {
+        n: 0.0,
+        sq: vec![0.0; ns],
+        cross: vec![[[0.0; 3]; 3]; ns],
+        second: [0.0; 3],
+        scatter: if want_scatter { vec![[[0.0; 3]; 3]; ns] } else { Vec::new() },
+    };
+    let mut xs = vec![[0.0; 3]; ns];
+    for j in 0..data.n_vertices {
+        let g = gamma[j * m + k];
+        if g < GAMMA_SKIP {
+            continue;
+        }
+        let h = data.vertex(j);
+        let mut y = [0.0; 3];
+        for i in 0..ns {
+            let b = c.translations[i];
+            let x = [h[i][0] - b[0], h[i][1] - b[1], h[i][2] - b[2]];
+            xs[i] = x;
+            let r = &wb.rt_over_s[i];
+            for d in 0..3 {
+                y[d] += r[d][0] * x[0] + r[d][1] * x[1] + r[d][2] * x[2];
+            }
+        }
+        let ez = [wb.post_gain[0] * y[0], wb.post_gain[1] * y[1], wb.post_gain[2] * y[2]];
+        st.n += g;
+        for d in 0..3 {
+            st.second[d] += g * (wb.post_var[d] + ez[d] * ez[d]);
+        }
+        let gez = [g * ez[0], g * ez[1], g * ez[2]];
+        for i in 0..ns {
+            let x = xs[i];
+            st.sq[i] += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+            let cr = &mut st.cross[i];
+            for a in 0..3 {
+                for b in 0..3 {
+                    cr[a][b] += x[a] * gez[b];
+                }
+            }
+            if want_scatter {
+                let sc = &mut st.scatter[i];
+                for a in 0..3 {
+                    for b in 0..3 {
+                        sc[a][b] += g * x[a] * x[b];
+                    }
+                }
+            }
+        }
+    }
+    st
+}
+
+/// Cycle 2 CM step (Λ, then R, then Φ) for every component. Returns n_k per component.
+pub fn cycle2(data: &Data, gamma: &[f64], comps: &mut [Component], rule: LambdaRule, floor: f64) -> Vec<f64> {
+    let m = comps.len();
+    let ns = data.n_shapes;
+    let mut masses = Vec::with_capacity(m);
+    for k in 0..m {
+        let st = accumulate(data, gamma, k, m, &comps[k], rule == LambdaRule::PaperEq18);
+        masses.push(st.n);
+        if st.n <= 0.0 {
+            continue;
+        }
+        let c = &mut comps[k];
+        // Λ
+        match rule {
+            LambdaRule::Exact => {
+                let w: f64 = c.variances.iter().map(|s| 1.0 / s).sum();
+                for d in 0..3 {
+                    let mut num = 0.0;
+                    for i in 0..ns {
+                        let r = &c.rotations[i];
+                        let cr = &st.cross[i];
+                        // (R_i^T C_i)_dd = Σ_a R_ad C_ad
+                        let rc = r[0][d] * cr[0][d] + r[1][d] * cr[1][d] + r[2][d] * cr[2][d];
+                        num += rc / c.variances[i];
+                    }
+                    let den = w * st.second[d];
+                    let l = if den > 0.0 { num / den } else { c.lambda[d] };
+                    c.lambda[d] = if l.is_finite() { l.max(LAMBDA_FLOOR) } else { c.lambda[d] };
+                }
+            }
+            LambdaRule::PaperEq18 => {
+                let mut eig_sum = [0.0; 3];
+                for i in 0..ns {
+                    let sc = &st.scatter[i];
+                    let cov = nalgebra::Matrix3::from_fn(|a, b| sc[a][b] / st.n);
+                    let mut ev: Vec<f64> = cov.symmetric_eigenvalues().iter().cloned().collect();
+                    ev.sort_by(|a, b| b.partial_cmp(a).unwrap_or(std::cmp::Ordering::Equal));
+                    for d in 0..3 {
+                        eig_sum[d] += ev[d].max(0.0);
+                    }
+                }
+                for d in 0..3 {
+                    c.lambda[d] = (eig_sum[d] / ns as f64).sqrt().max(LAMBDA_FLOOR);
+                }
+            }
+        }
+        // R_i = argmax trace(R^T C_i Λ)
+        for i in 0..ns {
+            let cr = &st.cross[i];
+            let mut cl = [[0.0; 3]; 3];
+            for a in 0..3 {
+                for b in 0..3 {
+                    cl[a][b] = cr[a][b] * c.lambda[b];
+                }
+            }
+            c.rotations[i] = best_rotation(&cl);
+            // Φ: s_i
+            let r = &c.rotations[i];
+            let mut inner = 0.0;
+            for a in 0..3 {
+                for b in 0..3 {
+                    inner += r[a][b] * cl[a][b];
+                }
+            }
+            let quad: f64 = (0..3).map(|d| c.lambda[d] * c.lambda[d] * st.second[d]).sum();
+            let s = (st.sq[i] - 2.0 * inner + quad) / (3.0 * st.n);
+            c.variances[i] = if s.is_finite() { s.max(floor) } else { floor };
+        }
+    }
+    masses
+}

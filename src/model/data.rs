@@ -1,1 +1,60 @@
-//! (being written)
+//! The data vectors h_j (vertex j stacked over the shapes), laid out for streaming, and centred.
+//!
+//! Layout: `h[(j * n_s + i) * 3 + c]`, i.e. each h_j is contiguous (3 n_s values), so the E-step and the
+//! CM accumulations read one vertex at a time. Each shape is centred on its centroid inside AECM (the
+//! expanded Woodbury form loses digits far from the origin); [`Data::offsets`] maps translations back.
+
+use crate::geometry::Vec3;
+use crate::mesh::Population;
+
+#[derive(Debug, Clone)]
+pub struct Data {
+    pub n_vertices: usize,
+    pub n_shapes: usize,
+    pub h: Vec<f64>,
+    /// Centroid of every shape that was subtracted (unit-box coordinates).
+    pub offsets: Vec<Vec3>,
+}
+
+impl Data {
+    pub fn from_population(pop: &Population) -> Data {
+        let all: Vec<usize> = (0..pop.n_vertices()).collect();
+        Data::from_population_subset(pop, &all)
+    }
+
+    /// Only the listed vertices (in that order), centred on their own centroid.
+    pub fn from_population_subset(pop: &Population, vertices: &[usize]) -> Data {
+        let ns = pop.n_shapes();
+        let nv = vertices.len();
+        let mut offsets = vec![[0.0; 3]; ns];
+        for (i, shape) in pop.shapes.iter().enumerate() {
+            let mut c = [0.0; 3];
+            for &j in vertices {
+                for d in 0..3 {
+                    c[d] += shape[j][d];
+                }
+            }
+            offsets[i] = c.map(|v| v / nv.max(1) as f64);
+        }
+        let mut h = vec![0.0; nv * ns * 3];
+        for (jj, &j) in vertices.iter().enumerate() {
+            for i in 0..ns {
+                let p = pop.shapes[i][j];
+                for d in 0..3 {
+                    h[(jj * ns + i) * 3 + d] = p[d] - offsets[i][d];
+                }
+            }
+        }
+        Data { n_vertices: nv, n_shapes: ns, h, offsets }
+    }
+
+    /// h_j as n_s points.
+    #[inline]
+    pub fn vertex(&self, j: usize) -> &[Vec3] {
+        let s = &self.h[j * self.n_shapes * 3..(j + 1) * self.n_shapes * 3];
+        // SAFETY-free reinterpretation: [f64] of length 3 n_s as [[f64; 3]] of length n_s.
+        let (chunks, rest) = s.as_chunks::<3>();
+        debug_assert!(rest.is_empty());
+        chunks
+    }
+}

@@ -1,1 +1,435 @@
-//! (being written)
+//! Algorithm 1, hierarchical optimisation, as a resumable pipeline (so a page can step it, show progress
+//! and cancel between iterations without threads):
+//!
+//! 1. Coarse: AECM with m parts from k-means++.
+//! 2. Refine: for every coarse part k, AECM on its vertices alone with m_k = 1, 2, ... components; err is
+//!    the mass-weighted mean variance of the sub-components (the paper's plain average is fragile,
+//!    METHOD_NOTES item 8). Stop when err < `refine_threshold`, when m_k does not lower err by at least the
+//!    fraction `refine_min_gain`, when a component died, or at `max_subparts`; keep the best m_k.
+//! 3. Final: AECM on all vertices started from the refined labels.
+//!
+//! Every stage is kept (coarse labels, refined labels, final model).
+
+use super::aecm::{Fit, StepInfo};
+use super::data::Data;
+use super::params::Params;
+use super::result::Model;
+use crate::error::Result;
+use crate::mesh::Population;
+use serde::Serialize;
+
+/// Where the pipeline is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", rename_all = "camelCase")]
+pub enum Stage {
+    Coarse,
+    /// Refining coarse part `part` (0-based) of `of`, trying `sub_parts` components.
+    Refine { part: usize, of: usize, sub_parts: usize },
+    Final,
+    Done,
+}
+
+/// Reported after every AECM iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Progress {
+    pub stage: Stage,
+    /// Iteration within the current AECM run.
+    pub iteration: usize,
+    /// Iterations over all runs so far.
+    pub total_iterations: usize,
+    pub log_likelihood: f64,
+    /// Components of the current AECM run.
+    pub parts: usize,
+    /// The current run's iteration was its last (converged or capped).
+    pub run_finished: bool,
+}
+
+/// Time and work of one stage.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct StageStats {
+    pub name: String,
+    pub iterations: usize,
+    pub aecm_runs: usize,
+    pub ms: f64,
+    pub estep_ms: f64,
+    pub estep_flops: f64,
+}
+
+/// Part counts of the three stages.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct StageParts {
+    pub coarse_parts: usize,
+    pub refined_parts: usize,
+    pub final_parts: usize,
+}
+
+/// Everything Algorithm 1 produced.
+#[derive(Debug, Clone)]
+pub struct FitResult {
+    /// The final model (or the best available if the fit was stopped early).
+    pub model: Model,
+    pub coarse_labels: Vec<u32>,
+    pub refined_labels: Vec<u32>,
+    pub stages: StageParts,
+    pub stats: Vec<StageStats>,
+    /// False if the fit was stopped before the final stage converged or hit its cap.
+    pub complete: bool,
+}
+
+struct Refinement {
+    coarse_labels: Vec<u32>,
+    members: Vec<Vec<usize>>,
+    part: usize,
+    /// Current trial: m_k and its fit.
+    sub_parts: usize,
+    fit: Fit,
+    /// Best accepted so far for this part: (err, local labels, m_k).
+    best: Option<(f64, Vec<u32>)>,
+    /// Refined labels accumulated over parts (global ids), u32::MAX = not yet assigned.
+    refined: Vec<u32>,
+    next_label: u32,
+}
+
+enum State {
+    Coarse(Fit),
+    Refine(Box<Refinement>),
+    Final(Fit),
+    Done,
+}
+
+pub struct Pipeline {
+    pop: Population,
+    params: Params,
+    state: State,
+    coarse: Option<Model>,
+    coarse_labels: Vec<u32>,
+    refined_labels: Vec<u32>,
+    final_model: Option<Model>,
+    stats: Vec<StageStats>,
+    stage_started_ms: f64,
+    total_iterations: usize,
+}
+
+impl Pipeline {
+    /// Validates the parameters and the data and runs the coarse initialisation (k-means++).
+    pub fn new(pop: &Population, params: &Params) -> Result<Pipeline> {
+        params.validate()?;
+        let t0 = crate::clock::now_ms();
+        let fit = Fit::new(Data::from_population(pop), params)?;
+        Ok(Pipeline {
+            pop: pop.clone(),
+            params: params.clone(),
+            state: State::Coarse(fit),
+            coarse: None,
+            coarse_labels: Vec::new(),
+            refined_labels: Vec::new(),
+            final_model: None,
+            stats: vec![StageStats { name: "coarse".into(), ..Default::default() }],
+            stage_started_ms: t0,
+            total_iterations: 0,
+        })
+    }
+
+    pub fn population(&self) -> &Population {
+        &self.pop
+    }
+
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    pub fn stage(&self) -> Stage {
+        match &self.state {
+            State::Coarse(_) => Stage::Coarse,
+            State::Refine(r) => Stage::Refine { part: r.part, of: r.members.len(), sub_parts: r.sub_parts },
+            State::Final(_) => Stage::Final,
+            State::Done => Stage::Done,
+        }
+    }
+
+    pub fn is_done(&self) -> bool {
+        matches!(self.state, State::Done)
+    }
+
+    /// The AECM run in progress (None when done).
+    pub fn current_fit(&self) -> Option<&Fit> {
+        match &self.state {
+            State::Coarse(f) | State::Final(f) => Some(f),
+            State::Refine(r) => Some(&r.fit),
+            State::Done => None,
+        }
+    }
+
+    /// Vertex ids (global) of the vertices of the current AECM run (all of them except in the refinement).
+    pub fn current_vertices(&self) -> Option<&[usize]> {
+        match &self.state {
+            State::Refine(r) => Some(&r.members[r.part]),
+            _ => None,
+        }
+    }
+
+    fn account(&mut self, fit: &Fit) {
+        let s = self.stats.last_mut().expect("a stage is always open");
+        s.iterations += fit.iterations();
+        s.aecm_runs += 1;
+        s.estep_ms += fit.estep_ms;
+        s.estep_flops += fit.estep_flops;
+    }
+
+    fn close_stage(&mut self, next: Option<&str>) {
+        let now = crate::clock::now_ms();
+        if let Some(s) = self.stats.last_mut() {
+            s.ms = now - self.stage_started_ms;
+        }
+        self.stage_started_ms = now;
+        if let Some(n) = next {
+            self.stats.push(StageStats { name: n.into(), ..Default::default() });
+        }
+    }
+
+    /// One AECM iteration of the current stage; stage transitions happen inside when a run finishes.
+    pub fn step(&mut self) -> Result<Progress> {
+        let stage = self.stage();
+        let info: StepInfo = match &mut self.state {
+            State::Coarse(f) | State::Final(f) => f.step(),
+            State::Refine(r) => r.fit.step(),
+            State::Done => {
+                return Ok(Progress {
+                    stage,
+                    iteration: 0,
+                    total_iterations: self.total_iterations,
+                    log_likelihood: self.final_model.as_ref().and_then(|m| m.log_likelihood.last().copied()).unwrap_or(f64::NAN),
+                    parts: self.final_model.as_ref().map_or(0, |m| m.n_parts()),
+                    run_finished: true,
+                })
+            }
+        };
+        self.total_iterations += 1;
+        let finished = self.current_fit().is_some_and(|f| f.is_finished());
+        let progress = Progress {
+            stage,
+            iteration: info.iteration,
+            total_iterations: self.total_iterations,
+            log_likelihood: info.log_likelihood,
+            parts: info.parts,
+            run_finished: finished,
+        };
+        if finished {
+            self.advance()?;
+        }
+        Ok(progress)
+    }
+
+    /// Moves to the next run or stage after the current run finished.
+    fn advance(&mut self) -> Result<()> {
+        let state = std::mem::replace(&mut self.state, State::Done);
+        self.state = match state {
+            State::Coarse(fit) => {
+                self.account(&fit);
+                let model = fit.model();
+                self.coarse_labels = model.labels.clone();
+                self.coarse = Some(model);
+                if self.params.refine {
+                    self.close_stage(Some("refine"));
+                    self.start_refinement()?
+                } else {
+                    self.close_stage(None);
+                    self.refined_labels = self.coarse_labels.clone();
+                    self.final_model = self.coarse.clone();
+                    State::Done
+                }
+            }
+            State::Refine(mut r) => {
+                let fit_done = std::mem::replace(&mut r.fit, placeholder_fit());
+                self.account(&fit_done);
+                self.refine_next(r, fit_done)?
+            }
+            State::Final(fit) => {
+                self.account(&fit);
+                self.close_stage(None);
+                self.final_model = Some(fit.model());
+                State::Done
+            }
+            State::Done => State::Done,
+        };
+        Ok(())
+    }
+
+    fn sub_params(&self) -> Params {
+        Params { max_iter: self.params.refine_max_iter, ..self.params.clone() }
+    }
+
+    fn start_refinement(&mut self) -> Result<State> {
+        let labels = &self.coarse_labels;
+        let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+        let mut members = vec![Vec::new(); m];
+        for (j, &l) in labels.iter().enumerate() {
+            members[l as usize].push(j);
+        }
+        members.retain(|m| !m.is_empty());
+        let fit = Fit::from_labels(
+            Data::from_population_subset(&self.pop, &members[0]),
+            &vec![0; members[0].len()],
+            &self.sub_params(),
+        )?;
+        Ok(State::Refine(Box::new(Refinement {
+            coarse_labels: labels.clone(),
+            refined: vec![u32::MAX; labels.len()],
+            members,
+            part: 0,
+            sub_parts: 1,
+            fit,
+            best: None,
+            next_label: 0,
+        })))
+    }
+
+    /// Decides after a refinement run: try one more sub-part, or accept and go to the next coarse part.
+    fn refine_next(&mut self, mut r: Box<Refinement>, done: Fit) -> Result<State> {
+        let err = done.mean_variance();
+        let died = done.n_parts() < r.sub_parts;
+        if std::env::var("POSEMFA_DEBUG").is_ok() {
+            eprintln!("part {} ({} v) m_k={} err={:.3e} died={} iters={}", r.part, r.members[r.part].len(), r.sub_parts, err, died, done.iterations());
+        }
+        let improved = match &r.best {
+            None => true,
+            Some((best_err, _)) => !died && err < (1.0 - self.params.refine_min_gain) * best_err,
+        };
+        if improved {
+            r.best = Some((err, compact(&done.labels())));
+        }
+        let n_members = r.members[r.part].len();
+        let can_grow = improved
+            && err >= self.params.refine_threshold
+            && r.sub_parts < self.params.max_subparts
+            && n_members >= (r.sub_parts + 1) * 2 * self.params.min_part_vertices;
+        if can_grow {
+            // Greedy split: the sub-part with the largest mass x variance is cut in two by 2-means on its
+            // vertices; the others keep their vertices. Nested starts make err decrease far more reliably
+            // than fresh k-means with m_k + 1 (which is what made the part count swing between seeds).
+            let labels = done.labels();
+            let comps = done.components();
+            let worst = (0..comps.len())
+                .max_by(|&a, &b| {
+                    let e = |k: usize| comps[k].weight * comps[k].variances.iter().sum::<f64>();
+                    e(a).partial_cmp(&e(b)).unwrap_or(std::cmp::Ordering::Equal)
+                })
+                .unwrap_or(0) as u32;
+            let mem = &r.members[r.part];
+            let local_w: Vec<usize> = (0..mem.len()).filter(|&l| labels[l] == worst).collect();
+            let global_w: Vec<usize> = local_w.iter().map(|&l| mem[l]).collect();
+            let mut new_labels = labels.clone();
+            if global_w.len() >= 2 * self.params.min_part_vertices {
+                let halves = super::init::kmeans(
+                    &Data::from_population_subset(&self.pop, &global_w),
+                    2,
+                    self.params.seed.wrapping_add(r.part as u64 * 1000 + r.sub_parts as u64),
+                    self.params.restarts,
+                );
+                for (&l, &hlf) in local_w.iter().zip(&halves) {
+                    if hlf == 1 {
+                        new_labels[l] = comps.len() as u32;
+                    }
+                }
+            }
+            r.sub_parts += 1;
+            r.fit = Fit::from_labels(Data::from_population_subset(&self.pop, mem), &new_labels, &self.sub_params())?;
+            return Ok(State::Refine(r));
+        }
+        // accept the best labelling of this part
+        let (_, local) = r.best.take().expect("the first run of a part is always accepted");
+        let n_local = local.iter().map(|&l| l + 1).max().unwrap_or(1);
+        for (&j, &l) in r.members[r.part].iter().zip(&local) {
+            r.refined[j] = r.next_label + l;
+        }
+        r.next_label += n_local;
+        r.part += 1;
+        if r.part < r.members.len() {
+            r.sub_parts = 1;
+            let mem = &r.members[r.part];
+            r.fit = Fit::from_labels(Data::from_population_subset(&self.pop, mem), &vec![0; mem.len()], &self.sub_params())?;
+            return Ok(State::Refine(r));
+        }
+        // all parts refined: final stage
+        let _ = &r.coarse_labels;
+        self.refined_labels = r.refined.clone();
+        self.close_stage(Some("final"));
+        let fit = Fit::from_labels(Data::from_population(&self.pop), &self.refined_labels, &self.params)?;
+        Ok(State::Final(fit))
+    }
+
+    /// Runs to the end; `observer` sees every iteration and returns false to stop (the best state so far
+    /// is kept).
+    pub fn run(&mut self, observer: &mut dyn FnMut(&Progress) -> bool) -> Result<FitResult> {
+        while !self.is_done() {
+            let p = self.step()?;
+            if !observer(&p) {
+                break;
+            }
+        }
+        Ok(self.result())
+    }
+
+    /// The result so far: the final model if done, else the best model available (the current final-stage
+    /// fit, or the coarse model, or the current coarse fit).
+    pub fn result(&self) -> FitResult {
+        let model = match (&self.final_model, &self.state) {
+            (Some(m), _) => m.clone(),
+            (None, State::Final(f)) => f.model(),
+            (None, State::Coarse(f)) => f.model(),
+            (None, _) => self.coarse.clone().expect("coarse model exists after the coarse stage"),
+        };
+        let n_distinct = |l: &[u32]| {
+            let mut v = l.to_vec();
+            v.sort_unstable();
+            v.dedup();
+            v.len()
+        };
+        FitResult {
+            stages: StageParts {
+                coarse_parts: n_distinct(&self.coarse_labels),
+                refined_parts: n_distinct(&self.refined_labels),
+                final_parts: model.n_parts(),
+            },
+            model,
+            coarse_labels: self.coarse_labels.clone(),
+            refined_labels: self.refined_labels.clone(),
+            stats: self.stats.clone(),
+            complete: self.is_done(),
+        }
+    }
+
+    /// The model of the current state, for display while stepping (stage-local during the refinement: then
+    /// the coarse model is shown).
+    pub fn current_model(&self) -> Model {
+        match &self.state {
+            State::Coarse(f) | State::Final(f) => f.model(),
+            _ => self.result().model,
+        }
+    }
+}
+
+/// Labels renumbered 0.. in order of first appearance of each used value.
+fn compact(labels: &[u32]) -> Vec<u32> {
+    let mut map = std::collections::HashMap::new();
+    labels
+        .iter()
+        .map(|&l| {
+            let n = map.len() as u32;
+            *map.entry(l).or_insert(n)
+        })
+        .collect()
+}
+
+/// An empty stand-in while a finished refinement fit is moved out (never stepped).
+fn placeholder_fit() -> Fit {
+    let data = Data { n_vertices: 0, n_shapes: 0, h: Vec::new(), offsets: Vec::new() };
+    Fit::from_components(data, Vec::new(), &Params::default())
+}
+
+/// Runs the whole of Algorithm 1.
+pub fn fit(pop: &Population, params: &Params, observer: &mut dyn FnMut(&Progress) -> bool) -> Result<FitResult> {
+    Pipeline::new(pop, params)?.run(observer)
+}

@@ -1,0 +1,90 @@
+//! The fit as JSON (the CLI's `--json`, the page's export). Unit-box coordinates throughout; the
+//! `normalization` maps them back: unit = (original - offset) * scale.
+
+use crate::mesh::{Normalization, Population};
+use crate::model::hierarchy::{FitResult, StageParts, StageStats};
+use serde::Serialize;
+
+#[derive(Serialize)]
+pub struct PartJson {
+    /// R_k^i per shape, row-major 3x3.
+    pub rotations: Vec<[f64; 9]>,
+    /// b_k^i per shape.
+    pub translations: Vec<[f64; 3]>,
+    pub lambda: [f64; 3],
+    pub variances: Vec<f64>,
+    pub weight: f64,
+}
+
+#[derive(Serialize)]
+pub struct FitJson {
+    pub shapes: Vec<String>,
+    pub n_vertices: usize,
+    pub normalization: Normalization,
+    pub labels: Vec<u32>,
+    pub parts: Vec<PartJson>,
+    /// v_j^ref (eq 21): shape i vertex j ≈ R^i_{l_j} latent_j + b^i_{l_j} (unit box).
+    pub latent: Vec<[f64; 3]>,
+    pub stages: StageParts,
+    pub coarse_labels: Vec<u32>,
+    pub refined_labels: Vec<u32>,
+    /// Log-likelihood after every iteration of the final AECM run.
+    pub log_likelihood: Vec<f64>,
+    pub iterations: usize,
+    pub converged: bool,
+    pub complete: bool,
+    pub rmse: f64,
+    pub timings_ms: std::collections::BTreeMap<String, f64>,
+    pub stage_stats: Vec<StageStats>,
+}
+
+impl FitJson {
+    pub fn new(pop: &Population, result: &FitResult) -> FitJson {
+        let m = &result.model;
+        let mut timings_ms = std::collections::BTreeMap::new();
+        let mut total = 0.0;
+        for s in &result.stats {
+            timings_ms.insert(s.name.clone(), s.ms);
+            total += s.ms;
+        }
+        timings_ms.insert("total".into(), total);
+        FitJson {
+            shapes: pop.names.clone(),
+            n_vertices: m.n_vertices,
+            normalization: pop.normalization,
+            labels: m.labels.clone(),
+            parts: m
+                .parts
+                .iter()
+                .map(|c| PartJson {
+                    rotations: c
+                        .rotations
+                        .iter()
+                        .map(|r| [r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2]])
+                        .collect(),
+                    translations: c.translations.clone(),
+                    lambda: c.lambda,
+                    variances: c.variances.clone(),
+                    weight: c.weight,
+                })
+                .collect(),
+            latent: m.latent.clone(),
+            stages: result.stages,
+            coarse_labels: result.coarse_labels.clone(),
+            refined_labels: result.refined_labels.clone(),
+            log_likelihood: m.log_likelihood.clone(),
+            iterations: m.iterations,
+            converged: m.converged,
+            complete: result.complete,
+            rmse: m.rmse(pop),
+            timings_ms,
+            stage_stats: result.stats.clone(),
+        }
+    }
+}
+
+/// The fit as a JSON string.
+pub fn fit_to_json(pop: &Population, result: &FitResult) -> String {
+    // Serialising plain numbers and strings cannot fail; NaN/inf become null.
+    serde_json::to_string(&FitJson::new(pop, result)).unwrap_or_else(|e| format!("{{\"error\":\"{e}\"}}"))
+}
