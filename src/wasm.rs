@@ -1,0 +1,274 @@
+//! The wasm-bindgen surface: thin wrappers that convert typed arrays, plain objects and errors, nothing
+//! else. camelCase at the JS boundary. Every Rust `Error` becomes a JS `Error` with the same message.
+
+use crate::mesh::Population;
+use crate::model::hierarchy::{FitResult, Pipeline};
+use crate::model::{Model, Params};
+use js_sys::{Array, Float32Array, Float64Array, Uint32Array, Uint8Array};
+use std::rc::Rc;
+use wasm_bindgen::prelude::*;
+
+fn js_err(e: impl std::fmt::Display) -> JsError {
+    JsError::new(&e.to_string())
+}
+
+fn flat_f32(points: &[[f64; 3]]) -> Float32Array {
+    let v: Vec<f32> = points.iter().flat_map(|p| p.map(|c| c as f32)).collect();
+    Float32Array::from(v.as_slice())
+}
+
+fn to_js<T: serde::Serialize>(v: &T) -> Result<JsValue, JsError> {
+    v.serialize(&serde_wasm_bindgen::Serializer::json_compatible()).map_err(js_err)
+}
+
+/// A loaded population (unit-box coordinates inside).
+#[wasm_bindgen(js_name = Population)]
+pub struct WasmPopulation {
+    inner: Rc<Population>,
+}
+
+#[wasm_bindgen(js_class = Population)]
+impl WasmPopulation {
+    /// Parses and validates OBJ files. Throws an Error whose message has one line per problem
+    /// ("file X, line N: ..."), every file's problem listed.
+    #[wasm_bindgen(constructor)]
+    pub fn new(names: Vec<String>, files: Vec<Uint8Array>) -> Result<WasmPopulation, JsError> {
+        if names.len() != files.len() {
+            return Err(JsError::new("names and files differ in length"));
+        }
+        let pairs = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
+        match Population::from_files_all_errors(pairs) {
+            Ok(p) => Ok(WasmPopulation { inner: Rc::new(p) }),
+            Err(errors) => Err(JsError::new(&errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))),
+        }
+    }
+
+    #[wasm_bindgen(getter, js_name = nShapes)]
+    pub fn n_shapes(&self) -> usize {
+        self.inner.n_shapes()
+    }
+
+    #[wasm_bindgen(getter, js_name = nVertices)]
+    pub fn n_vertices(&self) -> usize {
+        self.inner.n_vertices()
+    }
+
+    pub fn names(&self) -> Array {
+        self.inner.names.iter().map(|n| JsValue::from_str(n)).collect()
+    }
+
+    pub fn faces(&self) -> Uint32Array {
+        let v: Vec<u32> = self.inner.faces.iter().flatten().copied().collect();
+        Uint32Array::from(v.as_slice())
+    }
+
+    /// Shape i's vertices, unit box, flat xyz.
+    pub fn positions(&self, shape: usize) -> Result<Float32Array, JsError> {
+        let s = self.inner.shapes.get(shape).ok_or_else(|| js_err(format!("no shape {shape}")))?;
+        Ok(flat_f32(s))
+    }
+
+    /// [offset x, y, z, scale]: unit = (original - offset) * scale.
+    pub fn normalization(&self) -> Float64Array {
+        let n = self.inner.normalization;
+        Float64Array::from(&[n.offset[0], n.offset[1], n.offset[2], n.scale][..])
+    }
+}
+
+/// Algorithm 1 in progress. `step()` is one AECM iteration; `run(budgetMs)` steps until the budget is spent.
+#[wasm_bindgen]
+pub struct Fitter {
+    pipe: Pipeline,
+    pop: Rc<Population>,
+}
+
+#[wasm_bindgen]
+impl Fitter {
+    /// `params`: a plain object with any of the fields of `Params` in camelCase (parts, seed, tol, maxIter,
+    /// varianceFloor, lambdaRule: "exact" | "paper-eq18", restarts, refine, ...); missing fields take defaults.
+    #[wasm_bindgen(constructor)]
+    pub fn new(population: &WasmPopulation, params: JsValue) -> Result<Fitter, JsError> {
+        let params: Params = if params.is_undefined() || params.is_null() {
+            Params::default()
+        } else {
+            serde_wasm_bindgen::from_value(params).map_err(|e| js_err(format!("invalid parameters: {e}")))?
+        };
+        let pipe = Pipeline::new(&population.inner, &params).map_err(js_err)?;
+        Ok(Fitter { pipe, pop: population.inner.clone() })
+    }
+
+    /// One AECM iteration; returns the progress object {stage, iteration, totalIterations, logLikelihood,
+    /// parts, runFinished}.
+    pub fn step(&mut self) -> Result<JsValue, JsError> {
+        let p = self.pipe.step().map_err(js_err)?;
+        to_js(&p)
+    }
+
+    /// Steps until `budget_ms` has passed or the fit is done; returns the progress objects of every
+    /// iteration made.
+    pub fn run(&mut self, budget_ms: f64) -> Result<Array, JsError> {
+        let t0 = crate::clock::now_ms();
+        let out = Array::new();
+        while !self.pipe.is_done() {
+            let p = self.pipe.step().map_err(js_err)?;
+            out.push(&to_js(&p)?);
+            if crate::clock::now_ms() - t0 >= budget_ms {
+                break;
+            }
+        }
+        Ok(out)
+    }
+
+    #[wasm_bindgen(js_name = isDone)]
+    pub fn is_done(&self) -> bool {
+        self.pipe.is_done()
+    }
+
+    pub fn stage(&self) -> Result<JsValue, JsError> {
+        to_js(&self.pipe.stage())
+    }
+
+    /// Labels of the AECM run in progress over ALL vertices (during the refinement: the coarse labels).
+    #[wasm_bindgen(js_name = currentLabels)]
+    pub fn current_labels(&self) -> Uint32Array {
+        let labels = match self.pipe.current_fit() {
+            Some(f) if self.pipe.current_vertices().is_none() => f.labels(),
+            _ => self.pipe.current_model().labels,
+        };
+        Uint32Array::from(labels.as_slice())
+    }
+
+    /// Responsibilities of the run in progress, `[j * parts + k]` for the run's vertices (see
+    /// `currentVertices`), and the number of parts: {parts, gamma: Float32Array, vertices: Uint32Array|null}.
+    #[wasm_bindgen(js_name = currentResponsibilities)]
+    pub fn current_responsibilities(&self) -> Result<JsValue, JsError> {
+        let obj = js_sys::Object::new();
+        if let Some(f) = self.pipe.current_fit() {
+            let g: Vec<f32> = f.responsibilities().iter().map(|&v| v as f32).collect();
+            js_sys::Reflect::set(&obj, &"parts".into(), &JsValue::from(f.n_parts() as u32)).map_err(|_| js_err("reflect"))?;
+            js_sys::Reflect::set(&obj, &"gamma".into(), &Float32Array::from(g.as_slice())).map_err(|_| js_err("reflect"))?;
+            let verts = match self.pipe.current_vertices() {
+                Some(v) => Uint32Array::from(v.iter().map(|&x| x as u32).collect::<Vec<_>>().as_slice()).into(),
+                None => JsValue::NULL,
+            };
+            js_sys::Reflect::set(&obj, &"vertices".into(), &verts).map_err(|_| js_err("reflect"))?;
+        }
+        Ok(obj.into())
+    }
+
+    /// Log-likelihood trace of the AECM run in progress (after every iteration).
+    #[wasm_bindgen(js_name = currentTrace)]
+    pub fn current_trace(&self) -> Float64Array {
+        let t = self.pipe.current_fit().map(|f| f.trace().to_vec()).unwrap_or_default();
+        Float64Array::from(t.as_slice())
+    }
+
+    /// The result so far (final model when done; otherwise the best available).
+    pub fn result(&self) -> FitModel {
+        FitModel { result: Rc::new(self.pipe.result()), pop: self.pop.clone() }
+    }
+}
+
+/// A fitted model with its population.
+#[wasm_bindgen]
+pub struct FitModel {
+    result: Rc<FitResult>,
+    pop: Rc<Population>,
+}
+
+impl FitModel {
+    fn model(&self) -> &Model {
+        &self.result.model
+    }
+
+    fn shape(&self, i: usize) -> Result<(), JsError> {
+        if i < self.model().n_shapes {
+            Ok(())
+        } else {
+            Err(js_err(format!("no pose {i}: the population has {} poses", self.model().n_shapes)))
+        }
+    }
+}
+
+#[wasm_bindgen]
+impl FitModel {
+    #[wasm_bindgen(getter, js_name = nParts)]
+    pub fn n_parts(&self) -> usize {
+        self.model().n_parts()
+    }
+
+    pub fn labels(&self) -> Uint32Array {
+        Uint32Array::from(self.model().labels.as_slice())
+    }
+
+    #[wasm_bindgen(js_name = coarseLabels)]
+    pub fn coarse_labels(&self) -> Uint32Array {
+        Uint32Array::from(self.result.coarse_labels.as_slice())
+    }
+
+    #[wasm_bindgen(js_name = refinedLabels)]
+    pub fn refined_labels(&self) -> Uint32Array {
+        Uint32Array::from(self.result.refined_labels.as_slice())
+    }
+
+    /// Latent reference shape (eq 21), flat xyz.
+    pub fn latent(&self) -> Float32Array {
+        flat_f32(&self.model().latent)
+    }
+
+    /// Shape i rebuilt from the latent shape (eq 22), unit box, flat xyz.
+    pub fn reconstruct(&self, shape: usize) -> Result<Float32Array, JsError> {
+        self.shape(shape)?;
+        Ok(flat_f32(&self.model().reconstruct(shape)))
+    }
+
+    /// |original - reconstruction| per vertex of shape i (unit box).
+    #[wasm_bindgen(js_name = vertexErrors)]
+    pub fn vertex_errors(&self, shape: usize) -> Result<Float32Array, JsError> {
+        self.shape(shape)?;
+        let e: Vec<f32> = self.model().vertex_errors(&self.pop, shape).iter().map(|&v| v as f32).collect();
+        Ok(Float32Array::from(e.as_slice()))
+    }
+
+    /// P(k | h_j) for every part (eq 12).
+    pub fn responsibilities(&self, vertex: usize) -> Result<Float64Array, JsError> {
+        if vertex >= self.model().n_vertices {
+            return Err(js_err(format!("no vertex {vertex}")));
+        }
+        Ok(Float64Array::from(self.model().responsibilities(&self.pop, vertex).as_slice()))
+    }
+
+    /// Rotation angle (degrees) of part k in every pose, relative to pose `reference`.
+    #[wasm_bindgen(js_name = rotationAngles)]
+    pub fn rotation_angles(&self, part: usize, reference: usize) -> Result<Float64Array, JsError> {
+        let c = self.model().parts.get(part).ok_or_else(|| js_err(format!("no part {part}")))?;
+        self.shape(reference)?;
+        let a: Vec<f64> = c
+            .rotations
+            .iter()
+            .map(|r| crate::geometry::rotation::angle_between(&c.rotations[reference], r).to_degrees())
+            .collect();
+        Ok(Float64Array::from(a.as_slice()))
+    }
+
+    /// {shapes, vertices, parts, coarseParts, refinedParts, rmse, iterations, converged, complete,
+    /// logLikelihood: [...], stageStats: [...]}
+    pub fn summary(&self) -> Result<JsValue, JsError> {
+        let m = self.model();
+        let s = &self.result.stages;
+        let v = serde_json::json!({
+            "shapes": m.n_shapes, "vertices": m.n_vertices, "parts": m.n_parts(),
+            "coarseParts": s.coarse_parts, "refinedParts": s.refined_parts,
+            "rmse": m.rmse(&self.pop), "iterations": m.iterations, "converged": m.converged,
+            "complete": self.result.complete, "logLikelihood": m.log_likelihood,
+            "stageStats": self.result.stats,
+        });
+        to_js(&v)
+    }
+
+    /// The full result as JSON text (same format as the CLI's --json).
+    #[wasm_bindgen(js_name = toJson)]
+    pub fn to_json(&self) -> String {
+        crate::export::json::fit_to_json(&self.pop, &self.result)
+    }
+}
