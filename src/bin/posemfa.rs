@@ -4,7 +4,15 @@ use posemfa::export::json::{fit_to_json, FitJson};
 use posemfa::mesh::Population;
 use posemfa::model::hierarchy::{Pipeline, Progress, Stage};
 use posemfa::model::{LambdaRule, Params};
+use std::io::Write;
 use std::process::ExitCode;
+
+/// println! that never panics (a closed pipe, e.g. `| head`, just ends the output).
+macro_rules! out {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}
 
 const USAGE: &str = "posemfa: learn rigid parts and their motion from registered triangle meshes
 
@@ -84,18 +92,19 @@ fn cmd_inspect(args: &[String]) -> Result<(), String> {
         "vertices": mesh.positions,
         "triangles": mesh.faces,
     });
-    println!("{out}");
+    out!("{out}");
     Ok(())
 }
 
 fn run_fit(o: &Opts, pop: &Population) -> Result<posemfa::model::hierarchy::FitResult, String> {
     let mut pipe = Pipeline::new(pop, &o.params).map_err(|e| e.to_string())?;
-    let mut last_stage = String::new();
     let quiet = o.quiet;
+    let mut last_stage = String::new();
     let mut observer = |p: &Progress| {
         let name = stage_name(&p.stage);
         let top = name.split(' ').next().unwrap_or("").to_string();
-        if !quiet && p.run_finished && top != last_stage {
+        if !quiet && top != last_stage {
+            eprintln!("stage: {name}");
             last_stage = top;
         }
         true
@@ -137,10 +146,10 @@ fn cmd_fit(args: &[String], bench: bool) -> Result<(), String> {
             "load_ms": load_ms, "fit_ms_median": fit_ms, "fit_ms_all": totals,
             "parts": m.n_parts(), "rmse": m.rmse(&pop), "stages": stages,
         });
-        println!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+        out!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
     } else {
         let s = &result.stages;
-        println!(
+        out!(
             "{} shapes x {} vertices | parts: coarse {} -> refined {} -> final {} | final AECM {} iterations ({}) | RMSE {:.5} (unit box) | {:.0} ms (load {:.0} ms)",
             pop.n_shapes(),
             pop.n_vertices(),
@@ -154,14 +163,14 @@ fn cmd_fit(args: &[String], bench: bool) -> Result<(), String> {
             load_ms
         );
         for st in &result.stats {
-            println!("  {:<7} {:>8.1} ms  {:>5} iterations in {:>3} AECM runs", st.name, st.ms, st.iterations, st.aecm_runs);
+            out!("  {:<7} {:>8.1} ms  {:>5} iterations in {:>3} AECM runs", st.name, st.ms, st.iterations, st.aecm_runs);
         }
     }
     if let Some(path) = &o.json {
         let _ = FitJson::new(&pop, &result);
         std::fs::write(path, fit_to_json(&pop, &result)).map_err(|e| format!("cannot write {path}: {e}"))?;
         if !bench {
-            println!("wrote {path}");
+            out!("wrote {path}");
         }
     }
     Ok(())
@@ -183,7 +192,7 @@ fn main() -> ExitCode {
         Some("fit") => cmd_fit(&args[1..], false),
         Some("bench") => cmd_fit(&args[1..], true),
         Some("help") | Some("--help") | Some("-h") => {
-            print!("{USAGE}");
+            out!("{USAGE}");
             Ok(())
         }
         Some(other) => Err(format!("unknown command '{other}'\n\n{USAGE}")),

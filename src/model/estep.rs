@@ -33,6 +33,73 @@ pub fn e_step(data: &Data, comps: &[Component], gamma: &mut Vec<f64>) -> f64 {
     ll
 }
 
+/// Components more than this many nats below a vertex's best one contribute less than e^-60 ≈ 1e-26 to
+/// its responsibilities: below f64 rounding of the sum. They are skipped until the next full E-step.
+pub const ACTIVE_MARGIN: f64 = 60.0;
+
+/// For every vertex, the components within [`ACTIVE_MARGIN`] nats of its best one at the last full E-step
+/// (compressed rows: `idx[ptr[j]..ptr[j+1]]`).
+#[derive(Debug, Clone, Default)]
+pub struct ActiveSets {
+    pub ptr: Vec<u32>,
+    pub idx: Vec<u32>,
+}
+
+impl ActiveSets {
+    pub fn pairs(&self) -> usize {
+        self.idx.len()
+    }
+}
+
+/// Full E-step that also records, per vertex, which components are within the margin.
+pub fn e_step_full(data: &Data, comps: &[Component], gamma: &mut Vec<f64>, active: &mut ActiveSets) -> f64 {
+    let m = comps.len();
+    let wbs: Vec<Woodbury> = comps.iter().map(|c| c.woodbury()).collect();
+    gamma.clear();
+    gamma.resize(data.n_vertices * m, 0.0);
+    active.ptr.clear();
+    active.idx.clear();
+    active.ptr.push(0);
+    let mut ll = 0.0;
+    for j in 0..data.n_vertices {
+        let row = &mut gamma[j * m..(j + 1) * m];
+        log_densities(data.vertex(j), comps, &wbs, row);
+        let mx = row.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        for (k, &v) in row.iter().enumerate() {
+            if v >= mx - ACTIVE_MARGIN || !mx.is_finite() {
+                active.idx.push(k as u32);
+            }
+        }
+        active.ptr.push(active.idx.len() as u32);
+        ll += normalise_log_row(row);
+    }
+    ll
+}
+
+/// E-step over the active sets only (the other responsibilities are set to 0).
+pub fn e_step_active(data: &Data, comps: &[Component], gamma: &mut [f64], active: &ActiveSets) -> f64 {
+    let m = comps.len();
+    let wbs: Vec<Woodbury> = comps.iter().map(|c| c.woodbury()).collect();
+    let mut buf = vec![0.0; m];
+    let mut ll = 0.0;
+    for j in 0..data.n_vertices {
+        let ks = &active.idx[active.ptr[j] as usize..active.ptr[j + 1] as usize];
+        let h = data.vertex(j);
+        let b = &mut buf[..ks.len()];
+        for (slot, &k) in b.iter_mut().zip(ks) {
+            let k = k as usize;
+            *slot = comps[k].log_weighted_density(&wbs[k], h);
+        }
+        ll += normalise_log_row(b);
+        let row = &mut gamma[j * m..(j + 1) * m];
+        row.iter_mut().for_each(|g| *g = 0.0);
+        for (&g, &k) in b.iter().zip(ks) {
+            row[k as usize] = g;
+        }
+    }
+    ll
+}
+
 /// Turns a row of log-weights into probabilities in place; returns log Σ exp(row).
 #[inline]
 pub fn normalise_log_row(row: &mut [f64]) -> f64 {
@@ -45,7 +112,8 @@ pub fn normalise_log_row(row: &mut [f64]) -> f64 {
     }
     let mut s = 0.0;
     for g in row.iter_mut() {
-        *g = (*g - mx).exp();
+        // far below the best: exactly 0 after rounding anyway; skipping exp avoids its slow underflow path
+        *g = if *g < mx - 2.0 * ACTIVE_MARGIN { 0.0 } else { (*g - mx).exp() };
         s += *g;
     }
     let inv = 1.0 / s;

@@ -79,17 +79,64 @@ pub struct FitResult {
 }
 
 struct Refinement {
-    coarse_labels: Vec<u32>,
     members: Vec<Vec<usize>>,
     part: usize,
     /// Current trial: m_k and its fit.
     sub_parts: usize,
     fit: Fit,
-    /// Best accepted so far for this part: (err, local labels, m_k).
-    best: Option<(f64, Vec<u32>)>,
+    /// Best accepted fit so far for this part.
+    best: Option<Best>,
+    /// The split of the current best was already retried with the other rule.
+    retried: bool,
     /// Refined labels accumulated over parts (global ids), u32::MAX = not yet assigned.
     refined: Vec<u32>,
     next_label: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SplitRule {
+    Positions,
+    Residuals,
+}
+
+struct Best {
+    err: f64,
+    /// Labels renumbered 0.. (what is kept).
+    local: Vec<u32>,
+    /// Labels as the fit numbers its components (what the next split starts from).
+    raw: Vec<u32>,
+    /// The worst sub-part: its local vertex ids, and their residual vectors (3 n_s each, flat).
+    worst: (Vec<usize>, Vec<f64>),
+}
+
+/// The component with the largest mass x mean variance, its vertices (local ids) and their residuals
+/// h_j - (R Λ E[z|h_j] + b).
+fn worst_component(fit: &Fit) -> (Vec<usize>, Vec<f64>) {
+    let comps = fit.components();
+    let labels = fit.labels();
+    let score = |k: usize| comps[k].weight * comps[k].variances.iter().sum::<f64>();
+    let worst = (0..comps.len())
+        .max_by(|&a, &b| score(a).partial_cmp(&score(b)).unwrap_or(std::cmp::Ordering::Equal))
+        .unwrap_or(0);
+    let c = &comps[worst];
+    let wb = c.woodbury();
+    let data = fit.data();
+    let mut members = Vec::new();
+    let mut residuals = Vec::new();
+    for (j, &l) in labels.iter().enumerate() {
+        if l as usize != worst {
+            continue;
+        }
+        members.push(j);
+        let h = data.vertex(j);
+        let e = c.posterior_mean(&wb, h);
+        let v = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
+        for (i, p) in h.iter().enumerate() {
+            let q = c.place(i, v);
+            residuals.extend_from_slice(&[p[0] - q[0], p[1] - q[1], p[2] - q[2]]);
+        }
+    }
+    (members, residuals)
 }
 
 enum State {
@@ -258,7 +305,7 @@ impl Pipeline {
     }
 
     fn sub_params(&self) -> Params {
-        Params { max_iter: self.params.refine_max_iter, ..self.params.clone() }
+        Params { max_iter: self.params.refine_max_iter, tol: self.params.refine_tol, ..self.params.clone() }
     }
 
     fn start_refinement(&mut self) -> Result<State> {
@@ -275,89 +322,109 @@ impl Pipeline {
             &self.sub_params(),
         )?;
         Ok(State::Refine(Box::new(Refinement {
-            coarse_labels: labels.clone(),
             refined: vec![u32::MAX; labels.len()],
             members,
             part: 0,
             sub_parts: 1,
             fit,
             best: None,
+            retried: false,
             next_label: 0,
         })))
     }
 
-    /// Decides after a refinement run: try one more sub-part, or accept and go to the next coarse part.
+    /// Decides after a refinement run: try one more sub-part, retry the split another way, or accept and go
+    /// to the next coarse part.
     fn refine_next(&mut self, mut r: Box<Refinement>, done: Fit) -> Result<State> {
         let err = done.mean_variance();
         let died = done.n_parts() < r.sub_parts;
-        if std::env::var("POSEMFA_DEBUG").is_ok() {
-            eprintln!("part {} ({} v) m_k={} err={:.3e} died={} iters={}", r.part, r.members[r.part].len(), r.sub_parts, err, died, done.iterations());
+        if std::env::var_os("POSEMFA_DEBUG").is_some() {
+            eprintln!(
+                "refine part {} ({} vertices) m_k={} err={:.3e} died={died} iterations={} retry={}",
+                r.part,
+                r.members[r.part].len(),
+                r.sub_parts,
+                err,
+                done.iterations(),
+                r.retried
+            );
         }
         let improved = match &r.best {
             None => true,
-            Some((best_err, _)) => !died && err < (1.0 - self.params.refine_min_gain) * best_err,
+            Some(b) => !died && err < (1.0 - self.params.refine_min_gain) * b.err,
         };
-        if improved {
-            r.best = Some((err, compact(&done.labels())));
-        }
         let n_members = r.members[r.part].len();
-        let can_grow = improved
-            && err >= self.params.refine_threshold
-            && r.sub_parts < self.params.max_subparts
+        let room = r.sub_parts < self.params.max_subparts
             && n_members >= (r.sub_parts + 1) * 2 * self.params.min_part_vertices;
-        if can_grow {
-            // Greedy split: the sub-part with the largest mass x variance is cut in two by 2-means on its
-            // vertices; the others keep their vertices. Nested starts make err decrease far more reliably
-            // than fresh k-means with m_k + 1 (which is what made the part count swing between seeds).
-            let labels = done.labels();
-            let comps = done.components();
-            let worst = (0..comps.len())
-                .max_by(|&a, &b| {
-                    let e = |k: usize| comps[k].weight * comps[k].variances.iter().sum::<f64>();
-                    e(a).partial_cmp(&e(b)).unwrap_or(std::cmp::Ordering::Equal)
-                })
-                .unwrap_or(0) as u32;
-            let mem = &r.members[r.part];
-            let local_w: Vec<usize> = (0..mem.len()).filter(|&l| labels[l] == worst).collect();
-            let global_w: Vec<usize> = local_w.iter().map(|&l| mem[l]).collect();
-            let mut new_labels = labels.clone();
-            if global_w.len() >= 2 * self.params.min_part_vertices {
-                let halves = super::init::kmeans(
-                    &Data::from_population_subset(&self.pop, &global_w),
-                    2,
-                    self.params.seed.wrapping_add(r.part as u64 * 1000 + r.sub_parts as u64),
-                    self.params.restarts,
-                );
-                for (&l, &hlf) in local_w.iter().zip(&halves) {
-                    if hlf == 1 {
-                        new_labels[l] = comps.len() as u32;
-                    }
-                }
+        if improved {
+            let raw = done.labels();
+            let worst = worst_component(&done);
+            r.best = Some(Best { err, local: compact(&raw), raw, worst });
+            r.retried = false;
+            if err >= self.params.refine_threshold && room {
+                let labels = self.split(&r, SplitRule::Positions);
+                r.sub_parts += 1;
+                r.fit = self.sub_fit(&r, &labels)?;
+                return Ok(State::Refine(r));
             }
-            r.sub_parts += 1;
-            r.fit = Fit::from_labels(Data::from_population_subset(&self.pop, mem), &new_labels, &self.sub_params())?;
+        } else if !r.retried && r.sub_parts > 1 {
+            // The split of the worst sub-part by positions did not pay: cut it by its rigid-fit residuals
+            // instead (a different boundary) before giving up on this part.
+            r.retried = true;
+            let labels = self.split(&r, SplitRule::Residuals);
+            r.fit = self.sub_fit(&r, &labels)?;
             return Ok(State::Refine(r));
         }
         // accept the best labelling of this part
-        let (_, local) = r.best.take().expect("the first run of a part is always accepted");
-        let n_local = local.iter().map(|&l| l + 1).max().unwrap_or(1);
-        for (&j, &l) in r.members[r.part].iter().zip(&local) {
+        let best = r.best.take().expect("the first run of a part is always accepted");
+        let n_local = best.local.iter().map(|&l| l + 1).max().unwrap_or(1);
+        for (&j, &l) in r.members[r.part].iter().zip(&best.local) {
             r.refined[j] = r.next_label + l;
         }
         r.next_label += n_local;
         r.part += 1;
+        r.retried = false;
         if r.part < r.members.len() {
             r.sub_parts = 1;
-            let mem = &r.members[r.part];
-            r.fit = Fit::from_labels(Data::from_population_subset(&self.pop, mem), &vec![0; mem.len()], &self.sub_params())?;
+            let n = r.members[r.part].len();
+            r.fit = self.sub_fit(&r, &vec![0; n])?;
             return Ok(State::Refine(r));
         }
         // all parts refined: final stage
-        let _ = &r.coarse_labels;
-        self.refined_labels = r.refined.clone();
+        self.refined_labels = std::mem::take(&mut r.refined);
         self.close_stage(Some("final"));
         let fit = Fit::from_labels(Data::from_population(&self.pop), &self.refined_labels, &self.params)?;
         Ok(State::Final(fit))
+    }
+
+    fn sub_fit(&self, r: &Refinement, labels: &[u32]) -> Result<Fit> {
+        Fit::from_labels(Data::from_population_subset(&self.pop, &r.members[r.part]), labels, &self.sub_params())
+    }
+
+    /// Labels of the best fit so far with its worst sub-part cut in two by 2-means (on the vertices'
+    /// positions over all shapes, or on their residuals under that sub-part's rigid motion).
+    fn split(&self, r: &Refinement, rule: SplitRule) -> Vec<u32> {
+        let best = r.best.as_ref().expect("split needs an accepted fit");
+        let mem = &r.members[r.part];
+        let (worst, residuals) = (&best.worst.0, &best.worst.1);
+        let mut labels = best.raw.clone();
+        let new_label = labels.iter().copied().max().unwrap_or(0) + 1;
+        if worst.len() < 2 * self.params.min_part_vertices {
+            return labels;
+        }
+        let global: Vec<usize> = worst.iter().map(|&l| mem[l]).collect();
+        let mut data = Data::from_population_subset(&self.pop, &global);
+        if rule == SplitRule::Residuals {
+            data.h = residuals.clone();
+        }
+        let seed = self.params.seed.wrapping_add(1000 * r.part as u64 + r.sub_parts as u64);
+        let halves = super::init::kmeans(&data, 2, seed, self.params.restarts);
+        for (&l, &half) in worst.iter().zip(&halves) {
+            if half == 1 {
+                labels[l] = new_label;
+            }
+        }
+        labels
     }
 
     /// Runs to the end; `observer` sees every iteration and returns false to stop (the best state so far

@@ -46,6 +46,9 @@ pub struct Params {
     pub min_part_vertices: usize,
     /// Iteration cap of each small AECM run inside the refinement. Default 60.
     pub refine_max_iter: usize,
+    /// Convergence tolerance of the small AECM runs inside the refinement (they only decide how many
+    /// sub-parts a coarse part gets, and start the final stage). Default 1e-3.
+    pub refine_tol: f64,
 }
 
 impl Default for Params {
@@ -64,6 +67,7 @@ impl Default for Params {
             refine_min_gain: 0.1,
             min_part_vertices: 4,
             refine_max_iter: 60,
+            refine_tol: 1e-3,
         }
     }
 }
@@ -98,6 +102,9 @@ impl Params {
         }
         if self.min_part_vertices == 0 {
             return bad("min_part_vertices must be at least 1".into());
+        }
+        if !(self.refine_tol > 0.0 && self.refine_tol.is_finite()) {
+            return bad(format!("refine_tol = {} must be a positive number (try 1e-2)", self.refine_tol));
         }
         if self.refine_max_iter == 0 {
             return bad("refine_max_iter must be at least 1".into());
