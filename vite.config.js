@@ -1,0 +1,18 @@
+// The page: index.html at the repository root, its code in www/, the wasm bindings in www/pkg/
+// (scripts/build-wasm.sh). `base: './'` keeps every URL relative, so dist/ works from any static host or folder.
+import { defineConfig } from 'vite';
+
+const ignored = ['**/target/**', '**/node_modules/**', '**/dist/**', '**/pkg-node/**', '**/.git/**', '**/test-results/**'];
+
+export default defineConfig({
+  root: '.',
+  base: './',
+  publicDir: false,
+  // Scan only the page for dependencies (not target/, which holds HTML of its own).
+  optimizeDeps: { entries: ['index.html'] },
+  server: { host: '127.0.0.1', port: 5173, strictPort: false, watch: { ignored } },
+  preview: { host: '127.0.0.1', port: 4173, strictPort: false },
+  // www/main.js starts www/worker.js as a module worker ({ type: 'module' }): keep it an ES module when built.
+  worker: { format: 'es' },
+  build: { outDir: 'dist', emptyOutDir: true, target: 'es2022', assetsInlineLimit: 0 },
+});
