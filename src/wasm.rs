@@ -272,3 +272,9 @@ impl FitModel {
         crate::export::json::fit_to_json(&self.pop, &self.result)
     }
 }
+
+/// The default fit parameters as a plain object (camelCase fields of `Params`), for the page's form.
+#[wasm_bindgen(js_name = defaultParams)]
+pub fn default_params() -> Result<JsValue, JsError> {
+    to_js(&Params::default())
+}

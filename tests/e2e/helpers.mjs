@@ -1,0 +1,231 @@
+// Shared by the page tests and scripts/bench-page.mjs: a tiny static server for dist/, a headless Chromium
+// (Debian's, through playwright-core), and OBJ text of small generated articulated populations.
+import http from 'node:http';
+import { readFile, stat } from 'node:fs/promises';
+import { extname, join, normalize, resolve, sep } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+
+export const ROOT = resolve(fileURLToPath(new URL('../..', import.meta.url)));
+
+const TYPES = {
+  '.html': 'text/html; charset=utf-8',
+  '.js': 'text/javascript; charset=utf-8',
+  '.mjs': 'text/javascript; charset=utf-8',
+  '.css': 'text/css; charset=utf-8',
+  '.wasm': 'application/wasm',
+  '.json': 'application/json',
+  '.svg': 'image/svg+xml',
+  '.png': 'image/png',
+};
+
+/** Serves `dir` (default dist/) on a free loopback port; returns { url, close, requests }. */
+export async function serveStatic(dir = join(ROOT, 'dist')) {
+  const root = resolve(dir);
+  await stat(join(root, 'index.html')).catch(() => {
+    throw new Error(`${root}/index.html is missing: build the page first (npm run build)`);
+  });
+  const requests = [];
+  const server = http.createServer(async (req, res) => {
+    const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
+    requests.push(path);
+    const file = normalize(join(root, path.endsWith('/') ? `${path}index.html` : path));
+    if (!file.startsWith(root + sep) && file !== root) {
+      res.writeHead(403).end();
+      return;
+    }
+    try {
+      const body = await readFile(file);
+      res.writeHead(200, { 'content-type': TYPES[extname(file)] ?? 'application/octet-stream', 'cache-control': 'no-store' });
+      res.end(body);
+    } catch {
+      res.writeHead(404).end('not found');
+    }
+  });
+  await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
+  const { port } = server.address();
+  return { url: `http://127.0.0.1:${port}/`, requests, close: () => new Promise((ok) => server.close(ok)) };
+}
+
+// Flags for this closed network; none of them breaks WebGL2 (shared/TOOLCHAIN.md).
+const CHROMIUM_ARGS = [
+  '--no-sandbox', '--disable-background-networking', '--disable-component-update', '--disable-sync',
+  '--no-first-run', '--disable-default-apps', '--disable-extensions', '--disable-quic',
+  '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+];
+
+/** Headless Chromium with a fresh profile (launchPersistentContext would keep one; launch makes a new one). */
+export async function launch() {
+  return chromium.launch({
+    executablePath: process.env.POSEMFA_CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: CHROMIUM_ARGS,
+  });
+}
+
+/** A page at 1280x800 that records console errors, page errors, dialogs and requests leaving loopback. */
+export async function openPage(browser, url, { width = 1280, height = 800 } = {}) {
+  const context = await browser.newContext({ viewport: { width, height } });
+  const page = await context.newPage();
+  const log = { errors: [], dialogs: [], external: [] };
+  page.on('pageerror', (e) => log.errors.push(String(e)));
+  page.on('console', (m) => m.type() === 'error' && log.errors.push(m.text()));
+  page.on('dialog', (d) => {
+    log.dialogs.push(d.message());
+    d.dismiss();
+  });
+  page.on('request', (r) => {
+    const u = new URL(r.url());
+    if (!['127.0.0.1', 'localhost'].includes(u.hostname) && !['data:', 'blob:'].includes(u.protocol)) log.external.push(r.url());
+  });
+  await page.goto(url);
+  return { page, context, log };
+}
+
+/** Waits until document.body.dataset.state is one of `states`; returns it. */
+export async function waitState(page, states, timeout = 60000) {
+  const list = [].concat(states);
+  await page.waitForFunction((l) => l.includes(document.body.dataset.state), list, { timeout, polling: 20 });
+  return page.evaluate(() => document.body.dataset.state);
+}
+
+// ---------------------------------------------------------------- generated populations (OBJ text)
+
+// Small seeded PRNG (mulberry32): the same population on every run.
+function rng(seed) {
+  let a = seed >>> 0;
+  return () => {
+    a = (a + 0x6d2b79f5) >>> 0;
+    let t = a;
+    t = Math.imul(t ^ (t >>> 15), t | 1);
+    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
+    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
+  };
+}
+
+/**
+ * An articulated tube: `segments` rigid pieces of length 1 along x in a chain, each hinged on its parent about
+ * z (and a little about y), posed `poses` times at random angles. Closed at both ends. Returns
+ * { files: [{ name, text }], partOf: part index of every vertex }.
+ */
+export function tubePopulation({ segments = 3, poses = 8, ringsPerSegment = 16, around = 16, radius = 0.16, seed = 7, maxDeg = 70 } = {}) {
+  const random = rng(seed);
+  const rest = [];
+  const partOf = [];
+  const rings = segments * ringsPerSegment + 1;
+  for (let r = 0; r < rings; r++) {
+    const x = r / ringsPerSegment;
+    for (let k = 0; k < around; k++) {
+      const a = (2 * Math.PI * k) / around;
+      rest.push([x, radius * Math.cos(a), radius * Math.sin(a)]);
+      partOf.push(Math.min(Math.floor(r / ringsPerSegment), segments - 1));
+    }
+  }
+  rest.push([-0.04, 0, 0]); // end caps' centres
+  partOf.push(0);
+  rest.push([segments + 0.04, 0, 0]);
+  partOf.push(segments - 1);
+  const faces = [];
+  for (let r = 0; r + 1 < rings; r++) {
+    for (let k = 0; k < around; k++) {
+      const a = r * around + k;
+      const b = r * around + ((k + 1) % around);
+      const c = a + around;
+      const d = b + around;
+      faces.push([a, c, b], [b, c, d]);
+    }
+  }
+  const c0 = rings * around;
+  const c1 = c0 + 1;
+  for (let k = 0; k < around; k++) {
+    faces.push([c0, k, (k + 1) % around]);
+    const last = (rings - 1) * around;
+    faces.push([c1, last + ((k + 1) % around), last + k]);
+  }
+  const files = [];
+  for (let p = 0; p < poses; p++) {
+    // Chain of rotations: segment s turns by angle[s] about z (and tilt[s] about y) at its joint x = s.
+    const transforms = [{ R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]], t: [0, 0, 0] }];
+    for (let s = 1; s < segments; s++) {
+      const az = ((random() * 2 - 1) * maxDeg * Math.PI) / 180;
+      const ay = ((random() * 2 - 1) * maxDeg * 0.3 * Math.PI) / 180;
+      const Rz = [[Math.cos(az), -Math.sin(az), 0], [Math.sin(az), Math.cos(az), 0], [0, 0, 1]];
+      const Ry = [[Math.cos(ay), 0, Math.sin(ay)], [0, 1, 0], [-Math.sin(ay), 0, Math.cos(ay)]];
+      const local = mul(Rz, Ry);
+      const parent = transforms[s - 1];
+      const R = mul(parent.R, local);
+      const joint = apply(parent, [s, 0, 0]); // the joint moves with the parent
+      // x -> R (x - j) + joint(world)
+      const t = sub(joint, mulv(R, [s, 0, 0]));
+      transforms.push({ R, t });
+    }
+    const lines = [`# articulated tube, ${segments} parts, pose ${p + 1} of ${poses}`];
+    rest.forEach((v, i) => {
+      const w = apply(transforms[partOf[i]], v);
+      lines.push(`v ${w.map((c) => c.toFixed(6)).join(' ')}`);
+    });
+    for (const f of faces) lines.push(`f ${f[0] + 1} ${f[1] + 1} ${f[2] + 1}`);
+    files.push({ name: `tube${p + 1}.obj`, text: lines.join('\n') + '\n' });
+  }
+  return { files, partOf, nVertices: rest.length };
+}
+
+function mul(A, B) {
+  return A.map((row) => [0, 1, 2].map((j) => row[0] * B[0][j] + row[1] * B[1][j] + row[2] * B[2][j]));
+}
+function mulv(A, v) {
+  return A.map((row) => row[0] * v[0] + row[1] * v[1] + row[2] * v[2]);
+}
+function sub(a, b) {
+  return a.map((x, i) => x - b[i]);
+}
+function apply({ R, t }, v) {
+  return mulv(R, v).map((x, i) => x + t[i]);
+}
+
+/** Files for page.setInputFiles. */
+export const asPayload = (files) => files.map((f) => ({ name: f.name, mimeType: 'text/plain', buffer: Buffer.from(f.text) }));
+
+/**
+ * Counts, on the view's canvas, the pixels of each palette colour (exact within `tol` per channel; use the
+ * page's "Flat colours" mode so that shading does not change them). Returns { [hex]: pixels }.
+ */
+export async function paletteCounts(page, tol = 3) {
+  return page.evaluate((tol) => {
+    const src = document.querySelector('#view canvas');
+    const c = document.createElement('canvas');
+    c.width = src.width;
+    c.height = src.height;
+    const g = c.getContext('2d');
+    g.drawImage(src, 0, 0);
+    const { data } = g.getImageData(0, 0, c.width, c.height);
+    const pal = window.posemfa.palette.map((h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16)));
+    const counts = Object.fromEntries(window.posemfa.palette.map((h) => [h, 0]));
+    for (let p = 0; p < data.length; p += 4) {
+      for (let k = 0; k < pal.length; k++) {
+        const q = pal[k];
+        if (Math.abs(data[p] - q[0]) <= tol && Math.abs(data[p + 1] - q[1]) <= tol && Math.abs(data[p + 2] - q[2]) <= tol) {
+          counts[window.posemfa.palette[k]]++;
+          break;
+        }
+      }
+    }
+    return counts;
+  }, tol);
+}
+
+/** A hash-like fingerprint of the view's canvas pixels (to tell whether the picture changed). */
+export async function canvasFingerprint(page) {
+  return page.evaluate(() => {
+    const src = document.querySelector('#view canvas');
+    const c = document.createElement('canvas');
+    c.width = src.width;
+    c.height = src.height;
+    const g = c.getContext('2d');
+    g.drawImage(src, 0, 0);
+    const { data } = g.getImageData(0, 0, c.width, c.height);
+    let h = 2166136261;
+    for (let i = 0; i < data.length; i++) h = Math.imul(h ^ data[i], 16777619);
+    return h >>> 0;
+  });
+}

@@ -1,0 +1,228 @@
+// The built page (dist/) in headless Chromium, through its test contract: document.body.dataset.state,
+// the data-testid elements, window.posemfa.summary(). Populations are generated here (helpers.mjs).
+// Run: npm run build && node --test tests/e2e/
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { zipSync, strToU8 } from 'fflate';
+import {
+  serveStatic, launch, openPage, waitState, tubePopulation, asPayload, paletteCounts, canvasFingerprint,
+} from './helpers.mjs';
+
+let server;
+let browser;
+before(async () => {
+  server = await serveStatic();
+  browser = await launch();
+});
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+const SUMMARY_KEYS = ['shapes', 'vertices', 'parts', 'rmse', 'iterations', 'fitMs'];
+const summary = (page) => page.evaluate(() => window.posemfa.summary());
+
+// Opens the page and waits until it has settled (its default fitted, or idle in a build without one).
+async function fresh(opts) {
+  const p = await openPage(browser, server.url, opts);
+  await waitState(p.page, ['fitted', 'idle', 'error'], 60000);
+  return p;
+}
+
+// Picks files through the file input with the given initial part count; waits until that fit has ended.
+async function fitFiles(page, files, { parts } = {}) {
+  if (parts) await page.fill('#params input[name=parts]', String(parts));
+  const counts = await page.evaluate(() => [window.posemfa.fitCount(), window.posemfa.loadErrorCount()]);
+  await page.setInputFiles('[data-testid=file-input]', asPayload(files));
+  return waitFit(page, counts);
+}
+
+// Waits until one more fit has ended, or the load was refused; returns the state.
+async function waitFit(page, [fits, loadErrors], timeout = 60000) {
+  await page.waitForFunction(([f, l]) => window.posemfa.fitCount() > f || window.posemfa.loadErrorCount() > l, [fits, loadErrors], { timeout, polling: 20 })
+    .catch(async (e) => { throw new Error(`${e.message}; errors shown: ${await page.locator('[data-testid=errors]').innerText()}`); });
+  if (await page.evaluate((l) => window.posemfa.loadErrorCount() > l, loadErrors)) {
+    throw new Error(`the files were refused: ${await page.locator('[data-testid=errors]').innerText()}`);
+  }
+  return page.evaluate(() => document.body.dataset.state);
+}
+
+const counters = (page) => page.evaluate(() => [window.posemfa.fitCount(), window.posemfa.loadErrorCount()]);
+
+test('a population picked through the file input is fitted and its parts are coloured on screen', async () => {
+  const { page, context, log } = await fresh();
+  const tube = tubePopulation({ segments: 3, poses: 8, seed: 3 });
+  assert.equal(await fitFiles(page, tube.files, { parts: 3 }), 'fitted');
+  const s = await summary(page);
+  for (const k of SUMMARY_KEYS) assert.equal(typeof s[k], 'number', `summary.${k} = ${s[k]}`);
+  assert.equal(s.shapes, 8);
+  assert.equal(s.vertices, tube.nVertices);
+  assert.ok(s.parts >= 3 && s.parts <= 12, `a 3-part tube gave ${s.parts} parts`);
+  assert.ok(s.rmse < 1e-3, `rmse ${s.rmse}: the tube's parts are exactly rigid`);
+  assert.equal(await page.locator('[data-testid=parts-count]').innerText(), String(s.parts));
+
+  // Flat colours: the canvas shows the palette colours exactly; every part of the bent tube faces the camera.
+  await page.check('#flat');
+  await page.waitForTimeout(200);
+  const counts = await paletteCounts(page);
+  const partColours = await page.evaluate(() => window.posemfa.partColours());
+  assert.equal(partColours.length, s.parts);
+  const used = new Set(partColours);
+  const onScreen = Object.entries(counts).filter(([, n]) => n >= 50).map(([c]) => c);
+  assert.ok(onScreen.length >= Math.min(s.parts, used.size), `colours on screen ${JSON.stringify(counts)}, parts ${s.parts}`);
+  for (const c of onScreen) assert.ok(used.has(c), `${c} on screen is no part's colour`);
+  // Adjacent parts never share a colour: with this palette every part of a 3-12 part tube has its own.
+  assert.equal(used.size, Math.min(s.parts, (await page.evaluate(() => window.posemfa.palette)).length));
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('the interpolation slider changes the geometry', async () => {
+  const { page, context } = await fresh();
+  const tube = tubePopulation({ segments: 3, poses: 6, seed: 5 });
+  assert.equal(await fitFiles(page, tube.files, { parts: 3 }), 'fitted');
+  await page.check('#modes input[value=interp]', { force: true });
+  await page.selectOption('#pose-a', '0');
+  await page.selectOption('#pose-b', '3');
+  const setT = async (t) => {
+    await page.fill('[data-testid=interp-t]', String(t));
+    await page.waitForFunction((t) => document.querySelector('#caption').textContent.includes(`t = ${t.toFixed(2)}`), t);
+    await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+    return canvasFingerprint(page);
+  };
+  const at0 = await setT(0);
+  const atHalf = await setT(0.5);
+  const at1 = await setT(1);
+  assert.notEqual(at0, atHalf);
+  assert.notEqual(atHalf, at1);
+  assert.notEqual(at0, at1);
+  assert.equal(await setT(0), at0, 'the same t draws the same picture');
+  await context.close();
+});
+
+test('a malformed file lists its error and keeps the previous population and model', async () => {
+  const { page, context } = await fresh();
+  const tube = tubePopulation({ segments: 3, poses: 5, seed: 9 });
+  assert.equal(await fitFiles(page, tube.files, { parts: 3 }), 'fitted');
+  const before = await summary(page);
+  const shownBefore = await page.locator('#pop-info').innerText();
+  const bad = { name: 'broken.obj', text: 'v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n' };
+  await page.setInputFiles('[data-testid=file-input]', asPayload([bad, tube.files[0]]));
+  await page.waitForFunction(() => document.querySelector('[data-testid=errors]').textContent.includes('broken.obj'));
+  const errors = await page.locator('[data-testid=errors]').innerText();
+  assert.match(errors, /broken\.obj, line 2: /);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  assert.deepEqual(await summary(page), before);
+  assert.equal(await page.locator('#pop-info').innerText(), shownBefore);
+  assert.equal(await page.locator('[data-testid=parts-count]').innerText(), String(before.parts));
+  await context.close();
+});
+
+test('file names are shown as text, never as HTML', async () => {
+  const { page, context, log } = await fresh();
+  const name = '<img src=x onerror=alert(1)>.obj';
+  await page.setInputFiles('[data-testid=file-input]', asPayload([{ name, text: 'v 0 0 0\nv 1 1\n' }, { name: 'b.obj', text: 'v 0 0 0\n' }]));
+  await page.waitForFunction((n) => document.querySelector('[data-testid=errors]').textContent.includes(n), name);
+  await page.waitForTimeout(300);
+  assert.equal(await page.locator('[data-testid=errors] img').count(), 0);
+  assert.ok((await page.locator('[data-testid=errors]').innerText()).includes(name));
+  assert.ok(await page.getByText(name, { exact: false }).first().isVisible());
+  assert.deepEqual(log.dialogs, []);
+
+  // A valid population with such names lists them as text too.
+  const tube = tubePopulation({ segments: 2, poses: 3, seed: 2 });
+  tube.files[0].name = name;
+  assert.equal(await fitFiles(page, tube.files, { parts: 2 }), 'fitted');
+  assert.equal(await page.locator('#names img, #pose-strip img, #caption img').count(), 0);
+  assert.ok((await page.locator('#names').textContent()).includes(name));
+  assert.deepEqual(log.dialogs, []);
+  await context.close();
+});
+
+test('a dropped .zip is opened, natural-sorted and fitted', async () => {
+  const { page, context } = await fresh();
+  const tube = tubePopulation({ segments: 2, poses: 10, seed: 4 });
+  // pose10 must come after pose9: natural order, not text order.
+  const entries = Object.fromEntries(tube.files.map((f, i) => [`poses/p${i + 1}.obj`, strToU8(f.text)]));
+  entries['poses/readme.txt'] = strToU8('not a mesh');
+  const zip = Buffer.from(zipSync(entries));
+  const n = await counters(page);
+  await page.evaluate(async (b64) => {
+    const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+    const dt = new DataTransfer();
+    dt.items.add(new File([bytes], 'tube.zip', { type: 'application/zip' }));
+    window.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  }, zip.toString('base64'));
+  assert.equal(await waitFit(page, n), 'fitted');
+  const names = await page.locator('#names li').allTextContents();
+  assert.deepEqual(names, tube.files.map((_, i) => `tube.zip/poses/p${i + 1}.obj`));
+  assert.equal((await summary(page)).shapes, 10);
+  await context.close();
+});
+
+test('Cancel stops a fit within a slice and keeps its best state so far', async () => {
+  const { page, context } = await fresh();
+  // A tolerance no fit reaches: the coarse stage would run to its iteration cap (seconds to minutes).
+  const big = tubePopulation({ segments: 5, poses: 24, ringsPerSegment: 60, around: 40, seed: 11 });
+  await page.fill('#params input[name=parts]', '11');
+  await page.fill('#params input[name=tol]', '1e-12');
+  const n = await counters(page);
+  await page.setInputFiles('[data-testid=file-input]', asPayload(big.files));
+  await waitState(page, ['fitting'], 60000);
+  await page.waitForFunction(() => /\d/.test(document.querySelector('#iteration').textContent));
+  await page.waitForTimeout(300);
+  const t0 = Date.now();
+  await page.click('#cancel');
+  assert.equal(await waitFit(page, n, 30000), 'fitted');
+  const waited = Date.now() - t0;
+  assert.ok(waited < 3000, `the cancel took ${waited} ms to be seen`);
+  const s = await summary(page);
+  assert.equal(s.cancelled, true);
+  assert.equal(s.complete, false);
+  assert.ok(s.parts >= 1 && s.vertices === big.nVertices && Number.isFinite(s.rmse));
+  assert.match(await page.locator('#stage').innerText(), /cancelled/);
+  assert.ok(await page.locator('#cancel').isDisabled());
+  assert.notEqual(await page.locator('[data-testid=parts-count]').innerText(), '–');
+  await context.close();
+});
+
+test('the OBJ export writes the shown pose in the original units', async () => {
+  const { page, context } = await fresh();
+  const tube = tubePopulation({ segments: 2, poses: 4, seed: 6 });
+  // Move and scale the population away from the unit box, so that the normalisation matters.
+  const moved = tube.files.map((f) => ({
+    name: f.name,
+    text: f.text.replace(/^v (\S+) (\S+) (\S+)$/gm, (_, x, y, z) => `v ${(+x * 40 + 100).toFixed(4)} ${(+y * 40 - 7).toFixed(4)} ${(+z * 40).toFixed(4)}`),
+  }));
+  assert.equal(await fitFiles(page, moved, { parts: 2 }), 'fitted');
+  await page.click('#pose-strip button:nth-child(3)');
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-obj')]);
+  const text = await (await import('node:fs/promises')).readFile(await download.path(), 'utf8');
+  const verts = (t) => [...t.matchAll(/^v (\S+) (\S+) (\S+)$/gm)].map((m) => m.slice(1, 4).map(Number));
+  const got = verts(text);
+  const want = verts(moved[2].text);
+  assert.equal(got.length, want.length);
+  let worst = 0;
+  got.forEach((v, i) => v.forEach((c, k) => { worst = Math.max(worst, Math.abs(c - want[i][k])); }));
+  assert.ok(worst < 1e-3, `largest coordinate difference ${worst}`);
+  assert.equal([...text.matchAll(/^f /gm)].length, [...moved[2].text.matchAll(/^f /gm)].length);
+  await context.close();
+});
+
+test('works on a narrow window, the canvas follows its size, and the controls are keyboard reachable', async () => {
+  const { page, context } = await fresh({ width: 420, height: 860 });
+  const w = await page.evaluate(() => document.querySelector('#view canvas').getBoundingClientRect().width);
+  assert.ok(w > 200 && w <= 420, `canvas width ${w}`);
+  const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+  assert.ok(overflow <= 0, `page wider than the window by ${overflow}px`);
+  await page.setViewportSize({ width: 1280, height: 800 });
+  await page.waitForFunction(() => document.querySelector('#view canvas').getBoundingClientRect().width > 700);
+
+  const reached = new Set();
+  for (let i = 0; i < 40; i++) {
+    await page.keyboard.press('Tab');
+    reached.add(await page.evaluate(() => document.activeElement?.id || document.activeElement?.getAttribute('name') || document.activeElement?.tagName));
+  }
+  for (const id of ['file-input', 'parts', 'fit', 'mode', 'flat']) assert.ok(reached.has(id), `${id} not reached by Tab: ${[...reached]}`);
+  await context.close();
+});

@@ -1,0 +1,73 @@
+// Turns what a person drops or picks (OBJ files, folders, .zip archives) into [{ name, bytes }] for the
+// worker. Nothing is parsed here: the Rust importer reads and validates the OBJ text.
+import { unzipSync } from 'fflate';
+
+const collator = new Intl.Collator(undefined, { numeric: true, sensitivity: 'base' });
+export const naturalSort = (items) => items.sort((a, b) => collator.compare(a.name, b.name));
+
+const isObj = (name) => /\.obj$/i.test(name);
+const isZip = (name) => /\.zip$/i.test(name);
+const skip = (name) => /(^|\/)(__MACOSX\/|\.)/.test(name); // resource forks and hidden files
+
+// One File -> entries: an OBJ as is, a zip opened, anything else reported as ignored.
+async function fromFile(file, name, out) {
+  if (isZip(name)) {
+    let entries;
+    try {
+      entries = unzipSync(new Uint8Array(await file.arrayBuffer()), { filter: (f) => isObj(f.name) && !skip(f.name) });
+    } catch (e) {
+      out.problems.push({ file: name, line: null, reason: `cannot open the zip archive (${e.message || e})` });
+      return;
+    }
+    for (const [inner, bytes] of Object.entries(entries)) out.files.push({ name: `${name}/${inner}`, bytes });
+  } else if (isObj(name)) {
+    out.files.push({ name, bytes: new Uint8Array(await file.arrayBuffer()) });
+  } else if (!skip(name)) {
+    out.ignored.push(name);
+  }
+}
+
+const fileOf = (entry) => new Promise((resolve, reject) => entry.file(resolve, reject));
+
+// Chromium returns at most 100 entries per readEntries call: call it until it returns nothing.
+async function readAll(reader) {
+  const all = [];
+  for (;;) {
+    const batch = await new Promise((resolve, reject) => reader.readEntries(resolve, reject));
+    if (batch.length === 0) return all;
+    all.push(...batch);
+  }
+}
+
+async function walk(entry, out) {
+  const name = entry.fullPath.replace(/^\//, '');
+  if (entry.isDirectory) {
+    for (const child of await readAll(entry.createReader())) await walk(child, out);
+  } else if (entry.isFile) {
+    await fromFile(await fileOf(entry), name, out);
+  }
+}
+
+const emptyResult = () => ({ files: [], ignored: [], problems: [] });
+
+/** Files of a drop: folders walked through webkitGetAsEntry, zips opened; natural-sorted by name. */
+export async function filesFromDataTransfer(dt) {
+  const out = emptyResult();
+  // Entries must be taken synchronously, before the first await: the DataTransfer empties afterwards.
+  const entries = [...(dt.items || [])].filter((i) => i.kind === 'file').map((i) => i.webkitGetAsEntry?.());
+  if (entries.length && entries.every(Boolean)) {
+    for (const e of entries) await walk(e, out);
+  } else {
+    for (const f of dt.files) await fromFile(f, f.webkitRelativePath || f.name, out);
+  }
+  naturalSort(out.files);
+  return out;
+}
+
+/** Files of an <input type=file> (multiple files, or a folder with webkitdirectory). */
+export async function filesFromList(list) {
+  const out = emptyResult();
+  for (const f of list) await fromFile(f, f.webkitRelativePath || f.name, out);
+  naturalSort(out.files);
+  return out;
+}

@@ -1,0 +1,691 @@
+// Wires the page to the worker: sends what a person asks for, shows what comes back. Nothing here fits or
+// parses; the worker (and the Rust core in it) does. Test contract: document.body.dataset.state, the
+// data-testid elements of index.html, and window.posemfa (see the end of this file).
+import { Viewer } from './viewer.js';
+import { Plot } from './plot.js';
+import { filesFromDataTransfer, filesFromList } from './drop.js';
+import { labelColours, errorColours, RAMP_CSS, PALETTE } from './colors.js';
+
+const $ = (id) => document.getElementById(id);
+
+// The built-in population: a generated quadruped, small enough to be fitted within a second or two.
+const DEFAULT_SPEC = { preset: 'quadruped', vertices: 2500, poses: 8, seed: 1 };
+const GREY = 0.78;
+const LIVE_MS = 250;
+
+const app = {
+  state: 'loading',
+  defaults: null,
+  features: {},
+  pop: null, // { names, nShapes, nVertices, faces, positions: Float32Array[], normalization, truth, source }
+  model: null, // { summary, labels, coarseLabels, refinedLabels, latent, interpolate, gltf, trace }
+  gen: 0, // bumped whenever the population or the model changes: stale answers are dropped
+  colours: {}, // cached colourings: final, coarse, refined, live, grey
+  pose: 0,
+  mode: 'parts',
+  fitId: null,
+  loadId: null,
+  liveShown: 0,
+  fitCount: 0, // fits ended (finished, cancelled or failed)
+  loadErrorCount: 0, // drops or picks refused (the previous population kept)
+  cache: new Map(), // `${gen}:${method}:${args}` -> query result
+  pick: null, // { slot, vertex }
+  hoverPart: null,
+  shown: [], // what the viewer shows: [{ positions, colours, name }]
+  interp: { playing: false, last: 0, dir: 1, busy: false },
+};
+
+// ------------------------------------------------------------------ worker and its protocol (see worker.js)
+const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+let nextId = 1;
+const waiting = new Map();
+function send(msg, transfer = []) {
+  const id = nextId++;
+  worker.postMessage({ ...msg, id }, transfer);
+  return id;
+}
+function query(method, ...args) {
+  const key = `${app.gen}:${method}:${args.join(',')}`;
+  if (app.cache.has(key)) return Promise.resolve(app.cache.get(key));
+  return new Promise((resolve, reject) => {
+    const id = send({ type: 'query', method, args });
+    waiting.set(id, { resolve, reject, key, gen: app.gen });
+  });
+}
+
+worker.onmessage = ({ data: m }) => {
+  switch (m.type) {
+    case 'ready': return onReady(m);
+    case 'fatal': showProblems([{ reason: m.message }]); return setState('error');
+    case 'loaded': if (m.id === app.loadId) onLoaded(m.population); return;
+    case 'load-error': if (m.id === app.loadId) onLoadError(m.problems); return;
+    case 'progress': if (m.id === app.fitId) onProgress(m); return;
+    case 'fitted': if (m.id === app.fitId) onFitted(m); return;
+    case 'fit-error': if (m.id === app.fitId) onFitError(m.message); return;
+    case 'reply': {
+      const w = waiting.get(m.id);
+      if (!w) return;
+      waiting.delete(m.id);
+      if (m.error !== undefined) return w.reject(new Error(m.error));
+      if (w.gen === app.gen && !(m.result instanceof Uint8Array) && typeof m.result !== 'string') app.cache.set(w.key, m.result);
+      return w.resolve(m.result);
+    }
+  }
+};
+worker.onerror = (e) => {
+  showProblems([{ reason: `the worker failed: ${e.message || e}` }]);
+  setState('error');
+};
+
+// ------------------------------------------------------------------ state
+function setState(s) {
+  app.state = s;
+  document.body.dataset.state = s;
+  $('cancel').disabled = s !== 'fitting';
+  const fitted = !!app.model;
+  $('export-json').disabled = !fitted;
+  $('export-obj').disabled = !app.pop;
+  $('export-gltf').disabled = !(fitted && app.model.gltf);
+}
+// The state to return to when a load fails: whatever was there before.
+const restingState = () => (app.fitId ? 'fitting' : app.model ? 'fitted' : app.pop ? 'idle' : 'error');
+
+// ------------------------------------------------------------------ loading
+function onReady({ defaults, features }) {
+  app.defaults = defaults;
+  app.features = features;
+  fillParams(defaults);
+  document.querySelector('.generate').hidden = !features.synth;
+  if (features.synth) {
+    generate(DEFAULT_SPEC);
+  } else {
+    $('pop-info').textContent = 'No population yet: open or drop OBJ files (same vertices and faces, different poses).';
+    setState('idle');
+  }
+}
+
+function generate(spec) {
+  app.loadId = send({ type: 'generate', spec });
+  app.pendingSource = `generated ${spec.preset}, seed ${spec.seed}`;
+  setState('loading');
+}
+
+async function loadFiles(got) {
+  const { files, ignored, problems } = await got;
+  const notes = ignored.length ? [{ file: null, line: null, reason: `ignored (not .obj or .zip): ${ignored.join(', ')}` }] : [];
+  if (problems.length || files.length === 0) {
+    if (!files.length) problems.push({ file: null, line: null, reason: 'no .obj file in what was dropped or picked' });
+    showProblems([...problems, ...notes]);
+    app.loadErrorCount++;
+    setState(restingState());
+    return;
+  }
+  app.pendingNotes = notes;
+  app.pendingSource = files.length === 1 ? files[0].name : `${files.length} files`;
+  const buffers = files.map((f) => f.bytes.buffer.slice(f.bytes.byteOffset, f.bytes.byteOffset + f.bytes.byteLength));
+  app.loadId = send({ type: 'load', names: files.map((f) => f.name), files: buffers }, buffers);
+  setState('loading');
+}
+
+function onLoadError(problems) {
+  app.loadId = null;
+  app.loadErrorCount++;
+  showProblems(problems);
+  setState(restingState());
+}
+
+function onLoaded(pop) {
+  app.loadId = null;
+  pop.source = app.pendingSource;
+  app.pop = pop;
+  app.model = null;
+  app.fitId = null;
+  app.gen++;
+  app.cache.clear();
+  app.colours = { grey: new Float32Array(pop.nVertices * 3).fill(GREY) };
+  app.liveLabels = null;
+  app.pose = 0;
+  app.pick = null;
+  viewer.mark(null);
+  showProblems(app.pendingNotes || []);
+  app.pendingNotes = null;
+  const tris = pop.faces.length / 3;
+  $('pop-info').textContent = `${pop.nShapes} poses × ${pop.nVertices} vertices, ${tris} triangles (${pop.source})`;
+  $('names').replaceChildren(...pop.names.map((n) => Object.assign(document.createElement('li'), { textContent: n })));
+  fillPoseLists();
+  showResult();
+  updateInterpNote();
+  viewer.setTopology(pop.faces, pop.positions[0]);
+  renderView({ frame: true });
+  startFit();
+}
+
+function showProblems(problems) {
+  const box = $('errors');
+  if (!problems.length) return box.replaceChildren();
+  const head = document.createElement('strong');
+  head.textContent = problems.some((p) => p.file !== null || p.line !== null || !/^ignored/.test(p.reason))
+    ? `${problems.length} problem${problems.length > 1 ? 's' : ''}; the previous population is kept`
+    : 'Note';
+  const list = document.createElement('ul');
+  for (const p of problems) {
+    const li = document.createElement('li');
+    if (p.file !== null && p.file !== undefined) {
+      const f = document.createElement('span');
+      f.className = 'file';
+      f.textContent = p.file; // file names are text, never HTML
+      li.append(f, p.line ? `, line ${p.line}: ` : ': ');
+    }
+    li.append(p.reason);
+    list.append(li);
+  }
+  box.replaceChildren(head, list);
+}
+
+// ------------------------------------------------------------------ fitting
+function fillParams(p) {
+  const f = $('params').elements;
+  f.parts.value = p.parts;
+  f.seed.value = p.seed;
+  f.tol.value = p.tol;
+  f.varianceFloor.value = p.varianceFloor;
+  f.paperLambda.checked = p.lambdaRule === 'paper-eq18';
+  f.refine.checked = p.refine;
+}
+
+function readParams() {
+  const f = $('params').elements;
+  return {
+    ...app.defaults,
+    parts: Number(f.parts.value),
+    seed: Number(f.seed.value),
+    tol: Number(f.tol.value),
+    varianceFloor: Number(f.varianceFloor.value),
+    lambdaRule: f.paperLambda.checked ? 'paper-eq18' : 'exact',
+    refine: f.refine.checked,
+  };
+}
+
+function startFit() {
+  if (!app.pop) return;
+  app.fitId = send({ type: 'fit', params: readParams() });
+  app.fitStarted = performance.now();
+  app.lastStage = null;
+  $('stage').textContent = 'starting';
+  $('iteration').textContent = '–';
+  $('elapsed').textContent = '–';
+  $('loglik').textContent = '–';
+  plot.set([], '');
+  setState('fitting');
+}
+
+function stageText(s) {
+  if (!s) return '–';
+  if (s.kind === 'refine') return `refining part ${s.part + 1} of ${s.of} (${s.subParts} sub-parts)`;
+  return { coarse: 'coarse', final: 'final', done: 'done' }[s.kind] ?? s.kind;
+}
+
+// Progress arrives after every slice of the fit; the page shows the latest once per animation frame, so a
+// slow frame (software WebGL) never queues work behind it.
+let pendingProgress = null;
+function onProgress(m) {
+  if (!pendingProgress) requestAnimationFrame(showProgress);
+  pendingProgress = { ...m, steps: [...(pendingProgress?.steps ?? []), ...m.steps] };
+}
+
+function showProgress() {
+  const m = pendingProgress;
+  pendingProgress = null;
+  if (!m || m.id !== app.fitId) return;
+  const last = m.steps[m.steps.length - 1];
+  if (last) {
+    $('stage').textContent = stageText(last.stage);
+    $('iteration').textContent = `${last.iteration} (total ${last.totalIterations})`;
+    $('loglik').textContent = last.logLikelihood.toFixed(2);
+    plot.set(m.trace, `${stageText(last.stage)}: log-likelihood`);
+  }
+  $('elapsed').textContent = `${(m.elapsedMs / 1000).toFixed(2)} s`;
+  // The mesh is recoloured at most every LIVE_MS: a software-rendered frame costs tens of ms that the fit
+  // (sharing the CPU) would otherwise lose.
+  const now = performance.now();
+  if (now - app.liveShown >= LIVE_MS && !sameLabels(m.labels, app.liveLabels)) {
+    app.liveShown = now;
+    app.liveLabels = m.labels;
+    app.colours.live = labelColours(m.labels, app.pop.faces).vertexColours;
+    if (!app.model) renderView();
+  }
+}
+
+const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
+
+function onFitted({ cancelled, fitMs, model }) {
+  app.fitId = null;
+  app.fitCount++;
+  app.model = model;
+  app.gen++;
+  app.cache.clear();
+  const faces = app.pop.faces;
+  app.colours.final = labelColours(model.labels, faces);
+  app.colours.coarse = labelColours(model.coarseLabels, faces);
+  app.colours.refined = labelColours(model.refinedLabels, faces);
+  $('stage').textContent = cancelled ? 'cancelled: best state so far' : 'done';
+  $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
+  plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'best model so far' : 'final stage'}: log-likelihood`);
+  showResult();
+  updateInterpNote();
+  setState('fitted');
+  renderView({ frame: false });
+  setTimeout(drawThumbnails, 0);
+}
+
+function onFitError(message) {
+  app.fitId = null;
+  app.fitCount++;
+  showProblems([{ reason: message }]);
+  setState(app.model ? 'fitted' : 'error');
+}
+
+function showResult() {
+  const s = app.model?.summary;
+  $('parts-count').textContent = s ? s.parts : '–';
+  $('stage-parts').textContent = s ? `(coarse ${s.coarseParts}, refined ${s.refinedParts}${s.cancelled ? ', cancelled' : ''})` : '';
+  $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${(s.rmse / app.pop.normalization[3]).toExponential(3)} original units` : '–';
+  $('iterations').textContent = s ? `${s.iterations} in the final stage${s.converged ? ', converged' : ''}` : '–';
+  $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
+}
+
+// ------------------------------------------------------------------ views
+const viewer = new Viewer($('view'));
+const plot = new Plot($('plot'));
+
+function partColours() {
+  if (app.model) return app.colours.final.vertexColours;
+  return app.colours.live ?? app.colours.grey;
+}
+
+const poseName = (i) => app.pop.names[i];
+let renderToken = 0;
+
+// Builds the slots of the current mode (some need answers from the worker) and shows them.
+async function renderView({ frame = false } = {}) {
+  if (!app.pop) return;
+  const token = ++renderToken;
+  const { pop, model, pose } = app;
+  const P = pop.positions[pose];
+  let slots;
+  let caption = '';
+  let legend = null;
+  const needModel = !model && app.mode !== 'parts' && app.mode !== 'interp';
+  if (app.mode === 'parts' || needModel) {
+    slots = [{ positions: P, colours: partColours(), name: `pose ${poseName(pose)}` }];
+    caption = `Pose “${poseName(pose)}”, coloured by ${model ? `part (${model.summary.parts} parts)` : app.fitId ? 'the parts of the fit in progress' : 'nothing yet'}`;
+    if (needModel) caption += ' (this view needs a fitted model)';
+  } else if (app.mode === 'stages') {
+    const s = model.summary;
+    slots = [
+      { positions: P, colours: app.colours.coarse.vertexColours, name: 'coarse' },
+      { positions: P, colours: app.colours.refined.vertexColours, name: 'refined' },
+      { positions: P, colours: app.colours.final.vertexColours, name: 'final' },
+    ];
+    caption = `Algorithm 1 on pose “${poseName(pose)}”: coarse (${s.coarseParts} parts) | refined (${s.refinedParts}) | final (${s.parts})`;
+  } else if (app.mode === 'recon') {
+    const [recon, errors] = await Promise.all([query('reconstruct', pose), query('vertexErrors', pose)]);
+    if (token !== renderToken) return;
+    let max = 0;
+    for (const e of errors) max = Math.max(max, e);
+    slots = [
+      { positions: P, colours: partColours(), name: 'original' },
+      { positions: recon, colours: errorColours(errors, max), name: 'reconstruction' },
+    ];
+    caption = `Pose “${poseName(pose)}”: original (parts) | reconstruction from the latent shape, coloured by per-vertex error`;
+    legend = max;
+  } else if (app.mode === 'latent') {
+    slots = [{ positions: model.latent, colours: partColours(), name: 'latent' }];
+    caption = 'The latent reference shape (eq 21): every part in its own latent frame';
+  } else if (app.mode === 'interp') {
+    const { a, b, t, side } = interpValues();
+    const A = pop.positions[a];
+    const B = pop.positions[b];
+    const linear = new Float32Array(A.length);
+    for (let k = 0; k < A.length; k++) linear[k] = A[k] + (B[k] - A[k]) * t;
+    if (model?.interpolate) {
+      const partwise = await query('interpolate', a, b, t);
+      if (token !== renderToken) return;
+      slots = [{ positions: partwise, colours: partColours(), name: 'part-wise' }];
+      if (side) slots.push({ positions: linear, colours: partColours(), name: 'linear' });
+      caption = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}: part-wise${side ? ' | linear vertex blending' : ''}`;
+    } else {
+      slots = [{ positions: linear, colours: partColours(), name: 'linear' }];
+      caption = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}: linear vertex blending`;
+    }
+  }
+  if (token !== renderToken) return;
+  const reframe = frame || slots.length !== app.shown.length;
+  app.shown = slots;
+  viewer.show(slots, { frame: reframe });
+  $('caption').textContent = caption;
+  $('legend').hidden = legend === null;
+  if (legend !== null) {
+    $('legend-hi').textContent = `${legend.toExponential(2)} unit box (${(legend / pop.normalization[3]).toExponential(2)} original)`;
+  }
+  if (app.pick && app.pick.slot < slots.length) viewer.mark(app.pick.slot, app.pick.vertex);
+}
+
+$('legend').querySelector('.ramp').style.background = RAMP_CSS;
+
+for (const r of document.querySelectorAll('input[name=mode]')) {
+  r.addEventListener('change', () => {
+    app.mode = r.value;
+    $('interp').hidden = app.mode !== 'interp';
+    if (app.mode !== 'interp') stopPlay();
+    renderView({ frame: true });
+  });
+}
+$('flat').addEventListener('change', (e) => viewer.setFlat(e.target.checked));
+$('reset-view').addEventListener('click', () => viewer.reset());
+
+// ------------------------------------------------------------------ poses: list and thumbnail strip
+function fillPoseLists() {
+  const names = app.pop.names;
+  const opts = () => names.map((n, i) => Object.assign(document.createElement('option'), { value: i, textContent: n }));
+  $('pose-select').replaceChildren(...opts());
+  $('pose-a').replaceChildren(...opts());
+  $('pose-b').replaceChildren(...opts());
+  $('pose-a').value = 0;
+  $('pose-b').value = Math.min(1, names.length - 1);
+  $('pose-strip').replaceChildren(...names.map((n, i) => {
+    const b = document.createElement('button');
+    b.type = 'button';
+    b.title = n;
+    b.setAttribute('aria-pressed', String(i === app.pose));
+    b.setAttribute('aria-label', `pose ${n}`);
+    const c = document.createElement('canvas');
+    c.width = 160;
+    c.height = 120;
+    const label = document.createElement('span');
+    label.textContent = n;
+    b.append(c, label);
+    b.addEventListener('click', () => choosePose(i));
+    return b;
+  }));
+}
+
+function choosePose(i) {
+  app.pose = i;
+  $('pose-select').value = i;
+  [...$('pose-strip').children].forEach((b, k) => b.setAttribute('aria-pressed', String(k === i)));
+  app.hoverPart = null;
+  if (app.pick) showPick();
+  renderView();
+}
+$('pose-select').addEventListener('change', (e) => choosePose(Number(e.target.value)));
+
+let thumbsToken = 0;
+function drawThumbnails() {
+  const token = ++thumbsToken;
+  const canvases = [...$('pose-strip').querySelectorAll('canvas')];
+  const colours = partColours();
+  let i = 0;
+  const next = () => {
+    if (token !== thumbsToken || i >= canvases.length || !app.pop) return;
+    viewer.thumbnail(app.pop.positions[i], colours, canvases[i]);
+    i++;
+    setTimeout(next, 0);
+  };
+  next();
+}
+
+// ------------------------------------------------------------------ picking (click) and hovering
+const canvas = viewer.renderer.domElement;
+let down = null;
+canvas.addEventListener('pointerdown', (e) => { down = { x: e.clientX, y: e.clientY }; });
+canvas.addEventListener('pointerup', (e) => {
+  if (!down || Math.hypot(e.clientX - down.x, e.clientY - down.y) > 4) return;
+  down = null;
+  const hit = viewer.pick(e.clientX, e.clientY);
+  app.pick = hit;
+  if (hit) viewer.mark(hit.slot, hit.vertex);
+  else viewer.mark(null);
+  showPick();
+});
+
+let hoverQueued = false;
+canvas.addEventListener('pointermove', (e) => {
+  if (e.buttons || hoverQueued || !app.model) return;
+  hoverQueued = true;
+  requestAnimationFrame(() => {
+    hoverQueued = false;
+    const hit = viewer.pick(e.clientX, e.clientY);
+    const part = hit ? app.model.labels[hit.vertex] : null;
+    if (part !== app.hoverPart) {
+      app.hoverPart = part;
+      showHover();
+    }
+  });
+});
+canvas.addEventListener('pointerleave', () => {
+  app.hoverPart = null;
+  showHover();
+});
+
+const infoPick = document.createElement('div');
+const infoHover = document.createElement('div');
+$('info').append(infoPick, infoHover);
+
+function swatch(part) {
+  const s = document.createElement('span');
+  s.className = 'swatch';
+  s.style.background = app.colours.final?.partColour[part] ?? '#ccc';
+  return s;
+}
+
+function bar(fraction, width = 80) {
+  const b = document.createElement('span');
+  b.className = 'bar';
+  b.style.width = `${Math.max(1, Math.round(fraction * width))}px`;
+  return b;
+}
+
+function row(...cells) {
+  const tr = document.createElement('tr');
+  for (const c of cells) {
+    const td = document.createElement('td');
+    td.append(c);
+    tr.append(td);
+  }
+  return tr;
+}
+
+async function showPick() {
+  const hit = app.pick;
+  if (!hit || !app.model) {
+    infoPick.replaceChildren();
+    return;
+  }
+  const v = hit.vertex;
+  const part = app.model.labels[v];
+  const gen = app.gen;
+  const pose = app.pose;
+  let resp;
+  let errors;
+  try {
+    [resp, errors] = await Promise.all([query('responsibilities', v), query('vertexErrors', pose)]);
+  } catch (e) {
+    infoPick.textContent = e.message;
+    return;
+  }
+  if (gen !== app.gen || app.pick !== hit) return;
+  const s = app.pop.normalization[3];
+  const head = document.createElement('div');
+  head.append(`Vertex ${v} (${app.shown[hit.slot]?.name ?? ''}): part ${part} `, swatch(part));
+  const err = document.createElement('div');
+  err.textContent = `error in pose “${poseName(pose)}”: ${errors[v].toExponential(2)} unit box = ${(errors[v] / s).toExponential(2)} original`;
+  const order = [...resp.keys()].sort((a, b) => resp[b] - resp[a]).slice(0, 5);
+  const table = document.createElement('table');
+  table.append(row('P(part | vertex)', '', ''));
+  for (const k of order) table.append(row(Object.assign(swatch(k), { title: `part ${k}` }), `part ${k}`, resp[k].toFixed(4)));
+  infoPick.replaceChildren(head, err, table);
+}
+
+async function showHover() {
+  const part = app.hoverPart;
+  if (part === null || !app.model) {
+    infoHover.replaceChildren();
+    return;
+  }
+  const gen = app.gen;
+  const pose = app.pose;
+  let angles;
+  try {
+    angles = await query('rotationAngles', part, pose);
+  } catch (e) {
+    infoHover.textContent = e.message;
+    return;
+  }
+  if (gen !== app.gen || app.hoverPart !== part) return;
+  const head = document.createElement('div');
+  head.append(swatch(part), ` part ${part}: rotation from pose “${poseName(pose)}”`);
+  const table = document.createElement('table');
+  angles.forEach((a, i) => table.append(row(poseName(i), bar(a / 180), `${a.toFixed(1)}°`)));
+  infoHover.replaceChildren(head, table);
+}
+
+// ------------------------------------------------------------------ interpolation
+function interpValues() {
+  return {
+    a: Number($('pose-a').value),
+    b: Number($('pose-b').value),
+    t: Number($('interp-t').value),
+    side: $('side-by-side').checked,
+  };
+}
+function onInterpInput() {
+  $('interp-t-out').textContent = Number($('interp-t').value).toFixed(2);
+  if (app.mode === 'interp') renderView();
+}
+for (const id of ['pose-a', 'pose-b', 'interp-t']) $(id).addEventListener('input', onInterpInput);
+$('side-by-side').addEventListener('change', () => renderView({ frame: true }));
+
+function updateInterpNote() {
+  const partwise = !!app.model?.interpolate;
+  $('side-by-side').disabled = !partwise;
+  $('interp-note').textContent = partwise
+    ? ''
+    : 'Part-wise interpolation is not in this build yet (posemfa::articulate): showing linear vertex blending.';
+}
+
+function stopPlay() {
+  app.interp.playing = false;
+  $('play').textContent = 'Play';
+}
+$('play').addEventListener('click', () => {
+  if (app.interp.playing) return stopPlay();
+  app.interp.playing = true;
+  app.interp.last = performance.now();
+  $('play').textContent = 'Pause';
+  const tick = async (now) => {
+    if (!app.interp.playing) return;
+    const slider = $('interp-t');
+    let t = Number(slider.value) + (app.interp.dir * (now - app.interp.last)) / 2000;
+    app.interp.last = now;
+    if (t >= 1 || t <= 0) {
+      app.interp.dir *= -1;
+      t = Math.min(Math.max(t, 0), 1);
+    }
+    slider.value = t;
+    $('interp-t-out').textContent = t.toFixed(2);
+    await renderView();
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+});
+
+// ------------------------------------------------------------------ exports
+function download(name, data, type) {
+  const url = URL.createObjectURL(new Blob([data], { type }));
+  const a = Object.assign(document.createElement('a'), { href: url, download: name });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10000);
+}
+
+// OBJ text of a unit-box mesh, written back in the population's original units: original = unit / scale + offset.
+export function objText(positions, faces, normalization, comment) {
+  const [ox, oy, oz, s] = normalization;
+  const lines = [`# ${comment}`, `# posemfa, ${positions.length / 3} vertices, ${faces.length / 3} triangles`];
+  const num = (x) => String(Number(x.toPrecision(9)));
+  for (let k = 0; k < positions.length; k += 3) {
+    lines.push(`v ${num(positions[k] / s + ox)} ${num(positions[k + 1] / s + oy)} ${num(positions[k + 2] / s + oz)}`);
+  }
+  for (let k = 0; k < faces.length; k += 3) lines.push(`f ${faces[k] + 1} ${faces[k + 1] + 1} ${faces[k + 2] + 1}`);
+  return lines.join('\n') + '\n';
+}
+
+const safeName = (s) => s.replace(/\.obj$/i, '').replace(/[^A-Za-z0-9._-]+/g, '_');
+
+$('export-json').addEventListener('click', async () => download('posemfa-model.json', await query('toJson'), 'application/json'));
+$('export-obj').addEventListener('click', () => {
+  const slot = app.shown[0];
+  if (!slot) return;
+  const what = app.mode === 'interp' ? `${slot.name} interpolation t=${interpValues().t}` : `${slot.name}`;
+  const name = `posemfa-${safeName(poseName(app.pose))}-${safeName(what)}.obj`;
+  download(name, objText(slot.positions, app.pop.faces, app.pop.normalization, what), 'model/obj');
+});
+$('export-gltf').addEventListener('click', async () => download('posemfa-model.glb', await query('toGlb'), 'model/gltf-binary'));
+
+// ------------------------------------------------------------------ opening files: picker, folder, drop
+$('file-input').addEventListener('change', (e) => {
+  loadFiles(filesFromList([...e.target.files])); // a copy: clearing the input empties its FileList
+  e.target.value = '';
+});
+$('folder-input').addEventListener('change', (e) => {
+  loadFiles(filesFromList([...e.target.files])); // a copy: clearing the input empties its FileList
+  e.target.value = '';
+});
+let dragDepth = 0;
+window.addEventListener('dragenter', (e) => {
+  e.preventDefault();
+  dragDepth++;
+  $('drop-overlay').hidden = false;
+});
+window.addEventListener('dragleave', () => {
+  if (--dragDepth <= 0) {
+    dragDepth = 0;
+    $('drop-overlay').hidden = true;
+  }
+});
+window.addEventListener('dragover', (e) => e.preventDefault());
+window.addEventListener('drop', (e) => {
+  e.preventDefault();
+  dragDepth = 0;
+  $('drop-overlay').hidden = true;
+  loadFiles(filesFromDataTransfer(e.dataTransfer));
+});
+
+$('params').addEventListener('submit', (e) => {
+  e.preventDefault();
+  startFit();
+});
+$('cancel').addEventListener('click', () => worker.postMessage({ type: 'cancel' }));
+$('reset-params').addEventListener('click', () => app.defaults && fillParams(app.defaults));
+$('generate').addEventListener('click', () => generate({ ...DEFAULT_SPEC, preset: $('preset').value }));
+
+// ------------------------------------------------------------------ test contract
+window.posemfa = {
+  /** Summary of the current model ({shapes, vertices, parts, rmse, iterations, fitMs, ...}) or null. */
+  summary: () => (app.model ? { ...app.model.summary } : null),
+  /** The palette, and the colour of every final part. */
+  palette: PALETTE,
+  partColours: () => app.colours.final?.partColour.slice() ?? null,
+  /** Number of fits that have ended (finished, cancelled or failed) since the page opened. */
+  fitCount: () => app.fitCount,
+  /** Number of drops or picks refused with errors since the page opened. */
+  loadErrorCount: () => app.loadErrorCount,
+  /** Number of poses, and the view mode. */
+  poses: () => app.pop?.nShapes ?? 0,
+  mode: () => app.mode,
+};
+
+setState('loading');
+updateInterpNote();

@@ -1,0 +1,62 @@
+// The live log-likelihood plot: the trace of the AECM run in progress (one point per iteration), drawn on a
+// 2D canvas with its range written on the axis.
+
+const fmt = (v) => (Math.abs(v) >= 1e5 || (Math.abs(v) < 1e-2 && v !== 0) ? v.toExponential(3) : v.toFixed(2));
+
+export class Plot {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.values = [];
+    this.title = '';
+    new ResizeObserver(() => this.draw()).observe(canvas);
+  }
+
+  set(values, title) {
+    this.values = Array.from(values).filter(Number.isFinite);
+    this.title = title;
+    this.draw();
+  }
+
+  draw() {
+    const c = this.canvas;
+    const dpr = window.devicePixelRatio || 1;
+    const w = c.clientWidth;
+    const h = c.clientHeight;
+    if (!w || !h) return;
+    c.width = Math.round(w * dpr);
+    c.height = Math.round(h * dpr);
+    const g = c.getContext('2d');
+    g.setTransform(dpr, 0, 0, dpr, 0, 0);
+    g.clearRect(0, 0, w, h);
+    const style = getComputedStyle(c);
+    g.font = `11px ${style.fontFamily}`;
+    g.fillStyle = style.color;
+    g.fillText(this.title, 4, 12);
+    const v = this.values;
+    if (v.length === 0) {
+      g.fillText('log-likelihood: no iteration yet', 4, h / 2);
+      return;
+    }
+    const lo = Math.min(...v);
+    const hi = Math.max(...v);
+    const span = hi - lo || Math.abs(hi) || 1;
+    const left = 4;
+    const top = 18;
+    const bottom = h - 14;
+    const right = w - 4;
+    const x = (i) => left + ((right - left) * i) / Math.max(v.length - 1, 1);
+    const y = (val) => bottom - ((bottom - top) * (val - lo)) / span;
+    g.strokeStyle = style.borderColor || '#999';
+    g.beginPath();
+    g.moveTo(left, bottom + 0.5);
+    g.lineTo(right, bottom + 0.5);
+    g.stroke();
+    g.strokeStyle = style.getPropertyValue('--accent') || '#4363d8';
+    g.lineWidth = 1.5;
+    g.beginPath();
+    v.forEach((val, i) => (i ? g.lineTo(x(i), y(val)) : g.moveTo(x(i), y(val))));
+    g.stroke();
+    g.fillText(`max ${fmt(hi)}`, right - g.measureText(`max ${fmt(hi)}`).width, 12);
+    g.fillText(`min ${fmt(lo)} · ${v.length} iterations`, left, h - 2);
+  }
+}

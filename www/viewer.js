@@ -1,0 +1,280 @@
+// The three.js scene: up to three copies of the mesh side by side ("slots", e.g. original | reconstruction),
+// per-vertex colours, orbit controls, vertex picking, and pose thumbnails. It renders on demand only, so the
+// fit in the worker keeps the CPU.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+THREE.ColorManagement.enabled = false; // colours go to the screen as given: exact pixels for the tests
+
+const BACKGROUND = 0xeef0f3;
+
+export class Viewer {
+  constructor(container) {
+    this.container = container;
+    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+    this.renderer.setClearColor(BACKGROUND);
+    this.renderer.domElement.tabIndex = 0;
+    this.renderer.domElement.setAttribute('aria-label', 'mesh view: drag to orbit, wheel to zoom, click a vertex');
+    container.appendChild(this.renderer.domElement);
+
+    this.scene = new THREE.Scene();
+    this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 100);
+    // Lights chosen so that lit colours never exceed the vertex colour (no clipping, hues kept).
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8a8a, 1.6));
+    const key = new THREE.DirectionalLight(0xffffff, 1.4);
+    key.position.set(1, 1.5, 2);
+    this.camera.add(key);
+    this.scene.add(this.camera);
+
+    this.lit = new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide });
+    this.flatMaterial = new THREE.MeshBasicMaterial({ vertexColors: true, side: THREE.DoubleSide });
+    this.flat = false;
+    this.faces = null;
+    this.slots = [];
+    this.axes = { view: 2, up: 1, right: 0 };
+
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.enableDamping = true;
+    this.controls.addEventListener('change', () => this.requestRender());
+    this.controls.addEventListener('start', () => { this.userMoved = true; });
+
+    this.raycaster = new THREE.Raycaster();
+    this.needsRender = false;
+    new ResizeObserver(() => this.resize()).observe(container);
+    this.resize();
+  }
+
+  resize() {
+    const w = Math.max(this.container.clientWidth, 1);
+    const h = Math.max(this.container.clientHeight, 1);
+    this.renderer.setSize(w, h);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    if (this.framed && !this.userMoved) this.frame(); // keep everything in view until the person moves the camera
+    this.requestRender();
+  }
+
+  requestRender() {
+    if (this.needsRender) return;
+    this.needsRender = true;
+    requestAnimationFrame(() => {
+      this.needsRender = false;
+      const moving = this.controls.update(); // true while damping still moves the camera
+      this.renderer.render(this.scene, this.camera);
+      if (moving) this.requestRender();
+    });
+  }
+
+  /** New topology: faces of every slot from now on. `reference` (flat xyz) picks the view axes. */
+  setTopology(faces, reference) {
+    this.faces = faces;
+    for (const s of this.slots) this.removeSlot(s);
+    this.slots = [];
+    const box = new THREE.Box3().setFromBufferAttribute(new THREE.BufferAttribute(reference, 3));
+    const size = box.getSize(new THREE.Vector3()).toArray();
+    const view = size.indexOf(Math.min(...size)); // look across the thinnest side (a horse from its flank)
+    const up = view === 1 ? 2 : 1;
+    this.axes = { view, up, right: 3 - view - up };
+  }
+
+  removeSlot(s) {
+    this.scene.remove(s.mesh);
+    s.mesh.geometry.dispose();
+  }
+
+  /** Shows the given meshes side by side: [{ positions, colours }]. Frames the camera when asked. */
+  show(items, { frame = false } = {}) {
+    while (this.slots.length > items.length) this.removeSlot(this.slots.pop());
+    while (this.slots.length < items.length) {
+      const geometry = new THREE.BufferGeometry();
+      geometry.setIndex(new THREE.BufferAttribute(this.faces, 1)); // own attribute: disposing one geometry frees only its buffers
+      const mesh = new THREE.Mesh(geometry, this.flat ? this.flatMaterial : this.lit);
+      this.scene.add(mesh);
+      this.slots.push({ mesh });
+    }
+    items.forEach((item, k) => {
+      const g = this.slots[k].mesh.geometry;
+      const pos = g.getAttribute('position');
+      if (pos && pos.array.length === item.positions.length) {
+        pos.array.set(item.positions);
+        pos.needsUpdate = true;
+      } else {
+        g.setAttribute('position', new THREE.BufferAttribute(Float32Array.from(item.positions), 3));
+      }
+      const col = g.getAttribute('color');
+      if (col && col.array.length === item.colours.length) {
+        col.array.set(item.colours);
+        col.needsUpdate = true;
+      } else {
+        g.setAttribute('color', new THREE.BufferAttribute(Float32Array.from(item.colours), 3));
+      }
+      g.computeVertexNormals();
+      g.computeBoundingBox();
+      g.computeBoundingSphere();
+    });
+    if (frame) this.framed = false; // lay out for the framing direction, not for the camera being replaced
+    this.layout();
+    if (frame) this.frame();
+    this.requestRender();
+  }
+
+  /** Only new colours for slot k (labels changed while fitting). */
+  setColours(k, colours) {
+    const col = this.slots[k]?.mesh.geometry.getAttribute('color');
+    if (!col || col.array.length !== colours.length) return;
+    col.array.set(colours);
+    col.needsUpdate = true;
+    this.requestRender();
+  }
+
+  // Direction from the target to the camera when framing: across the view axis, a little from above.
+  frameDirection() {
+    const { view, up } = this.axes;
+    return new THREE.Vector3().setComponent(view, 1).setComponent(up, 0.2).normalize();
+  }
+
+  // +1 when the world's `right` axis points to the right of the screen, else -1.
+  screenRightSign() {
+    const { up, right } = this.axes;
+    let r;
+    if (this.framed) {
+      this.camera.updateMatrixWorld();
+      r = new THREE.Vector3().setFromMatrixColumn(this.camera.matrixWorld, 0);
+    } else {
+      r = new THREE.Vector3().crossVectors(this.frameDirection().negate(), new THREE.Vector3().setComponent(up, 1));
+    }
+    return r.getComponent(right) < 0 ? -1 : 1;
+  }
+
+  // Slots in a row, left to right on the screen, each centred on its own box.
+  layout() {
+    const { right } = this.axes;
+    const sign = this.screenRightSign();
+    const boxes = this.slots.map((s) => s.mesh.geometry.boundingBox);
+    const widths = boxes.map((b) => b.max.getComponent(right) - b.min.getComponent(right));
+    const gap = 0.15 * Math.max(...widths, 1e-6);
+    const total = widths.reduce((a, b) => a + b, 0) + gap * (widths.length - 1);
+    let x = -total / 2;
+    this.slots.forEach((s, k) => {
+      const c = boxes[k].getCenter(new THREE.Vector3());
+      const offset = new THREE.Vector3().sub(c);
+      offset.setComponent(right, sign * (x + widths[k] / 2) - c.getComponent(right));
+      s.mesh.position.copy(offset);
+      x += widths[k] + gap;
+    });
+  }
+
+  /** Back to the framing view, slots laid out for it. */
+  reset() {
+    this.framed = false;
+    this.layout();
+    this.frame();
+  }
+
+  /** Camera looking across the thinnest axis at everything shown. */
+  frame() {
+    const box = new THREE.Box3();
+    for (const s of this.slots) box.expandByObject(s.mesh);
+    if (box.isEmpty()) return;
+    const centre = box.getCenter(new THREE.Vector3());
+    const size = box.getSize(new THREE.Vector3());
+    const { view, up, right } = this.axes;
+    const halfW = size.getComponent(right) / 2;
+    const halfH = size.getComponent(up) / 2;
+    const fov = THREE.MathUtils.degToRad(this.camera.fov) / 2;
+    const dist = 1.15 * Math.max(halfH / Math.tan(fov), halfW / (Math.tan(fov) * this.camera.aspect)) + size.getComponent(view) / 2;
+    const dir = this.frameDirection();
+    this.camera.up.set(0, 0, 0).setComponent(up, 1);
+    this.camera.position.copy(centre).addScaledVector(dir, dist);
+    this.camera.near = dist / 100;
+    this.camera.far = dist * 10;
+    this.camera.updateProjectionMatrix();
+    this.controls.target.copy(centre);
+    this.controls.update();
+    this.framed = true;
+    this.userMoved = false;
+    this.requestRender();
+  }
+
+  /** A dot on vertex `vertex` of slot `slot` (null: none). */
+  mark(slot, vertex) {
+    if (!this.marker) {
+      this.marker = new THREE.Mesh(new THREE.SphereGeometry(1, 16, 12), new THREE.MeshBasicMaterial({ color: 0x111111 }));
+      this.scene.add(this.marker);
+    }
+    const s = this.slots[slot];
+    this.marker.visible = !!s;
+    if (s) {
+      const g = s.mesh.geometry;
+      this.marker.position.fromBufferAttribute(g.getAttribute('position'), vertex).add(s.mesh.position);
+      this.marker.scale.setScalar(0.012 * g.boundingSphere.radius);
+    }
+    this.requestRender();
+  }
+
+  setFlat(flat) {
+    this.flat = flat;
+    for (const s of this.slots) s.mesh.material = flat ? this.flatMaterial : this.lit;
+    this.requestRender();
+  }
+
+  /** The vertex under a screen point: { slot, vertex } or null (nearest corner of the hit triangle). */
+  pick(clientX, clientY) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
+    this.raycaster.setFromCamera(ndc, this.camera);
+    const hit = this.raycaster.intersectObjects(this.slots.map((s) => s.mesh), false)[0];
+    if (!hit) return null;
+    const slot = this.slots.findIndex((s) => s.mesh === hit.object);
+    const pos = hit.object.geometry.getAttribute('position');
+    const local = hit.object.worldToLocal(hit.point.clone());
+    let best = -1;
+    let bestD = Infinity;
+    for (const v of [hit.face.a, hit.face.b, hit.face.c]) {
+      const d = local.distanceToSquared(new THREE.Vector3().fromBufferAttribute(pos, v));
+      if (d < bestD) {
+        bestD = d;
+        best = v;
+      }
+    }
+    return { slot, vertex: best };
+  }
+
+  /** A small picture of one mesh, drawn into `canvas` (a 2D canvas), from the current view direction. */
+  thumbnail(positions, colours, canvas) {
+    const w = canvas.width;
+    const h = canvas.height;
+    const geometry = new THREE.BufferGeometry();
+    geometry.setIndex(new THREE.BufferAttribute(this.faces, 1)); // own attribute: disposing one geometry frees only its buffers
+    geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+    geometry.setAttribute('color', new THREE.BufferAttribute(colours, 3));
+    geometry.computeVertexNormals();
+    geometry.computeBoundingSphere();
+    const mesh = new THREE.Mesh(geometry, this.lit);
+    const scene = new THREE.Scene();
+    scene.add(mesh, new THREE.HemisphereLight(0xffffff, 0x8a8a8a, 1.6));
+    const cam = new THREE.PerspectiveCamera(35, w / h, 0.01, 100);
+    const key = new THREE.DirectionalLight(0xffffff, 1.4);
+    key.position.set(1, 1.5, 2);
+    cam.add(key);
+    scene.add(cam);
+    const { center, radius } = geometry.boundingSphere;
+    const dir = this.camera.position.clone().sub(this.controls.target).normalize();
+    cam.up.copy(this.camera.up);
+    cam.position.copy(center).addScaledVector(dir, radius / Math.sin(THREE.MathUtils.degToRad(17.5)));
+    cam.lookAt(center);
+    const target = new THREE.WebGLRenderTarget(w, h, { samples: 4 });
+    this.renderer.setRenderTarget(target);
+    this.renderer.render(scene, cam);
+    const pixels = new Uint8Array(w * h * 4);
+    this.renderer.readRenderTargetPixels(target, 0, 0, w, h, pixels);
+    this.renderer.setRenderTarget(null);
+    target.dispose();
+    geometry.dispose();
+    const img = new ImageData(w, h);
+    for (let y = 0; y < h; y++) img.data.set(pixels.subarray((h - 1 - y) * w * 4, (h - y) * w * 4), y * w * 4);
+    canvas.getContext('2d').putImageData(img, 0, 0);
+  }
+}

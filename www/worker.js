@@ -1,0 +1,222 @@
+// The Web Worker that owns the wasm instance and all state: the population, the fit in progress, the model.
+// The page only sends messages and shows the replies. Protocol (every message has a `type`; `id` is the
+// sender's number for the request and comes back in its replies):
+//
+//   page -> worker
+//     { type: 'load', id, names: string[], files: ArrayBuffer[] }   OBJ files (parsed and validated in Rust)
+//     { type: 'generate', id, spec }                                a synthetic population (posemfa::synth)
+//     { type: 'fit', id, params }                                   start fitting the current population
+//     { type: 'cancel' }                                            stop the fit, keep its best state so far
+//     { type: 'query', id, method, args }                           a question about the model (see QUERIES)
+//   worker -> page
+//     { type: 'ready', defaults, features }                         wasm loaded; defaults: the fit parameters'
+//                                                                   defaults; features: optional bindings found
+//     { type: 'loaded', id, population }                            population: names, nShapes, nVertices, faces,
+//                                                                   positions (one Float32Array per pose, unit
+//                                                                   box), normalization [ox, oy, oz, scale], truth
+//     { type: 'load-error', id, problems: [{ file, line, reason }] } the previous population is kept
+//     { type: 'progress', id, steps, trace, labels, elapsedMs }     after every slice: the AECM iterations made
+//                                                                   (one progress object each), the current run's
+//                                                                   log-likelihood trace and labels
+//     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
+//                                                                   coarseLabels, refinedLabels, latent
+//     { type: 'fit-error', id, message }
+//     { type: 'reply', id, result } | { type: 'reply', id, error }  answer to a query
+import init, * as wasm from './pkg/posemfa.js';
+import wasmUrl from './pkg/posemfa_bg.wasm?url';
+
+// Bindings that newer builds add (looked up by name, so that this file builds with or without them).
+const binding = (name) => wasm[name];
+
+const SLICE_MS = 40; // one fitter.run(budget) call; the worker reads its messages between slices
+
+let population = null; // wasm Population
+let fitter = null; // wasm Fitter of the fit in progress
+let model = null; // wasm FitModel of the last fit (final or best so far)
+let fitId = null;
+let cancelRequested = false;
+
+const post = (msg, transfer = []) => self.postMessage(msg, transfer);
+
+// Yields to the event loop without the 4 ms clamp of nested timers: a message posted to ourselves is queued
+// behind any message the page already sent (a 'cancel').
+const channel = new MessageChannel();
+const pending = [];
+channel.port1.onmessage = () => pending.shift()?.();
+const yieldToEvents = () => new Promise((resolve) => { pending.push(resolve); channel.port2.postMessage(0); });
+
+// "file X, line N: reason" / "file X: reason" / anything else, one problem per line.
+function problemsOf(message) {
+  return String(message).split('\n').filter((l) => l.trim()).map((text) => {
+    let m = /^file (.*), line (\d+): (.*)$/.exec(text);
+    if (m) return { file: m[1], line: Number(m[2]), reason: m[3] };
+    m = /^file (.*?): (.*)$/.exec(text);
+    if (m) return { file: m[1], line: null, reason: m[2] };
+    return { file: null, line: null, reason: text };
+  });
+}
+
+function describe(pop, truth = null) {
+  const positions = [];
+  for (let i = 0; i < pop.nShapes; i++) positions.push(pop.positions(i));
+  return {
+    names: pop.names(),
+    nShapes: pop.nShapes,
+    nVertices: pop.nVertices,
+    faces: pop.faces(),
+    positions,
+    normalization: Array.from(pop.normalization()),
+    truth,
+  };
+}
+
+function replacePopulation(pop) {
+  stopFit();
+  model?.free();
+  model = null;
+  population?.free();
+  population = pop;
+}
+
+function sendPopulation(id, truth) {
+  const p = describe(population, truth);
+  post({ type: 'loaded', id, population: p }, [p.faces.buffer, ...p.positions.map((a) => a.buffer)]);
+}
+
+function load({ id, names, files }) {
+  let pop;
+  try {
+    pop = new wasm.Population(names, files.map((b) => new Uint8Array(b)));
+  } catch (e) {
+    post({ type: 'load-error', id, problems: problemsOf(e.message ?? e) });
+    return;
+  }
+  replacePopulation(pop);
+  sendPopulation(id, null);
+}
+
+function generate({ id, spec }) {
+  if (typeof wasm.Synthetic !== 'function') {
+    post({ type: 'load-error', id, problems: [{ file: null, line: null, reason: 'this build has no generator (posemfa::synth binding)' }] });
+    return;
+  }
+  let synth;
+  try {
+    synth = new (binding('Synthetic'))(spec);
+  } catch (e) {
+    post({ type: 'load-error', id, problems: problemsOf(e.message ?? e) });
+    return;
+  }
+  const truth = { partNames: synth.partNames(), partOfVertex: synth.partOfVertex() };
+  replacePopulation(synth.population());
+  synth.free();
+  sendPopulation(id, truth);
+}
+
+function stopFit() {
+  if (fitter) cancelRequested = true;
+}
+
+function modelMessage(m) {
+  return {
+    summary: m.summary(),
+    labels: m.labels(),
+    coarseLabels: m.coarseLabels(),
+    refinedLabels: m.refinedLabels(),
+    latent: m.latent(),
+    interpolate: typeof m.interpolate === 'function',
+    gltf: typeof m.toGlb === 'function',
+  };
+}
+
+async function fit({ id, params }) {
+  if (!population) {
+    post({ type: 'fit-error', id, message: 'no population loaded' });
+    return;
+  }
+  if (fitter) {
+    // A fit is running: stop it and wait until its loop has let go.
+    cancelRequested = true;
+    while (fitter) await yieldToEvents();
+  }
+  const t0 = performance.now();
+  let f;
+  try {
+    f = new wasm.Fitter(population, params);
+  } catch (e) {
+    post({ type: 'fit-error', id, message: String(e.message ?? e) });
+    return;
+  }
+  fitter = f;
+  fitId = id;
+  cancelRequested = false;
+  const pop = population;
+  try {
+    while (!f.isDone() && !cancelRequested) {
+      const steps = f.run(SLICE_MS);
+      const trace = f.currentTrace();
+      const labels = f.currentLabels();
+      post({ type: 'progress', id, steps, trace, labels, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer]);
+      await yieldToEvents();
+    }
+    if (pop !== population) return; // a new population replaced this one: its fit is void
+    const cancelled = !f.isDone();
+    const m = f.result();
+    const fitMs = performance.now() - t0;
+    model?.free();
+    model = m;
+    const msg = modelMessage(m);
+    msg.summary.fitMs = fitMs;
+    msg.summary.cancelled = cancelled;
+    post({ type: 'fitted', id, cancelled, fitMs, model: msg });
+  } catch (e) {
+    post({ type: 'fit-error', id, message: String(e.message ?? e) });
+  } finally {
+    f.free();
+    if (fitter === f) {
+      fitter = null;
+      fitId = null;
+    }
+  }
+}
+
+// Questions about the model or the population; each returns plain data or typed arrays.
+const QUERIES = {
+  reconstruct: (i) => model.reconstruct(i),
+  vertexErrors: (i) => model.vertexErrors(i),
+  responsibilities: (v) => model.responsibilities(v),
+  rotationAngles: (part, ref) => model.rotationAngles(part, ref),
+  toJson: () => model.toJson(),
+  interpolate: (i, j, t, opts) => model.interpolate(i, j, t, opts ?? {}),
+  toGlb: () => model.toGlb(),
+};
+
+function query({ id, method, args }) {
+  try {
+    if (!QUERIES[method]) throw new Error(`unknown query ${method}`);
+    if (!model) throw new Error('no fitted model yet');
+    const result = QUERIES[method](...(args ?? []));
+    post({ type: 'reply', id, result }, ArrayBuffer.isView(result) ? [result.buffer] : []);
+  } catch (e) {
+    post({ type: 'reply', id, error: String(e.message ?? e) });
+  }
+}
+
+const ready = init({ module_or_path: wasmUrl }).then(
+  () => post({ type: 'ready', defaults: wasm.defaultParams(), features: { synth: typeof binding('Synthetic') === 'function' } }),
+  (e) => post({ type: 'fatal', message: `the wasm module failed to load: ${e.message ?? e}` }),
+);
+
+self.onmessage = async ({ data }) => {
+  if (data.type === 'cancel') {
+    cancelRequested = true;
+    return;
+  }
+  await ready;
+  if (data.type === 'load') load(data);
+  else if (data.type === 'generate') generate(data);
+  else if (data.type === 'fit') fit(data);
+  else if (data.type === 'query') query(data);
+};
+
+export {};
