@@ -1,6 +1,7 @@
 // Wires the page to the worker: sends what a person asks for, shows what comes back. Nothing here fits or
 // parses; the worker (and the Rust core in it) does. Test contract: document.body.dataset.state, the
 // data-testid elements of index.html, and window.posemfa (see the end of this file).
+import { worker } from './worker-client.js'; // first: the worker starts loading wasm while three.js evaluates
 import { Viewer } from './viewer.js';
 import { Plot } from './plot.js';
 import { filesFromDataTransfer, filesFromList } from './drop.js';
@@ -36,7 +37,6 @@ const app = {
 };
 
 // ------------------------------------------------------------------ worker and its protocol (see worker.js)
-const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
 let nextId = 1;
 const waiting = new Map();
 function send(msg, transfer = []) {
@@ -81,6 +81,7 @@ worker.onerror = (e) => {
 function setState(s) {
   app.state = s;
   document.body.dataset.state = s;
+  performance.mark(`posemfa:${s}`); // times since navigation, for scripts/bench-page.mjs
   $('cancel').disabled = s !== 'fitting';
   const fitted = !!app.model;
   $('export-json').disabled = !fitted;
@@ -104,8 +105,15 @@ function onReady({ defaults, features }) {
   }
 }
 
+// Loading and fitting go in one message: the worker starts the fit as soon as the population is in.
+function fitRequest() {
+  const params = readParams();
+  return { id: nextId++, params };
+}
+
 function generate(spec) {
-  app.loadId = send({ type: 'generate', spec });
+  app.pendingFit = fitRequest();
+  app.loadId = send({ type: 'generate', spec, fit: app.pendingFit });
   app.pendingSource = `generated ${spec.preset}, seed ${spec.seed}`;
   setState('loading');
 }
@@ -123,7 +131,8 @@ async function loadFiles(got) {
   app.pendingNotes = notes;
   app.pendingSource = files.length === 1 ? files[0].name : `${files.length} files`;
   const buffers = files.map((f) => f.bytes.buffer.slice(f.bytes.byteOffset, f.bytes.byteOffset + f.bytes.byteLength));
-  app.loadId = send({ type: 'load', names: files.map((f) => f.name), files: buffers }, buffers);
+  app.pendingFit = fitRequest();
+  app.loadId = send({ type: 'load', names: files.map((f) => f.name), files: buffers, fit: app.pendingFit }, buffers);
   setState('loading');
 }
 
@@ -157,7 +166,7 @@ function onLoaded(pop) {
   updateInterpNote();
   viewer.setTopology(pop.faces, pop.positions[0]);
   renderView({ frame: true });
-  startFit();
+  fitStarted(app.pendingFit.id); // the worker started it right after the load
 }
 
 function showProblems(problems) {
@@ -208,9 +217,12 @@ function readParams() {
 
 function startFit() {
   if (!app.pop) return;
-  app.fitId = send({ type: 'fit', params: readParams() });
-  app.fitStarted = performance.now();
-  app.lastStage = null;
+  fitStarted(send({ type: 'fit', params: readParams() }));
+}
+
+function fitStarted(id) {
+  app.fitId = id;
+  app.lastStep = null;
   $('stage').textContent = 'starting';
   $('iteration').textContent = '–';
   $('elapsed').textContent = '–';
@@ -229,6 +241,7 @@ function stageText(s) {
 // slow frame (software WebGL) never queues work behind it.
 let pendingProgress = null;
 function onProgress(m) {
+  app.lastStep = m.steps[m.steps.length - 1] ?? app.lastStep;
   if (!pendingProgress) requestAnimationFrame(showProgress);
   pendingProgress = { ...m, steps: [...(pendingProgress?.steps ?? []), ...m.steps] };
 }
@@ -269,6 +282,7 @@ function onFitted({ cancelled, fitMs, model }) {
   app.colours.coarse = labelColours(model.coarseLabels, faces);
   app.colours.refined = labelColours(model.refinedLabels, faces);
   $('stage').textContent = cancelled ? 'cancelled: best state so far' : 'done';
+  if (app.lastStep) $('iteration').textContent = `${app.lastStep.iteration} (total ${app.lastStep.totalIterations})`;
   $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
   plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'best model so far' : 'final stage'}: log-likelihood`);
   showResult();

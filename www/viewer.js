@@ -40,10 +40,25 @@ export class Viewer {
     this.controls.addEventListener('change', () => this.requestRender());
     this.controls.addEventListener('start', () => { this.userMoved = true; });
 
+    this.warmUp();
     this.raycaster = new THREE.Raycaster();
     this.needsRender = false;
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
+  }
+
+  // Compiles the shaders of both materials now (software GL takes a while), while the worker loads the wasm,
+  // rather than at the first frame of a mesh.
+  warmUp() {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
+    g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(9), 3));
+    g.setAttribute('normal', new THREE.BufferAttribute(new Float32Array(9), 3));
+    const meshes = [new THREE.Mesh(g, this.lit), new THREE.Mesh(g, this.flatMaterial)];
+    this.scene.add(...meshes);
+    this.renderer.compile(this.scene, this.camera);
+    this.scene.remove(...meshes);
+    g.dispose();
   }
 
   resize() {

@@ -3,8 +3,10 @@
 // sender's number for the request and comes back in its replies):
 //
 //   page -> worker
-//     { type: 'load', id, names: string[], files: ArrayBuffer[] }   OBJ files (parsed and validated in Rust)
-//     { type: 'generate', id, spec }                                a synthetic population (posemfa::synth)
+//     { type: 'load', id, names: string[], files: ArrayBuffer[], fit? }  OBJ files (parsed and validated in Rust)
+//     { type: 'generate', id, spec, fit? }                          a synthetic population (posemfa::synth)
+//                                                                   fit: { id, params }: start fitting it at once
+//                                                                   (as a 'fit' message would; no round trip)
 //     { type: 'fit', id, params }                                   start fitting the current population
 //     { type: 'cancel' }                                            stop the fit, keep its best state so far
 //     { type: 'query', id, method, args }                           a question about the model (see QUERIES)
@@ -83,7 +85,8 @@ function sendPopulation(id, truth) {
   post({ type: 'loaded', id, population: p }, [p.faces.buffer, ...p.positions.map((a) => a.buffer)]);
 }
 
-function load({ id, names, files }) {
+function load(data) {
+  const { id, names, files } = data;
   let pop;
   try {
     pop = new wasm.Population(names, files.map((b) => new Uint8Array(b)));
@@ -93,9 +96,11 @@ function load({ id, names, files }) {
   }
   replacePopulation(pop);
   sendPopulation(id, null);
+  if (data.fit) fit(data.fit);
 }
 
-function generate({ id, spec }) {
+function generate(data) {
+  const { id, spec } = data;
   if (typeof wasm.Synthetic !== 'function') {
     post({ type: 'load-error', id, problems: [{ file: null, line: null, reason: 'this build has no generator (posemfa::synth binding)' }] });
     return;
@@ -111,6 +116,7 @@ function generate({ id, spec }) {
   replacePopulation(synth.population());
   synth.free();
   sendPopulation(id, truth);
+  if (data.fit) fit(data.fit);
 }
 
 function stopFit() {
