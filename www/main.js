@@ -9,8 +9,20 @@ import { labelColours, errorColours, RAMP_CSS, PALETTE } from './colors.js';
 
 const $ = (id) => document.getElementById(id);
 
-// The built-in population: a generated quadruped, small enough to be fitted within a second or two.
-const DEFAULT_SPEC = { preset: 'quadruped', vertices: 2500, poses: 8, seed: 1 };
+// The built-in population: a generated quadruped, small enough to be fitted within a second or two. The URL
+// may choose another: ?preset=arm&vertices=3000&poses=12&seed=4
+const url = new URLSearchParams(location.search);
+const DEFAULT_SPEC = {
+  preset: url.get('preset') ?? 'quadruped',
+  vertices: Number(url.get('vertices')) || 2500,
+  poses: Number(url.get('poses')) || 8,
+  seed: Number(url.get('seed') ?? 1) || 0,
+};
+const PRESET_NOTES = {
+  quadruped: '18 true parts: trunk, neck, head, three tail pieces, four legs of three pieces',
+  arm: '3 true parts: a fixed base, the upper arm (shoulder) and the forearm (elbow hinge)',
+  snake: '8 true parts along one tube',
+};
 const GREY = 0.78;
 const LIVE_MS = 250;
 
@@ -101,6 +113,7 @@ function onReady({ defaults, features }) {
     generate(DEFAULT_SPEC);
   } else {
     $('pop-info').textContent = 'No population yet: open or drop OBJ files (same vertices and faces, different poses).';
+    $('caption').textContent = 'Open or drop OBJ files of one mesh in several poses to see its parts here.';
     setState('idle');
   }
 }
@@ -112,9 +125,11 @@ function fitRequest() {
 }
 
 function generate(spec) {
+  $('preset').value = spec.preset;
   app.pendingFit = fitRequest();
   app.loadId = send({ type: 'generate', spec, fit: app.pendingFit });
   app.pendingSource = `generated ${spec.preset}, seed ${spec.seed}`;
+  app.pendingSpec = spec;
   setState('loading');
 }
 
@@ -130,6 +145,7 @@ async function loadFiles(got) {
   }
   app.pendingNotes = notes;
   app.pendingSource = files.length === 1 ? files[0].name : `${files.length} files`;
+  app.pendingSpec = null;
   const buffers = files.map((f) => f.bytes.buffer.slice(f.bytes.byteOffset, f.bytes.byteOffset + f.bytes.byteLength));
   app.pendingFit = fitRequest();
   app.loadId = send({ type: 'load', names: files.map((f) => f.name), files: buffers, fit: app.pendingFit }, buffers);
@@ -160,6 +176,12 @@ function onLoaded(pop) {
   app.pendingNotes = null;
   const tris = pop.faces.length / 3;
   $('pop-info').textContent = `${pop.nShapes} poses × ${pop.nVertices} vertices, ${tris} triangles (${pop.source})`;
+  if (pop.truth) {
+    $('pop-info').textContent += `. Ground truth: ${PRESET_NOTES[app.pendingSpec?.preset] ?? `${pop.truth.partNames.length} parts`}.`;
+    app.colours.truth = labelColours(pop.truth.partOfVertex, pop.faces).vertexColours;
+  }
+  document.querySelector('#modes input[value=truth]').parentElement.hidden = !pop.truth;
+  if (!pop.truth && app.mode === 'truth') document.querySelector('#modes input[value=parts]').click();
   $('names').replaceChildren(...pop.names.map((n) => Object.assign(document.createElement('li'), { textContent: n })));
   fillPoseLists();
   showResult();
@@ -329,7 +351,7 @@ async function renderView({ frame = false } = {}) {
   let slots;
   let caption = '';
   let legend = null;
-  const needModel = !model && app.mode !== 'parts' && app.mode !== 'interp';
+  const needModel = (!model && app.mode !== 'parts' && app.mode !== 'interp') || (app.mode === 'truth' && !pop.truth);
   if (app.mode === 'parts' || needModel) {
     slots = [{ positions: P, colours: partColours(), name: `pose ${poseName(pose)}` }];
     caption = `Pose “${poseName(pose)}”, coloured by ${model ? `part (${model.summary.parts} parts)` : app.fitId ? 'the parts of the fit in progress' : 'nothing yet'}`;
@@ -353,6 +375,12 @@ async function renderView({ frame = false } = {}) {
     ];
     caption = `Pose “${poseName(pose)}”: original (parts) | reconstruction from the latent shape, coloured by per-vertex error`;
     legend = max;
+  } else if (app.mode === 'truth') {
+    slots = [
+      { positions: P, colours: app.colours.truth, name: 'ground truth' },
+      { positions: P, colours: app.colours.final.vertexColours, name: 'final' },
+    ];
+    caption = `Pose “${poseName(pose)}”: ground truth of the generator (${pop.truth.partNames.length} parts) | fitted (${model.summary.parts} parts)`;
   } else if (app.mode === 'latent') {
     slots = [{ positions: model.latent, colours: partColours(), name: 'latent' }];
     caption = 'The latent reference shape (eq 21): every part in its own latent frame';
