@@ -1,2 +1,3 @@
 //! (being written)
 pub mod json;
+pub mod obj;
