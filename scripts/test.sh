@@ -18,6 +18,7 @@ root=$(pwd)
 export PATH="$HOME/.cargo/bin:$PATH"
 export CARGO_TERM_PROGRESS_WHEN=never
 export CARGO_TERM_COLOR=never
+export NO_COLOR=1
 
 all_stages=(native wasm-node wasm-chromium page)
 stages=("$@")
