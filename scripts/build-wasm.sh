@@ -30,6 +30,8 @@ say "wasm-bindgen --target web -> www/pkg, --target nodejs -> pkg-node"
 rm -rf www/pkg pkg-node
 wasm-bindgen --target web --out-dir www/pkg "$raw"
 wasm-bindgen --target nodejs --out-dir pkg-node "$raw"
+# the repo is "type": "module" and the nodejs glue is CommonJS: mark pkg-node/ as CommonJS for Node
+echo '{ "type": "commonjs" }' > pkg-node/package.json
 
 web_wasm="www/pkg/${crate}_bg.wasm"
 bound_size=$(size "$web_wasm")
@@ -51,6 +53,7 @@ node --input-type=module -e "
   const glue = await import('./www/pkg/$crate.js');
   glue.initSync({ module: bytes });
 " || die "the optimised $web_wasm does not load with www/pkg/$crate.js"
+node -e "require('./pkg-node/$crate.js')" || die "pkg-node/$crate.js does not load in Node"
 
 say "sizes: cargo $(size "$raw") -> wasm-bindgen $bound_size -> wasm-opt $(size "$web_wasm") (node build $(size "pkg-node/${crate}_bg.wasm"))"
 say "done in $(( $(date +%s) - t0 )) s"
