@@ -94,7 +94,7 @@ print_summary() {
 # ------------------------------------------------------------------ 1. native
 if want native; then
   run_stage native "cargo test (native: lib, bin, tests/)" \
-    cargo test
+    timeout 3600 cargo test
 fi
 
 # ------------------------------------------------------------------ 2. wasm in Node
