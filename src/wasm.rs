@@ -278,3 +278,51 @@ impl FitModel {
 pub fn default_params() -> Result<JsValue, JsError> {
     to_js(&Params::default())
 }
+
+/// A generated population and its ground truth (`posemfa::synth`).
+#[wasm_bindgen]
+pub struct Synthetic {
+    inner: crate::synth::Generated,
+}
+
+#[wasm_bindgen]
+impl Synthetic {
+    /// `spec`: a plain object with any of the fields of `synth::Spec` in camelCase (preset: "quadruped" |
+    /// "arm" | "snake" | "blob", vertices, poses, seed, jointBand, noise, maxAngleDeg, rootMotion, tied);
+    /// missing fields take defaults. Throws an Error naming the invalid field.
+    #[wasm_bindgen(constructor)]
+    pub fn new(spec: JsValue) -> Result<Synthetic, JsError> {
+        let spec: crate::synth::Spec = if spec.is_undefined() || spec.is_null() {
+            crate::synth::Spec::default()
+        } else {
+            serde_wasm_bindgen::from_value(spec).map_err(|e| js_err(format!("invalid generator spec: {e}")))?
+        };
+        Ok(Synthetic { inner: crate::synth::generate(&spec).map_err(js_err)? })
+    }
+
+    /// The generated shapes as a population (unit box; its normalisation is the identity).
+    pub fn population(&self) -> WasmPopulation {
+        WasmPopulation { inner: Rc::new(self.inner.population.clone()) }
+    }
+
+    /// Ground-truth part names, in part-index order.
+    #[wasm_bindgen(js_name = partNames)]
+    pub fn part_names(&self) -> Array {
+        self.inner.part_names.iter().map(|n| JsValue::from_str(n)).collect()
+    }
+
+    /// Ground-truth part of every vertex.
+    #[wasm_bindgen(js_name = partOfVertex)]
+    pub fn part_of_vertex(&self) -> Uint32Array {
+        Uint32Array::from(self.inner.part_of_vertex.as_slice())
+    }
+
+    /// The shapes as OBJ files: [[name, text], ...] in order.
+    #[wasm_bindgen(js_name = objFiles)]
+    pub fn obj_files(&self) -> Array {
+        crate::synth::obj_files(&self.inner)
+            .into_iter()
+            .map(|(n, t)| -> JsValue { [JsValue::from_str(&n), JsValue::from_str(&t)].iter().collect::<Array>().into() })
+            .collect()
+    }
+}

@@ -461,6 +461,15 @@ function choosePose(i) {
   renderView();
 }
 $('pose-select').addEventListener('change', (e) => choosePose(Number(e.target.value)));
+// Arrow keys step through the strip.
+$('pose-strip').addEventListener('keydown', (e) => {
+  const step = { ArrowLeft: -1, ArrowRight: 1 }[e.key];
+  if (!step || !app.pop) return;
+  e.preventDefault();
+  const i = (app.pose + step + app.pop.nShapes) % app.pop.nShapes;
+  choosePose(i);
+  $('pose-strip').children[i].focus();
+});
 
 let thumbsToken = 0;
 function drawThumbnails() {

@@ -49,6 +49,26 @@ async function waitFit(page, [fits, loadErrors], timeout = 60000) {
 
 const counters = (page) => page.evaluate(() => [window.posemfa.fitCount(), window.posemfa.loadErrorCount()]);
 
+test('the page loads and fits its built-in population, with no external request', async () => {
+  const t0 = Date.now();
+  const { page, context, log } = await fresh();
+  const marks = await page.evaluate(() => performance.getEntriesByName('posemfa:fitted').map((m) => m.startTime));
+  const state = await page.evaluate(() => document.body.dataset.state);
+  assert.equal(state, 'fitted', `state ${state}; errors: ${await page.locator('[data-testid=errors]').innerText()}`);
+  const s = await summary(page);
+  for (const k of SUMMARY_KEYS) assert.equal(typeof s[k], 'number', `summary.${k} = ${s[k]}`);
+  assert.ok(s.shapes >= 2 && s.vertices > 100 && s.parts >= 2, JSON.stringify(s));
+  assert.ok(s.fitMs > 0 && s.fitMs < Date.now() - t0, `fitMs ${s.fitMs}`);
+  assert.equal(await page.locator('[data-testid=parts-count]').innerText(), String(s.parts));
+  assert.equal(marks.length, 1, 'fitted once, at load');
+  // The generator's ground truth is shown beside the fit.
+  await page.check('#modes input[value=truth]', { force: true });
+  await page.waitForFunction(() => /ground truth/.test(document.querySelector('#caption').textContent));
+  assert.deepEqual(log.external, []);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
 test('a population picked through the file input is fitted and its parts are coloured on screen', async () => {
   const { page, context, log } = await fresh();
   const tube = tubePopulation({ segments: 3, poses: 8, seed: 3 });
