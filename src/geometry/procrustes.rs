@@ -85,7 +85,7 @@ mod tests {
         // y = mirror(x): the unconstrained optimum is a reflection; the best rotation keeps det +1
         // and flips the direction of the smallest singular value.
         let mirror = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]];
-        let xs = [[3.0, 0.0, 0.1], [0.0, 2.0, 0.2], [-3.0, 0.0, -0.1], [0.0, -2.0, 0.3]];
+        let xs = [[3.0, 0.0, 0.1], [-3.0, 0.0, 0.1], [0.0, 2.0, -0.1], [0.0, -2.0, -0.1]];
         let ys: Vec<_> = xs.iter().map(|&x| mat_vec(&mirror, x)).collect();
         let c = cross_cov(&ys, &xs);
         assert!(needs_flip(&c));

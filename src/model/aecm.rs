@@ -8,7 +8,7 @@
 use super::cm;
 use super::component::Component;
 use super::data::Data;
-use super::estep::{e_step, e_step_active, e_step_full, flops_per_pair, ActiveSets};
+use super::estep::{e_step, e_step_pruned};
 use super::init;
 use super::params::{LambdaRule, Params};
 use super::result::Model;
@@ -39,10 +39,6 @@ pub struct Fit {
     rule: LambdaRule,
     min_mass: f64,
     best: Option<(f64, Vec<Component>)>,
-    /// Components within reach of each vertex at the last full E-step (see [`ActiveSets`]).
-    active: ActiveSets,
-    /// E-steps since the last full one; None forces a full one next.
-    since_full: Option<usize>,
     /// Floating-point operations and milliseconds spent in E-steps (for benchmarks).
     pub estep_flops: f64,
     pub estep_ms: f64,
@@ -82,8 +78,6 @@ impl Fit {
             rule: params.lambda_rule,
             min_mass: params.min_part_vertices as f64,
             best: None,
-            active: ActiveSets::default(),
-            since_full: None,
             estep_flops: 0.0,
             estep_ms: 0.0,
         };
@@ -96,32 +90,13 @@ impl Fit {
         self.max_iter = n.max(1);
     }
 
-    /// Every E-step of the first iterations, and then every `FULL_EVERY`-th, evaluates all components
-    /// (and refreshes the active sets); the others evaluate only the components within
-    /// [`super::estep::ACTIVE_MARGIN`] nats of each vertex's best (the rest are below rounding).
-    const FULL_EVERY: usize = 8;
-    const FULL_FIRST_ITERATIONS: usize = 3;
-
+    /// E-step with exact pruning of negligible components ([`super::estep::e_step_pruned`]).
     fn run_e_step(&mut self) -> f64 {
-        let full = match self.since_full {
-            None => true,
-            Some(n) => n + 1 >= Self::FULL_EVERY || self.trace.len() < Self::FULL_FIRST_ITERATIONS,
-        };
-        self.e_step(full)
-    }
-
-    fn e_step(&mut self, full: bool) -> f64 {
         let t0 = crate::clock::now_ms();
-        let (ll, pairs) = if full {
-            self.since_full = Some(0);
-            let ll = e_step_full(&self.data, &self.comps, &mut self.gamma, &mut self.active);
-            (ll, self.data.n_vertices * self.comps.len())
-        } else {
-            self.since_full = self.since_full.map(|n| n + 1);
-            (e_step_active(&self.data, &self.comps, &mut self.gamma, &self.active), self.active.pairs())
-        };
+        let (ll, shape_evals) = e_step_pruned(&self.data, &self.comps, &mut self.gamma);
         self.estep_ms += crate::clock::now_ms() - t0;
-        self.estep_flops += pairs as f64 * flops_per_pair(self.data.n_shapes);
+        // 28 flops per (vertex, component, shape) evaluated, see estep::flops_per_pair
+        self.estep_flops += 28.0 * shape_evals as f64;
         ll
     }
 
@@ -150,15 +125,10 @@ impl Fit {
         }
         let dropped = before - self.comps.len();
         if dropped > 0 {
-            self.since_full = None; // component indices changed
+            self.gamma.clear(); // component indices changed: no hint for the next E-step
         }
-        let mut ll = self.run_e_step();
+        let ll = self.run_e_step();
         let prev = self.trace.last().copied().unwrap_or(self.initial_ll);
-        let converging = ((ll - prev) / self.data.n_vertices as f64).abs() < self.tol && dropped == 0;
-        if converging && self.since_full != Some(0) {
-            // confirm on a full E-step: final labels and responsibilities always come from one
-            ll = self.e_step(true);
-        }
         self.trace.push(ll);
         if ll.is_finite() && self.best.as_ref().is_none_or(|b| ll > b.0) {
             self.best = Some((ll, self.comps.clone()));

@@ -34,70 +34,118 @@ pub fn e_step(data: &Data, comps: &[Component], gamma: &mut Vec<f64>) -> f64 {
 }
 
 /// Components more than this many nats below a vertex's best one contribute less than e^-60 ≈ 1e-26 to
-/// its responsibilities: below f64 rounding of the sum. They are skipped until the next full E-step.
-pub const ACTIVE_MARGIN: f64 = 60.0;
+/// its responsibilities: below f64 rounding of their sum, so they are skipped.
+pub const PRUNE_MARGIN: f64 = 60.0;
 
-/// For every vertex, the components within [`ACTIVE_MARGIN`] nats of its best one at the last full E-step
-/// (compressed rows: `idx[ptr[j]..ptr[j+1]]`).
-#[derive(Debug, Clone, Default)]
-pub struct ActiveSets {
-    pub ptr: Vec<u32>,
-    pub idx: Vec<u32>,
+/// Per component, the Woodbury constants of the first t shapes (t = 1..n_s), for the early-exit bound.
+struct Prefix {
+    /// shrink_t[d] = λ_d² / (1 + w_t λ_d²), w_t = Σ_{i<t} 1/s_i
+    shrink: Vec<[f64; 3]>,
 }
 
-impl ActiveSets {
-    pub fn pairs(&self) -> usize {
-        self.idx.len()
-    }
+fn prefixes(comps: &[Component]) -> Vec<Prefix> {
+    comps
+        .iter()
+        .map(|c| {
+            let mut w = 0.0;
+            let shrink = c
+                .variances
+                .iter()
+                .map(|s| {
+                    w += 1.0 / s;
+                    c.lambda.map(|l| l * l / (1.0 + w * l * l))
+                })
+                .collect();
+            Prefix { shrink }
+        })
+        .collect()
 }
 
-/// Full E-step that also records, per vertex, which components are within the margin.
-pub fn e_step_full(data: &Data, comps: &[Component], gamma: &mut Vec<f64>, active: &mut ActiveSets) -> f64 {
-    let m = comps.len();
-    let wbs: Vec<Woodbury> = comps.iter().map(|c| c.woodbury()).collect();
-    gamma.clear();
-    gamma.resize(data.n_vertices * m, 0.0);
-    active.ptr.clear();
-    active.idx.clear();
-    active.ptr.push(0);
-    let mut ll = 0.0;
-    for j in 0..data.n_vertices {
-        let row = &mut gamma[j * m..(j + 1) * m];
-        log_densities(data.vertex(j), comps, &wbs, row);
-        let mx = row.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        for (k, &v) in row.iter().enumerate() {
-            if v >= mx - ACTIVE_MARGIN || !mx.is_finite() {
-                active.idx.push(k as u32);
+/// Shapes after which the early-exit bound is checked.
+const CHECK_AFTER: [usize; 4] = [1, 2, 4, 8];
+
+/// log π_k N(h | Θ_k), or -inf as soon as a bound proves it is more than [`PRUNE_MARGIN`] below `best`.
+///
+/// The bound: (h-b)^T Σ^-1 (h-b) = min_z Σ_i |x_i - R_i Λ z|² / s_i + |z|², and dropping shapes from the sum
+/// can only lower the minimum, which is again a Woodbury form over the first t shapes. So
+/// log_norm - q_t / 2 is an upper bound of the log-density for every t; once it falls below best - margin
+/// the component cannot matter. Returns (value, shapes evaluated).
+#[inline]
+fn bounded_log_density(c: &Component, wb: &Woodbury, pre: &Prefix, h: &[[f64; 3]], best: f64) -> (f64, usize) {
+    let ns = h.len();
+    let mut y = [0.0; 3];
+    let mut sq = 0.0;
+    let mut next_check = 0;
+    for (i, &p) in h.iter().enumerate() {
+        let b = c.translations[i];
+        let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
+        sq += (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) * wb.inv_s[i];
+        let r = &wb.rt_over_s[i];
+        y[0] += r[0][0] * x[0] + r[0][1] * x[1] + r[0][2] * x[2];
+        y[1] += r[1][0] * x[0] + r[1][1] * x[1] + r[1][2] * x[2];
+        y[2] += r[2][0] * x[0] + r[2][1] * x[1] + r[2][2] * x[2];
+        let t = i + 1;
+        if t < ns && next_check < CHECK_AFTER.len() && t == CHECK_AFTER[next_check] {
+            next_check += 1;
+            let sh = &pre.shrink[i];
+            let q = sq - (sh[0] * y[0] * y[0] + sh[1] * y[1] * y[1] + sh[2] * y[2] * y[2]);
+            if wb.log_norm - 0.5 * q < best - PRUNE_MARGIN {
+                return (f64::NEG_INFINITY, t);
             }
         }
-        active.ptr.push(active.idx.len() as u32);
-        ll += normalise_log_row(row);
     }
-    ll
+    let q = sq - (wb.shrink[0] * y[0] * y[0] + wb.shrink[1] * y[1] * y[1] + wb.shrink[2] * y[2] * y[2]);
+    (wb.log_norm - 0.5 * q, ns)
 }
 
-/// E-step over the active sets only (the other responsibilities are set to 0).
-pub fn e_step_active(data: &Data, comps: &[Component], gamma: &mut [f64], active: &ActiveSets) -> f64 {
+/// The E-step with exact pruning: per vertex, the component that was most responsible before (the argmax
+/// of the incoming `gamma` row, when it has the same number of components) is evaluated first, and every
+/// other component stops as soon as the bound of [`bounded_log_density`] proves it negligible. The result
+/// equals [`e_step`] to rounding. Returns (log-likelihood, shape evaluations done).
+pub fn e_step_pruned(data: &Data, comps: &[Component], gamma: &mut Vec<f64>) -> (f64, usize) {
     let m = comps.len();
+    let ns = data.n_shapes;
     let wbs: Vec<Woodbury> = comps.iter().map(|c| c.woodbury()).collect();
-    let mut buf = vec![0.0; m];
-    let mut ll = 0.0;
-    for j in 0..data.n_vertices {
-        let ks = &active.idx[active.ptr[j] as usize..active.ptr[j + 1] as usize];
-        let h = data.vertex(j);
-        let b = &mut buf[..ks.len()];
-        for (slot, &k) in b.iter_mut().zip(ks) {
-            let k = k as usize;
-            *slot = comps[k].log_weighted_density(&wbs[k], h);
-        }
-        ll += normalise_log_row(b);
-        let row = &mut gamma[j * m..(j + 1) * m];
-        row.iter_mut().for_each(|g| *g = 0.0);
-        for (&g, &k) in b.iter().zip(ks) {
-            row[k as usize] = g;
-        }
+    let pre = prefixes(comps);
+    let have_hint = gamma.len() == data.n_vertices * m;
+    if !have_hint {
+        gamma.clear();
+        gamma.resize(data.n_vertices * m, 0.0);
     }
-    ll
+    let mut ll = 0.0;
+    let mut evals = 0usize;
+    for j in 0..data.n_vertices {
+        let h = data.vertex(j);
+        let row = &mut gamma[j * m..(j + 1) * m];
+        let first = if have_hint {
+            let mut a = 0;
+            for k in 1..m {
+                if row[k] > row[a] {
+                    a = k;
+                }
+            }
+            a
+        } else {
+            0
+        };
+        let best0 = comps[first].log_weighted_density(&wbs[first], h);
+        evals += ns;
+        let mut best = best0;
+        for k in 0..m {
+            if k == first {
+                continue;
+            }
+            let (v, n) = bounded_log_density(&comps[k], &wbs[k], &pre[k], h, best);
+            evals += n;
+            row[k] = v;
+            if v > best {
+                best = v;
+            }
+        }
+        row[first] = best0;
+        ll += normalise_log_row(row);
+    }
+    (ll, evals)
 }
 
 /// Turns a row of log-weights into probabilities in place; returns log Σ exp(row).
@@ -113,7 +161,7 @@ pub fn normalise_log_row(row: &mut [f64]) -> f64 {
     let mut s = 0.0;
     for g in row.iter_mut() {
         // far below the best: exactly 0 after rounding anyway; skipping exp avoids its slow underflow path
-        *g = if *g < mx - 2.0 * ACTIVE_MARGIN { 0.0 } else { (*g - mx).exp() };
+        *g = if *g < mx - 2.0 * PRUNE_MARGIN { 0.0 } else { (*g - mx).exp() };
         s += *g;
     }
     let inv = 1.0 / s;
