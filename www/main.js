@@ -68,7 +68,7 @@ function query(method, ...args) {
 worker.onmessage = ({ data: m }) => {
   switch (m.type) {
     case 'ready': return onReady(m);
-    case 'fatal': showProblems([{ reason: m.message }]); return setState('error');
+    case 'fatal': showProblems([{ file: null, line: null, reason: m.message }], 'The page cannot run'); return setState('error');
     case 'loaded': if (m.id === app.loadId) onLoaded(m.population); return;
     case 'load-error': if (m.id === app.loadId) onLoadError(m.problems); return;
     case 'progress': if (m.id === app.fitId) onProgress(m); return;
@@ -85,7 +85,7 @@ worker.onmessage = ({ data: m }) => {
   }
 };
 worker.onerror = (e) => {
-  showProblems([{ reason: `the worker failed: ${e.message || e}` }]);
+  showProblems([{ file: null, line: null, reason: `the worker failed: ${e.message || e}` }], 'The page cannot run');
   setState('error');
 };
 
@@ -181,7 +181,10 @@ function onLoaded(pop) {
     app.colours.truth = labelColours(pop.truth.partOfVertex, pop.faces).vertexColours;
   }
   document.querySelector('#modes input[value=truth]').parentElement.hidden = !pop.truth;
-  if (!pop.truth && app.mode === 'truth') document.querySelector('#modes input[value=parts]').click();
+  if (!pop.truth && app.mode === 'truth') {
+    app.mode = 'parts';
+    document.querySelector('#modes input[value=parts]').checked = true;
+  }
   $('names').replaceChildren(...pop.names.map((n) => Object.assign(document.createElement('li'), { textContent: n })));
   fillPoseLists();
   showResult();
@@ -191,13 +194,15 @@ function onLoaded(pop) {
   fitStarted(app.pendingFit.id); // the worker started it right after the load
 }
 
-function showProblems(problems) {
+// Lists problems (file, line, reason), each as text. `heading` defaults to the one for a refused input.
+function showProblems(problems, heading) {
   const box = $('errors');
   if (!problems.length) return box.replaceChildren();
   const head = document.createElement('strong');
-  head.textContent = problems.some((p) => p.file !== null || p.line !== null || !/^ignored/.test(p.reason))
-    ? `${problems.length} problem${problems.length > 1 ? 's' : ''}; the previous population is kept`
-    : 'Note';
+  const serious = problems.some((p) => p.file !== null || p.line !== null || !/^ignored/.test(p.reason));
+  head.textContent = heading ?? (serious
+    ? `${problems.length} problem${problems.length > 1 ? 's' : ''}${app.pop ? '; the previous population is kept' : ''}`
+    : 'Note');
   const list = document.createElement('ul');
   for (const p of problems) {
     const li = document.createElement('li');
@@ -239,6 +244,7 @@ function readParams() {
 
 function startFit() {
   if (!app.pop) return;
+  showProblems([]);
   fitStarted(send({ type: 'fit', params: readParams() }));
 }
 
@@ -317,7 +323,7 @@ function onFitted({ cancelled, fitMs, model }) {
 function onFitError(message) {
   app.fitId = null;
   app.fitCount++;
-  showProblems([{ reason: message }]);
+  showProblems([{ file: null, line: null, reason: message }], app.model ? 'The fit failed; the previous model is kept' : 'The fit failed');
   setState(app.model ? 'fitted' : 'error');
 }
 

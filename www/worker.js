@@ -35,7 +35,7 @@ const SLICE_MS = 40; // one fitter.run(budget) call; the worker reads its messag
 let population = null; // wasm Population
 let fitter = null; // wasm Fitter of the fit in progress
 let model = null; // wasm FitModel of the last fit (final or best so far)
-let fitId = null;
+let fitToken = 0; // bumped by every new fit and population: a fit whose token is stale was superseded
 let cancelRequested = false;
 
 const post = (msg, transfer = []) => self.postMessage(msg, transfer);
@@ -74,6 +74,7 @@ function describe(pop, truth = null) {
 
 function replacePopulation(pop) {
   stopFit();
+  fitToken++;
   model?.free();
   model = null;
   population?.free();
@@ -140,10 +141,12 @@ async function fit({ id, params }) {
     post({ type: 'fit-error', id, message: 'no population loaded' });
     return;
   }
+  const token = ++fitToken;
   if (fitter) {
-    // A fit is running: stop it and wait until its loop has let go.
+    // A fit is running: stop it and wait until its loop has let go (it keeps nothing: it was superseded).
     cancelRequested = true;
     while (fitter) await yieldToEvents();
+    if (token !== fitToken) return; // superseded in the meantime too
   }
   const t0 = performance.now();
   let f;
@@ -154,9 +157,7 @@ async function fit({ id, params }) {
     return;
   }
   fitter = f;
-  fitId = id;
   cancelRequested = false;
-  const pop = population;
   try {
     while (!f.isDone() && !cancelRequested) {
       const steps = f.run(SLICE_MS);
@@ -165,7 +166,7 @@ async function fit({ id, params }) {
       post({ type: 'progress', id, steps, trace, labels, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer]);
       await yieldToEvents();
     }
-    if (pop !== population) return; // a new population replaced this one: its fit is void
+    if (token !== fitToken) return; // a new fit or population superseded this one: it keeps nothing
     const cancelled = !f.isDone();
     const m = f.result();
     const fitMs = performance.now() - t0;
@@ -179,10 +180,7 @@ async function fit({ id, params }) {
     post({ type: 'fit-error', id, message: String(e.message ?? e) });
   } finally {
     f.free();
-    if (fitter === f) {
-      fitter = null;
-      fitId = null;
-    }
+    if (fitter === f) fitter = null;
   }
 }
 

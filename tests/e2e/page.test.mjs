@@ -138,6 +138,25 @@ test('a malformed file lists its error and keeps the previous population and mod
   await context.close();
 });
 
+test('the parameters show their defaults, and an invalid one is reported with the model kept', async () => {
+  const { page, context } = await fresh();
+  const form = (name) => page.locator(`#params [name=${name}]`);
+  assert.equal(await form('parts').inputValue(), '11');
+  assert.equal(Number(await form('tol').inputValue()), 1e-3);
+  assert.equal(Number(await form('varianceFloor').inputValue()), 1e-7);
+  assert.equal(await form('paperLambda').isChecked(), false);
+  const before = await summary(page);
+  const n = await counters(page);
+  await form('tol').fill('-1');
+  await page.click('#fit');
+  assert.equal(await waitFit(page, n), 'fitted');
+  assert.match(await page.locator('[data-testid=errors]').innerText(), /The fit failed; the previous model is kept[\s\S]*tol/);
+  assert.deepEqual(await summary(page), before);
+  await page.click('#reset-params');
+  assert.equal(Number(await form('tol').inputValue()), 1e-3);
+  await context.close();
+});
+
 test('file names are shown as text, never as HTML', async () => {
   const { page, context, log } = await fresh();
   const name = '<img src=x onerror=alert(1)>.obj';
