@@ -451,7 +451,7 @@ function fillPoseLists() {
     c.width = 160;
     c.height = 120;
     const label = document.createElement('span');
-    label.textContent = n;
+    label.textContent = n.split('/').pop(); // the file's own name; the full path is in the title
     b.append(c, label);
     b.addEventListener('click', () => choosePose(i));
     return b;
