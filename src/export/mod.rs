@@ -1,3 +1,4 @@
 //! (being written)
+pub mod gltf;
 pub mod json;
 pub mod obj;

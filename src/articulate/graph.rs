@@ -1,0 +1,423 @@
+//! The part graph: which rigid parts touch, where, and the tree the interpolation walks.
+//!
+//! Two parts are adjacent when a mesh edge joins a vertex of one to a vertex of the other. The contact
+//! region of a pair is the set of triangles that have vertices in both parts (METHOD_NOTES item 10); when it
+//! falls into several patches (a label island inside another part adds a small second patch) the patch with
+//! the largest area is kept, so that a stray island does not pull the joint away from the real contact.
+//!
+//! Labels are not guaranteed to be spatially coherent (item 7), so a part can touch another through a small
+//! island as well as through its real joint. The default tree is therefore grown from the root by always
+//! taking the strongest remaining contact (the most mesh edges crossing: Prim's maximum spanning tree); the
+//! paper's plain breadth-first tree is [`TreeRule::BreadthFirst`]. On a clean segmentation whose part graph
+//! is itself a tree the two are the same tree.
+//!
+//! Parts in different connected pieces of the part graph (a mesh made of several pieces) are joined by a
+//! virtual contact between the closest pair of vertices found from the pieces' centroids, so that every used
+//! part is in one tree. Parts that label no vertex are in no tree.
+
+use crate::geometry::{add, norm, scale, sub, Vec3};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, VecDeque};
+
+/// How the part tree is grown from its root.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum TreeRule {
+    /// Maximum spanning tree on contact strength (mesh edges crossing), grown from the root. Default.
+    #[default]
+    Strongest,
+    /// Algorithm 2's breadth-first search, neighbours in index order.
+    BreadthFirst,
+}
+
+/// Where two parts touch.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Contact {
+    /// Triangles with vertices in both parts (the largest connected patch of them), by triangle index.
+    Triangles(Vec<usize>),
+    /// A virtual contact between two vertices (one per part) joining disconnected pieces of the mesh.
+    Virtual(u32, u32),
+}
+
+/// Parts, their contacts and sizes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PartGraph {
+    pub n_parts: usize,
+    /// Vertices per part.
+    pub vertex_count: Vec<usize>,
+    /// Sorted neighbour lists.
+    pub neighbors: Vec<Vec<usize>>,
+    /// Contact of every adjacent pair, keyed (smaller, larger).
+    pub contacts: BTreeMap<(usize, usize), Contact>,
+    /// Mesh edges crossing between the two parts of a pair, keyed (smaller, larger) (1 for virtual contacts).
+    pub strength: BTreeMap<(usize, usize), usize>,
+}
+
+/// A tree over the used parts.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Tree {
+    pub root: usize,
+    /// Parts in the order they were reached: every part comes after its parent.
+    pub order: Vec<usize>,
+    /// parent[k]: None for the root and for parts not in the tree (no vertices).
+    pub parent: Vec<Option<usize>>,
+}
+
+impl Tree {
+    /// Depth of every part in the tree (root 0), None when not in the tree.
+    pub fn depths(&self) -> Vec<Option<usize>> {
+        let mut d = vec![None; self.parent.len()];
+        for &k in &self.order {
+            d[k] = Some(match self.parent[k] {
+                None => 0,
+                Some(p) => d[p].expect("parents come first") + 1,
+            });
+        }
+        d
+    }
+
+    pub fn contains(&self, part: usize) -> bool {
+        self.order.contains(&part)
+    }
+}
+
+/// Every edge of the triangles once, as (smaller, larger) vertex index, sorted.
+pub fn mesh_edges(faces: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let mut e: Vec<[u32; 2]> = faces
+        .iter()
+        .flat_map(|f| [[f[0], f[1]], [f[1], f[2]], [f[2], f[0]]])
+        .filter(|e| e[0] != e[1])
+        .map(|e| if e[0] < e[1] { e } else { [e[1], e[0]] })
+        .collect();
+    e.sort_unstable();
+    e.dedup();
+    e
+}
+
+fn key(a: usize, b: usize) -> (usize, usize) {
+    if a < b {
+        (a, b)
+    } else {
+        (b, a)
+    }
+}
+
+/// Area of triangle (a, b, c).
+pub fn triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f64 {
+    0.5 * norm(crate::geometry::cross(sub(b, a), sub(c, a)))
+}
+
+struct Dsu(Vec<usize>);
+impl Dsu {
+    fn find(&mut self, x: usize) -> usize {
+        let mut r = x;
+        while self.0[r] != r {
+            r = self.0[r];
+        }
+        let mut y = x;
+        while self.0[y] != r {
+            let n = self.0[y];
+            self.0[y] = r;
+            y = n;
+        }
+        r
+    }
+    fn union(&mut self, a: usize, b: usize) {
+        let (a, b) = (self.find(a), self.find(b));
+        if a != b {
+            self.0[a] = b;
+        }
+    }
+}
+
+impl PartGraph {
+    /// Builds the graph from the labels (one per vertex, < `n_parts`), the triangles, and one pose of the
+    /// mesh (`positions`, used for patch areas and to place virtual contacts).
+    pub fn new(labels: &[u32], faces: &[[u32; 3]], n_parts: usize, positions: &[Vec3]) -> PartGraph {
+        let mut vertex_count = vec![0usize; n_parts];
+        for &l in labels {
+            vertex_count[l as usize] += 1;
+        }
+        let mut strength: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        for e in mesh_edges(faces) {
+            let (a, b) = (labels[e[0] as usize] as usize, labels[e[1] as usize] as usize);
+            if a != b {
+                *strength.entry(key(a, b)).or_default() += 1;
+            }
+        }
+        // Triangles touching two parts, per pair.
+        let mut tri_of_pair: BTreeMap<(usize, usize), Vec<usize>> = BTreeMap::new();
+        for (t, f) in faces.iter().enumerate() {
+            let l = f.map(|v| labels[v as usize] as usize);
+            let mut pairs = vec![key(l[0], l[1]), key(l[1], l[2]), key(l[0], l[2])];
+            pairs.sort_unstable();
+            pairs.dedup();
+            for p in pairs {
+                if p.0 != p.1 {
+                    tri_of_pair.entry(p).or_default().push(t);
+                }
+            }
+        }
+        let mut contacts = BTreeMap::new();
+        for (pair, tris) in tri_of_pair {
+            contacts.insert(pair, Contact::Triangles(largest_patch(&tris, faces, positions)));
+        }
+        let mut graph = PartGraph { n_parts, vertex_count, neighbors: vec![Vec::new(); n_parts], contacts, strength };
+        graph.join_pieces(labels, positions);
+        for &(a, b) in graph.contacts.keys() {
+            graph.neighbors[a].push(b);
+            graph.neighbors[b].push(a);
+        }
+        for n in &mut graph.neighbors {
+            n.sort_unstable();
+            n.dedup();
+        }
+        graph
+    }
+
+    /// Adds virtual contacts until the used parts form one connected graph.
+    fn join_pieces(&mut self, labels: &[u32], positions: &[Vec3]) {
+        let used: Vec<usize> = (0..self.n_parts).filter(|&k| self.vertex_count[k] > 0).collect();
+        if used.len() < 2 {
+            return;
+        }
+        loop {
+            let mut dsu = Dsu((0..self.n_parts).collect());
+            for &(a, b) in self.contacts.keys() {
+                dsu.union(a, b);
+            }
+            let main = dsu.find(used[0]);
+            // The first used part outside the main piece, and the whole piece it is in.
+            let Some(&other) = used.iter().find(|&&k| dsu.find(k) != main) else { return };
+            let other_root = dsu.find(other);
+            let in_main: Vec<bool> = (0..self.n_parts).map(|k| dsu.find(k) == main).collect();
+            let in_other: Vec<bool> = (0..self.n_parts).map(|k| dsu.find(k) == other_root).collect();
+            let centroid = |inside: &[bool]| {
+                let (mut c, mut n) = ([0.0; 3], 0.0);
+                for (j, &l) in labels.iter().enumerate() {
+                    if inside[l as usize] {
+                        c = add(c, positions[j]);
+                        n += 1.0;
+                    }
+                }
+                scale(c, 1.0 / n)
+            };
+            let nearest = |inside: &[bool], to: Vec3| {
+                (0..labels.len())
+                    .filter(|&j| inside[labels[j] as usize])
+                    .min_by(|&a, &b| norm(sub(positions[a], to)).total_cmp(&norm(sub(positions[b], to))))
+                    .expect("piece has vertices")
+            };
+            // Alternate nearest-point searches from the other piece's centroid: a cheap closest pair.
+            let mut vo = nearest(&in_other, centroid(&in_main));
+            let mut vm = nearest(&in_main, positions[vo]);
+            for _ in 0..3 {
+                vo = nearest(&in_other, positions[vm]);
+                vm = nearest(&in_main, positions[vo]);
+            }
+            let (a, b) = (labels[vm] as usize, labels[vo] as usize);
+            let (va, vb) = if a < b { (vm as u32, vo as u32) } else { (vo as u32, vm as u32) };
+            self.contacts.insert(key(a, b), Contact::Virtual(va, vb));
+            self.strength.insert(key(a, b), 1);
+        }
+    }
+
+    pub fn contact(&self, a: usize, b: usize) -> Option<&Contact> {
+        self.contacts.get(&key(a, b))
+    }
+
+    pub fn strength(&self, a: usize, b: usize) -> usize {
+        self.strength.get(&key(a, b)).copied().unwrap_or(0)
+    }
+
+    /// Parts that label at least one vertex.
+    pub fn used_parts(&self) -> Vec<usize> {
+        (0..self.n_parts).filter(|&k| self.vertex_count[k] > 0).collect()
+    }
+
+    /// The tree over the used parts grown from `root` by `rule`.
+    pub fn tree(&self, root: usize, rule: TreeRule) -> Tree {
+        let mut parent = vec![None; self.n_parts];
+        let mut seen = vec![false; self.n_parts];
+        let mut order = vec![root];
+        seen[root] = true;
+        match rule {
+            TreeRule::BreadthFirst => {
+                let mut queue = VecDeque::from([root]);
+                while let Some(c) = queue.pop_front() {
+                    for &k in &self.neighbors[c] {
+                        if !seen[k] {
+                            seen[k] = true;
+                            parent[k] = Some(c);
+                            order.push(k);
+                            queue.push_back(k);
+                        }
+                    }
+                }
+            }
+            TreeRule::Strongest => loop {
+                // Strongest contact from the tree to a part outside; ties: smaller tree index, then part.
+                let mut best: Option<(usize, usize, usize)> = None;
+                for (pos, &c) in order.iter().enumerate() {
+                    for &k in &self.neighbors[c] {
+                        if seen[k] {
+                            continue;
+                        }
+                        let s = self.strength(c, k);
+                        let better = match best {
+                            None => true,
+                            Some((bs, bpos, bk)) => s > bs || (s == bs && (pos, k) < (bpos, bk)),
+                        };
+                        if better {
+                            best = Some((s, pos, k));
+                        }
+                    }
+                }
+                let Some((_, pos, k)) = best else { break };
+                seen[k] = true;
+                parent[k] = Some(order[pos]);
+                order.push(k);
+            },
+        }
+        Tree { root, order, parent }
+    }
+}
+
+/// The connected patch (triangles sharing a vertex) with the largest area, triangles in index order.
+fn largest_patch(tris: &[usize], faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<usize> {
+    if tris.len() <= 1 {
+        return tris.to_vec();
+    }
+    let mut dsu = Dsu((0..tris.len()).collect());
+    let mut first_with_vertex: BTreeMap<u32, usize> = BTreeMap::new();
+    for (i, &t) in tris.iter().enumerate() {
+        for v in faces[t] {
+            match first_with_vertex.get(&v) {
+                Some(&o) => dsu.union(i, o),
+                None => {
+                    first_with_vertex.insert(v, i);
+                }
+            }
+        }
+    }
+    let mut area: BTreeMap<usize, f64> = BTreeMap::new();
+    for (i, &t) in tris.iter().enumerate() {
+        let f = faces[t];
+        let a = triangle_area(positions[f[0] as usize], positions[f[1] as usize], positions[f[2] as usize]);
+        // a tiny floor so that degenerate patches still count by their size
+        *area.entry(dsu.find(i)).or_default() += a + 1e-300;
+    }
+    let best = area.iter().max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(a.0))).map(|(&r, _)| r).unwrap_or(0);
+    tris.iter().enumerate().filter(|&(i, _)| dsu.find(i) == best).map(|(_, &t)| t).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A strip of quads along x: vertices (i, y) for i = 0..=n, y = 0..rows (vertex i * rows + y); labels
+    /// by column; two triangles per quad.
+    fn strip_rows(n: usize, rows: usize, label_of_column: impl Fn(usize) -> u32) -> (Vec<u32>, Vec<[u32; 3]>, Vec<Vec3>) {
+        let mut pos = Vec::new();
+        let mut labels = Vec::new();
+        for i in 0..=n {
+            for y in 0..rows {
+                pos.push([i as f64, y as f64, 0.0]);
+                labels.push(label_of_column(i));
+            }
+        }
+        let mut faces = Vec::new();
+        let r = rows as u32;
+        for i in 0..n as u32 {
+            for y in 0..r - 1 {
+                let (a, b, c, d) = (i * r + y, i * r + y + 1, (i + 1) * r + y, (i + 1) * r + y + 1);
+                faces.push([a, c, b]);
+                faces.push([b, c, d]);
+            }
+        }
+        (labels, faces, pos)
+    }
+
+    fn strip(n: usize, label_of_column: impl Fn(usize) -> u32) -> (Vec<u32>, Vec<[u32; 3]>, Vec<Vec3>) {
+        strip_rows(n, 2, label_of_column)
+    }
+
+    #[test]
+    fn edges_are_unique_and_sorted() {
+        let e = mesh_edges(&[[0, 1, 2], [2, 1, 3]]);
+        assert_eq!(e, vec![[0, 1], [0, 2], [1, 2], [1, 3], [2, 3]]);
+    }
+
+    #[test]
+    fn chain_adjacency_contacts_and_trees() {
+        // parts 0 | 1 | 2 along the strip, part 3 unused
+        let (labels, faces, pos) = strip(9, |i| (i / 4).min(2) as u32);
+        let g = PartGraph::new(&labels, &faces, 4, &pos);
+        assert_eq!(g.neighbors, vec![vec![1], vec![0, 2], vec![1], vec![]]);
+        assert_eq!(g.used_parts(), vec![0, 1, 2]);
+        // columns 3|4: one quad (2 triangles) and 3 crossing edges (two horizontal, one diagonal)
+        assert_eq!(g.strength(0, 1), 3);
+        let Some(Contact::Triangles(t)) = g.contact(1, 0) else { panic!("no contact") };
+        assert_eq!(t, &vec![6, 7]);
+        for rule in [TreeRule::Strongest, TreeRule::BreadthFirst] {
+            let tr = g.tree(1, rule);
+            assert_eq!(tr.order, vec![1, 0, 2]);
+            assert_eq!(tr.parent, vec![Some(1), None, Some(1), None]);
+            assert_eq!(tr.depths(), vec![Some(1), Some(0), Some(1), None]);
+            let tr = g.tree(0, rule);
+            assert_eq!(tr.parent, vec![None, Some(0), Some(1), None]);
+        }
+    }
+
+    #[test]
+    fn strongest_tree_ignores_a_weak_island_contact() {
+        // 0: columns 0..=5, 1: columns 6..=11, 2: columns 12..=14, 5 rows, plus an island of part 2 at
+        // column 2 of part 0 (one vertex). BFS from 0 hangs 2 on 0 through the island; the strongest tree
+        // hangs it on 1.
+        let (mut labels, faces, pos) = strip_rows(14, 5, |i| if i <= 5 { 0 } else if i <= 11 { 1 } else { 2 });
+        labels[10] = 2; // vertex (2, 0)
+        let g = PartGraph::new(&labels, &faces, 3, &pos);
+        assert_eq!(g.neighbors[0], vec![1, 2]);
+        assert!(g.strength(0, 2) < g.strength(1, 2));
+        assert_eq!(g.tree(0, TreeRule::BreadthFirst).parent[2], Some(0));
+        assert_eq!(g.tree(0, TreeRule::Strongest).parent[2], Some(1));
+        // the contact of (1, 2) is its one real patch; the contact of (0, 2) is the island's patch
+        let Some(Contact::Triangles(t)) = g.contact(0, 2) else { panic!() };
+        assert!(t.iter().all(|&t| faces[t].contains(&10)));
+    }
+
+    #[test]
+    fn largest_patch_is_kept() {
+        // part 1 = columns 0..=2 and 8..=12 (two patches against part 0 in the middle, the second larger
+        // because the mesh is stretched there)
+        let (labels, faces, mut pos) = strip(12, |i| if (3..=7).contains(&i) { 0 } else { 1 });
+        for p in &mut pos {
+            if p[0] >= 7.0 {
+                p[1] *= 3.0;
+            }
+        }
+        let g = PartGraph::new(&labels, &faces, 2, &pos);
+        let Some(Contact::Triangles(t)) = g.contact(0, 1) else { panic!() };
+        // patch at columns 7|8 = quad 7 = triangles 14, 15
+        assert_eq!(t, &vec![14, 15]);
+    }
+
+    #[test]
+    fn disconnected_pieces_get_a_virtual_contact() {
+        // two separate strips: part 0 on one, part 1 on the other, 5 units apart in y
+        let (l1, f1, p1) = strip(3, |_| 0);
+        let n = p1.len() as u32;
+        let (_, f2, p2) = strip(3, |_| 1);
+        let labels: Vec<u32> = l1.iter().copied().chain(std::iter::repeat(1).take(p2.len())).collect();
+        let faces: Vec<[u32; 3]> = f1.iter().copied().chain(f2.iter().map(|f| f.map(|v| v + n))).collect();
+        let pos: Vec<Vec3> = p1.iter().copied().chain(p2.iter().map(|p| [p[0], p[1] + 5.0, p[2]])).collect();
+        let g = PartGraph::new(&labels, &faces, 2, &pos);
+        assert_eq!(g.neighbors, vec![vec![1], vec![0]]);
+        let Some(&Contact::Virtual(a, b)) = g.contact(0, 1) else { panic!("{:?}", g.contacts) };
+        assert_eq!(labels[a as usize], 0);
+        assert_eq!(labels[b as usize], 1);
+        // the closest pair: a vertex at y = 1 of the first strip and one at y = 5 of the second
+        assert!((norm(sub(pos[a as usize], pos[b as usize])) - 4.0).abs() < 1e-12);
+        assert_eq!(g.tree(0, TreeRule::Strongest).order, vec![0, 1]);
+    }
+}

@@ -1,0 +1,569 @@
+//! Skinning weights and blending of part motions per vertex.
+//!
+//! Rigid parts crease and stretch at joints (METHOD_NOTES item 9). The smooth weights spread each part
+//! boundary over a band: for a vertex j of part p and another part k at mesh distance d (Dijkstra over the
+//! edges, each edge as long as its mean length over the training shapes), k gets the raw weight
+//! φ(d / h_pk) with φ(x) = 1 - 3x² + 2x³ on [0, 1) and 0 beyond, and p itself gets φ(0) = 1; the raw weights
+//! are normalised (glTF export keeps the four largest, see [`SkinWeights::capped`]). The band half-width
+//! h_pk = band · min(r_p, r_k), where r_k is part k's RMS radius about its centroid (rigid, so measured on
+//! the latent shape): a joint between two short parts gets a narrow band, one between the trunk and a leg a
+//! band scaled by the leg. At a boundary both sides weigh 1/2 each; the weight of the other part falls
+//! smoothly to 0 at distance h on each side.
+//!
+//! Blending: dual-quaternion skinning (Kavan et al. 2007: the weighted sum of unit dual quaternions, signs
+//! aligned with the heaviest, normalised) or linear blend skinning (the weighted sum of the matrices).
+
+use super::graph::{mesh_edges, PartGraph};
+use super::{Blend, RigidMotion};
+use crate::geometry::rotation::{from_quat, to_quat};
+use crate::geometry::{norm, scale, sub, Mat3, Vec3};
+use glam::DQuat;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// Influences per vertex a glTF viewer blends (JOINTS_0 / WEIGHTS_0).
+pub const GLTF_INFLUENCES: usize = 4;
+
+/// Default band (half-width of the blend on each side of a boundary, as a fraction of the smaller part's
+/// RMS radius). Chosen on the horse and the generated creatures: see the module doc of `report`.
+pub const DEFAULT_BAND: f64 = 1.0;
+
+/// Per-vertex part weights: (part, weight) pairs, weights positive and summing to 1, the vertex's own part
+/// first, then heaviest first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkinWeights {
+    pub influences: Vec<Vec<(u32, f64)>>,
+}
+
+impl SkinWeights {
+    /// One-hot weights: every vertex on its own part.
+    pub fn rigid(labels: &[u32]) -> SkinWeights {
+        SkinWeights { influences: labels.iter().map(|&l| vec![(l, 1.0)]).collect() }
+    }
+
+    pub fn len(&self) -> usize {
+        self.influences.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.influences.is_empty()
+    }
+
+    /// (part, weight) pairs of vertex v.
+    pub fn influences(&self, v: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.influences[v].iter().map(|&(k, w)| (k as usize, w))
+    }
+
+    /// The `n` heaviest influences of every vertex, renormalised (for glTF's four).
+    pub fn capped(&self, n: usize) -> SkinWeights {
+        SkinWeights {
+            influences: self
+                .influences
+                .iter()
+                .map(|inf| {
+                    let mut v = inf.clone();
+                    v.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+                    v.truncate(n.max(1));
+                    let sum: f64 = v.iter().map(|x| x.1).sum();
+                    v.iter().map(|&(k, w)| (k, w / sum)).collect()
+                })
+                .collect(),
+        }
+    }
+
+    /// Dense n_vertices x n_parts matrix (row-major), for display.
+    pub fn dense(&self, n_parts: usize) -> Vec<f64> {
+        let mut out = vec![0.0; self.len() * n_parts];
+        for v in 0..self.len() {
+            for (k, w) in self.influences(v) {
+                out[v * n_parts + k] += w;
+            }
+        }
+        out
+    }
+}
+
+fn phi(x: f64) -> f64 {
+    if x >= 1.0 {
+        0.0
+    } else {
+        let x = x.max(0.0);
+        1.0 - x * x * (3.0 - 2.0 * x)
+    }
+}
+
+/// RMS radius of every part about its centroid, from the latent shape.
+pub fn part_radii(labels: &[u32], latent: &[Vec3], n_parts: usize) -> Vec<f64> {
+    let mut c = vec![[0.0; 3]; n_parts];
+    let mut n = vec![0.0; n_parts];
+    for (v, &l) in latent.iter().zip(labels) {
+        let l = l as usize;
+        c[l] = crate::geometry::add(c[l], *v);
+        n[l] += 1.0;
+    }
+    for k in 0..n_parts {
+        c[k] = scale(c[k], 1.0 / f64::max(n[k], 1.0));
+    }
+    let mut r2 = vec![0.0; n_parts];
+    for (v, &l) in latent.iter().zip(labels) {
+        let d = norm(sub(*v, c[l as usize]));
+        r2[l as usize] += d * d;
+    }
+    (0..n_parts).map(|k| (r2[k] / f64::max(n[k], 1.0)).sqrt()).collect()
+}
+
+/// Smooth weights (module doc). `band` scales every blend half-width; `shapes` gives the edge lengths.
+pub fn smooth_weights(
+    graph: &PartGraph,
+    labels: &[u32],
+    latent: &[Vec3],
+    faces: &[[u32; 3]],
+    shapes: &[Vec<Vec3>],
+    band: f64,
+) -> SkinWeights {
+    let nv = labels.len();
+    let n_parts = graph.n_parts;
+    let radii = part_radii(labels, latent, n_parts);
+    // Every part's reach depends on that part alone, so the raw weights are continuous across boundaries:
+    // its own radius, or its smallest neighbour's if smaller (a small part next to it bounds the band).
+    let reach: Vec<f64> = (0..n_parts)
+        .map(|k| graph.neighbors[k].iter().map(|&n| radii[n]).fold(radii[k], f64::min))
+        .collect();
+    // CSR adjacency with mean edge lengths.
+    let edges = mesh_edges(faces);
+    let mut deg = vec![0usize; nv + 1];
+    for e in &edges {
+        deg[e[0] as usize + 1] += 1;
+        deg[e[1] as usize + 1] += 1;
+    }
+    for v in 0..nv {
+        deg[v + 1] += deg[v];
+    }
+    let mut fill = deg.clone();
+    let mut nbr = vec![(0u32, 0.0f64); deg[nv]];
+    for e in &edges {
+        let (a, b) = (e[0] as usize, e[1] as usize);
+        let len = shapes.iter().map(|s| norm(sub(s[a], s[b]))).sum::<f64>() / shapes.len().max(1) as f64;
+        nbr[fill[a]] = (e[1], len);
+        fill[a] += 1;
+        nbr[fill[b]] = (e[0], len);
+        fill[b] += 1;
+    }
+    // raw[v]: (part, raw weight) pairs; the own part first.
+    let mut raw: Vec<Vec<(u32, f64)>> = labels.iter().map(|&l| vec![(l, 1.0)]).collect();
+    let mut dist = vec![f64::INFINITY; nv];
+    let mut touched: Vec<usize> = Vec::new();
+    for k in 0..n_parts {
+        if graph.vertex_count[k] == 0 || graph.neighbors[k].is_empty() {
+            continue;
+        }
+        let cutoff = band * reach[k];
+        if !(cutoff > 0.0) {
+            continue;
+        }
+        let mut heap = BinaryHeap::new();
+        for v in 0..nv {
+            if labels[v] as usize == k {
+                dist[v] = 0.0;
+                touched.push(v);
+                heap.push(Reverse((0u64, v)));
+            }
+        }
+        while let Some(Reverse((dbits, v))) = heap.pop() {
+            let d = f64::from_bits(dbits);
+            if d > dist[v] {
+                continue;
+            }
+            for &(u, len) in &nbr[deg[v]..deg[v + 1]] {
+                let u = u as usize;
+                let nd = d + len;
+                if nd < cutoff && nd < dist[u] {
+                    if dist[u].is_infinite() {
+                        touched.push(u);
+                    }
+                    dist[u] = nd;
+                    heap.push(Reverse((nd.to_bits(), u)));
+                }
+            }
+        }
+        for &v in &touched {
+            let p = labels[v] as usize;
+            if p != k {
+                let w = phi(dist[v] / cutoff);
+                if w > 0.0 {
+                    raw[v].push((k as u32, w));
+                }
+            }
+            dist[v] = f64::INFINITY;
+        }
+        touched.clear();
+    }
+    let influences = raw
+        .into_iter()
+        .map(|mut r| {
+            // own part first, then by weight
+            r[1..].sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            let sum: f64 = r.iter().map(|x| x.1).sum();
+            r.iter().map(|&(k, w)| (k, w / sum)).collect()
+        })
+        .collect();
+    SkinWeights { influences }
+}
+
+/// Weights fitted to the training shapes, on the support of `prior` (normally [`smooth_weights`]).
+///
+/// For vertex v with candidate parts K (those `prior` gives it), d_k^{ri} = M_k^{r->i} x_v^r - x_v^i is
+/// how far vertex v of shape r lands from its place in shape i when it follows part k alone
+/// (M_k^{r->i} = T_k^i (T_k^r)^-1). The weights minimise Σ_{r != i} |Σ_k w_k d_k^{ri}|² + μ' |w - w_prior|²
+/// over w >= 0, Σ w = 1: the linear blend of part motions that best carries every training shape onto
+/// every other, pulled toward the smooth prior (μ' = `mu` x the mean diagonal of the normal matrix, so
+/// `mu` is unitless) where the data cannot tell the parts apart.
+pub fn fitted_weights(motions: &[Vec<RigidMotion>], shapes: &[Vec<Vec3>], prior: &SkinWeights, mu: f64) -> SkinWeights {
+    let ns = shapes.len();
+    let n_parts = motions.len();
+    // M_k^{r->i} for every ordered pair r != i
+    let mut pairs = Vec::new();
+    for r in 0..ns {
+        for i in 0..ns {
+            if r != i {
+                let m: Vec<RigidMotion> = (0..n_parts).map(|k| motions[k][i].then_after(&motions[k][r].inverse())).collect();
+                pairs.push((r, i, m));
+            }
+        }
+    }
+    let influences = (0..prior.len())
+        .map(|v| {
+            let cand: Vec<(u32, f64)> = prior.influences[v].clone();
+            let kk = cand.len();
+            if kk <= 1 {
+                return cand;
+            }
+            let mut g = nalgebra::DMatrix::<f64>::zeros(kk, kk);
+            let mut d = vec![[0.0; 3]; kk];
+            for (r, i, m) in &pairs {
+                for (a, &(k, _)) in cand.iter().enumerate() {
+                    d[a] = sub(m[k as usize].apply(shapes[*r][v]), shapes[*i][v]);
+                }
+                for a in 0..kk {
+                    for b in a..kk {
+                        let x = crate::geometry::dot(d[a], d[b]);
+                        g[(a, b)] += x;
+                        if a != b {
+                            g[(b, a)] += x;
+                        }
+                    }
+                }
+            }
+            let mu_eff = mu * (g.trace() / kk as f64).max(1e-300);
+            let w0: Vec<f64> = cand.iter().map(|c| c.1).collect();
+            let mut active: Vec<bool> = vec![true; kk];
+            let mut w = w0.clone();
+            for _ in 0..kk {
+                let idx: Vec<usize> = (0..kk).filter(|&a| active[a]).collect();
+                let n = idx.len();
+                let mut a = nalgebra::DMatrix::<f64>::zeros(n + 1, n + 1);
+                let mut rhs = nalgebra::DVector::<f64>::zeros(n + 1);
+                for (p, &x) in idx.iter().enumerate() {
+                    for (q, &y) in idx.iter().enumerate() {
+                        a[(p, q)] = 2.0 * g[(x, y)];
+                    }
+                    a[(p, p)] += 2.0 * mu_eff;
+                    a[(p, n)] = 1.0;
+                    a[(n, p)] = 1.0;
+                    rhs[p] = 2.0 * mu_eff * w0[x];
+                }
+                rhs[n] = 1.0;
+                let Some(sol) = a.lu().solve(&rhs) else { return cand };
+                let mut neg = false;
+                w = vec![0.0; kk];
+                for (p, &x) in idx.iter().enumerate() {
+                    w[x] = sol[p];
+                }
+                // drop the most negative and solve again
+                if let Some((worst, _)) = idx.iter().map(|&x| (x, w[x])).filter(|(_, y)| *y < 0.0).min_by(|a, b| a.1.total_cmp(&b.1)) {
+                    active[worst] = false;
+                    neg = true;
+                }
+                if !neg {
+                    break;
+                }
+            }
+            let mut out: Vec<(u32, f64)> = cand.iter().zip(&w).filter(|(_, &x)| x > 1e-12).map(|(c, &x)| (c.0, x)).collect();
+            if out.is_empty() {
+                return vec![cand[0]];
+            }
+            let s: f64 = out.iter().map(|x| x.1).sum();
+            for o in &mut out {
+                o.1 /= s;
+            }
+            out.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            out
+        })
+        .collect();
+    SkinWeights { influences }
+}
+
+/// Edge vector at t between a and b: direction by slerp of the unit vectors, length (1-t)|a| + t|b|.
+pub fn slerp_vector(a: Vec3, b: Vec3, t: f64) -> Vec3 {
+    let (la, lb) = (norm(a), norm(b));
+    let mix = |p: Vec3, q: Vec3| crate::geometry::add(scale(p, 1.0 - t), scale(q, t));
+    if !(la > 0.0 && lb > 0.0) {
+        return mix(a, b);
+    }
+    let (ua, ub) = (scale(a, 1.0 / la), scale(b, 1.0 / lb));
+    let theta = crate::geometry::dot(ua, ub).clamp(-1.0, 1.0).acos();
+    let dir = if theta < 1e-9 || theta > std::f64::consts::PI - 1e-6 {
+        mix(ua, ub)
+    } else {
+        let s = theta.sin();
+        crate::geometry::add(scale(ua, ((1.0 - t) * theta).sin() / s), scale(ub, (t * theta).sin() / s))
+    };
+    let n = norm(dir);
+    if n > 0.0 {
+        scale(dir, ((1.0 - t) * la + t * lb) / n)
+    } else {
+        mix(a, b)
+    }
+}
+
+/// Anchor weight of [`edge_blend`] (relative to a vertex's edge weights).
+pub const EDGE_BLEND_ANCHOR: f64 = 0.01;
+
+/// Blends two versions `a`, `b` of the same mesh at t by their edges rather than their positions.
+///
+/// Averaging positions shortens every edge whose two versions point different ways (by cos(angle / 2)
+/// at t = 1/2): at joints, where the data is least rigid, that is where edges collapse. Here every edge
+/// (p, q) gets a target vector g_pq = [`slerp_vector`](a_p - a_q, b_p - b_q, t), and the positions solve
+/// min Σ_pq w_pq |x_p - x_q - g_pq|² + ε Σ_p d_p |x_p - m_p|², with w_pq = 1/|g_pq|² (relative errors),
+/// d_p = Σ_q w_pq, m = (1-t) a + t b (which fixes the translation and keeps the shape from drifting) and
+/// ε = `anchor`. Solved by Jacobi-preconditioned conjugate gradients from m; when a and b agree (t = 0 or 1
+/// in particular) m is the exact solution and is returned as it is.
+pub fn edge_blend(a: &[Vec3], b: &[Vec3], t: f64, edges: &[[u32; 2]], anchor: f64) -> Vec<Vec3> {
+    let n = a.len();
+    let m: Vec<Vec3> = a.iter().zip(b).map(|(p, q)| crate::geometry::add(scale(*p, 1.0 - t), scale(*q, t))).collect();
+    let g: Vec<Vec3> = edges
+        .iter()
+        .map(|e| {
+            let (p, q) = (e[0] as usize, e[1] as usize);
+            slerp_vector(sub(a[p], a[q]), sub(b[p], b[q]), t)
+        })
+        .collect();
+    let w: Vec<f64> = g.iter().map(|v| 1.0 / crate::geometry::dot(*v, *v).max(1e-30)).collect();
+    let mut diag = vec![0.0; n];
+    for (k, e) in edges.iter().enumerate() {
+        diag[e[0] as usize] += w[k];
+        diag[e[1] as usize] += w[k];
+    }
+    let eps: Vec<f64> = diag.iter().map(|d| anchor * d.max(1e-300)).collect();
+    let mut rhs: Vec<Vec3> = (0..n).map(|v| scale(m[v], eps[v])).collect();
+    for (k, e) in edges.iter().enumerate() {
+        let (p, q) = (e[0] as usize, e[1] as usize);
+        rhs[p] = crate::geometry::add(rhs[p], scale(g[k], w[k]));
+        rhs[q] = sub(rhs[q], scale(g[k], w[k]));
+    }
+    let apply = |x: &[Vec3]| -> Vec<Vec3> {
+        let mut y: Vec<Vec3> = (0..n).map(|v| scale(x[v], diag[v] + eps[v])).collect();
+        for (k, e) in edges.iter().enumerate() {
+            let (p, q) = (e[0] as usize, e[1] as usize);
+            y[p] = sub(y[p], scale(x[q], w[k]));
+            y[q] = sub(y[q], scale(x[p], w[k]));
+        }
+        y
+    };
+    let dot3 = |u: &[Vec3], v: &[Vec3]| {
+        let mut s = [0.0; 3];
+        for (p, q) in u.iter().zip(v) {
+            for d in 0..3 {
+                s[d] += p[d] * q[d];
+            }
+        }
+        s
+    };
+    let mut x = m;
+    let ax = apply(&x);
+    let mut r: Vec<Vec3> = (0..n).map(|v| sub(rhs[v], ax[v])).collect();
+    let scale_rhs = dot3(&rhs, &rhs).map(f64::sqrt);
+    let pre: Vec<f64> = (0..n).map(|v| 1.0 / (diag[v] + eps[v])).collect();
+    let mut z: Vec<Vec3> = (0..n).map(|v| scale(r[v], pre[v])).collect();
+    let mut p = z.clone();
+    let mut rz = dot3(&r, &z);
+    for _ in 0..(4 * n).max(100) {
+        let rr = dot3(&r, &r);
+        if (0..3).all(|d| rr[d].sqrt() <= 1e-12 * scale_rhs[d].max(1e-300)) {
+            break;
+        }
+        let ap = apply(&p);
+        let pap = dot3(&p, &ap);
+        let alpha = [0, 1, 2].map(|d| if pap[d] > 0.0 { rz[d] / pap[d] } else { 0.0 });
+        for v in 0..n {
+            for d in 0..3 {
+                x[v][d] += alpha[d] * p[v][d];
+                r[v][d] -= alpha[d] * ap[v][d];
+            }
+            z[v] = scale(r[v], pre[v]);
+        }
+        let rz2 = dot3(&r, &z);
+        let beta = [0, 1, 2].map(|d| if rz[d] > 0.0 { rz2[d] / rz[d] } else { 0.0 });
+        for v in 0..n {
+            for d in 0..3 {
+                p[v][d] = z[v][d] + beta[d] * p[v][d];
+            }
+        }
+        rz = rz2;
+    }
+    x
+}
+
+/// A unit dual quaternion q_r + ε q_d for x -> R x + b: q_r = quat(R), q_d = (0, b) q_r / 2.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DualQuat {
+    pub real: DQuat,
+    pub dual: DQuat,
+}
+
+impl DualQuat {
+    pub fn from_motion(m: &RigidMotion) -> DualQuat {
+        let real = to_quat(&m.rotation);
+        let t = DQuat::from_xyzw(m.translation[0], m.translation[1], m.translation[2], 0.0);
+        DualQuat { real, dual: (t * real) * 0.5 }
+    }
+
+    /// Normalised (by the real part's length) and turned back into a rigid motion.
+    pub fn to_motion(&self) -> RigidMotion {
+        let n = self.real.length();
+        let (r, d) = (self.real * (1.0 / n), self.dual * (1.0 / n));
+        let t = (d * r.conjugate()) * 2.0;
+        RigidMotion { rotation: from_quat(r), translation: [t.x, t.y, t.z] }
+    }
+}
+
+fn motion_sum(ms: &[(RigidMotion, f64)]) -> RigidMotion {
+    let mut r: Mat3 = [[0.0; 3]; 3];
+    let mut b = [0.0; 3];
+    for (m, w) in ms {
+        for a in 0..3 {
+            for c in 0..3 {
+                r[a][c] += w * m.rotation[a][c];
+            }
+            b[a] += w * m.translation[a];
+        }
+    }
+    RigidMotion { rotation: r, translation: b }
+}
+
+/// The blended motion of vertex v: Σ_k w_vk M_k (linear: an affine map, not a rigid motion in general) or
+/// the dual-quaternion blend. With a single influence it is that part's motion exactly.
+pub fn blend_motion(motions: &[RigidMotion], weights: &SkinWeights, v: usize, blend: Blend) -> RigidMotion {
+    let mut inf = weights.influences(v);
+    let Some((k0, w0)) = inf.next() else { return RigidMotion::IDENTITY };
+    let rest: Vec<(usize, f64)> = inf.collect();
+    if rest.is_empty() {
+        return motions[k0];
+    }
+    match blend {
+        Blend::Linear => {
+            let mut all = vec![(motions[k0], w0)];
+            all.extend(rest.iter().map(|&(k, w)| (motions[k], w)));
+            motion_sum(&all)
+        }
+        Blend::DualQuaternion => {
+            let q0 = DualQuat::from_motion(&motions[k0]);
+            let mut real = q0.real * w0;
+            let mut dual = q0.dual * w0;
+            for (k, w) in rest {
+                let q = DualQuat::from_motion(&motions[k]);
+                let s = if q.real.dot(q0.real) < 0.0 { -w } else { w };
+                real = real + q.real * s;
+                dual = dual + q.dual * s;
+            }
+            DualQuat { real, dual }.to_motion()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::rotation::axis_angle;
+
+    #[test]
+    fn dual_quaternion_round_trip_and_blend() {
+        let m = RigidMotion { rotation: axis_angle([1.0, 2.0, 0.5], 2.5), translation: [0.3, -1.0, 2.0] };
+        let back = DualQuat::from_motion(&m).to_motion();
+        let p = [0.7, -0.2, 0.4];
+        assert!(norm(sub(back.apply(p), m.apply(p))) < 1e-12);
+        // half-way between two rotations about the same axis through the origin = the half rotation
+        let a = RigidMotion { rotation: axis_angle([0.0, 0.0, 1.0], 0.0), translation: [0.0; 3] };
+        let b = RigidMotion { rotation: axis_angle([0.0, 0.0, 1.0], 1.2), translation: [0.0; 3] };
+        let w = SkinWeights { influences: vec![vec![(0, 0.5), (1, 0.5)]] };
+        let mid = blend_motion(&[a, b], &w, 0, Blend::DualQuaternion);
+        let want = axis_angle([0.0, 0.0, 1.0], 0.6);
+        assert!(crate::geometry::rotation::angle_between(&mid.rotation, &want) < 1e-12);
+        // linear blending shrinks the same point (candy-wrapper effect): |p| is kept by DQ, not by LBS
+        let lin = blend_motion(&[a, b], &w, 0, Blend::Linear);
+        let q = [1.0, 0.0, 0.0];
+        assert!((norm(mid.apply(q)) - 1.0).abs() < 1e-12);
+        assert!(norm(lin.apply(q)) < 0.96);
+        // a rotation about a point away from the origin: DQ keeps that point fixed
+        let c = [2.0, 1.0, 0.0];
+        let r = axis_angle([0.0, 0.0, 1.0], 1.0);
+        let about_c = RigidMotion { rotation: r, translation: sub(c, crate::geometry::mat_vec(&r, c)) };
+        let id = RigidMotion::IDENTITY;
+        let blended = blend_motion(&[id, about_c], &w, 0, Blend::DualQuaternion);
+        assert!(norm(sub(blended.apply(c), c)) < 1e-12);
+    }
+
+    #[test]
+    fn sign_of_quaternions_does_not_matter() {
+        // a 350° rotation equals a -10° one; its quaternion has the other sign: blending must go the short way
+        let a = RigidMotion { rotation: axis_angle([0.0, 0.0, 1.0], 0.2), translation: [0.0; 3] };
+        let b = RigidMotion { rotation: axis_angle([0.0, 0.0, 1.0], (350f64).to_radians()), translation: [0.0; 3] };
+        let w = SkinWeights { influences: vec![vec![(0, 0.5), (1, 0.5)]] };
+        let mid = blend_motion(&[a, b], &w, 0, Blend::DualQuaternion);
+        let want = axis_angle([0.0, 0.0, 1.0], (0.2 - 10f64.to_radians()) / 2.0);
+        assert!(crate::geometry::rotation::angle_between(&mid.rotation, &want) < 1e-12);
+    }
+
+    #[test]
+    fn smooth_weights_on_a_strip() {
+        // 21 columns of 2 vertices along x, unit spacing; part 0 = columns 0..=10, part 1 = 11..=20
+        let mut pos = Vec::new();
+        let mut labels = Vec::new();
+        for i in 0..=20 {
+            for y in 0..2 {
+                pos.push([i as f64, y as f64 * 0.01, 0.0]);
+                labels.push(if i <= 10 { 0 } else { 1 });
+            }
+        }
+        let mut faces = Vec::new();
+        for i in 0..20u32 {
+            let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+            faces.push([a, c, b]);
+            faces.push([b, c, d]);
+        }
+        let graph = PartGraph::new(&labels, &faces, 2, &pos);
+        let radii = part_radii(&labels, &pos, 2);
+        // RMS radius of 11 (10) unit-spaced columns about their middle: sqrt(10) (sqrt(99 / 12))
+        assert!((radii[0] - 10f64.sqrt()).abs() < 1e-3 && (radii[1] - (99.0f64 / 12.0).sqrt()).abs() < 1e-3, "{radii:?}");
+        let w = smooth_weights(&graph, &labels, &pos, &faces, &[pos.clone()], 1.0);
+        let h = radii[0].min(radii[1]);
+        for v in 0..pos.len() {
+            let sum: f64 = w.influences(v).map(|x| x.1).sum();
+            assert!((sum - 1.0).abs() < 1e-12);
+            let x = pos[v][0];
+            let w1 = w.dense(2)[v * 2 + 1];
+            // distance to the other part along x (the diagonals are slightly longer but not shorter)
+            let d = if x <= 10.0 { 11.0 - x } else { x - 10.0 };
+            let other = phi(d / h);
+            let want = if x <= 10.0 { other / (1.0 + other) } else { 1.0 / (1.0 + other) };
+            assert!((w1 - want).abs() < 0.02, "x={x}: w1={w1}, want {want}");
+        }
+        // monotone across the boundary, 0 and 1 far away
+        let col = |i: usize| w.dense(2)[(2 * i) * 2 + 1];
+        assert_eq!(col(0), 0.0);
+        assert_eq!(col(20), 1.0);
+        for i in 0..20 {
+            assert!(col(i + 1) >= col(i));
+        }
+    }
+}

@@ -1,0 +1,636 @@
+//! Binary glTF 2.0 (.glb) of an articulated model: the mesh, a skeleton of one joint per part, the skin and
+//! two animation clips. The document is built with the `gltf-json` crate; the GLB container (12-byte
+//! header, JSON chunk, BIN chunk) is written here.
+//!
+//! Layout:
+//! - node 0 `mesh`: the skinned mesh (a root node without transform, as glTF wants);
+//! - node 1 `skeleton`: carries the unit box -> original units map (scale 1/s, translation = offset);
+//! - nodes 2..: one joint per used part, arranged as the anchor-rooted part tree. Part k's joint sits, in
+//!   k's latent frame, at its contact with its parent (its centroid for the root): world matrix
+//!   G_k^i = [R_k^i | R_k^i o_k + b_k^i] in pose i. Animation channels hold the local transforms
+//!   G_p^-1 G_k (rotation + translation).
+//! - inverse bind matrices (G_k^bind)^-1 x (unit box <- original units), so that joint world x inverse
+//!   bind = T_k^i (T_k^bind)^-1: part k's rigid motion from the bind pose to pose i.
+//! - the mesh is bound in pose `bind_pose`: its rigid reconstruction (eq 22) with rigid weights, so that the
+//!   clip reproduces every training pose's rigid reconstruction exactly; the training shape itself with
+//!   smooth weights (glTF blends linearly: at other poses the result is linear blend skinning of it).
+//! - clip `training poses`: keyframe i at time i s (0-based), one per training shape;
+//!   clip `interpolated`: the articulation's own interpolation (anchor root, exact ends) through the poses in
+//!   order, `samples_per_second` samples per second.
+//!
+//! Positions are in the population's original units. [`check_glb`] reads a .glb back and evaluates its
+//! training clip at every keyframe from the stored numbers.
+
+use crate::articulate::graph::{Tree, TreeRule};
+use crate::articulate::{Articulation, Options, RigidMotion, Skin};
+use crate::error::{Error, Result};
+use crate::geometry::rotation::to_quat;
+use crate::geometry::{mat_mul, mat_vec, sub, Vec3};
+use gltf_json as json;
+use json::validation::{Checked::Valid, USize64};
+use serde::Serialize;
+
+/// Which skinning weights the file carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Weights {
+    /// Each vertex on its part (one joint, weight 1). Default.
+    #[default]
+    Rigid,
+    /// The articulation's smooth weights (up to 4 joints per vertex).
+    Smooth,
+}
+
+/// Export options. Defaults in each field's doc.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+#[serde(default, rename_all = "camelCase")]
+pub struct GltfOptions {
+    /// Default [`Weights::Rigid`].
+    pub weights: Weights,
+    /// Training shape the mesh is bound in (0-based). Default 0.
+    pub bind_pose: usize,
+    /// Samples per second (per pair of consecutive poses) of the `interpolated` clip, at least 1. Default 10.
+    pub samples_per_second: usize,
+    /// Interpolation options of the `interpolated` clip (skin and residual do not apply: glTF moves joints).
+    pub interpolation: Options,
+}
+
+impl Default for GltfOptions {
+    fn default() -> GltfOptions {
+        GltfOptions { weights: Weights::Rigid, bind_pose: 0, samples_per_second: 10, interpolation: Options::default() }
+    }
+}
+
+const GLB_MAGIC: u32 = 0x4654_6C67;
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+
+/// Column-major 4x4 of an affine map x -> A x + c (A row-major 3x3).
+fn mat4(a: &[[f64; 3]; 3], c: Vec3) -> [f64; 16] {
+    [
+        a[0][0], a[1][0], a[2][0], 0.0, a[0][1], a[1][1], a[2][1], 0.0, a[0][2], a[1][2], a[2][2], 0.0, c[0], c[1], c[2], 1.0,
+    ]
+}
+
+struct Bin {
+    data: Vec<u8>,
+    views: Vec<json::buffer::View>,
+    accessors: Vec<json::Accessor>,
+}
+
+impl Bin {
+    fn view(&mut self, bytes: &[u8], target: Option<json::buffer::Target>) -> json::Index<json::buffer::View> {
+        while self.data.len() % 4 != 0 {
+            self.data.push(0);
+        }
+        let offset = self.data.len();
+        self.data.extend_from_slice(bytes);
+        self.views.push(json::buffer::View {
+            buffer: json::Index::new(0),
+            byte_length: USize64(bytes.len() as u64),
+            byte_offset: Some(USize64(offset as u64)),
+            byte_stride: None,
+            name: None,
+            target: target.map(Valid),
+            extensions: Default::default(),
+            extras: Default::default(),
+        });
+        json::Index::new(self.views.len() as u32 - 1)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn accessor(
+        &mut self,
+        bytes: &[u8],
+        target: Option<json::buffer::Target>,
+        count: usize,
+        component: json::accessor::ComponentType,
+        type_: json::accessor::Type,
+        bounds: Option<(Vec<f32>, Vec<f32>)>,
+        name: &str,
+    ) -> json::Index<json::Accessor> {
+        let view = self.view(bytes, target);
+        let (min, max) = match bounds {
+            Some((lo, hi)) => (Some(serde_json::json!(lo)), Some(serde_json::json!(hi))),
+            None => (None, None),
+        };
+        self.accessors.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: USize64(count as u64),
+            component_type: Valid(json::accessor::GenericComponentType(component)),
+            extensions: Default::default(),
+            extras: Default::default(),
+            type_: Valid(type_),
+            min,
+            max,
+            name: Some(name.to_string()),
+            normalized: false,
+            sparse: None,
+        });
+        json::Index::new(self.accessors.len() as u32 - 1)
+    }
+
+    fn floats(&mut self, values: &[f32], type_: json::accessor::Type, per: usize, bounds: bool, target: Option<json::buffer::Target>, name: &str) -> json::Index<json::Accessor> {
+        let b = bounds.then(|| {
+            let mut lo = vec![f32::INFINITY; per];
+            let mut hi = vec![f32::NEG_INFINITY; per];
+            for c in values.chunks(per) {
+                for d in 0..per {
+                    lo[d] = lo[d].min(c[d]);
+                    hi[d] = hi[d].max(c[d]);
+                }
+            }
+            (lo, hi)
+        });
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        self.accessor(&bytes, target, values.len() / per, json::accessor::ComponentType::F32, type_, b, name)
+    }
+}
+
+/// Local transforms (translation, rotation quaternion xyzw) of every joint of `tree` for world part
+/// motions `motions` (latent -> unit box): the root relative to the `skeleton` node, every other joint
+/// relative to its parent joint.
+fn locals(art: &Articulation, tree: &Tree, motions: &[RigidMotion]) -> Vec<(Vec3, [f64; 4])> {
+    let world: Vec<RigidMotion> = (0..art.n_parts())
+        .map(|k| {
+            if tree.contains(k) {
+                let m = &motions[k];
+                RigidMotion { rotation: m.rotation, translation: m.apply(art.node_offset(tree, k)) }
+            } else {
+                RigidMotion::IDENTITY
+            }
+        })
+        .collect();
+    tree.order
+        .iter()
+        .map(|&k| {
+            let local = match tree.parent[k] {
+                None => world[k],
+                Some(p) => world[p].inverse().then_after(&world[k]),
+            };
+            let q = to_quat(&local.rotation).normalize();
+            (local.translation, [q.x, q.y, q.z, q.w])
+        })
+        .collect()
+}
+
+/// The .glb bytes (module doc).
+pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
+    let ns = art.n_shapes();
+    if opts.bind_pose >= ns {
+        return Err(Error::Request(format!("bind pose {} (0-based): the population has {ns} poses", opts.bind_pose)));
+    }
+    if opts.samples_per_second == 0 {
+        return Err(Error::Params("samples per second must be at least 1".into()));
+    }
+    let tree = art.graph.tree(art.anchor, TreeRule::Strongest);
+    let n_joints = tree.order.len();
+    let mut joint_of_part = vec![u32::MAX; art.n_parts()];
+    for (slot, &k) in tree.order.iter().enumerate() {
+        joint_of_part[k] = slot as u32;
+    }
+    let norm = art.normalization;
+    let mut bin = Bin { data: Vec::new(), views: Vec::new(), accessors: Vec::new() };
+
+    // Mesh.
+    let bind_unit = match opts.weights {
+        Weights::Rigid => &art.rigid[opts.bind_pose],
+        Weights::Smooth => &art.shapes[opts.bind_pose],
+    };
+    let positions: Vec<f32> = art.to_original(bind_unit).iter().flat_map(|p| p.map(|c| c as f32)).collect();
+    let pos_acc = bin.floats(&positions, json::accessor::Type::Vec3, 3, true, Some(json::buffer::Target::ArrayBuffer), "POSITION");
+    let indices: Vec<u8> = art.faces.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    let idx_acc = bin.accessor(
+        &indices,
+        Some(json::buffer::Target::ElementArrayBuffer),
+        art.faces.len() * 3,
+        json::accessor::ComponentType::U32,
+        json::accessor::Type::Scalar,
+        None,
+        "indices",
+    );
+    let weights = art
+        .weights(match opts.weights {
+            Weights::Rigid => Skin::Rigid,
+            Weights::Smooth => Skin::Smooth,
+        })
+        .capped(crate::articulate::skin::GLTF_INFLUENCES);
+    let mut joint_idx: Vec<u16> = Vec::with_capacity(art.n_vertices() * 4);
+    let mut joint_w: Vec<f32> = Vec::with_capacity(art.n_vertices() * 4);
+    for v in 0..art.n_vertices() {
+        let mut slots: Vec<(u16, f32)> = weights.influences(v).map(|(k, w)| (joint_of_part[k] as u16, w as f32)).collect();
+        // normalise in f32: the heaviest takes the rounding
+        let rest: f32 = slots[1..].iter().map(|s| s.1).sum();
+        slots[0].1 = 1.0 - rest;
+        slots.resize(4, (0, 0.0));
+        for (j, w) in slots {
+            joint_idx.push(j);
+            joint_w.push(w);
+        }
+    }
+    let (joints_bytes, joints_type) = if n_joints <= 256 {
+        (joint_idx.iter().map(|&j| j as u8).collect::<Vec<u8>>(), json::accessor::ComponentType::U8)
+    } else {
+        (joint_idx.iter().flat_map(|j| j.to_le_bytes()).collect(), json::accessor::ComponentType::U16)
+    };
+    let joints_acc = bin.accessor(
+        &joints_bytes,
+        Some(json::buffer::Target::ArrayBuffer),
+        art.n_vertices(),
+        joints_type,
+        json::accessor::Type::Vec4,
+        None,
+        "JOINTS_0",
+    );
+    let weights_acc = bin.floats(&joint_w, json::accessor::Type::Vec4, 4, false, Some(json::buffer::Target::ArrayBuffer), "WEIGHTS_0");
+
+    // Inverse bind matrices: (G_k^bind)^-1 x (x -> (x - offset) * scale).
+    let bind_motions: Vec<RigidMotion> = (0..art.n_parts()).map(|k| art.training_motion(k, opts.bind_pose)).collect();
+    let mut ibm: Vec<f32> = Vec::with_capacity(16 * n_joints);
+    for &k in &tree.order {
+        let g = RigidMotion { rotation: bind_motions[k].rotation, translation: bind_motions[k].apply(art.node_offset(&tree, k)) };
+        let gi = g.inverse();
+        let s = norm.scale;
+        let a = gi.rotation.map(|r| r.map(|x| x * s));
+        let c = sub(gi.translation, mat_vec(&a, norm.offset));
+        ibm.extend(mat4(&a, c).iter().map(|&x| x as f32));
+    }
+    let ibm_acc = bin.floats(&ibm, json::accessor::Type::Mat4, 16, false, None, "inverse bind matrices");
+
+    // Animations.
+    let mut animations = Vec::new();
+    let keys: Vec<usize> = (0..ns).collect();
+    let mut clips: Vec<(&str, Vec<f64>, Vec<Vec<RigidMotion>>)> = Vec::new();
+    let training: Vec<Vec<RigidMotion>> =
+        (0..ns).map(|i| (0..art.n_parts()).map(|k| art.training_motion(k, i)).collect()).collect();
+    clips.push(("training poses", (0..ns).map(|i| i as f64).collect(), training));
+    let steps = (ns - 1) * opts.samples_per_second;
+    let mut times = Vec::with_capacity(steps + 1);
+    let mut frames = Vec::with_capacity(steps + 1);
+    for s in 0..=steps {
+        let time = s as f64 / opts.samples_per_second as f64;
+        times.push(time);
+        frames.push(art.keyframe_motions(&keys, time, &opts.interpolation)?);
+    }
+    clips.push(("interpolated", times, frames));
+    for (name, times, frames) in clips {
+        if times.len() < 2 {
+            continue; // a single pose: nothing to animate
+        }
+        let t32: Vec<f32> = times.iter().map(|&t| t as f32).collect();
+        let input = bin.floats(&t32, json::accessor::Type::Scalar, 1, true, None, &format!("{name}: time"));
+        let per_frame: Vec<Vec<(Vec3, [f64; 4])>> = frames.iter().map(|m| locals(art, &tree, m)).collect();
+        let mut samplers = Vec::new();
+        let mut channels = Vec::new();
+        for (slot, &k) in tree.order.iter().enumerate() {
+            let mut tr: Vec<f32> = Vec::with_capacity(3 * frames.len());
+            let mut rot: Vec<f32> = Vec::with_capacity(4 * frames.len());
+            let mut prev: Option<[f64; 4]> = None;
+            for f in &per_frame {
+                let (t, mut q) = f[slot];
+                if let Some(p) = prev {
+                    if p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3] < 0.0 {
+                        q = q.map(|c| -c);
+                    }
+                }
+                prev = Some(q);
+                tr.extend(t.map(|c| c as f32));
+                rot.extend(q.map(|c| c as f32));
+            }
+            let node = json::Index::new(2 + slot as u32);
+            for (path, values, type_, per) in [
+                (json::animation::Property::Translation, tr, json::accessor::Type::Vec3, 3),
+                (json::animation::Property::Rotation, rot, json::accessor::Type::Vec4, 4),
+            ] {
+                let out = bin.floats(&values, type_, per, false, None, &format!("{name}: part {k} {path:?}"));
+                samplers.push(json::animation::Sampler {
+                    extensions: Default::default(),
+                    extras: Default::default(),
+                    input,
+                    interpolation: Valid(json::animation::Interpolation::Linear),
+                    output: out,
+                });
+                channels.push(json::animation::Channel {
+                    sampler: json::Index::new(samplers.len() as u32 - 1),
+                    target: json::animation::Target {
+                        extensions: Default::default(),
+                        extras: Default::default(),
+                        node,
+                        path: Valid(path),
+                    },
+                    extensions: Default::default(),
+                    extras: Default::default(),
+                });
+            }
+        }
+        animations.push(json::Animation {
+            extensions: Default::default(),
+            extras: Default::default(),
+            channels,
+            name: Some(name.to_string()),
+            samplers,
+        });
+    }
+
+    // Nodes: mesh, skeleton wrapper, joints (rest state = the bind pose).
+    let rest = locals(art, &tree, &bind_motions);
+    let mut nodes = vec![
+        json::Node {
+            mesh: Some(json::Index::new(0)),
+            skin: Some(json::Index::new(0)),
+            name: Some("mesh".into()),
+            ..Default::default()
+        },
+        json::Node {
+            children: Some(vec![json::Index::new(2)]),
+            name: Some("skeleton".into()),
+            scale: Some([(1.0 / norm.scale) as f32; 3]),
+            translation: Some(norm.offset.map(|c| c as f32)),
+            ..Default::default()
+        },
+    ];
+    for (slot, &k) in tree.order.iter().enumerate() {
+        let children: Vec<json::Index<json::Node>> = tree
+            .order
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| tree.parent[c] == Some(k))
+            .map(|(s, _)| json::Index::new(2 + s as u32))
+            .collect();
+        let (t, q) = rest[slot];
+        nodes.push(json::Node {
+            children: if children.is_empty() { None } else { Some(children) },
+            name: Some(format!("part {k}")),
+            translation: Some(t.map(|c| c as f32)),
+            rotation: Some(json::scene::UnitQuaternion(q.map(|c| c as f32))),
+            ..Default::default()
+        });
+    }
+    while bin.data.len() % 4 != 0 {
+        bin.data.push(0);
+    }
+    let mut attributes = std::collections::BTreeMap::new();
+    attributes.insert(Valid(json::mesh::Semantic::Positions), pos_acc);
+    attributes.insert(Valid(json::mesh::Semantic::Joints(0)), joints_acc);
+    attributes.insert(Valid(json::mesh::Semantic::Weights(0)), weights_acc);
+    let root = json::Root {
+        asset: json::Asset {
+            generator: Some(format!("posemfa {} (export::gltf, {:?} weights)", env!("CARGO_PKG_VERSION"), opts.weights)),
+            ..Default::default()
+        },
+        accessors: bin.accessors,
+        buffer_views: bin.views,
+        buffers: vec![json::Buffer {
+            byte_length: USize64(bin.data.len() as u64),
+            name: None,
+            uri: None,
+            extensions: Default::default(),
+            extras: Default::default(),
+        }],
+        meshes: vec![json::Mesh {
+            extensions: Default::default(),
+            extras: Default::default(),
+            name: Some("posemfa".into()),
+            primitives: vec![json::mesh::Primitive {
+                attributes,
+                extensions: Default::default(),
+                extras: Default::default(),
+                indices: Some(idx_acc),
+                material: None,
+                mode: Valid(json::mesh::Mode::Triangles),
+                targets: None,
+            }],
+            weights: None,
+        }],
+        skins: vec![json::Skin {
+            extensions: Default::default(),
+            extras: Default::default(),
+            inverse_bind_matrices: Some(ibm_acc),
+            joints: (0..n_joints).map(|s| json::Index::new(2 + s as u32)).collect(),
+            name: Some("parts".into()),
+            skeleton: Some(json::Index::new(2)),
+        }],
+        nodes,
+        scenes: vec![json::Scene {
+            extensions: Default::default(),
+            extras: Default::default(),
+            name: Some("posemfa".into()),
+            nodes: vec![json::Index::new(0), json::Index::new(1)],
+        }],
+        scene: Some(json::Index::new(0)),
+        animations,
+        ..Default::default()
+    };
+    let text = json::serialize::to_vec(&root).map_err(|e| Error::Data(format!("glTF JSON: {e}")))?;
+    Ok(glb_container(text, bin.data))
+}
+
+/// GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
+fn glb_container(mut text: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + text.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let mut out = Vec::with_capacity(total);
+    out.extend(GLB_MAGIC.to_le_bytes());
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(CHUNK_JSON.to_le_bytes());
+    out.extend(text);
+    if !bin.is_empty() {
+        out.extend((bin.len() as u32).to_le_bytes());
+        out.extend(CHUNK_BIN.to_le_bytes());
+        out.extend(bin);
+    }
+    out
+}
+
+/// Splits a .glb into its JSON document and BIN chunk.
+pub fn parse_glb(glb: &[u8]) -> Result<(json::Root, Vec<u8>)> {
+    let bad = |m: &str| Error::Data(format!("not a valid .glb: {m}"));
+    let word = |o: usize| -> Result<u32> {
+        glb.get(o..o + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).ok_or_else(|| bad("truncated"))
+    };
+    if word(0)? != GLB_MAGIC || word(4)? != 2 || word(8)? as usize != glb.len() {
+        return Err(bad("header"));
+    }
+    let jlen = word(12)? as usize;
+    if word(16)? != CHUNK_JSON {
+        return Err(bad("first chunk is not JSON"));
+    }
+    let text = glb.get(20..20 + jlen).ok_or_else(|| bad("JSON chunk"))?;
+    let root: json::Root = json::deserialize::from_slice(text).map_err(|e| bad(&e.to_string()))?;
+    let mut bin = Vec::new();
+    let o = 20 + jlen;
+    if o < glb.len() {
+        let blen = word(o)? as usize;
+        if word(o + 4)? != CHUNK_BIN {
+            return Err(bad("second chunk is not BIN"));
+        }
+        bin = glb.get(o + 8..o + 8 + blen).ok_or_else(|| bad("BIN chunk"))?.to_vec();
+    }
+    Ok((root, bin))
+}
+
+fn read_floats(root: &json::Root, bin: &[u8], acc: json::Index<json::Accessor>) -> Result<Vec<f64>> {
+    let a = root.get(acc).ok_or_else(|| Error::Data("accessor out of range".into()))?;
+    let view = root.get(a.buffer_view.ok_or_else(|| Error::Data("accessor without view".into()))?).ok_or_else(|| Error::Data("view".into()))?;
+    let start = view.byte_offset.map_or(0, |o| o.0 as usize) + a.byte_offset.map_or(0, |o| o.0 as usize);
+    let per = match a.type_ {
+        Valid(t) => t.multiplicity(),
+        _ => return Err(Error::Data("accessor type".into())),
+    };
+    let n = a.count.0 as usize * per;
+    let comp = match a.component_type {
+        Valid(json::accessor::GenericComponentType(c)) => c,
+        _ => return Err(Error::Data("component type".into())),
+    };
+    let size = comp.size();
+    let bytes = bin.get(start..start + n * size).ok_or_else(|| Error::Data("accessor past the buffer".into()))?;
+    Ok(bytes
+        .chunks(size)
+        .map(|b| match comp {
+            json::accessor::ComponentType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            json::accessor::ComponentType::U8 => b[0] as f64,
+            json::accessor::ComponentType::U16 => u16::from_le_bytes([b[0], b[1]]) as f64,
+            json::accessor::ComponentType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            _ => f64::NAN,
+        })
+        .collect())
+}
+
+/// What [`check_glb`] found.
+#[derive(Debug, Clone, Serialize)]
+pub struct GlbCheck {
+    pub joints: usize,
+    pub clips: Vec<String>,
+    /// Per training pose: the largest distance (unit box) between the skinned mesh of clip `training poses`
+    /// at time i and the rigid reconstruction of pose i.
+    pub frame_error: Vec<f64>,
+    pub max_frame_error: f64,
+}
+
+type Affine = ([[f64; 3]; 3], Vec3);
+
+fn affine_mul(a: &Affine, b: &Affine) -> Affine {
+    (mat_mul(&a.0, &b.0), crate::geometry::add(mat_vec(&a.0, b.1), a.1))
+}
+
+fn trs(t: Vec3, q: [f64; 4], s: Vec3) -> Affine {
+    let r = crate::geometry::rotation::from_quat(glam::DQuat::from_xyzw(q[0], q[1], q[2], q[3]));
+    let m = [[r[0][0] * s[0], r[0][1] * s[1], r[0][2] * s[2]], [r[1][0] * s[0], r[1][1] * s[1], r[1][2] * s[2]], [
+        r[2][0] * s[0],
+        r[2][1] * s[1],
+        r[2][2] * s[2],
+    ]];
+    (m, t)
+}
+
+/// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe, from the file's
+/// own numbers: node hierarchy, TRS, inverse bind matrices, JOINTS_0/WEIGHTS_0, positions (linear blend
+/// skinning as a glTF viewer does), and compares with the rigid reconstructions of `art`.
+pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
+    let (root, bin) = parse_glb(glb)?;
+    let err = |m: &str| Error::Data(format!("glb check: {m}"));
+    let skin = root.skins.first().ok_or_else(|| err("no skin"))?;
+    let prim = root.meshes.first().and_then(|m| m.primitives.first()).ok_or_else(|| err("no mesh"))?;
+    let attr = |s: json::mesh::Semantic| prim.attributes.get(&Valid(s)).copied().ok_or_else(|| err("attribute missing"));
+    let pos = read_floats(&root, &bin, attr(json::mesh::Semantic::Positions)?)?;
+    let jts = read_floats(&root, &bin, attr(json::mesh::Semantic::Joints(0))?)?;
+    let wts = read_floats(&root, &bin, attr(json::mesh::Semantic::Weights(0))?)?;
+    let ibm = read_floats(&root, &bin, skin.inverse_bind_matrices.ok_or_else(|| err("no IBM"))?)?;
+    let n_nodes = root.nodes.len();
+    let mut parent = vec![None; n_nodes];
+    for (i, n) in root.nodes.iter().enumerate() {
+        for c in n.children.iter().flatten() {
+            parent[c.value()] = Some(i);
+        }
+    }
+    let anim = root
+        .animations
+        .iter()
+        .find(|a| a.name.as_deref() == Some("training poses"))
+        .ok_or_else(|| err("no clip 'training poses'"))?;
+    let mut frame_error = Vec::new();
+    for i in 0..art.n_shapes() {
+        // local TRS of every node at keyframe i
+        let mut local: Vec<(Vec3, [f64; 4], Vec3)> = root
+            .nodes
+            .iter()
+            .map(|n| {
+                let t = n.translation.map_or([0.0; 3], |t| t.map(|c| c as f64));
+                let q = n.rotation.map_or([0.0, 0.0, 0.0, 1.0], |q| q.0.map(|c| c as f64));
+                let s = n.scale.map_or([1.0; 3], |s| s.map(|c| c as f64));
+                (t, q, s)
+            })
+            .collect();
+        for ch in &anim.channels {
+            let smp = &anim.samplers[ch.sampler.value()];
+            let times = read_floats(&root, &bin, smp.input)?;
+            let k = times.iter().position(|&t| (t - i as f64).abs() < 1e-6).ok_or_else(|| err("keyframe time missing"))?;
+            let out = read_floats(&root, &bin, smp.output)?;
+            let node = ch.target.node.value();
+            match ch.target.path {
+                Valid(json::animation::Property::Translation) => local[node].0 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]],
+                Valid(json::animation::Property::Rotation) => {
+                    local[node].1 = [out[4 * k], out[4 * k + 1], out[4 * k + 2], out[4 * k + 3]]
+                }
+                _ => return Err(err("unexpected channel")),
+            }
+        }
+        let mut world: Vec<Option<Affine>> = vec![None; n_nodes];
+        fn world_of(n: usize, parent: &[Option<usize>], local: &[(Vec3, [f64; 4], Vec3)], world: &mut Vec<Option<Affine>>) -> Affine {
+            if let Some(w) = world[n] {
+                return w;
+            }
+            let l = trs(local[n].0, local[n].1, local[n].2);
+            let w = match parent[n] {
+                Some(p) => affine_mul(&world_of(p, parent, local, world), &l),
+                None => l,
+            };
+            world[n] = Some(w);
+            w
+        }
+        let joint_mats: Vec<Affine> = skin
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(s, j)| {
+                let w = world_of(j.value(), &parent, &local, &mut world);
+                let m = &ibm[16 * s..16 * s + 16];
+                let b: Affine = ([[m[0], m[4], m[8]], [m[1], m[5], m[9]], [m[2], m[6], m[10]]], [m[12], m[13], m[14]]);
+                affine_mul(&w, &b)
+            })
+            .collect();
+        let mut worst: f64 = 0.0;
+        for v in 0..art.n_vertices() {
+            let p = [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]];
+            let mut x = [0.0; 3];
+            for s in 0..4 {
+                let w = wts[4 * v + s];
+                if w == 0.0 {
+                    continue;
+                }
+                let m = &joint_mats[jts[4 * v + s] as usize];
+                let y = crate::geometry::add(mat_vec(&m.0, p), m.1);
+                for d in 0..3 {
+                    x[d] += w * y[d];
+                }
+            }
+            let unit = art.normalization.to_unit(x);
+            worst = worst.max(crate::geometry::norm(sub(unit, art.rigid[i][v])));
+        }
+        frame_error.push(worst);
+    }
+    Ok(GlbCheck {
+        joints: skin.joints.len(),
+        clips: root.animations.iter().filter_map(|a| a.name.clone()).collect(),
+        max_frame_error: frame_error.iter().cloned().fold(0.0, f64::max),
+        frame_error,
+    })
+}
