@@ -1,0 +1,159 @@
+// The .glb written by `posemfa export-gltf`: the Khronos validator reports 0 errors (rigid and smooth
+// weights), three.js's GLTFLoader loads it, and playing the clip "training poses" reproduces every training
+// pose's rigid reconstruction (from `posemfa interpolate --from I --to I --t 0 --no-residual`) within 1e-4
+// of the unit box. Runs the CLI (debug build, built here if needed) on a generated quadruped.
+// Run: node --test tests/e2e/gltf.test.mjs
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { validateFile } from '../../scripts/validate-gltf.mjs';
+
+const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+const POSES = 6;
+let dir;
+let bin;
+
+function posemfa(...args) {
+  return execFileSync(bin, args, { cwd: root, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+}
+
+function readObj(file) {
+  const v = [];
+  for (const line of readFileSync(file, 'utf8').split('\n')) {
+    if (line.startsWith('v ')) v.push(line.trim().split(/\s+/).slice(1).map(Number));
+  }
+  return v;
+}
+
+// Extent of a point set (largest bounding-box side): the unit box's scale in original units.
+function extent(shapes) {
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  for (const s of shapes) for (const p of s) for (let d = 0; d < 3; d++) { lo[d] = Math.min(lo[d], p[d]); hi[d] = Math.max(hi[d], p[d]); }
+  return Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+}
+
+async function loadGlb(file) {
+  const bytes = readFileSync(file);
+  const ab = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+  return new Promise((resolve, reject) => new GLTFLoader().parse(ab, '', resolve, reject));
+}
+
+// Skinned vertex positions (world space) of the first SkinnedMesh at time `time` of clip `name`.
+function skinnedAt(gltf, name, time) {
+  const clip = gltf.animations.find((a) => a.name === name);
+  assert.ok(clip, `clip ${name} in ${gltf.animations.map((a) => a.name)}`);
+  let mesh;
+  gltf.scene.traverse((o) => { if (o.isSkinnedMesh && !mesh) mesh = o; });
+  assert.ok(mesh, 'a SkinnedMesh');
+  const mixer = new THREE.AnimationMixer(gltf.scene);
+  const action = mixer.clipAction(clip);
+  action.setLoop(THREE.LoopOnce, 1); // at time = duration a looping action wraps to the first frame
+  action.clampWhenFinished = true;
+  action.play();
+  mixer.setTime(time);
+  gltf.scene.updateMatrixWorld(true);
+  mesh.skeleton.update();
+  const pos = mesh.geometry.getAttribute('position');
+  const out = [];
+  const v = new THREE.Vector3();
+  for (let i = 0; i < pos.count; i++) {
+    v.fromBufferAttribute(pos, i);
+    mesh.applyBoneTransform(i, v);
+    v.applyMatrix4(mesh.matrixWorld);
+    out.push([v.x, v.y, v.z]);
+  }
+  mixer.stopAllAction();
+  return { out, clip };
+}
+
+function maxDistance(a, b) {
+  assert.equal(a.length, b.length);
+  let m = 0;
+  for (let i = 0; i < a.length; i++) m = Math.max(m, Math.hypot(a[i][0] - b[i][0], a[i][1] - b[i][1], a[i][2] - b[i][2]));
+  return m;
+}
+
+before(() => {
+  execFileSync('cargo', ['build', '--quiet', '--bin', 'posemfa'], { cwd: root, stdio: 'inherit' });
+  bin = path.join(root, 'target', 'debug', 'posemfa');
+  dir = mkdtempSync(path.join(tmpdir(), 'posemfa-gltf-'));
+  posemfa('generate', 'quadruped', '--vertices', '1500', '--poses', String(POSES), '--seed', '4', '--out', path.join(dir, 'pop'));
+  posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'rigid.glb'));
+  posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'smooth.glb'), '--weights', 'smooth');
+});
+
+after(() => {
+  if (dir) rmSync(dir, { recursive: true, force: true });
+});
+
+test('the Khronos validator reports 0 errors and 0 warnings (rigid and smooth weights)', async () => {
+  for (const f of ['rigid.glb', 'smooth.glb']) {
+    const r = await validateFile(path.join(dir, f));
+    assert.equal(r.errors, 0, `${f}: ${JSON.stringify(r.messages)}`);
+    assert.equal(r.warnings, 0, `${f}: ${JSON.stringify(r.messages)}`);
+  }
+});
+
+test('a corrupted .glb is reported by the validator (the check can fail)', async () => {
+  const bytes = readFileSync(path.join(dir, 'rigid.glb'));
+  // overwrite the BIN chunk's first inverse-bind / position bytes with NaNs
+  const bad = Buffer.from(bytes);
+  const jsonLen = bad.readUInt32LE(12);
+  const binStart = 20 + jsonLen + 8;
+  for (let k = 0; k < 64; k += 4) bad.writeFloatLE(NaN, binStart + k);
+  const file = path.join(dir, 'bad.glb');
+  (await import('node:fs')).writeFileSync(file, bad);
+  const r = await validateFile(file);
+  assert.ok(r.errors > 0, JSON.stringify(r));
+});
+
+test('three.js loads it; the training clip reproduces every rigid reconstruction within 1e-4 (unit box)', async () => {
+  const gltf = await loadGlb(path.join(dir, 'rigid.glb'));
+  const names = gltf.animations.map((a) => a.name).sort();
+  assert.deepEqual(names, ['interpolated', 'training poses']);
+  const objs = readdirSync(path.join(dir, 'pop')).filter((f) => f.endsWith('.obj'));
+  const originals = objs.map((f) => readObj(path.join(dir, 'pop', f)));
+  const scale = extent(originals);
+  for (let pose = 1; pose <= POSES; pose++) {
+    const ref = path.join(dir, `rigid-${pose}.obj`);
+    posemfa('interpolate', path.join(dir, 'pop'), '--from', String(pose), '--to', String(pose), '--t', '0', '--no-residual', '--out', ref);
+    const want = readObj(ref);
+    const { out, clip } = skinnedAt(gltf, 'training poses', pose - 1);
+    assert.ok(Math.abs(clip.duration - (POSES - 1)) < 1e-6, `duration ${clip.duration}`);
+    const err = maxDistance(out, want) / scale;
+    assert.ok(err <= 1e-4, `pose ${pose}: max error ${err} (unit box)`);
+  }
+  // the interpolated clip passes through the training poses too (same keyframe times)
+  const want = readObj(path.join(dir, 'rigid-3.obj'));
+  const { out } = skinnedAt(gltf, 'interpolated', 2);
+  assert.ok(maxDistance(out, want) / scale <= 1e-4);
+  // and between keyframes it is somewhere else than either neighbour
+  const mid = skinnedAt(gltf, 'interpolated', 2.5).out;
+  assert.ok(maxDistance(mid, want) / scale > 1e-3);
+});
+
+test('smooth weights: up to 4 joints per vertex, bound in the first training shape', async () => {
+  const gltf = await loadGlb(path.join(dir, 'smooth.glb'));
+  let mesh;
+  gltf.scene.traverse((o) => { if (o.isSkinnedMesh) mesh = o; });
+  const w = mesh.geometry.getAttribute('skinWeight');
+  let blended = 0;
+  for (let i = 0; i < w.count; i++) {
+    const ws = [w.getX(i), w.getY(i), w.getZ(i), w.getW(i)];
+    assert.ok(Math.abs(ws.reduce((a, b) => a + b, 0) - 1) < 1e-5);
+    if (ws.filter((x) => x > 0).length > 1) blended++;
+  }
+  assert.ok(blended > w.count * 0.05, `only ${blended} of ${w.count} vertices blend joints`);
+  const objs = readdirSync(path.join(dir, 'pop')).filter((f) => f.endsWith('.obj'))
+    .sort((a, b) => a.localeCompare(b, 'en', { numeric: true }));
+  const first = readObj(path.join(dir, 'pop', objs[0]));
+  const { out } = skinnedAt(gltf, 'training poses', 0);
+  assert.ok(maxDistance(out, first) / extent([first]) <= 1e-4);
+});
