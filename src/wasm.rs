@@ -326,3 +326,10 @@ impl Synthetic {
             .collect()
     }
 }
+
+/// The built-in examples (`posemfa::synth::presets`): [{id, title, note, failsOnPurpose, spec, params}], the
+/// default (the quadruped) first. `spec` goes to `new Synthetic(spec)`, `params` to `new Fitter(pop, params)`.
+#[wasm_bindgen]
+pub fn examples() -> Result<JsValue, JsError> {
+    to_js(&crate::synth::presets::examples())
+}

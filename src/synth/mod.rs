@@ -16,6 +16,7 @@
 pub mod creature;
 pub mod curve;
 pub mod pose;
+pub mod presets;
 pub mod tube;
 
 pub use pose::Blend;

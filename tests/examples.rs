@@ -1,0 +1,63 @@
+//! The page's built-in examples do what their notes say (native and wasm).
+
+use posemfa::metrics::{adjusted_rand_index, median, rotation_errors_deg};
+use posemfa::model::hierarchy::{fit, FitResult};
+use posemfa::synth::presets::{example, examples};
+use posemfa::synth::{generate, part_index, Generated, Preset};
+
+macro_rules! dual_test {
+    ($(fn $name:ident() $body:block)*) => {$(
+        #[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
+        #[cfg_attr(not(target_arch = "wasm32"), test)]
+        fn $name() $body
+    )*};
+}
+
+fn run(id: &str) -> (Generated, FitResult) {
+    let ex = example(id).expect("example exists");
+    let g = generate(&ex.spec).unwrap();
+    let r = fit(&g.population, &ex.params, &mut |_| true).unwrap();
+    (g, r)
+}
+
+dual_test! {
+    fn the_quadruped_is_recovered() {
+        let (g, r) = run("quadruped");
+        let m = &r.model;
+        let ari = adjusted_rand_index(&m.labels, &g.part_of_vertex);
+        let fitted: Vec<_> = m.parts.iter().map(|p| p.rotations.clone()).collect();
+        let errs = rotation_errors_deg(&fitted, &m.labels, &g.rotations, &g.part_of_vertex).unwrap();
+        let med = median(&errs);
+        assert!(ari >= 0.95, "adjusted Rand {ari} with {} parts", m.n_parts());
+        assert!(med <= 2.0, "median rotation error {med} degrees");
+    }
+
+    fn two_legs_that_never_move_apart_share_their_parts() {
+        let (g, r) = run("too-few-poses");
+        let labels = &r.model.labels;
+        for seg in ["upper", "lower", "foot"] {
+            let a = part_index(Preset::Quadruped, &format!("front_left_{seg}")).unwrap() as u32;
+            let b = part_index(Preset::Quadruped, &format!("front_right_{seg}")).unwrap() as u32;
+            let majority = |p: u32| {
+                let mut counts = std::collections::HashMap::new();
+                for (l, t) in labels.iter().zip(&g.part_of_vertex) {
+                    if *t == p {
+                        *counts.entry(*l).or_insert(0usize) += 1;
+                    }
+                }
+                counts.into_iter().max_by_key(|c| c.1).map(|c| c.0).unwrap()
+            };
+            assert_eq!(majority(a), majority(b), "front {seg} pieces: the tied legs are one rigid body");
+        }
+    }
+
+    fn every_example_is_valid() {
+        let all = examples();
+        assert_eq!(all[0].id, "quadruped");
+        for e in &all {
+            e.spec.validate().unwrap();
+            e.params.validate().unwrap();
+            assert!(!e.note.is_empty() && e.note.len() < 260);
+        }
+    }
+}
