@@ -9,7 +9,7 @@
 //!
 //! No 3n_s x 3n_s matrix is ever formed.
 
-use crate::geometry::{dot, mat_t_vec, sub, Mat3, Vec3};
+use crate::geometry::{mat_t_vec, sub, Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 
 pub const LN_2PI: f64 = 1.837_877_066_409_345_3;
@@ -30,9 +30,14 @@ pub struct Component {
     pub weight: f64,
 }
 
+/// Per shape, packed for streaming: [b_x, b_y, b_z, 1/s, (R^T/s) row-major (9)].
+pub type PackedShape = [f64; 13];
+
 /// Per-component constants of the Woodbury form, computed once per E-step.
 #[derive(Debug, Clone)]
 pub struct Woodbury {
+    /// Everything the inner loop reads per shape, contiguous (see [`PackedShape`]).
+    pub packed: Vec<PackedShape>,
     /// R_i^T / s_i, row-major, per shape.
     pub rt_over_s: Vec<Mat3>,
     pub inv_s: Vec<f64>,
@@ -67,7 +72,7 @@ impl Component {
             post_var[d] = 1.0 / m;
             log_det += m.ln();
         }
-        let rt_over_s = (0..ns)
+        let rt_over_s: Vec<Mat3> = (0..ns)
             .map(|i| {
                 let r = &self.rotations[i];
                 let is = inv_s[i];
@@ -79,22 +84,18 @@ impl Component {
             })
             .collect();
         let log_norm = self.weight.ln() - 0.5 * (3.0 * ns as f64 * LN_2PI + log_det);
-        Woodbury { rt_over_s, inv_s, shrink, post_gain, post_var, log_norm }
+        let packed = (0..ns)
+            .map(|i| {
+                let (b, r): (&Vec3, &Mat3) = (&self.translations[i], &rt_over_s[i]);
+                [b[0], b[1], b[2], inv_s[i], r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2]]
+            })
+            .collect();
+        Woodbury { packed, rt_over_s, inv_s, shrink, post_gain, post_var, log_norm }
     }
 
     /// y = Σ_i R_i^T (h_i - b_i) / s_i and Σ_i |h_i - b_i|² / s_i for one data vector h (one point per shape).
     pub fn project(&self, wb: &Woodbury, h: &[Vec3]) -> (Vec3, f64) {
-        let mut y = [0.0; 3];
-        let mut sq = 0.0;
-        for (i, &p) in h.iter().enumerate() {
-            let x = sub(p, self.translations[i]);
-            sq += dot(x, x) * wb.inv_s[i];
-            let r = &wb.rt_over_s[i];
-            y[0] += r[0][0] * x[0] + r[0][1] * x[1] + r[0][2] * x[2];
-            y[1] += r[1][0] * x[0] + r[1][1] * x[1] + r[1][2] * x[2];
-            y[2] += r[2][0] * x[0] + r[2][1] * x[1] + r[2][2] * x[2];
-        }
-        (y, sq)
+        project_packed(&wb.packed, h)
     }
 
     /// log(π_k N(h; b_k, A A^T + Φ)) by the Woodbury identity (eq 6, weighted by π as in eq 12's numerator).
@@ -199,4 +200,20 @@ mod tests {
             }
         }
     }
+}
+
+/// y = Σ_i (R_i^T / s_i)(h_i - b_i) and Σ_i |h_i - b_i|² / s_i over packed shapes (the E-step's kernel).
+#[inline(always)]
+pub fn project_packed(packed: &[PackedShape], h: &[Vec3]) -> (Vec3, f64) {
+    let (mut y0, mut y1, mut y2, mut sq) = (0.0, 0.0, 0.0, 0.0);
+    for (p, q) in h.iter().zip(packed) {
+        let x0 = p[0] - q[0];
+        let x1 = p[1] - q[1];
+        let x2 = p[2] - q[2];
+        sq += (x0 * x0 + x1 * x1 + x2 * x2) * q[3];
+        y0 += q[4] * x0 + q[5] * x1 + q[6] * x2;
+        y1 += q[7] * x0 + q[8] * x1 + q[9] * x2;
+        y2 += q[10] * x0 + q[11] * x1 + q[12] * x2;
+    }
+    ([y0, y1, y2], sq)
 }
