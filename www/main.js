@@ -9,20 +9,15 @@ import { labelColours, errorColours, RAMP_CSS, PALETTE } from './colors.js';
 
 const $ = (id) => document.getElementById(id);
 
-// The built-in population: a generated quadruped, small enough to be fitted within a second or two. The URL
-// may choose another: ?preset=arm&vertices=3000&poses=12&seed=4
+// The built-in population: the first of the core's examples (posemfa::synth::presets), fitted at load. The
+// URL may choose another example (?example=arm) or a population of its own (?preset=snake&vertices=3000&
+// poses=12&seed=4, fitted with the default parameters).
 const url = new URLSearchParams(location.search);
-const DEFAULT_SPEC = {
-  preset: url.get('preset') ?? 'quadruped',
-  vertices: Number(url.get('vertices')) || 2500,
-  poses: Number(url.get('poses')) || 8,
-  seed: Number(url.get('seed') ?? 1) || 0,
-};
-const PRESET_NOTES = {
-  quadruped: '18 true parts: trunk, neck, head, three tail pieces, four legs of three pieces',
-  arm: '3 true parts: a fixed base, the upper arm (shoulder) and the forearm (elbow hinge)',
-  snake: '8 true parts along one tube',
-};
+const URL_SPEC = url.has('preset')
+  ? { preset: url.get('preset'), vertices: Number(url.get('vertices')) || 2500, poses: Number(url.get('poses')) || 8, seed: Number(url.get('seed')) || 0 }
+  : null;
+// Without the examples binding (older core): a small quadruped.
+const FALLBACK_SPEC = { preset: 'quadruped', vertices: 2500, poses: 8, seed: 1 };
 const GREY = 0.78;
 const LIVE_MS = 250;
 
@@ -56,12 +51,14 @@ function send(msg, transfer = []) {
   worker.postMessage({ ...msg, id }, transfer);
   return id;
 }
+// Answers kept for the model's lifetime (small, asked again and again); interpolations are not kept.
+const CACHED = new Set(['reconstruct', 'vertexErrors', 'responsibilities', 'rotationAngles']);
 function query(method, ...args) {
-  const key = `${app.gen}:${method}:${args.join(',')}`;
+  const key = `${app.gen}:${method}:${JSON.stringify(args)}`;
   if (app.cache.has(key)) return Promise.resolve(app.cache.get(key));
   return new Promise((resolve, reject) => {
     const id = send({ type: 'query', method, args });
-    waiting.set(id, { resolve, reject, key, gen: app.gen });
+    waiting.set(id, { resolve, reject, key, gen: app.gen, method });
   });
 }
 
@@ -79,7 +76,7 @@ worker.onmessage = ({ data: m }) => {
       if (!w) return;
       waiting.delete(m.id);
       if (m.error !== undefined) return w.reject(new Error(m.error));
-      if (w.gen === app.gen && !(m.result instanceof Uint8Array) && typeof m.result !== 'string') app.cache.set(w.key, m.result);
+      if (w.gen === app.gen && CACHED.has(w.method)) app.cache.set(w.key, m.result);
       return w.resolve(m.result);
     }
   }
@@ -104,18 +101,33 @@ function setState(s) {
 const restingState = () => (app.fitId ? 'fitting' : app.model ? 'fitted' : app.pop ? 'idle' : 'error');
 
 // ------------------------------------------------------------------ loading
-function onReady({ defaults, features }) {
+function onReady({ defaults, features, examples }) {
   app.defaults = defaults;
+  app.baseParams = defaults; // parameters the form does not show come from here
   app.features = features;
+  app.examples = examples ?? [];
   fillParams(defaults);
-  document.querySelector('.generate').hidden = !features.synth;
-  if (features.synth) {
-    generate(DEFAULT_SPEC);
+  document.querySelector('.generate').hidden = !app.examples.length;
+  $('example').replaceChildren(...app.examples.map((e) => Object.assign(document.createElement('option'), { value: e.id, textContent: e.title })));
+  if (URL_SPEC && features.synth) {
+    generate(URL_SPEC);
+  } else if (app.examples.length) {
+    runExample(app.examples.find((e) => e.id === url.get('example')) ?? app.examples[0]);
+  } else if (features.synth) {
+    generate(FALLBACK_SPEC);
   } else {
     $('pop-info').textContent = 'No population yet: open or drop OBJ files (same vertices and faces, different poses).';
     $('caption').textContent = 'Open or drop OBJ files of one mesh in several poses to see its parts here.';
     setState('idle');
   }
+}
+
+// An example: its population generated and fitted with its own parameters (shown in the form).
+function runExample(ex) {
+  $('example').value = ex.id;
+  app.baseParams = { ...app.defaults, ...ex.params };
+  fillParams(app.baseParams);
+  generate(ex.spec, ex);
 }
 
 // Loading and fitting go in one message: the worker starts the fit as soon as the population is in.
@@ -124,12 +136,11 @@ function fitRequest() {
   return { id: nextId++, params };
 }
 
-function generate(spec) {
-  $('preset').value = spec.preset;
+function generate(spec, example = null) {
   app.pendingFit = fitRequest();
   app.loadId = send({ type: 'generate', spec, fit: app.pendingFit });
-  app.pendingSource = `generated ${spec.preset}, seed ${spec.seed}`;
-  app.pendingSpec = spec;
+  app.pendingSource = example ? `example “${example.title}”` : `generated ${spec.preset}, seed ${spec.seed ?? 0}`;
+  app.pendingExample = example;
   setState('loading');
 }
 
@@ -145,7 +156,8 @@ async function loadFiles(got) {
   }
   app.pendingNotes = notes;
   app.pendingSource = files.length === 1 ? files[0].name : `${files.length} files`;
-  app.pendingSpec = null;
+  app.pendingExample = null;
+  app.baseParams = app.defaults; // the form's values stay; hidden ones back to the defaults
   const buffers = files.map((f) => f.bytes.buffer.slice(f.bytes.byteOffset, f.bytes.byteOffset + f.bytes.byteLength));
   app.pendingFit = fitRequest();
   app.loadId = send({ type: 'load', names: files.map((f) => f.name), files: buffers, fit: app.pendingFit }, buffers);
@@ -177,9 +189,13 @@ function onLoaded(pop) {
   const tris = pop.faces.length / 3;
   $('pop-info').textContent = `${pop.nShapes} poses × ${pop.nVertices} vertices, ${tris} triangles (${pop.source})`;
   if (pop.truth) {
-    $('pop-info').textContent += `. Ground truth: ${PRESET_NOTES[app.pendingSpec?.preset] ?? `${pop.truth.partNames.length} parts`}.`;
+    $('pop-info').textContent += `. Ground truth: ${pop.truth.partNames.length} parts.`;
     app.colours.truth = labelColours(pop.truth.partOfVertex, pop.faces).vertexColours;
   }
+  const ex = app.pendingExample;
+  $('example-note').hidden = !ex;
+  $('example-note').classList.toggle('fails', !!ex?.failsOnPurpose);
+  $('example-note').textContent = ex ? `${ex.failsOnPurpose ? 'Fails on purpose. ' : ''}${ex.note}` : '';
   document.querySelector('#modes input[value=truth]').parentElement.hidden = !pop.truth;
   if (!pop.truth && app.mode === 'truth') {
     app.mode = 'parts';
@@ -232,7 +248,7 @@ function fillParams(p) {
 function readParams() {
   const f = $('params').elements;
   return {
-    ...app.defaults,
+    ...app.baseParams,
     parts: Number(f.parts.value),
     seed: Number(f.seed.value),
     tol: Number(f.tol.value),
@@ -391,17 +407,17 @@ async function renderView({ frame = false } = {}) {
     slots = [{ positions: model.latent, colours: partColours(), name: 'latent' }];
     caption = 'The latent reference shape (eq 21): every part in its own latent frame';
   } else if (app.mode === 'interp') {
-    const { a, b, t, side } = interpValues();
+    const { a, b, t, side, opts } = interpValues();
     const A = pop.positions[a];
     const B = pop.positions[b];
     const linear = new Float32Array(A.length);
     for (let k = 0; k < A.length; k++) linear[k] = A[k] + (B[k] - A[k]) * t;
     if (model?.interpolate) {
-      const partwise = await query('interpolate', a, b, t);
+      const partwise = await query('interpolate', a, b, t, opts);
       if (token !== renderToken) return;
       slots = [{ positions: partwise, colours: partColours(), name: 'part-wise' }];
       if (side) slots.push({ positions: linear, colours: partColours(), name: 'linear' });
-      caption = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}: part-wise${side ? ' | linear vertex blending' : ''}`;
+      caption = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}: part-wise (${opts.skin === 'smooth' ? 'smooth joints' : 'rigid parts'})${side ? ' | linear vertex blending' : ''}`;
     } else {
       slots = [{ positions: linear, colours: partColours(), name: 'linear' }];
       caption = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}: linear vertex blending`;
@@ -614,22 +630,58 @@ function interpValues() {
     b: Number($('pose-b').value),
     t: Number($('interp-t').value),
     side: $('side-by-side').checked,
+    opts: { skin: $('interp-skin').value, residual: $('interp-residual').checked },
   };
 }
 function onInterpInput() {
+  $('report').replaceChildren();
   $('interp-t-out').textContent = Number($('interp-t').value).toFixed(2);
   if (app.mode === 'interp') renderView();
 }
-for (const id of ['pose-a', 'pose-b', 'interp-t']) $(id).addEventListener('input', onInterpInput);
+for (const id of ['pose-a', 'pose-b', 'interp-t', 'interp-skin', 'interp-residual']) $(id).addEventListener('input', onInterpInput);
 $('side-by-side').addEventListener('change', () => renderView({ frame: true }));
 
 function updateInterpNote() {
   const partwise = !!app.model?.interpolate;
-  $('side-by-side').disabled = !partwise;
+  for (const id of ['side-by-side', 'interp-skin', 'interp-residual', 'measure']) $(id).disabled = !partwise;
   $('interp-note').textContent = partwise
     ? ''
-    : 'Part-wise interpolation is not in this build yet (posemfa::articulate): showing linear vertex blending.';
+    : app.model
+      ? 'Part-wise interpolation is not in this build (posemfa::articulate binding): showing linear vertex blending.'
+      : 'Linear vertex blending until the fit ends; then the part-wise interpolation.';
+  $('report').replaceChildren();
 }
+
+// The core's figures of every interpolation method at this t: volume change and edge stretch.
+$('measure').addEventListener('click', async () => {
+  const { a, b, t } = interpValues();
+  $('report').textContent = 'measuring…';
+  let r;
+  try {
+    r = await query('articulationReport', a, b, t);
+  } catch (e) {
+    $('report').textContent = e.message;
+    return;
+  }
+  const pct = (x) => `${(100 * x).toFixed(1)} %`;
+  const table = document.createElement('table');
+  const head = document.createElement('tr');
+  for (const h of ['method', 'volume change', 'edge stretch p99 (boundary)', 'largest stretch', 'error at t=0 / t=1']) {
+    head.append(Object.assign(document.createElement('th'), { textContent: h }));
+  }
+  table.append(head);
+  for (const m of r.methods) {
+    const tr = document.createElement('tr');
+    for (const c of [m.name, pct(m.volume_change), pct(m.stretch.boundary_p99), pct(m.stretch.all_max),
+      m.endpoint_error.map((e) => e.toExponential(1)).join(' / ')]) {
+      tr.append(Object.assign(document.createElement('td'), { textContent: c }));
+    }
+    table.append(tr);
+  }
+  const cap = document.createElement('div');
+  cap.textContent = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}; volume relative to (1-t)·V(from) + t·V(to); errors in unit-box units`;
+  $('report').replaceChildren(cap, table);
+});
 
 function stopPlay() {
   app.interp.playing = false;
@@ -689,7 +741,10 @@ $('export-obj').addEventListener('click', () => {
   const name = `posemfa-${safeName(poseName(app.pose))}-${safeName(what)}.obj`;
   download(name, objText(slot.positions, app.pop.faces, app.pop.normalization, what), 'model/obj');
 });
-$('export-gltf').addEventListener('click', async () => download('posemfa-model.glb', await query('toGlb'), 'model/gltf-binary'));
+$('export-gltf').addEventListener('click', async () => {
+  const skin = $('interp-skin').value; // the skinning chosen for the interpolation
+  download(`posemfa-model-${skin}.glb`, await query('toGlb', skin), 'model/gltf-binary');
+});
 
 // ------------------------------------------------------------------ opening files: picker, folder, drop
 $('file-input').addEventListener('change', (e) => {
@@ -725,8 +780,8 @@ $('params').addEventListener('submit', (e) => {
   startFit();
 });
 $('cancel').addEventListener('click', () => worker.postMessage({ type: 'cancel' }));
-$('reset-params').addEventListener('click', () => app.defaults && fillParams(app.defaults));
-$('generate').addEventListener('click', () => generate({ ...DEFAULT_SPEC, preset: $('preset').value }));
+$('reset-params').addEventListener('click', () => app.baseParams && fillParams(app.baseParams));
+$('generate').addEventListener('click', () => runExample(app.examples.find((e) => e.id === $('example').value)));
 
 // ------------------------------------------------------------------ test contract
 window.posemfa = {

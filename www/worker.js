@@ -11,8 +11,10 @@
 //     { type: 'cancel' }                                            stop the fit, keep its best state so far
 //     { type: 'query', id, method, args }                           a question about the model (see QUERIES)
 //   worker -> page
-//     { type: 'ready', defaults, features }                         wasm loaded; defaults: the fit parameters'
-//                                                                   defaults; features: optional bindings found
+//     { type: 'ready', defaults, examples, features }               wasm loaded; defaults: the fit parameters'
+//                                                                   defaults; examples: the core's built-in
+//                                                                   examples ({id, title, note, failsOnPurpose,
+//                                                                   spec, params}); features: optional bindings
 //     { type: 'loaded', id, population }                            population: names, nShapes, nVertices, faces,
 //                                                                   positions (one Float32Array per pose, unit
 //                                                                   box), normalization [ox, oy, oz, scale], truth
@@ -133,6 +135,7 @@ function modelMessage(m) {
     latent: m.latent(),
     interpolate: typeof m.interpolate === 'function',
     gltf: typeof m.toGlb === 'function',
+    report: typeof m.articulationReport === 'function',
   };
 }
 
@@ -192,7 +195,8 @@ const QUERIES = {
   rotationAngles: (part, ref) => model.rotationAngles(part, ref),
   toJson: () => model.toJson(),
   interpolate: (i, j, t, opts) => model.interpolate(i, j, t, opts ?? {}),
-  toGlb: () => model.toGlb(),
+  toGlb: (weights) => model.toGlb(weights),
+  articulationReport: (i, j, t) => model.articulationReport(i, j, t),
 };
 
 function query({ id, method, args }) {
@@ -207,7 +211,12 @@ function query({ id, method, args }) {
 }
 
 const ready = init({ module_or_path: wasmUrl }).then(
-  () => post({ type: 'ready', defaults: wasm.defaultParams(), features: { synth: typeof binding('Synthetic') === 'function' } }),
+  () => post({
+    type: 'ready',
+    defaults: wasm.defaultParams(),
+    examples: typeof binding('examples') === 'function' ? binding('examples')() : [],
+    features: { synth: typeof binding('Synthetic') === 'function' },
+  }),
   (e) => post({ type: 'fatal', message: `the wasm module failed to load: ${e.message ?? e}` }),
 );
 

@@ -19,8 +19,8 @@ const TYPES = {
   '.png': 'image/png',
 };
 
-/** Serves `dir` (default dist/) on a free loopback port; returns { url, close, requests }. */
-export async function serveStatic(dir = join(ROOT, 'dist')) {
+/** Serves `dir` (default $POSEMFA_DIST, else dist/) on a free loopback port; returns { url, close, requests }. */
+export async function serveStatic(dir = process.env.POSEMFA_DIST || join(ROOT, 'dist')) {
   const root = resolve(dir);
   await stat(join(root, 'index.html')).catch(() => {
     throw new Error(`${root}/index.html is missing: build the page first (npm run build)`);

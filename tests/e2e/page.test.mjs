@@ -69,6 +69,22 @@ test('the page loads and fits its built-in population, with no external request'
   await context.close();
 });
 
+test('an example from the list is generated and fitted with its own parameters and note', async () => {
+  const { page, context } = await fresh();
+  const ids = await page.locator('#example option').evaluateAll((os) => os.map((o) => o.value));
+  assert.ok(ids.includes('arm') && ids.length >= 3, `examples: ${ids}`);
+  const n = await counters(page);
+  await page.selectOption('#example', 'arm');
+  await page.click('#generate');
+  assert.equal(await waitFit(page, n), 'fitted');
+  assert.match(await page.locator('#example-note').innerText(), /\S/);
+  assert.match(await page.locator('#pop-info').innerText(), /Ground truth: 3 parts/);
+  const s = await summary(page);
+  assert.ok(s.parts >= 3 && s.parts <= 6, `the 3-part arm gave ${s.parts} parts`);
+  assert.equal(await page.locator('[data-testid=parts-count]').innerText(), String(s.parts));
+  await context.close();
+});
+
 test('a population picked through the file input is fitted and its parts are coloured on screen', async () => {
   const { page, context, log } = await fresh();
   const tube = tubePopulation({ segments: 3, poses: 8, seed: 3 });
