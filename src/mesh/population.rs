@@ -213,7 +213,7 @@ impl Population {
     }
 
     /// Loads the OBJ files of a directory (every `*.obj`, any case) or an explicit list of files.
-    #[cfg(not(target_arch = "wasm32"))]
+    // (compiles on wasm32 too, where std::fs reports "unsupported" at run time)
     pub fn from_paths<P: AsRef<std::path::Path>>(paths: &[P]) -> Result<Population> {
         let mut files = Vec::new();
         for p in paths {
