@@ -333,3 +333,103 @@ impl Synthetic {
 pub fn examples() -> Result<JsValue, JsError> {
     to_js(&crate::synth::presets::examples())
 }
+
+// ---------------------------------------------------------------- articulation (issue 4)
+
+thread_local! {
+    /// The articulation of the last FitModel asked (graph, joints, weights are computed once per fit).
+    static ARTICULATION: std::cell::RefCell<Option<(std::rc::Weak<FitResult>, Rc<crate::articulate::Articulation>)>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+fn articulate_options(opts: JsValue) -> Result<crate::articulate::Options, JsError> {
+    if opts.is_undefined() || opts.is_null() {
+        return Ok(crate::articulate::Options::default());
+    }
+    serde_wasm_bindgen::from_value(opts).map_err(|e| js_err(format!("invalid interpolation options: {e}")))
+}
+
+impl FitModel {
+    fn articulation(&self) -> Result<Rc<crate::articulate::Articulation>, JsError> {
+        ARTICULATION.with(|cache| {
+            if let Some((weak, art)) = &*cache.borrow() {
+                if weak.upgrade().is_some_and(|r| Rc::ptr_eq(&r, &self.result)) {
+                    return Ok(art.clone());
+                }
+            }
+            let art = Rc::new(crate::articulate::Articulation::new(&self.result.model, &self.pop).map_err(js_err)?);
+            *cache.borrow_mut() = Some((Rc::downgrade(&self.result), art.clone()));
+            Ok(art)
+        })
+    }
+}
+
+#[wasm_bindgen]
+impl FitModel {
+    /// The shape at t in [0, 1] between poses i and j (0-based), unit box, flat xyz. `opts`: {residual: bool,
+    /// skin: "rigid" | "smooth", exactEnds: bool, root: "anchor" | "paper", tree: "strongest" |
+    /// "breadth-first", blend: "dual-quaternion" | "linear", edgeBlend: bool}; missing fields take defaults.
+    pub fn interpolate(&self, i: usize, j: usize, t: f64, opts: JsValue) -> Result<Float32Array, JsError> {
+        let o = articulate_options(opts)?;
+        Ok(flat_f32(&self.articulation()?.interpolate(i, j, t, &o).map_err(js_err)?))
+    }
+
+    /// The shape at time s in [0, keys.length - 1] along the poses `keys` (0-based), unit box, flat xyz.
+    pub fn keyframes(&self, keys: Vec<u32>, s: f64, opts: JsValue) -> Result<Float32Array, JsError> {
+        let o = articulate_options(opts)?;
+        let keys: Vec<usize> = keys.iter().map(|&k| k as usize).collect();
+        Ok(flat_f32(&self.articulation()?.keyframes(&keys, s, &o).map_err(js_err)?))
+    }
+
+    /// Plain linear vertex interpolation of poses i and j (the baseline), unit box, flat xyz.
+    #[wasm_bindgen(js_name = linearInterpolate)]
+    pub fn linear_interpolate(&self, i: usize, j: usize, t: f64) -> Result<Float32Array, JsError> {
+        Ok(flat_f32(&self.articulation()?.linear(i, j, t).map_err(js_err)?))
+    }
+
+    /// Skinning weights, dense: `[vertex * nParts + part]`. `skin`: "smooth" (default) or "rigid".
+    #[wasm_bindgen(js_name = skinWeights)]
+    pub fn skin_weights(&self, skin: Option<String>) -> Result<Float32Array, JsError> {
+        let s = match skin.as_deref() {
+            None | Some("smooth") => crate::articulate::Skin::Smooth,
+            Some("rigid") => crate::articulate::Skin::Rigid,
+            Some(o) => return Err(js_err(format!("skin '{o}': use rigid or smooth"))),
+        };
+        let art = self.articulation()?;
+        let w: Vec<f32> = art.weights(s).dense(art.n_parts()).iter().map(|&x| x as f32).collect();
+        Ok(Float32Array::from(w.as_slice()))
+    }
+
+    /// The skeleton in pose `shape`: {root, parents: [part or -1 per part], positions: Float32Array (xyz per
+    /// part, NaN for parts without vertices)}.
+    pub fn skeleton(&self, shape: usize) -> Result<JsValue, JsError> {
+        let sk = self.articulation()?.skeleton(shape).map_err(js_err)?;
+        let parents: Vec<i32> = sk.tree.parent.iter().map(|p| p.map_or(-1, |p| p as i32)).collect();
+        let pos: Vec<[f64; 3]> = sk.positions.iter().map(|p| p.unwrap_or([f64::NAN; 3])).collect();
+        let obj = js_sys::Object::new();
+        let set = |k: &str, v: &JsValue| js_sys::Reflect::set(&obj, &k.into(), v).map(|_| ()).map_err(|_| js_err("reflect"));
+        set("root", &JsValue::from(sk.tree.root as u32))?;
+        set("parents", &js_sys::Int32Array::from(parents.as_slice()).into())?;
+        set("positions", &flat_f32(&pos).into())?;
+        Ok(obj.into())
+    }
+
+    /// Binary glTF 2.0 (.glb) of the articulated model; `weights`: "rigid" (default) or "smooth".
+    #[wasm_bindgen(js_name = toGlb)]
+    pub fn to_glb(&self, weights: Option<String>) -> Result<Uint8Array, JsError> {
+        let w = match weights.as_deref() {
+            None | Some("rigid") => crate::export::gltf::Weights::Rigid,
+            Some("smooth") => crate::export::gltf::Weights::Smooth,
+            Some(o) => return Err(js_err(format!("weights '{o}': use rigid or smooth"))),
+        };
+        let opts = crate::export::gltf::GltfOptions { weights: w, ..Default::default() };
+        let glb = crate::export::gltf::to_glb(&*self.articulation()?, &opts).map_err(js_err)?;
+        Ok(Uint8Array::from(glb.as_slice()))
+    }
+
+    /// Endpoint errors, volume and edge stretch at t of every interpolation method, poses i -> j (0-based).
+    #[wasm_bindgen(js_name = articulationReport)]
+    pub fn articulation_report(&self, i: usize, j: usize, t: f64) -> Result<JsValue, JsError> {
+        to_js(&crate::articulate::report::report(&*self.articulation()?, i, j, t).map_err(js_err)?)
+    }
+}

@@ -157,3 +157,59 @@ test('smooth weights: up to 4 joints per vertex, bound in the first training sha
   const { out } = skinnedAt(gltf, 'training poses', 0);
   assert.ok(maxDistance(out, first) / extent([first]) <= 1e-4);
 });
+
+// The same functions through the wasm build for Node (pkg-node/, written by scripts/build-wasm.sh, which
+// scripts/test.sh runs before these tests).
+test('wasm: interpolate, keyframes, skinWeights, skeleton, toGlb', async (t) => {
+  const pkg = path.join(root, 'pkg-node', 'posemfa.js');
+  let wasm;
+  try {
+    wasm = (await import('node:module')).createRequire(import.meta.url)(pkg);
+  } catch (e) {
+    t.skip(`no wasm build for Node at ${pkg} (run npm run build:wasm): ${e.message}`);
+    return;
+  }
+  assert.equal(typeof wasm.FitModel.prototype.toGlb, 'function', 'pkg-node is older than the articulation bindings: rebuild');
+  const syn = new wasm.Synthetic({ preset: 'quadruped', vertices: 1200, poses: 4, seed: 3 });
+  const pop = syn.population();
+  const fitter = new wasm.Fitter(pop, {});
+  while (!fitter.isDone()) fitter.run(1e9);
+  const model = fitter.result();
+  const nv = pop.nVertices;
+  const close = (a, b, tol) => {
+    assert.equal(a.length, b.length);
+    let m = 0;
+    for (let i = 0; i < a.length; i++) m = Math.max(m, Math.abs(a[i] - b[i]));
+    assert.ok(m <= tol, `max difference ${m}`);
+  };
+  close(model.interpolate(0, 3, 0, {}), pop.positions(0), 1e-6);
+  close(model.interpolate(0, 3, 1, undefined), pop.positions(3), 1e-6);
+  close(model.interpolate(0, 3, 1, { residual: false }), model.reconstruct(3), 1e-6);
+  close(model.interpolate(0, 3, 0, { skin: 'smooth', root: 'paper', exactEnds: true }), pop.positions(0), 1e-6);
+  close(model.keyframes([0, 2, 1], 1, {}), pop.positions(2), 1e-6);
+  const mid = model.interpolate(0, 3, 0.5, { skin: 'smooth' });
+  assert.equal(mid.length, 3 * nv);
+  assert.ok(mid.every(Number.isFinite));
+  assert.throws(() => model.interpolate(0, 3, 0.5, { skin: 'rubber' }), /skin|variant/);
+  assert.throws(() => model.interpolate(0, 9, 0.5, {}), /pose/);
+  const w = model.skinWeights('smooth');
+  const parts = model.nParts;
+  assert.equal(w.length, nv * parts);
+  for (let v = 0; v < nv; v++) {
+    let s = 0;
+    for (let k = 0; k < parts; k++) s += w[v * parts + k];
+    assert.ok(Math.abs(s - 1) < 1e-5);
+  }
+  const sk = model.skeleton(0);
+  assert.equal(sk.parents.length, parts);
+  assert.equal(sk.parents[sk.root], -1);
+  const report = model.articulationReport(0, 3, 0.5);
+  assert.ok(report.methods.length >= 5);
+  for (const weights of ['rigid', 'smooth']) {
+    const glb = model.toGlb(weights);
+    const file = path.join(dir, `wasm-${weights}.glb`);
+    (await import('node:fs')).writeFileSync(file, glb);
+    const r = await validateFile(file);
+    assert.equal(r.errors, 0, JSON.stringify(r.messages));
+  }
+});
