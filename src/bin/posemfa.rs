@@ -22,7 +22,7 @@ USAGE:
   posemfa bench DIR_OR_FILES... [options]    fit and print per-stage figures as JSON
   posemfa generate PRESET [--vertices N] [--poses P] [--seed S] [--band B] [--noise X] --out DIR
                                              write a generated population (quadruped, arm, snake, blob) as OBJ
-  Instead of DIR_OR_FILES, fit and bench accept synth:PRESET[:VERTICES[:POSES[:SEED]]], a generated
+  Instead of DIR_OR_FILES, fit and bench accept synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]], a generated
   population whose ground truth (adjusted Rand index, rotation error) is then reported too.
 
 FIT OPTIONS:
@@ -34,6 +34,7 @@ FIT OPTIONS:
   --literal-eq18     use the paper's literal eq 18 for Lambda (breaks monotonicity; for teaching)
   --refine-threshold E   Algorithm 1: stop splitting a part below this mean variance (default 1e-5)
   --max-subparts N   Algorithm 1: most sub-parts per coarse part (default 6)
+  --refine-tol T     tolerance of the refinement's small AECM runs (default 1e-3)
   --no-refine        stop after the coarse AECM
   --json OUT         write the result as JSON
   --quiet            no per-stage progress on stderr
@@ -63,6 +64,7 @@ fn parse_opts(args: &[String]) -> Result<Opts, String> {
             "--floor" => o.params.variance_floor = num("--floor", val("--floor")?)?,
             "--repeat" => o.repeat = num("--repeat", val("--repeat")?)?,
             "--refine-threshold" => o.params.refine_threshold = num("--refine-threshold", val("--refine-threshold")?)?,
+            "--refine-tol" => o.params.refine_tol = num("--refine-tol", val("--refine-tol")?)?,
             "--max-subparts" => o.params.max_subparts = num("--max-subparts", val("--max-subparts")?)?,
             "--literal-eq18" => o.params.lambda_rule = LambdaRule::PaperEq18,
             "--no-refine" => o.params.refine = false,
@@ -422,7 +424,7 @@ fn cmd_articulate_report(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-/// A folder / files, or `synth:PRESET[:VERTICES[:POSES[:SEED]]]` (a generated population with its truth).
+/// A folder / files, or `synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]]` (a generated population with its truth).
 fn load_inputs(inputs: &[String]) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
     if let [one] = inputs {
         if let Some(rest) = one.strip_prefix("synth:") {
@@ -441,6 +443,15 @@ fn load_inputs(inputs: &[String]) -> Result<(Population, Option<posemfa::synth::
             }
             if let Some(v) = num(it.next(), "seed")? {
                 spec.seed = v;
+            }
+            let float = |v: Option<&str>, what: &str| -> Result<Option<f64>, String> {
+                v.map(|v| v.parse::<f64>().map_err(|_| format!("{what} '{v}' in '{one}' is not a number"))).transpose()
+            };
+            if let Some(v) = float(it.next(), "joint band")? {
+                spec.joint_band = v;
+            }
+            if let Some(v) = float(it.next(), "max angle")? {
+                spec.max_angle_deg = v;
             }
             let g = posemfa::synth::generate(&spec).map_err(|e| e.to_string())?;
             return Ok((g.population.clone(), Some(g)));
