@@ -794,6 +794,8 @@ window.posemfa = {
   fitCount: () => app.fitCount,
   /** Number of drops or picks refused with errors since the page opened. */
   loadErrorCount: () => app.loadErrorCount,
+  /** Names of the meshes in the view, left to right (e.g. ['part-wise', 'linear']). */
+  shown: () => app.shown.map((x) => x.name),
   /** Number of poses, and the view mode. */
   poses: () => app.pop?.nShapes ?? 0,
   mode: () => app.mode,

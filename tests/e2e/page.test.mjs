@@ -113,7 +113,7 @@ test('a population picked through the file input is fitted and its parts are col
   await context.close();
 });
 
-test('the interpolation slider changes the geometry', async () => {
+test('the interpolation slider changes the geometry, part-wise beside linear blending', async () => {
   const { page, context } = await fresh();
   const tube = tubePopulation({ segments: 3, poses: 6, seed: 5 });
   assert.equal(await fitFiles(page, tube.files, { parts: 3 }), 'fitted');
@@ -126,6 +126,7 @@ test('the interpolation slider changes the geometry', async () => {
     await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
     return canvasFingerprint(page);
   };
+  assert.deepEqual(await page.evaluate(() => window.posemfa.shown()), ['part-wise']);
   const at0 = await setT(0);
   const atHalf = await setT(0.5);
   const at1 = await setT(1);
@@ -133,6 +134,40 @@ test('the interpolation slider changes the geometry', async () => {
   assert.notEqual(atHalf, at1);
   assert.notEqual(at0, at1);
   assert.equal(await setT(0), at0, 'the same t draws the same picture');
+
+  // Side by side: the part-wise shape beside the linear blend, which differs from it mid-way.
+  await page.check('#side-by-side');
+  await page.waitForFunction(() => window.posemfa.shown().join() === 'part-wise,linear');
+  await setT(0.5);
+  const [left, right] = await page.evaluate(() => {
+    const src = document.querySelector('#view canvas');
+    const c = document.createElement('canvas');
+    c.width = src.width;
+    c.height = src.height;
+    const g = c.getContext('2d');
+    g.drawImage(src, 0, 0);
+    const half = (x0) => {
+      const { data } = g.getImageData(x0, 0, c.width / 2, c.height);
+      let n = 0;
+      for (let i = 0; i < data.length; i += 4) if (data[i] !== 0xee || data[i + 1] !== 0xf0 || data[i + 2] !== 0xf3) n++;
+      return n;
+    };
+    return [half(0), half(c.width / 2)];
+  });
+  assert.ok(left > 500 && right > 500, `both halves draw a mesh: ${left}, ${right}`);
+  await context.close();
+});
+
+test('the glTF export of the fitted model validates', async () => {
+  const { validateFile } = await import('../../scripts/validate-gltf.mjs');
+  const { page, context } = await fresh();
+  assert.ok(await page.locator('#export-gltf').isEnabled());
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-gltf')]);
+  const path = await download.path();
+  const bytes = await (await import('node:fs/promises')).readFile(path);
+  assert.equal(bytes.subarray(0, 4).toString('latin1'), 'glTF');
+  const report = await validateFile(path);
+  assert.equal(report.errors, 0, JSON.stringify(report.messages.slice(0, 5)));
   await context.close();
 });
 
