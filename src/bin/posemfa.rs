@@ -34,7 +34,7 @@ FIT OPTIONS:
   --literal-eq18     use the paper's literal eq 18 for Lambda (breaks monotonicity; for teaching)
   --refine-threshold E   Algorithm 1: stop splitting a part below this mean variance (default 1e-5)
   --max-subparts N   Algorithm 1: most sub-parts per coarse part (default 6)
-  --refine-tol T     tolerance of the refinement's small AECM runs (default 1e-3)
+  --refine-tol T     tolerance of the coarse and refinement AECM runs (default 1e-2)
   --no-refine        stop after the coarse AECM
   --json OUT         write the result as JSON
   --quiet            no per-stage progress on stderr

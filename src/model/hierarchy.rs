@@ -164,7 +164,8 @@ impl Pipeline {
     pub fn new(pop: &Population, params: &Params) -> Result<Pipeline> {
         params.validate()?;
         let t0 = crate::clock::now_ms();
-        let fit = Fit::new(Data::from_population(pop), params)?;
+        let coarse = if params.refine { Params { tol: params.refine_tol, ..params.clone() } } else { params.clone() };
+        let fit = Fit::new(Data::from_population(pop), &coarse)?;
         Ok(Pipeline {
             pop: pop.clone(),
             params: params.clone(),

@@ -46,8 +46,8 @@ pub struct Params {
     pub min_part_vertices: usize,
     /// Iteration cap of each small AECM run inside the refinement. Default 60.
     pub refine_max_iter: usize,
-    /// Convergence tolerance of the small AECM runs inside the refinement (they only decide how many
-    /// sub-parts a coarse part gets, and start the final stage). Default 1e-3.
+    /// Convergence tolerance of the coarse AECM and of the small AECM runs of the refinement (they only
+    /// decide the labels that start the next stage; the final stage uses `tol`). Default 1e-2.
     pub refine_tol: f64,
 }
 
@@ -67,7 +67,7 @@ impl Default for Params {
             refine_min_gain: 0.1,
             min_part_vertices: 4,
             refine_max_iter: 60,
-            refine_tol: 1e-3,
+            refine_tol: 1e-2,
         }
     }
 }
