@@ -10,6 +10,7 @@ use super::component::Component;
 use super::data::Data;
 use super::estep::{e_step, e_step_pruned};
 use super::init;
+use super::memory;
 use super::params::{LambdaRule, Params};
 use super::result::Model;
 use crate::error::{Error, Result};
@@ -48,7 +49,15 @@ impl Fit {
     /// Starts from k-means++ (m = `params.parts`) with the per-cluster Procrustes initialisation.
     pub fn new(data: Data, params: &Params) -> Result<Fit> {
         params.validate()?;
-        check_data(&data, params.parts)?;
+        let most = memory::max_components(params.parts, params.refine, params.max_subparts, data.n_vertices);
+        if data.n_vertices < 3 {
+            return Err(Error::Data(format!(
+                "{} vertices; at least 3 are needed; use a mesh with more vertices",
+                data.n_vertices
+            )));
+        }
+        check_data(&data, params.parts, most)?;
+        check_motion(&data)?;
         let labels = init::kmeans(&data, params.parts, params.seed, params.restarts);
         Fit::from_labels(data, &labels, params)
     }
@@ -56,7 +65,8 @@ impl Fit {
     /// Starts from a labelling (one component per distinct label).
     pub fn from_labels(data: Data, labels: &[u32], params: &Params) -> Result<Fit> {
         params.validate()?;
-        check_data(&data, 1)?;
+        let most = labels.iter().max().map_or(1, |&l| l as usize + 1).min(data.n_vertices);
+        check_data(&data, 1, most)?;
         if labels.len() != data.n_vertices {
             return Err(Error::Request(format!("{} labels for {} vertices", labels.len(), data.n_vertices)));
         }
@@ -284,21 +294,53 @@ pub fn labels_from_gamma(gamma: &[f64], m: usize) -> Vec<u32> {
         .collect()
 }
 
-fn check_data(data: &Data, parts: usize) -> Result<()> {
+/// Refuses data that cannot be fitted, before anything is allocated for the fit: fewer than 2 shapes, no
+/// vertex, more `parts` than vertices, non-finite coordinates, or a working set for `most_components`
+/// components beyond the memory budget ([`memory`]).
+fn check_data(data: &Data, parts: usize, most_components: usize) -> Result<()> {
     if data.n_shapes < 2 {
-        return Err(Error::Data(format!("{} shape(s); at least 2 poses are needed", data.n_shapes)));
+        return Err(Error::Data(format!(
+            "{} shape(s); at least 2 poses are needed; add more poses of the same mesh",
+            data.n_shapes
+        )));
     }
-    if data.n_vertices < 3 {
-        return Err(Error::Data(format!("{} vertices; at least 3 are needed", data.n_vertices)));
+    // (a whole population needs 3 vertices, see Fit::new; a part of it, fitted alone in the refinement, may
+    // have fewer)
+    if data.n_vertices == 0 {
+        return Err(Error::Data("no vertices to fit; give the fit at least one vertex".into()));
     }
     if parts > data.n_vertices {
         return Err(Error::Params(format!(
-            "parts = {parts} is more than the {} vertices; ask for fewer parts",
-            data.n_vertices
+            "parts = {parts} is more than the {} vertices of the mesh; ask for at most {} parts",
+            data.n_vertices, data.n_vertices
         )));
     }
-    if data.h.iter().any(|v| !v.is_finite()) {
-        return Err(Error::Data("non-finite coordinates".into()));
+    if let Some(at) = data.h.iter().position(|v| !v.is_finite()) {
+        let (j, i) = (at / (3 * data.n_shapes), (at / 3) % data.n_shapes);
+        return Err(Error::Data(format!(
+            "vertex {} of shape {} has a non-finite coordinate ({}); fix or remove that vertex",
+            j + 1,
+            i + 1,
+            data.h[at]
+        )));
     }
-    Ok(())
+    memory::check(data.n_vertices, data.n_shapes, most_components, memory::budget_bytes()?)
+}
+
+/// Refuses a population whose shapes are all the same point set (up to rounding, after each is centred on
+/// its centroid: identical shapes, or the whole mesh moved by a translation only): there is no motion, so no
+/// parts, to learn. Only for the whole population: a part that does not move is fine inside a fit.
+fn check_motion(data: &Data) -> Result<()> {
+    const SAME: f64 = 1e-9; // unit-box units; rounding of the centring is about 1e-16
+    for j in 0..data.n_vertices {
+        let h = data.vertex(j);
+        if h[1..].iter().any(|p| (0..3).any(|d| (p[d] - h[0][d]).abs() > SAME)) {
+            return Ok(());
+        }
+    }
+    Err(Error::Data(format!(
+        "all {} shapes are the same: every vertex is at the same place in each of them (up to one translation \
+         of the whole mesh), so there is no motion to learn; load poses in which the parts move",
+        data.n_shapes
+    )))
 }

@@ -19,6 +19,7 @@ pub mod data;
 pub mod estep;
 pub mod hierarchy;
 pub mod init;
+pub mod memory;
 pub mod params;
 pub mod result;
 
