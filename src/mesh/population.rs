@@ -102,6 +102,17 @@ impl Population {
                 message: "has no triangles; posemfa needs triangle meshes (f lines)".into(),
             });
         }
+        if let Some(k) = first.faces.iter().position(|f| f.iter().any(|&v| v as usize >= first.positions.len())) {
+            return Err(Error::Population {
+                file: first_name.clone(),
+                message: format!(
+                    "triangle {} is {:?} (1-based) but the mesh has {} vertices; every index must name a vertex",
+                    k + 1,
+                    first.faces[k].map(|x| x as u64 + 1),
+                    first.positions.len()
+                ),
+            });
+        }
         for (name, mesh) in &named[1..] {
             if mesh.positions.len() != first.positions.len() {
                 return Err(Error::Population {
@@ -146,6 +157,9 @@ impl Population {
                 });
             }
         }
+        // The smallest fit (one part) of this population must fit in the memory budget: refuse now, before
+        // the normalised copy is made.
+        crate::model::memory::check(first.positions.len(), named.len(), 1, crate::model::memory::budget_bytes()?)?;
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for (_, mesh) in &named {
@@ -157,10 +171,21 @@ impl Population {
             }
         }
         let side = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
-        if !(side > 0.0) || !side.is_finite() {
+        if !(side > 0.0) {
             return Err(Error::Population {
                 file: first_name.clone(),
-                message: "all vertices of all shapes are at one point (or the extent overflows); nothing to fit".into(),
+                message: "all vertices of all shapes are at one point; there is no shape to fit: load the real meshes"
+                    .into(),
+            });
+        }
+        // 1/side must be finite too (a subnormal extent, say 1e-310, would give an infinite scale and NaN).
+        if !side.is_finite() || !(1.0 / side).is_finite() {
+            return Err(Error::Population {
+                file: first_name.clone(),
+                message: format!(
+                    "the shapes span {side:e} units, which double precision cannot scale into a unit box; \
+                     rescale the meshes (the same way for every pose) to an ordinary size"
+                ),
             });
         }
         let normalization = Normalization { offset: lo, scale: 1.0 / side };
@@ -204,6 +229,12 @@ impl Population {
 
     /// Builds a population directly from unit-box shapes (generated data, tests).
     pub fn from_unit_shapes(names: Vec<String>, faces: Vec<[u32; 3]>, shapes: Vec<Vec<[f64; 3]>>) -> Result<Population> {
+        if names.len() != shapes.len() {
+            return Err(Error::Population {
+                file: names.first().cloned().unwrap_or_else(|| "(none)".into()),
+                message: format!("{} names for {} shapes; give one name per shape", names.len(), shapes.len()),
+            });
+        }
         let named = names
             .into_iter()
             .zip(shapes)
