@@ -433,3 +433,29 @@ impl FitModel {
         to_js(&crate::articulate::report::report(&*self.articulation()?, i, j, t).map_err(js_err)?)
     }
 }
+
+// ---------------------------------------------------------------- ground-truth accuracy (issue 5)
+
+#[wasm_bindgen]
+impl Synthetic {
+    /// Accuracy of a fit of this population against the generator's truth (`posemfa::metrics`):
+    /// {ari: adjusted Rand index of the fitted labels, rotationErrorDeg: median over the true parts of their
+    /// mean rotation error (degrees, relative to pose 1), rotationErrorDegMax, rotationErrorsDeg: [per true
+    /// part], trueParts}.
+    #[wasm_bindgen(js_name = groundTruth)]
+    pub fn ground_truth(&self, model: &FitModel) -> Result<JsValue, JsError> {
+        let (g, m) = (&self.inner, model.model());
+        if m.labels.len() != g.part_of_vertex.len() {
+            return Err(js_err(format!("the model has {} vertices, the ground truth {}", m.labels.len(), g.part_of_vertex.len())));
+        }
+        let fitted: Vec<Vec<crate::geometry::Mat3>> = m.parts.iter().map(|p| p.rotations.clone()).collect();
+        let errs = crate::metrics::rotation_errors_deg(&fitted, &m.labels, &g.rotations, &g.part_of_vertex).map_err(js_err)?;
+        to_js(&serde_json::json!({
+            "ari": crate::metrics::adjusted_rand_index(&m.labels, &g.part_of_vertex),
+            "rotationErrorDeg": crate::metrics::median(&errs),
+            "rotationErrorDegMax": errs.iter().cloned().fold(0.0, f64::max),
+            "rotationErrorsDeg": errs,
+            "trueParts": g.n_parts(),
+        }))
+    }
+}
