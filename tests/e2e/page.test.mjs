@@ -276,7 +276,7 @@ test('Cancel stops a fit within a slice and keeps its best state so far', async 
   await context.close();
 });
 
-test('the OBJ export writes the shown pose in the original units', async () => {
+test('the OBJ export writes the shown pose in the original units; the JSON export is the model', async () => {
   const { page, context } = await fresh();
   const tube = tubePopulation({ segments: 2, poses: 4, seed: 6 });
   // Move and scale the population away from the unit box, so that the normalisation matters.
@@ -296,6 +296,14 @@ test('the OBJ export writes the shown pose in the original units', async () => {
   got.forEach((v, i) => v.forEach((c, k) => { worst = Math.max(worst, Math.abs(c - want[i][k])); }));
   assert.ok(worst < 1e-3, `largest coordinate difference ${worst}`);
   assert.equal([...text.matchAll(/^f /gm)].length, [...moved[2].text.matchAll(/^f /gm)].length);
+
+  // The model as JSON: the core's own text, for this population and fit.
+  const [json] = await Promise.all([page.waitForEvent('download'), page.click('#export-json')]);
+  const model = JSON.parse(await (await import('node:fs/promises')).readFile(await json.path(), 'utf8'));
+  const s = await summary(page);
+  assert.deepEqual(model.shapes, moved.map((f) => f.name));
+  assert.equal(model.labels.length, s.vertices);
+  assert.equal(model.rmse, s.rmse);
   await context.close();
 });
 
