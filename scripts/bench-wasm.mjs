@@ -18,7 +18,7 @@ if (!existsSync(dir)) {
   console.error(`bench-wasm: data folder ${dir} is absent; pass a folder of registered OBJ files`);
   process.exit(2);
 }
-const pkg = resolve('pkg-node/posemfa.js');
+const pkg = resolve(process.env.POSEMFA_PKG ?? 'pkg-node/posemfa.js');
 if (!existsSync(pkg)) {
   console.error('bench-wasm: pkg-node/ is missing; run `npm run build:wasm` first');
   process.exit(2);
