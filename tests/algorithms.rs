@@ -5,6 +5,9 @@
 //! The chain fixture: P rigid tube segments end to end along x; every pose bends every joint by a random
 //! rotation (up to ~70 degrees), segments follow by forward kinematics; Gaussian noise on every coordinate.
 
+#[macro_use]
+mod common;
+
 use posemfa::geometry::rotation::{angle_between, axis_angle};
 use posemfa::geometry::{add, det, mat_mul, mat_vec, orthonormality_error, sub, transpose, Mat3, Vec3};
 use posemfa::mesh::Population;
@@ -16,14 +19,6 @@ use posemfa::model::hierarchy::Pipeline;
 use posemfa::model::{LambdaRule, Params};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
-
-macro_rules! dual_test {
-    ($(fn $name:ident() $body:block)*) => {$(
-        #[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
-        #[cfg_attr(not(target_arch = "wasm32"), test)]
-        fn $name() $body
-    )*};
-}
 
 struct Chain {
     pop: Population,

@@ -1,17 +1,12 @@
 //! The page's built-in examples do what their notes say (native and wasm).
 
+#[macro_use]
+mod common;
+
 use posemfa::metrics::{adjusted_rand_index, median, rotation_errors_deg};
 use posemfa::model::hierarchy::{fit, FitResult};
 use posemfa::synth::presets::{example, examples};
 use posemfa::synth::{generate, part_index, Generated, Preset};
-
-macro_rules! dual_test {
-    ($(fn $name:ident() $body:block)*) => {$(
-        #[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
-        #[cfg_attr(not(target_arch = "wasm32"), test)]
-        fn $name() $body
-    )*};
-}
 
 fn run(id: &str) -> (Generated, FitResult) {
     let ex = example(id).expect("example exists");

@@ -4,21 +4,15 @@
 //! The references here are computed independently of the library (own rotation formula, own dense Cholesky),
 //! so a wrong result on either target fails.
 
+#[macro_use]
+mod common;
+
 use posemfa::geometry::procrustes::{best_rotation, needs_flip};
 use posemfa::geometry::Mat3;
 use posemfa::mesh::population::natural_cmp;
 use posemfa::mesh::{Mesh, Population};
 use posemfa::model::component::LN_2PI;
 use posemfa::model::Component;
-
-/// `#[test]` natively, `#[wasm_bindgen_test]` on wasm32: the same body runs on both targets.
-macro_rules! dual_test {
-    ($(fn $name:ident() $body:block)*) => {$(
-        #[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
-        #[cfg_attr(not(target_arch = "wasm32"), test)]
-        fn $name() $body
-    )*};
-}
 
 /// Rotation of `angle` about `axis` (Rodrigues), row-major: the test's own, not the library's.
 fn rodrigues(axis: [f64; 3], angle: f64) -> Mat3 {
