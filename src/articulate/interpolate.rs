@@ -12,13 +12,15 @@
 //!    moves part k from pose i to pose t, S_j blends them with vertex j's weights, and y is the training shape
 //!    (residual on) or its rigid reconstruction (off). With one-hot weights this IS step 4's rigid formula.
 //!    With [`Options::edge_blend`] the two skinned ends are blended by their edges instead of their positions
-//!    ([`super::skin::edge_blend`]), which keeps joints from collapsing where the data is least rigid.
+//!    ([`super::skin::edge_blend`]): every edge points half-way (slerp) between its two skinned versions and
+//!    is as long as the linear mix of its lengths in the two end shapes y^i, y^j; positions are the least-
+//!    squares fit to those edges. That keeps joints from collapsing where the data is least rigid.
 
 use super::skin::{blend_motion, edge_blend, SkinWeights, EDGE_BLEND_ANCHOR};
 use super::{lerp, Articulation, Options, RigidMotion, Skin};
 use crate::error::{Error, Result};
 use crate::geometry::rotation::slerp;
-use crate::geometry::{add, mat_t_vec, mat_vec, sub, Vec3};
+use crate::geometry::{add, mat_t_vec, mat_vec, norm, sub, Vec3};
 
 fn check_t(t: f64) -> Result<()> {
     if (0.0..=1.0).contains(&t) {
@@ -123,7 +125,16 @@ impl Articulation {
         }
         let b: Vec<Vec3> = (0..self.n_vertices()).map(|v| blend_motion(&from_j, weights, v, opts.blend).apply(yj[v])).collect();
         if opts.edge_blend {
-            edge_blend(&a, &b, t, &self.edges, EDGE_BLEND_ANCHOR)
+            // every edge's length moves linearly between its lengths in the two end shapes
+            let lengths: Vec<f64> = self
+                .edges
+                .iter()
+                .map(|e| {
+                    let (p, q) = (e[0] as usize, e[1] as usize);
+                    (1.0 - t) * norm(sub(yi[p], yi[q])) + t * norm(sub(yj[p], yj[q]))
+                })
+                .collect();
+            edge_blend(&a, &b, t, &self.edges, Some(&lengths), EDGE_BLEND_ANCHOR)
         } else {
             a.iter().zip(&b).map(|(&p, &q)| lerp(p, q, t)).collect()
         }
