@@ -59,7 +59,7 @@ pub struct Tree {
     pub root: usize,
     /// Parts in the order they were reached: every part comes after its parent.
     pub order: Vec<usize>,
-    /// parent[k]: None for the root and for parts not in the tree (no vertices).
+    /// `parent[k]`: None for the root and for parts not in the tree (no vertices).
     pub parent: Vec<Option<usize>>,
 }
 

@@ -167,7 +167,7 @@ impl Articulation {
         Ok((keys[seg], keys[seg + 1], s - seg as f64))
     }
 
-    /// The shape at time s along a sequence of poses (0-based keys; s = 0 is keys[0], s = 1 keys[1], ...).
+    /// The shape at time s along a sequence of poses (0-based keys; s = 0 is `keys[0]`, s = 1 `keys[1]`, ...).
     pub fn keyframes(&self, keys: &[usize], s: f64, opts: &Options) -> Result<Vec<Vec3>> {
         let (i, j, t) = self.keyframe_segment(keys, s)?;
         self.interpolate(i, j, t, opts)
