@@ -4,6 +4,9 @@
 //! Two kinds of model: the generator's ground truth turned into a [`Model`] (exact rigid parts, no fit:
 //! for properties that must hold exactly) and a fitted model (Algorithm 1 on the generated shapes).
 
+#[macro_use]
+mod common;
+
 use posemfa::articulate::graph::TreeRule;
 use posemfa::articulate::report::{edge_stretch, max_distance, signed_volume};
 use posemfa::articulate::{Articulation, Blend, Options, RootRule, Skin};
@@ -12,14 +15,6 @@ use posemfa::geometry::{mat_vec, norm, sub, Vec3};
 use posemfa::mesh::Population;
 use posemfa::model::{Component, Model, Params};
 use posemfa::synth::{generate, Generated, Preset, Spec};
-
-macro_rules! dual_test {
-    ($(fn $name:ident() $body:block)*) => {$(
-        #[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
-        #[cfg_attr(not(target_arch = "wasm32"), test)]
-        fn $name() $body
-    )*};
-}
 
 fn creature(vertices: usize, poses: usize, seed: u64, band: f64, max_angle: f64) -> Generated {
     generate(&Spec {
