@@ -26,8 +26,11 @@
 //                                                                   coarseLabels, refinedLabels, latent
 //     { type: 'fit-error', id, message }
 //     { type: 'reply', id, result } | { type: 'reply', id, error }  answer to a query
+//   teaching mode (one AECM iteration per Step): 'teach-reset', 'teach-step', 'teach-run', 'teach-pause' and
+//   the replies 'teach', see teach-worker.js
 import init, * as wasm from './pkg/posemfa.js';
 import wasmUrl from './pkg/posemfa_bg.wasm?url';
+import { Teacher } from './teach-worker.js';
 
 // Bindings that newer builds add (looked up by name, so that this file builds with or without them).
 const binding = (name) => wasm[name];
@@ -37,6 +40,7 @@ const SLICE_MS = 40; // one fitter.run(budget) call; the worker reads its messag
 let population = null; // wasm Population
 let fitter = null; // wasm Fitter of the fit in progress
 let model = null; // wasm FitModel of the last fit (final or best so far)
+let truth = null; // wasm Synthetic of a generated population (its ground truth), else null
 let fitToken = 0; // bumped by every new fit and population: a fit whose token is stale was superseded
 let cancelRequested = false;
 
@@ -74,13 +78,16 @@ function describe(pop, truth = null) {
   };
 }
 
-function replacePopulation(pop) {
+function replacePopulation(pop, synth = null) {
   stopFit();
+  teacher.drop();
   fitToken++;
   model?.free();
   model = null;
   population?.free();
   population = pop;
+  truth?.free();
+  truth = synth;
 }
 
 function sendPopulation(id, truth) {
@@ -115,10 +122,9 @@ function generate(data) {
     post({ type: 'load-error', id, problems: problemsOf(e.message ?? e) });
     return;
   }
-  const truth = { partNames: synth.partNames(), partOfVertex: synth.partOfVertex() };
-  replacePopulation(synth.population());
-  synth.free();
-  sendPopulation(id, truth);
+  const groundTruth = { partNames: synth.partNames(), partOfVertex: synth.partOfVertex() };
+  replacePopulation(synth.population(), typeof synth.groundTruth === 'function' ? synth : (synth.free(), null));
+  sendPopulation(id, groundTruth);
   if (data.fit) fit(data.fit);
 }
 
@@ -127,8 +133,10 @@ function stopFit() {
 }
 
 function modelMessage(m) {
+  const summary = m.summary();
+  if (truth) summary.groundTruth = truth.groundTruth(m); // {ari, rotationErrorDeg, ...}
   return {
-    summary: m.summary(),
+    summary,
     labels: m.labels(),
     coarseLabels: m.coarseLabels(),
     refinedLabels: m.refinedLabels(),
@@ -144,13 +152,8 @@ async function fit({ id, params }) {
     post({ type: 'fit-error', id, message: 'no population loaded' });
     return;
   }
-  const token = ++fitToken;
-  if (fitter) {
-    // A fit is running: stop it and wait until its loop has let go (it keeps nothing: it was superseded).
-    cancelRequested = true;
-    while (fitter) await yieldToEvents();
-    if (token !== fitToken) return; // superseded in the meantime too
-  }
+  teacher.drop();
+  if (!(await claimFit())) return;
   const t0 = performance.now();
   let f;
   try {
@@ -161,6 +164,7 @@ async function fit({ id, params }) {
   }
   fitter = f;
   cancelRequested = false;
+  const token = fitToken;
   try {
     while (!f.isDone() && !cancelRequested) {
       const steps = f.run(SLICE_MS);
@@ -170,20 +174,51 @@ async function fit({ id, params }) {
       await yieldToEvents();
     }
     if (token !== fitToken) return; // a new fit or population superseded this one: it keeps nothing
-    const cancelled = !f.isDone();
-    const m = f.result();
-    const fitMs = performance.now() - t0;
-    model?.free();
-    model = m;
-    const msg = modelMessage(m);
-    msg.summary.fitMs = fitMs;
-    msg.summary.cancelled = cancelled;
-    post({ type: 'fitted', id, cancelled, fitMs, model: msg });
+    finishFit(f, id, t0);
   } catch (e) {
     post({ type: 'fit-error', id, message: String(e.message ?? e) });
   } finally {
     f.free();
     if (fitter === f) fitter = null;
+  }
+}
+
+// Stops the fit in progress, if any, and waits until its loop has let go (it keeps nothing: it was
+// superseded). False when another fit or population superseded this request meanwhile.
+async function claimFit() {
+  const token = ++fitToken;
+  if (fitter) {
+    cancelRequested = true;
+    while (fitter) await yieldToEvents();
+  }
+  return token === fitToken;
+}
+
+// The model of a finished (or cancelled) fitter becomes the worker's model and goes to the page.
+function finishFit(f, id, t0) {
+  const cancelled = !f.isDone();
+  const m = f.result();
+  const fitMs = performance.now() - t0;
+  model?.free();
+  model = m;
+  const msg = modelMessage(m);
+  msg.summary.fitMs = fitMs;
+  msg.summary.cancelled = cancelled;
+  post({ type: 'fitted', id, cancelled, fitMs, model: msg });
+}
+
+const teacher = new Teacher({ wasm, post, claim: claimFit, finish: finishFit, yieldToEvents });
+let teachQueue = Promise.resolve();
+
+// Teaching messages: errors end the teaching fit and are reported like a fit's.
+async function teach(data) {
+  try {
+    if (data.type === 'teach-reset') await teacher.reset(population, data);
+    else if (data.type === 'teach-step') await teacher.step(population, data);
+    else if (data.type === 'teach-run') await teacher.run(population, data);
+  } catch (e) {
+    teacher.drop();
+    post({ type: 'fit-error', id: data.id, message: String(e.message ?? e) });
   }
 }
 
@@ -225,11 +260,14 @@ self.onmessage = async ({ data }) => {
     cancelRequested = true;
     return;
   }
+  if (data.type === 'teach-pause' || data.type === 'teach-reset') teacher.pause(); // a run stops at once
+  if (data.type === 'teach-pause') return;
   await ready;
   if (data.type === 'load') load(data);
   else if (data.type === 'generate') generate(data);
   else if (data.type === 'fit') fit(data);
   else if (data.type === 'query') query(data);
+  else if (data.type.startsWith('teach-')) teachQueue = teachQueue.then(() => teach(data)); // one at a time, in order
 };
 
 export {};
