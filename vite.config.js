@@ -15,5 +15,14 @@ export default defineConfig({
   // www/main.js starts www/worker.js as a module worker ({ type: 'module' }): keep it an ES module when built.
   worker: { format: 'es' },
   // three.js alone is about 550 KB minified: one chunk is fine for a page loaded once from a local host.
-  build: { outDir: 'dist', emptyOutDir: true, target: 'es2022', assetsInlineLimit: 0, chunkSizeWarningLimit: 1024 },
+  build: {
+    outDir: 'dist', emptyOutDir: true, target: 'es2022', assetsInlineLimit: 0, chunkSizeWarningLimit: 1024,
+    // The page, the embedding demo (www/embed-demo.html), and www/mount.js as dist/mount.js: a stable name
+    // with its exports kept, for other pages to import (mount(element, options)).
+    rolldownOptions: {
+      input: { index: 'index.html', 'embed-demo': 'www/embed-demo.html', mount: 'www/mount.js' },
+      preserveEntrySignatures: 'exports-only',
+      output: { entryFileNames: (chunk) => (chunk.name === 'mount' ? 'mount.js' : 'assets/[name]-[hash].js') },
+    },
+  },
 });

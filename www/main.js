@@ -2,10 +2,13 @@
 // parses; the worker (and the Rust core in it) does. Test contract: document.body.dataset.state, the
 // data-testid elements of index.html, and window.posemfa (see the end of this file).
 import { worker } from './worker-client.js'; // first: the worker starts loading wasm while three.js evaluates
+import { installUrlState } from './urlstate.js'; // second: an embedded page hides its controls at once
 import { Viewer } from './viewer.js';
 import { Plot } from './plot.js';
 import { filesFromDataTransfer, filesFromList } from './drop.js';
 import { labelColours, errorColours, RAMP_CSS, PALETTE } from './colors.js';
+import { installTeaching } from './teach.js';
+import { installPresets, accuracyText } from './presets.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -63,6 +66,7 @@ function query(method, ...args) {
 }
 
 worker.onmessage = ({ data: m }) => {
+  if (extensions.some((x) => x.onMessage(m))) return; // presets, URL state, teaching mode (see the end)
   switch (m.type) {
     case 'ready': return onReady(m);
     case 'fatal': showProblems([{ file: null, line: null, reason: m.message }], 'The page cannot run'); return setState('error');
@@ -109,7 +113,9 @@ function onReady({ defaults, features, examples }) {
   fillParams(defaults);
   document.querySelector('.generate').hidden = !app.examples.length;
   $('example').replaceChildren(...app.examples.map((e) => Object.assign(document.createElement('option'), { value: e.id, textContent: e.title })));
-  if (URL_SPEC && features.synth) {
+  if (urlState.start()) {
+    // the state in location.hash chose the population (and its parameters and view)
+  } else if (URL_SPEC && features.synth) {
     generate(URL_SPEC);
   } else if (app.examples.length) {
     runExample(app.examples.find((e) => e.id === url.get('example')) ?? app.examples[0]);
@@ -123,10 +129,10 @@ function onReady({ defaults, features, examples }) {
 }
 
 // An example: its population generated and fitted with its own parameters (shown in the form).
-function runExample(ex) {
+function runExample(ex, params = {}) {
   $('example').value = ex.id;
   app.baseParams = { ...app.defaults, ...ex.params };
-  fillParams(app.baseParams);
+  fillParams({ ...app.baseParams, ...params });
   generate(ex.spec, ex);
 }
 
@@ -136,7 +142,9 @@ function fitRequest() {
   return { id: nextId++, params };
 }
 
-function generate(spec, example = null) {
+function generate(spec, example = null, params = null) {
+  if (params) fillParams({ ...app.baseParams, ...params });
+  app.pendingSpec = spec;
   app.pendingFit = fitRequest();
   app.loadId = send({ type: 'generate', spec, fit: app.pendingFit });
   app.pendingSource = example ? `example “${example.title}”` : `generated ${spec.preset}, seed ${spec.seed ?? 0}`;
@@ -157,6 +165,7 @@ async function loadFiles(got) {
   app.pendingNotes = notes;
   app.pendingSource = files.length === 1 ? files[0].name : `${files.length} files`;
   app.pendingExample = null;
+  app.pendingSpec = null;
   app.baseParams = app.defaults; // the form's values stay; hidden ones back to the defaults
   const buffers = files.map((f) => f.bytes.buffer.slice(f.bytes.byteOffset, f.bytes.byteOffset + f.bytes.byteLength));
   app.pendingFit = fitRequest();
@@ -350,6 +359,8 @@ function showResult() {
   $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${(s.rmse / app.pop.normalization[3]).toExponential(3)} original units` : '–';
   $('iterations').textContent = s ? `${s.iterations} in the final stage${s.converged ? ', converged' : ''}` : '–';
   $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
+  $('truth-acc').textContent = accuracyText(s?.groundTruth);
+  $('truth-acc').classList.toggle('good', s?.groundTruth?.ari >= 0.95);
 }
 
 // ------------------------------------------------------------------ views
@@ -800,6 +811,18 @@ window.posemfa = {
   poses: () => app.pop?.nShapes ?? 0,
   mode: () => app.mode,
 };
+
+// Presets, URL state (location.hash) and the teaching mode: each sees the worker's messages first.
+const urlState = installUrlState({
+  app, viewer, readParams, renderView, runExample, generate,
+  examples: () => app.examples ?? [],
+  note: (text) => showProblems([{ file: null, line: null, reason: text }], 'Note'),
+});
+const extensions = [
+  installPresets({ app, runExample }),
+  urlState,
+  installTeaching({ app, send, setState, plot, renderView, readParams, stageText }),
+];
 
 setState('loading');
 updateInterpNote();

@@ -11,9 +11,12 @@ export class Plot {
     new ResizeObserver(() => this.draw()).observe(canvas);
   }
 
-  set(values, title) {
+  /** `runs` (optional): indices where AECM runs start; each run is then drawn to its own scale (the
+   *  teaching mode's steps span runs on different vertex sets, whose log-likelihoods do not compare). */
+  set(values, title, runs = null) {
     this.values = Array.from(values).filter(Number.isFinite);
     this.title = title;
+    this.runs = runs && runs.length > 1 ? runs : null;
     this.draw();
   }
 
@@ -37,8 +40,9 @@ export class Plot {
       g.fillText('log-likelihood: no iteration yet', 4, h / 2);
       return;
     }
-    const lo = Math.min(...v);
-    const hi = Math.max(...v);
+    const shown = this.runs ? v.slice(this.runs[this.runs.length - 1]) : v; // labels: the current run's range
+    const lo = Math.min(...shown);
+    const hi = Math.max(...shown);
     const span = hi - lo || Math.abs(hi) || 1;
     const left = 4;
     const top = 18;
@@ -54,9 +58,25 @@ export class Plot {
     g.strokeStyle = style.getPropertyValue('--accent') || '#4363d8';
     g.lineWidth = 1.5;
     g.beginPath();
-    v.forEach((val, i) => (i ? g.lineTo(x(i), y(val)) : g.moveTo(x(i), y(val))));
+    if (this.runs) {
+      // one polyline per run, each scaled to its own range, a tick where a run starts
+      this.runs.forEach((start, r) => {
+        const seg = v.slice(start, this.runs[r + 1] ?? v.length);
+        const a = Math.min(...seg);
+        const s = Math.max(...seg) - a || 1;
+        seg.forEach((val, i) => {
+          const yy = bottom - ((bottom - top) * (val - a)) / s;
+          if (i) g.lineTo(x(start + i), yy);
+          else g.moveTo(x(start), yy);
+        });
+        g.moveTo(x(start), bottom);
+        g.lineTo(x(start), bottom - 4);
+      });
+    } else {
+      v.forEach((val, i) => (i ? g.lineTo(x(i), y(val)) : g.moveTo(x(i), y(val))));
+    }
     g.stroke();
     g.fillText(`max ${fmt(hi)}`, right - g.measureText(`max ${fmt(hi)}`).width, 12);
-    g.fillText(`min ${fmt(lo)} · ${v.length} iterations`, left, h - 2);
+    g.fillText(`min ${fmt(lo)} · ${v.length} iterations${this.runs ? ` · ${this.runs.length} runs, each to its own scale` : ''}`, left, h - 2);
   }
 }

@@ -43,8 +43,21 @@ export class Viewer {
     this.warmUp();
     this.raycaster = new THREE.Raycaster();
     this.needsRender = false;
-    new ResizeObserver(() => this.resize()).observe(container);
+    this.resizeObserver = new ResizeObserver(() => this.resize());
+    this.resizeObserver.observe(container);
     this.resize();
+  }
+
+  /** Frees the WebGL context and removes the canvas (www/mount.js unmount()). */
+  dispose() {
+    this.disposed = true;
+    this.resizeObserver.disconnect();
+    this.controls.dispose();
+    for (const s of this.slots) this.removeSlot(s);
+    this.slots = [];
+    this.renderer.dispose();
+    this.renderer.forceContextLoss();
+    this.renderer.domElement.remove();
   }
 
   // Compiles the shaders of both materials now (software GL takes a while), while the worker loads the wasm,
@@ -76,6 +89,7 @@ export class Viewer {
     this.needsRender = true;
     requestAnimationFrame(() => {
       this.needsRender = false;
+      if (this.disposed) return;
       const moving = this.controls.update(); // true while damping still moves the camera
       this.renderer.render(this.scene, this.camera);
       if (moving) this.requestRender();

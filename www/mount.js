@@ -1,0 +1,96 @@
+// posemfa without an iframe: `mount(element, options)` puts a minimal view (the mesh coloured by its fitted
+// parts, a one-line caption) into any element of another page; `unmount()` takes it away again. It runs its
+// own worker (www/worker.js, the same protocol as the page), so several mounts and the page do not share
+// state. Built to dist/mount.js (stable name, relative URLs). Usage:
+//
+//   import { mount } from './posemfa/mount.js';
+//   const view = mount(document.querySelector('#creature'), { example: 'arm' });
+//   view.ready.then((summary) => console.log(summary.parts, summary.groundTruth?.ari));
+//   view.unmount();
+//
+// options: example (id of a built-in example; default: the first, the quadruped), or spec (a generator spec,
+// see Synthetic in src/wasm.rs); params (fit parameters over the example's); pose (0-based, default 0);
+// view: 'parts' (default) | 'truth' (the generator's ground truth); flat (unlit colours, default false).
+// The element gets data-state = loading | fitting | fitted | error.
+import { Viewer } from './viewer.js';
+import { labelColours } from './colors.js';
+
+export function mount(element, options = {}) {
+  const box = document.createElement('div');
+  box.className = 'posemfa-mount';
+  box.style.cssText = 'position:relative;width:100%;height:100%;min-height:200px;display:flex;flex-direction:column;font:13px system-ui,sans-serif';
+  const view = document.createElement('div');
+  view.style.cssText = 'position:relative;flex:1;min-height:0';
+  const caption = document.createElement('div');
+  caption.className = 'posemfa-caption';
+  caption.style.cssText = 'padding:2px 4px;color:#5b6475';
+  box.append(view, caption);
+  element.append(box);
+
+  const setState = (s) => { element.dataset.state = s; };
+  setState('loading');
+  caption.textContent = 'Loading…';
+  const viewer = new Viewer(view);
+  if (options.flat) viewer.setFlat(true);
+  const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+  let pop = null;
+  let summary = null;
+  let resolveReady;
+  let rejectReady;
+  const ready = new Promise((ok, fail) => { resolveReady = ok; rejectReady = fail; });
+  ready.catch(() => {}); // a failure is also shown in the caption and data-state
+
+  const fail = (message) => {
+    setState('error');
+    caption.textContent = message;
+    rejectReady(new Error(message));
+  };
+
+  worker.onmessage = ({ data: m }) => {
+    if (m.type === 'ready') {
+      const ex = options.spec ? null : (m.examples.find((e) => e.id === options.example) ?? m.examples[0]);
+      if (!ex && !options.spec) return fail('this build has no built-in examples');
+      if (options.example && ex && ex.id !== options.example) return fail(`no example "${options.example}"`);
+      const params = { ...m.defaults, ...(ex?.params ?? {}), ...(options.params ?? {}) };
+      worker.postMessage({ type: 'generate', id: 1, spec: options.spec ?? ex.spec, fit: { id: 2, params } });
+      caption.textContent = ex ? ex.title : `generated ${options.spec.preset ?? ''}`;
+    } else if (m.type === 'loaded') {
+      pop = m.population;
+      viewer.setTopology(pop.faces, pop.positions[0]);
+      setState('fitting');
+    } else if (m.type === 'fitted') {
+      summary = m.model.summary;
+      const pose = Math.min(Math.max(Number(options.pose) || 0, 0), pop.nShapes - 1);
+      const truth = options.view === 'truth' && pop.truth;
+      const labels = truth ? pop.truth.partOfVertex : m.model.labels;
+      viewer.show([{ positions: pop.positions[pose], colours: labelColours(labels, pop.faces).vertexColours }], { frame: true });
+      const acc = summary.groundTruth ? `, adjusted Rand ${summary.groundTruth.ari.toFixed(3)}` : '';
+      caption.textContent += truth
+        ? ` — ground truth, ${pop.truth.partNames.length} parts`
+        : ` — ${summary.parts} parts fitted in ${Math.round(summary.fitMs)} ms${acc}`;
+      setState('fitted');
+      resolveReady({ ...summary });
+    } else if (m.type === 'load-error') {
+      fail(m.problems.map((p) => p.reason).join('; '));
+    } else if (m.type === 'fit-error' || m.type === 'fatal') {
+      fail(m.message);
+    }
+  };
+  worker.onerror = (e) => fail(`the worker failed: ${e.message || e}`);
+
+  let mounted = true;
+  return {
+    /** Resolves to the fit's summary ({parts, rmse, fitMs, groundTruth: {ari, rotationErrorDeg}, ...}). */
+    ready,
+    summary: () => (summary ? { ...summary } : null),
+    /** Stops the worker, frees the WebGL context and removes what mount() added. */
+    unmount() {
+      if (!mounted) return;
+      mounted = false;
+      worker.terminate();
+      viewer.dispose();
+      box.remove();
+      delete element.dataset.state;
+    },
+  };
+}

@@ -1,0 +1,47 @@
+// The preset list: every built-in example of the core (posemfa::synth::presets) with its one line of what to
+// notice, the ones that fail on purpose marked so; a click generates and fits it. And the fitted model's
+// accuracy against the generator's ground truth (computed in Rust, posemfa::metrics).
+import './teach.css';
+
+/** ctx: { app, runExample }. Returns { onMessage(m) } (never consumes a message). */
+export function installPresets(ctx) {
+  const { app } = ctx;
+  const $ = (id) => document.getElementById(id);
+
+  function render(examples) {
+    $('presets-box').hidden = !examples.length;
+    $('presets').replaceChildren(...examples.map((ex) => {
+      const li = document.createElement('li');
+      li.classList.toggle('fails', ex.failsOnPurpose);
+      const b = document.createElement('button');
+      b.type = 'button';
+      b.dataset.id = ex.id;
+      b.textContent = ex.title.replace(/^Fails on purpose: /, '');
+      b.addEventListener('click', () => ctx.runExample(ex));
+      const note = document.createElement('span');
+      note.className = 'note';
+      note.textContent = ex.note; // one line; all of it on hover or focus, and its title
+      note.title = ex.note;
+      li.append(b, note);
+      return li;
+    }));
+  }
+
+  function mark(id) {
+    for (const b of $('presets').querySelectorAll('button')) b.setAttribute('aria-current', String(b.dataset.id === id));
+  }
+
+  return {
+    onMessage(m) {
+      if (m.type === 'ready') render(m.examples ?? []);
+      else if (m.type === 'loaded' && m.id === app.loadId) mark(app.pendingExample?.id ?? null);
+      return false;
+    },
+  };
+}
+
+/** One line of ground-truth accuracy: adjusted Rand index and rotation error (median and worst part). */
+export function accuracyText(g) {
+  if (!g) return '–';
+  return `adjusted Rand ${g.ari.toFixed(3)}; rotation error ${g.rotationErrorDeg.toFixed(2)}° median, ${g.rotationErrorDegMax.toFixed(2)}° worst part (${g.trueParts} true parts)`;
+}

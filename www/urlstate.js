@@ -1,0 +1,263 @@
+// The page's whole state in location.hash, so that reloading or sharing the link restores it, and the
+// embedding flags. Keys (all optional; in this order when written):
+//
+//   ex=ID                      a built-in example (posemfa::synth::presets), or
+//   gen=PRESET,VERTICES,POSES,SEED   a generated population, or
+//   src=files                  opened or dropped files (not in the link: the default example is shown)
+//   parts, seed, tol, floor, lambda=exact|paper-eq18, refine=0|1     fit parameters (the form's)
+//   view=parts|stages|recon|latent|interp|truth   flat=0|1   pose=I (0-based)
+//   a=I, b=J, t=0..1, side=0|1, skin=rigid|smooth, residual=0|1     interpolation
+//   cam=PX,PY,PZ,TX,TY,TZ      camera position and target (exact numbers)
+//   embed=1                    minimal view for an iframe (hides header, panel, toolbar, poses, interpolation
+//                              controls); hide=NAME,... hides more; show=NAME,... brings some back. Names:
+//                              header, panel, toolbar, modes, caption, poses, interp, info, presets, teach
+import './embed.css';
+
+export const CONTROLS = ['header', 'panel', 'toolbar', 'modes', 'caption', 'poses', 'interp', 'info', 'presets', 'teach'];
+const EMBED_HIDES = ['header', 'panel', 'toolbar', 'poses', 'interp'];
+const MODES = ['parts', 'stages', 'recon', 'latent', 'interp', 'truth'];
+const ORDER = ['ex', 'gen', 'src', 'parts', 'seed', 'tol', 'floor', 'lambda', 'refine', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];
+
+const num = (v) => (v === null || v === undefined || v === '' || !Number.isFinite(Number(v)) ? undefined : Number(v));
+const bool = (v) => (v === '1' ? true : v === '0' ? false : undefined);
+const list = (v) => (v ? v.split(',').filter((x) => CONTROLS.includes(x)) : []);
+
+/** The state written in a hash string ("#..." or "..."), as a plain object (absent keys left out). */
+export function parseHash(hash) {
+  const q = new URLSearchParams(String(hash).replace(/^#/, ''));
+  const s = {};
+  if (q.has('ex')) s.ex = q.get('ex');
+  if (q.has('gen')) {
+    const [preset, vertices, poses, seed] = q.get('gen').split(',');
+    s.gen = { preset, vertices: num(vertices) ?? 2500, poses: num(poses) ?? 8, seed: num(seed) ?? 0 };
+  }
+  if (q.get('src') === 'files') s.src = 'files';
+  const params = {};
+  if (num(q.get('parts')) !== undefined) params.parts = num(q.get('parts'));
+  if (num(q.get('seed')) !== undefined) params.seed = num(q.get('seed'));
+  if (num(q.get('tol')) !== undefined) params.tol = num(q.get('tol'));
+  if (num(q.get('floor')) !== undefined) params.varianceFloor = num(q.get('floor'));
+  if (['exact', 'paper-eq18'].includes(q.get('lambda'))) params.lambdaRule = q.get('lambda');
+  if (bool(q.get('refine')) !== undefined) params.refine = bool(q.get('refine'));
+  if (Object.keys(params).length) s.params = params;
+  const view = {};
+  if (MODES.includes(q.get('view'))) view.mode = q.get('view');
+  if (bool(q.get('flat')) !== undefined) view.flat = bool(q.get('flat'));
+  for (const k of ['pose', 'a', 'b', 't']) if (num(q.get(k)) !== undefined) view[k] = num(q.get(k));
+  if (bool(q.get('side')) !== undefined) view.side = bool(q.get('side'));
+  if (['rigid', 'smooth'].includes(q.get('skin'))) view.skin = q.get('skin');
+  if (bool(q.get('residual')) !== undefined) view.residual = bool(q.get('residual'));
+  const cam = (q.get('cam') ?? '').split(',').map(Number);
+  if (cam.length === 6 && cam.every(Number.isFinite)) view.cam = cam;
+  if (Object.keys(view).length) s.view = view;
+  if (q.get('embed') === '1') s.embed = true;
+  if (list(q.get('hide')).length) s.hide = list(q.get('hide'));
+  if (list(q.get('show')).length) s.show = list(q.get('show'));
+  return s;
+}
+
+/** The hash string (without "#") of a state object as parseHash returns it. */
+export function formatHash(s) {
+  const q = {};
+  if (s.ex) q.ex = s.ex;
+  if (s.gen) q.gen = [s.gen.preset, s.gen.vertices, s.gen.poses, s.gen.seed].join(',');
+  if (s.src) q.src = s.src;
+  const p = s.params ?? {};
+  if (p.parts !== undefined) q.parts = p.parts;
+  if (p.seed !== undefined) q.seed = p.seed;
+  if (p.tol !== undefined) q.tol = p.tol;
+  if (p.varianceFloor !== undefined) q.floor = p.varianceFloor;
+  if (p.lambdaRule !== undefined) q.lambda = p.lambdaRule;
+  if (p.refine !== undefined) q.refine = p.refine ? 1 : 0;
+  const v = s.view ?? {};
+  if (v.mode) q.view = v.mode;
+  if (v.flat !== undefined) q.flat = v.flat ? 1 : 0;
+  for (const k of ['pose', 'a', 'b', 't']) if (v[k] !== undefined) q[k] = v[k];
+  if (v.side !== undefined) q.side = v.side ? 1 : 0;
+  if (v.skin) q.skin = v.skin;
+  if (v.residual !== undefined) q.residual = v.residual ? 1 : 0;
+  if (v.cam) q.cam = v.cam.map(String).join(','); // shortest exact decimal of every number
+  if (s.embed) q.embed = 1;
+  if (s.hide?.length) q.hide = s.hide.join(',');
+  if (s.show?.length) q.show = s.show.join(',');
+  return ORDER.filter((k) => k in q).map((k) => `${k}=${encodeURIComponent(q[k]).replace(/%2C/g, ',')}`).join('&');
+}
+
+/** Hides the controls the flags name (body classes hide-NAME; see embed.css). */
+export function applyEmbedFlags(s, body = document.body) {
+  const hidden = new Set([...(s.embed ? EMBED_HIDES : []), ...(s.hide ?? [])]);
+  for (const c of s.show ?? []) hidden.delete(c);
+  body.classList.toggle('embed', !!s.embed);
+  for (const c of CONTROLS) body.classList.toggle(`hide-${c}`, hidden.has(c));
+}
+
+// Applied as soon as this module runs (before the page's first fit), so an embedded page never shows its
+// controls.
+applyEmbedFlags(parseHash(location.hash));
+
+/**
+ * ctx (from main.js): { app, viewer, readParams, renderView, runExample, generate, examples() }.
+ * Returns { start(): true when the hash chose what to load (and loaded it), onMessage(m) }.
+ */
+export function installUrlState(ctx) {
+  const { app, viewer } = ctx;
+  const $ = (id) => document.getElementById(id);
+  let restoring = null; // view state waiting for the fit to end
+  let source = null; // { ex } | { gen } | { src: 'files' } of the population shown
+  let fitParams = null; // the form's fit parameters when the shown model was fitted
+  let flags = parseHash(location.hash);
+  let written = location.hash.replace(/^#/, '');
+  let timer = 0;
+  let note = null; // shown once the first population is in
+
+  function current() {
+    const s = { ...source };
+    if (fitParams && !s.src) {
+      const { parts, seed, tol, varianceFloor, lambdaRule, refine } = fitParams;
+      s.params = { parts, seed, tol, varianceFloor, lambdaRule, refine };
+    }
+    if (app.pop && !s.src) {
+      s.view = {
+        mode: app.mode,
+        flat: $('flat').checked,
+        pose: app.pose,
+        a: Number($('pose-a').value),
+        b: Number($('pose-b').value),
+        t: Number($('interp-t').value),
+        side: $('side-by-side').checked,
+        skin: $('interp-skin').value,
+        residual: $('interp-residual').checked,
+      };
+      if (viewer.framed) s.view.cam = [...viewer.camera.position.toArray(), ...viewer.controls.target.toArray()];
+    }
+    if (flags.embed) s.embed = true;
+    if (flags.hide) s.hide = flags.hide;
+    if (flags.show) s.show = flags.show;
+    return s;
+  }
+
+  function write() {
+    timer = 0;
+    if (restoring || !source) return; // not before the state in the link has been applied
+    const h = formatHash(current());
+    if (h === written) return;
+    written = h;
+    history.replaceState(history.state, '', `#${h}`);
+  }
+  // Written at most every 150 ms while things change, and once more 300 ms after the last change (a camera
+  // still gliding after a drag changes without telling).
+  let trailing = 0;
+  const schedule = () => {
+    if (!timer) timer = setTimeout(write, 150);
+    clearTimeout(trailing);
+    trailing = setTimeout(write, 300);
+  };
+  for (const ev of ['change', 'input', 'click', 'keyup']) document.addEventListener(ev, schedule, true);
+  viewer.controls.addEventListener('change', schedule);
+
+  // The view of a state: the form controls set and their handlers run (main.js), then the camera.
+  async function applyView(v) {
+    const set = (id, prop, value, ev) => {
+      if (value === undefined) return;
+      $(id)[prop] = value;
+      $(id).dispatchEvent(new Event(ev, { bubbles: true }));
+    };
+    const n = app.pop.nShapes;
+    const pose = (i) => (i === undefined ? undefined : String(Math.min(Math.max(Math.round(i), 0), n - 1)));
+    set('flat', 'checked', v.flat, 'change');
+    set('pose-a', 'value', pose(v.a), 'input');
+    set('pose-b', 'value', pose(v.b), 'input');
+    set('interp-t', 'value', v.t === undefined ? undefined : String(v.t), 'input');
+    set('interp-skin', 'value', v.skin, 'input');
+    set('interp-residual', 'checked', v.residual, 'input');
+    set('side-by-side', 'checked', v.side, 'change');
+    set('pose-select', 'value', pose(v.pose), 'change');
+    const radio = document.querySelector(`#modes input[value=${v.mode}]`);
+    if (v.mode && radio && !radio.parentElement.hidden) {
+      radio.checked = true;
+      radio.dispatchEvent(new Event('change', { bubbles: true }));
+    }
+    await ctx.renderView({ frame: true }); // the last render wins: the camera goes on after it
+    if (v.cam) {
+      viewer.camera.position.fromArray(v.cam, 0);
+      viewer.controls.target.fromArray(v.cam, 3);
+      viewer.camera.updateMatrixWorld();
+      viewer.userMoved = true; // a resize keeps this camera
+      viewer.requestRender();
+    }
+  }
+
+  // Loads what a state names; its view waits for the fit. False when the state names no population.
+  function load(s) {
+    const examples = ctx.examples();
+    if (s.ex) {
+      const ex = examples.find((e) => e.id === s.ex);
+      if (!ex) return false;
+      restoring = s.view ?? {};
+      ctx.runExample(ex, s.params);
+      return true;
+    }
+    if (s.gen) {
+      restoring = s.view ?? {};
+      ctx.generate(s.gen, null, s.params);
+      return true;
+    }
+    return false;
+  }
+
+  window.addEventListener('hashchange', () => {
+    const h = location.hash.replace(/^#/, '');
+    if (h === written) return;
+    written = h;
+    const s = parseHash(h);
+    flags = s;
+    applyEmbedFlags(s);
+    const sameSource = formatHash({ ex: s.ex, gen: s.gen, params: s.params }) === formatHash({ ...source, params: current().params });
+    if (sameSource && app.model) applyView(s.view ?? {});
+    else load(s);
+  });
+
+  /** The state now (as parseHash returns it), and whether a link's view is still waiting for its fit. */
+  window.posemfa.urlState = () => current();
+  window.posemfa.restoring = () => !!restoring;
+
+  return {
+    /** At the worker's 'ready': loads the population the hash names. False: the page's default applies. */
+    start() {
+      const s = parseHash(location.hash);
+      if (s.src === 'files') {
+        note = 'This link was made from opened files, which a link cannot carry: open them again. Showing the default example.';
+      }
+      return load(s);
+    },
+    onMessage(m) {
+      if (m.type === 'loaded' && m.id === app.loadId) {
+        source = app.pendingExample ? { ex: app.pendingExample.id } : app.pendingSpec ? { gen: app.pendingSpec } : { src: 'files' };
+        fitParams = null;
+        if (note) {
+          const text = note;
+          note = null;
+          queueMicrotask(() => ctx.note(text)); // after main.js has cleared the previous notes
+        }
+      } else if ((m.type === 'fitted' && m.id === app.fitId) || (m.type === 'teach' && m.kind === 'reset')) {
+        fitParams = ctx.readParams();
+        if (m.type === 'fitted' && restoring) {
+          const v = restoring;
+          queueMicrotask(async () => { // after main.js has shown the model
+            try {
+              await applyView(v);
+            } finally {
+              restoring = null;
+              schedule();
+            }
+          });
+        } else {
+          schedule();
+        }
+      } else if ((m.type === 'load-error' || m.type === 'fit-error') && restoring) {
+        restoring = null;
+      }
+      return false;
+    },
+  };
+}
