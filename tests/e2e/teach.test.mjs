@@ -1,0 +1,328 @@
+// Issue 5 on the built page (dist/): presets and ground-truth accuracy, the teaching mode (Step / Run / Pause /
+// Reset on the core's single-step API), the state in location.hash, and embedding (embed=1, mount()).
+// The step-by-step values are checked against the same core run in Node (pkg-node/, built with the page).
+// Run: npm run build && node --test tests/e2e/teach.test.mjs
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { createRequire } from 'node:module';
+import { join } from 'node:path';
+import { serveStatic, launch, openPage, waitState, canvasFingerprint, ROOT } from './helpers.mjs';
+
+let server;
+let browser;
+before(async () => {
+  server = await serveStatic();
+  browser = await launch();
+});
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+const core = () => createRequire(import.meta.url)(join(ROOT, 'pkg-node', 'posemfa.js'));
+const summary = (page) => page.evaluate(() => window.posemfa.summary());
+const teaching = (page) => page.evaluate(() => window.posemfa.teaching());
+const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+
+// Opens `hash` (or the default) and waits until the page is fitted and any view in the link is applied.
+async function fitted(hash = '', opts) {
+  const p = await openPage(browser, `${server.url}${hash}`, opts);
+  const state = await waitState(p.page, ['fitted', 'error'], 60000);
+  assert.equal(state, 'fitted', await p.page.locator('[data-testid=errors]').innerText());
+  await p.page.waitForFunction(() => !window.posemfa.restoring(), null, { polling: 20 });
+  await frames(p.page);
+  return p;
+}
+
+// The first `n` AECM iterations of an example, computed by the core in Node: progress objects.
+function coreSteps(id, n, overrides = {}) {
+  const w = core();
+  const ex = w.examples().find((e) => e.id === id);
+  const synth = new w.Synthetic(ex.spec);
+  const pop = synth.population();
+  const f = new w.Fitter(pop, { ...w.defaultParams(), ...ex.params, ...overrides });
+  const out = Array.from({ length: n }, () => f.step());
+  f.free();
+  pop.free();
+  synth.free();
+  return out;
+}
+
+// The view's pixels (RGBA).
+async function canvasPixels(page) {
+  const b64 = await page.evaluate(() => {
+    const src = document.querySelector('#view canvas');
+    const c = Object.assign(document.createElement('canvas'), { width: src.width, height: src.height });
+    const g = c.getContext('2d');
+    g.drawImage(src, 0, 0);
+    const { data } = g.getImageData(0, 0, c.width, c.height);
+    let s = '';
+    for (let i = 0; i < data.length; i += 0x8000) s += String.fromCharCode(...data.subarray(i, i + 0x8000));
+    return btoa(s);
+  });
+  return Buffer.from(b64, 'base64');
+}
+
+async function step(page) {
+  const before = (await teaching(page)).iteration;
+  await page.click('[data-testid=teach-step]');
+  await page.waitForFunction((b) => window.posemfa.teaching().iteration !== b, before, { polling: 20 });
+}
+
+test('the page opens on the quadruped, fitted, with its ground-truth accuracy, and lists the presets with their notes', async () => {
+  const { page, context, log } = await fitted();
+  const opened = await page.evaluate(() => performance.getEntriesByName('posemfa:fitted')[0].startTime);
+  const s = await summary(page);
+  assert.equal(await page.locator('#example').inputValue(), 'quadruped');
+  // The accuracy comes from the core (posemfa::metrics): the same numbers as Node's.
+  const w = core();
+  const ex = w.examples()[0];
+  assert.equal(ex.id, 'quadruped');
+  assert.ok(s.groundTruth && s.groundTruth.ari >= 0.95, `adjusted Rand ${s.groundTruth?.ari}`);
+  assert.ok(s.groundTruth.rotationErrorDeg >= 0 && s.groundTruth.rotationErrorDeg <= 2, `median rotation error ${s.groundTruth.rotationErrorDeg}`);
+  assert.equal(s.groundTruth.trueParts, 18);
+  const shown = await page.locator('[data-testid=truth-acc]').innerText();
+  assert.ok(shown.includes(`adjusted Rand ${s.groundTruth.ari.toFixed(3)}`) && shown.includes(`${s.groundTruth.rotationErrorDeg.toFixed(2)}°`), shown);
+  console.log(`# opened on the fitted quadruped after ${Math.round(opened)} ms (fit ${Math.round(s.fitMs)} ms), adjusted Rand ${s.groundTruth.ari.toFixed(4)}, median rotation error ${s.groundTruth.rotationErrorDeg.toFixed(3)} deg`);
+
+  // Every example of the core is listed with its note; the ones failing on purpose say so.
+  const items = await page.locator('[data-testid=presets] li').evaluateAll((lis) => lis.map((li) => ({
+    id: li.querySelector('button').dataset.id, note: li.querySelector('.note').textContent, fails: li.classList.contains('fails'),
+    current: li.querySelector('button').getAttribute('aria-current'),
+  })));
+  assert.deepEqual(items.map((i) => i.id), w.examples().map((e) => e.id));
+  for (const [i, e] of w.examples().entries()) {
+    assert.equal(items[i].note, e.note);
+    assert.equal(items[i].fails, e.failsOnPurpose);
+  }
+  assert.deepEqual(items.filter((i) => i.fails).map((i) => i.id).sort(), ['blob', 'literal-eq18', 'too-few-poses']);
+  assert.equal(items[0].current, 'true');
+
+  // A preset that fails on purpose, picked from the list: its note says why.
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  await page.click('[data-testid=presets] button[data-id=too-few-poses]');
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n);
+  assert.match(await page.locator('#example-note').innerText(), /^Fails on purpose\. .*share/);
+  assert.equal(await page.locator('[data-testid=presets] button[data-id=too-few-poses]').getAttribute('aria-current'), 'true');
+  await page.waitForFunction(() => location.hash.split('&')[0] === '#ex=too-few-poses');
+  assert.deepEqual(log.errors, []);
+  assert.deepEqual(log.external, []);
+  await context.close();
+});
+
+test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the core\'s own values', async () => {
+  const { page, context, log } = await fitted();
+  const reference = coreSteps('quadruped', 5);
+  assert.equal(await page.evaluate(() => window.posemfa.teaching().active), false);
+  const split = []; // vertices with no part above γ = 0.9 after each step, and how many are shown blended
+  for (let k = 1; k <= 5; k++) {
+    await step(page);
+    await frames(page);
+    const t = await teaching(page);
+    split.push(t.soft);
+    assert.equal(t.iteration, k, 'one Step, one iteration');
+    assert.equal(await page.locator('[data-testid=teach-iteration]').innerText(), String(k));
+    assert.equal(t.points, k);
+    assert.equal(await page.evaluate(() => window.posemfa.plotPoints()), k);
+    assert.equal(await page.evaluate(() => document.body.dataset.state), 'teaching');
+  }
+  const t = await teaching(page);
+  // The same five iterations as fitter.step() five times in Node, to the last digit.
+  assert.deepEqual(t.logLikelihood, reference.map((p) => p.logLikelihood));
+  assert.deepEqual(reference.map((p) => p.totalIterations), [1, 2, 3, 4, 5]);
+  for (let i = 1; i < 5; i++) assert.ok(t.logLikelihood[i] >= t.logLikelihood[i - 1], `exact AECM never lowers the log-likelihood: ${t.logLikelihood}`);
+  assert.match(await page.locator('#teach-stages li.current').innerText(), /coarse/);
+  assert.match(await page.locator('#teach-eq').innerText(), /eqs 13–14[\s\S]*eq 12[\s\S]*Λ[\s\S]*eq 19[\s\S]*eq 31[\s\S]*eq 16[\s\S]*eq 12/);
+
+  // Soft colours: every vertex whose responsibilities are split shows a blend of its parts' colours (the
+  // model's γ are nearly hard: a few boundary vertices per step).
+  for (const sp of split) assert.equal(sp.blended, sp.vertices, JSON.stringify(split));
+  assert.ok(split.reduce((a, sp) => a + sp.vertices, 0) >= 1, JSON.stringify(split));
+
+  // Run, then Pause: it stops, and 5 more Steps move the counter and the plot by exactly 5.
+  await page.click('#teach-run');
+  await page.waitForFunction(() => window.posemfa.teaching().iteration >= 12, null, { polling: 10 });
+  await page.click('#teach-pause');
+  await page.waitForFunction(() => !window.posemfa.teaching().running);
+  const paused = await teaching(page);
+  await page.waitForTimeout(200);
+  assert.equal((await teaching(page)).iteration, paused.iteration, 'paused: no more iterations');
+  assert.equal(paused.points, paused.iteration);
+  for (let k = 1; k <= 5; k++) await step(page);
+  const after5 = await teaching(page);
+  assert.equal(after5.iteration, paused.iteration + 5);
+  assert.equal(after5.points, paused.points + 5);
+  assert.equal(await page.evaluate(() => window.posemfa.plotPoints()), paused.points + 5);
+  assert.deepEqual(after5.logLikelihood, coreSteps('quadruped', paused.iteration + 5).map((p) => p.logLikelihood));
+
+  // Reset: a new fit at iteration 0, empty plot; Run to the end gives the fitted model (and its accuracy).
+  await page.click('#teach-reset');
+  await page.waitForFunction(() => window.posemfa.teaching().points === 0 && window.posemfa.plotPoints() === 0);
+  assert.equal(await page.locator('[data-testid=teach-iteration]').innerText(), '0');
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.click('#teach-run');
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, fits, { timeout: 60000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  const s = await summary(page);
+  const done = await teaching(page);
+  assert.equal(done.active, false);
+  assert.equal(done.points, done.iteration);
+  assert.ok(s.groundTruth.ari >= 0.95, `stepped to the end: adjusted Rand ${s.groundTruth.ari}`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('the literal eq 18 preset shows the log-likelihood dropping while stepping', async () => {
+  const { page, context } = await fitted('#ex=literal-eq18');
+  assert.equal(await page.locator('#params [name=paperLambda]').isChecked(), true);
+  assert.equal(await page.locator('#teach-eq-lambda-paper').isVisible(), true);
+  assert.equal(await page.locator('#teach-eq-lambda-exact').isVisible(), false);
+  for (let k = 0; k < 6; k++) await step(page);
+  const t = await teaching(page);
+  const drops = t.logLikelihood.filter((v, i) => i > 0 && v < t.logLikelihood[i - 1]);
+  assert.ok(drops.length >= 1, `no drop in ${t.logLikelihood}`);
+  assert.deepEqual(t.logLikelihood, coreSteps('literal-eq18', 6).map((p) => p.logLikelihood));
+  await context.close();
+});
+
+test('the state in the URL round-trips: a shared link restores the same view', async () => {
+  // Parameters, pose and view from a link.
+  {
+    const { page, context } = await fitted('#ex=arm&parts=4&seed=2&view=stages&pose=2&flat=1');
+    assert.equal(await page.locator('#example').inputValue(), 'arm');
+    assert.equal(await page.locator('#params [name=parts]').inputValue(), '4');
+    assert.equal(await page.locator('#params [name=seed]').inputValue(), '2');
+    assert.equal(await page.evaluate(() => window.posemfa.mode()), 'stages');
+    assert.equal(await page.locator('#pose-select').inputValue(), '2');
+    assert.equal(await page.locator('#flat').isChecked(), true);
+    assert.deepEqual(await page.evaluate(() => window.posemfa.shown()), ['coarse', 'refined', 'final']);
+    const s = await page.evaluate(() => window.posemfa.urlState());
+    assert.deepEqual({ ex: s.ex, parts: s.params.parts, seed: s.params.seed, mode: s.view.mode, pose: s.view.pose, flat: s.view.flat },
+      { ex: 'arm', parts: 4, seed: 2, mode: 'stages', pose: 2, flat: true });
+    await context.close();
+  }
+
+  // A person changes the view and moves the camera; the link opened elsewhere draws the same picture.
+  const a = await fitted();
+  const pa = a.page;
+  const defaultCam = (await pa.evaluate(() => window.posemfa.urlState())).view.cam;
+  await pa.click('#pose-strip button:nth-child(4)');
+  await pa.check('#modes input[value=interp]', { force: true });
+  await pa.selectOption('#pose-a', '1');
+  await pa.selectOption('#pose-b', '6');
+  await pa.fill('[data-testid=interp-t]', '0.3');
+  await pa.check('#side-by-side');
+  await pa.selectOption('#interp-skin', 'smooth');
+  await pa.waitForFunction(() => window.posemfa.shown().join() === 'part-wise,linear' && /t = 0\.30/.test(document.querySelector('#caption').textContent));
+  const box = await pa.locator('#view canvas').boundingBox();
+  await pa.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await pa.mouse.down();
+  await pa.mouse.move(box.x + box.width / 2 + 90, box.y + box.height / 2 + 12, { steps: 6 });
+  await pa.mouse.up();
+  await pa.mouse.move(box.x + 3, box.y + 3); // off the mesh: no hover
+  // Wait until the camera has settled (damping) and the hash has stopped changing.
+  const now = () => pa.evaluate(() => JSON.stringify([location.href, window.posemfa.urlState()]));
+  let seen = await now();
+  for (let still = 0; still < 3;) {
+    await pa.waitForTimeout(400);
+    const x = await now();
+    still = x === seen ? still + 1 : 0;
+    seen = x;
+  }
+  const [href, stateA] = JSON.parse(seen);
+  assert.equal(stateA.view.mode, 'interp');
+  assert.equal(stateA.view.pose, 3);
+  assert.deepEqual([stateA.view.a, stateA.view.b, stateA.view.t, stateA.view.side, stateA.view.skin], [1, 6, 0.3, true, 'smooth']);
+  assert.ok(href.includes('view=interp') && href.includes('cam='), href);
+  const pixelsA = await canvasPixels(pa);
+
+  const b = await fitted(new URL(href).hash);
+  const stateB = await b.page.evaluate(() => window.posemfa.urlState());
+  assert.deepEqual({ ...stateB, view: { ...stateB.view, cam: null } }, { ...stateA, view: { ...stateA.view, cam: null } });
+  // (OrbitControls re-derives the position from spherical coordinates on every frame: last-digit changes)
+  stateB.view.cam.forEach((c, i) => assert.ok(Math.abs(c - stateA.view.cam[i]) < 1e-6, `camera ${stateB.view.cam} vs ${stateA.view.cam}`));
+  assert.notDeepEqual(stateA.view.cam, defaultCam, 'the camera was moved');
+  assert.equal(await b.page.locator('#pose-strip button:nth-child(4)').getAttribute('aria-pressed'), 'true');
+  // The same picture, up to a few anti-aliased pixels (the camera's last digits, above).
+  const pixelsB = await canvasPixels(b.page);
+  assert.equal(pixelsB.length, pixelsA.length);
+  let differ = 0;
+  for (let i = 0; i < pixelsA.length; i += 4) if (pixelsA[i] !== pixelsB[i] || pixelsA[i + 1] !== pixelsB[i + 1] || pixelsA[i + 2] !== pixelsB[i + 2]) differ++;
+  assert.ok(differ <= pixelsA.length / 4 / 2000, `the shared link draws the same picture: ${differ} of ${pixelsA.length / 4} pixels differ`);
+  const picture = await canvasFingerprint(b.page);
+
+  // Reloading keeps it too.
+  await b.page.reload();
+  await waitState(b.page, ['fitted'], 60000);
+  await b.page.waitForFunction(() => !window.posemfa.restoring());
+  await frames(b.page);
+  assert.equal(await canvasFingerprint(b.page), picture, 'a reload draws the same picture');
+  assert.deepEqual(a.log.errors, []);
+  assert.deepEqual(b.log.errors, []);
+  await a.context.close();
+  await b.context.close();
+});
+
+test('embed=1 and the hide/show flags give a minimal view', async () => {
+  const { page, context } = await fitted('#ex=arm&embed=1', { width: 640, height: 400 });
+  for (const sel of ['header', '#panel', '.toolbar', '.poses', '#interp']) assert.equal(await page.locator(sel).isVisible(), false, `${sel} hidden`);
+  assert.equal(await page.locator('#caption').isVisible(), true);
+  const box = await page.locator('#view canvas').boundingBox();
+  assert.ok(box.width >= 600 && box.height >= 320, `the view fills the frame: ${JSON.stringify(box)}`);
+  assert.equal(await page.evaluate(() => document.documentElement.scrollHeight <= window.innerHeight), true, 'no scrolling');
+  assert.equal((await summary(page)).shapes, 8);
+  assert.match(await page.evaluate(() => location.hash), /embed=1/, 'the flags stay in the link');
+  await context.close();
+
+  const p1 = await fitted('#ex=arm&embed=1&show=poses', { width: 640, height: 400 });
+  assert.equal(await p1.page.locator('.poses').isVisible(), true, 'show= brings a control back');
+  assert.equal(await p1.page.locator('#panel').isVisible(), false);
+  await p1.context.close();
+
+  const p2 = await fitted('#ex=arm&hide=presets,teach,caption');
+  assert.equal(await p2.page.locator('#presets-box').isVisible(), false);
+  assert.equal(await p2.page.locator('#teach').isVisible(), false);
+  assert.equal(await p2.page.locator('#caption').isVisible(), false);
+  assert.equal(await p2.page.locator('#panel').isVisible(), true);
+  await p2.context.close();
+});
+
+test('the embed page shows a fitted model in an iframe and through mount()', async () => {
+  const { page, context, log } = await openPage(browser, `${server.url}www/embed-demo.html`);
+  const frame = page.frameLocator('[data-testid=embed-iframe]');
+  const inner = page.frames().find((f) => f.url().includes('index.html'));
+  await inner.waitForFunction(() => document.body.dataset.state === 'fitted', null, { timeout: 90000, polling: 50 });
+  assert.equal(await frame.locator('#panel').isVisible(), false);
+  const s = await inner.evaluate(() => window.posemfa.summary());
+  assert.ok(s.groundTruth.ari >= 0.95, `iframe: adjusted Rand ${s.groundTruth.ari}`);
+
+  await page.waitForFunction(() => document.querySelector('[data-testid=embed-mount]').dataset.state === 'fitted', null, { timeout: 90000, polling: 50 });
+  const m = await page.evaluate(() => window.mounted.summary());
+  assert.ok(m.parts >= 3 && m.parts <= 6, `mount(): the 3-part arm gave ${m.parts} parts`);
+  assert.ok(m.groundTruth.ari > 0.9, `mount(): adjusted Rand ${m.groundTruth.ari}`);
+  assert.match(await page.locator('[data-testid=embed-mount] .posemfa-caption').innerText(), /parts fitted/);
+  // Both canvases draw a mesh (pixels other than the background).
+  const meshPixels = (sel, f = page) => f.evaluate(async (sel) => {
+    await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+    const src = document.querySelector(sel);
+    const c = Object.assign(document.createElement('canvas'), { width: src.width, height: src.height });
+    const g = c.getContext('2d');
+    g.drawImage(src, 0, 0);
+    const { data } = g.getImageData(0, 0, c.width, c.height);
+    let n = 0;
+    for (let i = 0; i < data.length; i += 4) if (data[i] !== 0xee || data[i + 1] !== 0xf0 || data[i + 2] !== 0xf3) n++;
+    return n;
+  }, sel);
+  assert.ok(await meshPixels('[data-testid=embed-mount] canvas') > 2000);
+  assert.ok(await meshPixels('#view canvas', inner) > 2000);
+
+  // unmount() takes everything away; mounting again works.
+  await page.click('#toggle');
+  assert.equal(await page.locator('[data-testid=embed-mount] canvas').count(), 0);
+  assert.equal(await page.evaluate(() => document.querySelector('[data-testid=embed-mount]').dataset.state), undefined);
+  await page.click('#toggle');
+  await page.waitForFunction(() => document.querySelector('[data-testid=embed-mount]').dataset.state === 'fitted', null, { timeout: 90000 });
+  assert.deepEqual(log.errors, []);
+  assert.deepEqual(log.external, []);
+  await context.close();
+});
