@@ -163,7 +163,13 @@ export function installTeaching(ctx) {
     pending = null;
     if (!m || !active() || !app.pop) return;
     app.colours.live = softColours(m);
-    if (!app.model) renderView();
+    if (app.model) return;
+    renderView().then(() => {
+      if (active() && app.mode === 'parts') {
+        const where = m.vertices ? `; grey: outside coarse part ${m.stage.part + 1}` : '';
+        $('caption').textContent = `Pose “${app.pop.names[app.pose]}”: responsibilities γ of the fit in progress as soft colours (part colours blended by γ${where})`;
+      }
+    });
   }
 
   function onTeach(m) {
