@@ -124,7 +124,8 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
     assert.equal(await page.locator('[data-testid=teach-iteration]').innerText(), String(k));
     assert.equal(t.points, k);
     assert.equal(await page.evaluate(() => window.posemfa.plotPoints()), k);
-    assert.equal(await page.evaluate(() => document.body.dataset.state), 'teaching');
+    assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitting');
+    assert.equal(await page.evaluate(() => document.body.dataset.teaching), '1');
   }
   const t = await teaching(page);
   // The same five iterations as fitter.step() five times in Node, to the last digit.
