@@ -131,7 +131,8 @@ dual_test! {
     fn recovers_parts_and_rotations_of_chains_from_3_to_10_parts() {
         for (parts, seed) in [(3usize, 1u64), (5, 2), (7, 3), (10, 4)] {
             let c = chain(parts, 6, 2e-4, seed);
-            let params = Params { parts, seed, ..Params::default() };
+            // Algorithm 1 as the paper uses it: a small initial m, the refinement finds the rest.
+            let params = Params { parts: parts.div_ceil(2), seed, ..Params::default() };
             let result = Pipeline::new(&c.pop, &params).unwrap().run(&mut |_| true).unwrap();
             let m = &result.model;
             let ari = adjusted_rand_index(&m.labels, &c.part_of);

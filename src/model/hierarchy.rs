@@ -392,7 +392,7 @@ impl Pipeline {
             return Ok(State::Refine(r));
         }
         // all parts refined: final stage
-        self.refined_labels = std::mem::take(&mut r.refined);
+        self.refined_labels = merge_rigid_neighbours(&self.pop, &r.refined, &self.params);
         self.close_stage(Some("final"));
         let fit = Fit::from_labels(Data::from_population(&self.pop), &self.refined_labels, &self.params)?;
         Ok(State::Final(fit))
@@ -500,4 +500,64 @@ fn placeholder_fit() -> Fit {
 /// Runs the whole of Algorithm 1.
 pub fn fit(pop: &Population, params: &Params, observer: &mut dyn FnMut(&Progress) -> bool) -> Result<FitResult> {
     Pipeline::new(pop, params)?.run(observer)
+}
+
+/// Algorithm 1's own stopping rule, applied across coarse parts: two parts that share mesh edges and that one
+/// rigid component explains with err (mean variance) below `merge_ratio * refine_threshold` are one part (they
+/// would not have been split had they started in one coarse part). Merges the pair with the smallest joint err first,
+/// until no pair qualifies. Keeps over-segmentation (a rigid piece cut in two by an unlucky coarse start or
+/// split) out of the final stage. Labels are renumbered 0..
+pub fn merge_rigid_neighbours(pop: &Population, labels: &[u32], params: &Params) -> Vec<u32> {
+    let mut labels = compact(labels);
+    let err_of = |members: &[usize]| -> f64 {
+        let data = Data::from_population_subset(pop, members);
+        let all: Vec<usize> = (0..members.len()).collect();
+        let c = super::init::component_from_points(&data, &all, members.len(), params.variance_floor);
+        c.variances.iter().sum::<f64>() / c.variances.len() as f64
+    };
+    let mut cache: std::collections::HashMap<(u32, u32), f64> = std::collections::HashMap::new();
+    loop {
+        let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+        let mut members = vec![Vec::new(); m];
+        for (j, &l) in labels.iter().enumerate() {
+            members[l as usize].push(j);
+        }
+        let mut pairs = std::collections::BTreeSet::new();
+        for f in &pop.faces {
+            for e in 0..3 {
+                let (a, b) = (labels[f[e] as usize], labels[f[(e + 1) % 3] as usize]);
+                if a != b {
+                    pairs.insert((a.min(b), a.max(b)));
+                }
+            }
+        }
+        let mut best: Option<((u32, u32), f64)> = None;
+        for &(a, b) in &pairs {
+            let key = (a, b);
+            let err = *cache.entry(key).or_insert_with(|| {
+                let mut union = members[a as usize].clone();
+                union.extend_from_slice(&members[b as usize]);
+                err_of(&union)
+            });
+            if err < params.merge_ratio * params.refine_threshold && best.is_none_or(|x| err < x.1) {
+                best = Some((key, err));
+            }
+        }
+        let Some(((a, b), _)) = best else { break };
+        // merge b into a; labels above b shift down, so cached pairs are renumbered too
+        for l in labels.iter_mut() {
+            if *l == b {
+                *l = a;
+            } else if *l > b {
+                *l -= 1;
+            }
+        }
+        let shift = |x: u32| if x > b { x - 1 } else { x };
+        cache = cache
+            .into_iter()
+            .filter(|((p, q), _)| *p != a && *q != a && *p != b && *q != b)
+            .map(|((p, q), e)| ((shift(p), shift(q)), e))
+            .collect();
+    }
+    labels
 }

@@ -37,6 +37,9 @@ pub struct Params {
     pub refine: bool,
     /// Algorithm 1 step 5: stop splitting a part when its mean variance err falls below this. Default 1e-5.
     pub refine_threshold: f64,
+    /// After the refinement, adjacent parts that one rigid component explains with a mean variance below
+    /// `merge_ratio * refine_threshold` are merged (0 turns the merge off). Default 0.25.
+    pub merge_ratio: f64,
     /// Most sub-parts tried per coarse part in the refinement. Default 6.
     pub max_subparts: usize,
     /// A sub-part must lower err by at least this fraction to be kept (makes "stops decreasing" robust).
@@ -63,6 +66,7 @@ impl Default for Params {
             restarts: 4,
             refine: true,
             refine_threshold: 1e-5,
+            merge_ratio: 0.25,
             max_subparts: 6,
             refine_min_gain: 0.1,
             min_part_vertices: 4,
@@ -93,6 +97,9 @@ impl Params {
         }
         if !(self.refine_threshold >= 0.0 && self.refine_threshold.is_finite()) {
             return bad(format!("refine_threshold = {} must be >= 0", self.refine_threshold));
+        }
+        if !(0.0..=1.0).contains(&self.merge_ratio) {
+            return bad(format!("merge_ratio = {} must be in [0, 1]", self.merge_ratio));
         }
         if self.max_subparts == 0 || self.max_subparts > 64 {
             return bad(format!("max_subparts = {} must be between 1 and 64", self.max_subparts));
