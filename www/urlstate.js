@@ -153,7 +153,7 @@ export function installUrlState(ctx) {
     trailing = setTimeout(write, 300);
   };
   for (const ev of ['change', 'input', 'click', 'keyup']) document.addEventListener(ev, schedule, true);
-  viewer.controls.addEventListener('change', schedule);
+  viewer.onCameraChange(schedule);
 
   // The view of a state: the form controls set and their handlers run (main.js), then the camera.
   async function applyView(v) {

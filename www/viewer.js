@@ -35,10 +35,8 @@ export class Viewer {
     this.slots = [];
     this.axes = { view: 2, up: 1, right: 0 };
 
-    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
-    this.controls.enableDamping = true;
-    this.controls.addEventListener('change', () => this.requestRender());
-    this.controls.addEventListener('start', () => { this.userMoved = true; });
+    this.cameraListeners = [];
+    this.makeControls();
 
     this.warmUp();
     this.raycaster = new THREE.Raycaster();
@@ -202,6 +200,23 @@ export class Viewer {
     this.frame();
   }
 
+  /** OrbitControls orbit about the camera's up axis as it was when they were made: made anew when it changes. */
+  makeControls() {
+    this.controls?.dispose();
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.enableDamping = true;
+    this.controls.addEventListener('change', () => {
+      this.requestRender();
+      for (const f of this.cameraListeners) f();
+    });
+    this.controls.addEventListener('start', () => { this.userMoved = true; });
+  }
+
+  /** Calls `f` whenever the user's camera moves (survives makeControls). */
+  onCameraChange(f) {
+    this.cameraListeners.push(f);
+  }
+
   /** Camera looking across the thinnest axis at everything shown. */
   frame() {
     const box = new THREE.Box3();
@@ -215,7 +230,10 @@ export class Viewer {
     const fov = THREE.MathUtils.degToRad(this.camera.fov) / 2;
     const dist = 1.15 * Math.max(halfH / Math.tan(fov), halfW / (Math.tan(fov) * this.camera.aspect)) + size.getComponent(view) / 2;
     const dir = this.frameDirection();
-    this.camera.up.set(0, 0, 0).setComponent(up, 1);
+    if (this.camera.up.getComponent(up) !== 1) {
+      this.camera.up.set(0, 0, 0).setComponent(up, 1);
+      this.makeControls();
+    }
     this.camera.position.copy(centre).addScaledVector(dir, dist);
     this.camera.near = dist / 100;
     this.camera.far = dist * 10;
