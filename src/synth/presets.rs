@@ -78,7 +78,7 @@ pub fn examples() -> Vec<Example> {
         Example {
             id: "too-few-poses",
             title: "Fails on purpose: two limbs that never move apart",
-            note: "The two front legs bend together in every pose, so nothing in the data tells them apart: they share their parts. More varied poses would separate them.",
+            note: "The two front legs bend together in every pose, so nothing in the data tells their motions apart: their parts get one and the same motion (often one shared part). More varied poses would separate them.",
             fails_on_purpose: true,
             spec: Spec { tied, poses: 6, ..q.clone() },
             params: synth_params(),
