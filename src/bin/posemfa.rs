@@ -32,6 +32,7 @@ FIT OPTIONS:
   --max-iter N       iteration cap per AECM run (default 300)
   --floor F          variance floor, unit-box units^2 (default 1e-7)
   --literal-eq18     use the paper's literal eq 18 for Lambda (breaks monotonicity; for teaching)
+  --no-px            no parameter-expanded step at the end of cycle 2 (PX-EM, on by default; same optimum)
   --refine-threshold E   Algorithm 1: stop splitting a part below this mean variance (default 1e-5)
   --max-subparts N   Algorithm 1: most sub-parts per coarse part (default 6)
   --refine-tol T     tolerance of the coarse and refinement AECM runs (default 1e-2)
@@ -67,6 +68,7 @@ fn parse_opts(args: &[String]) -> Result<Opts, String> {
             "--refine-tol" => o.params.refine_tol = num("--refine-tol", val("--refine-tol")?)?,
             "--max-subparts" => o.params.max_subparts = num("--max-subparts", val("--max-subparts")?)?,
             "--literal-eq18" => o.params.lambda_rule = LambdaRule::PaperEq18,
+            "--no-px" => o.params.px_em = false,
             "--no-refine" => o.params.refine = false,
             "--json" => o.json = Some(val("--json")?),
             "--quiet" => o.quiet = true,
@@ -150,8 +152,12 @@ fn cmd_fit(args: &[String], bench: bool) -> Result<(), String> {
                 })
             })
             .collect();
+        let data = posemfa::model::data::Data::from_population(&pop);
+        let limit = posemfa::model::estep::kernel_limit(&data, &m.parts, 300.0);
+        let vertex_major = posemfa::model::estep::kernel_rate_vertex_major(&data, &m.parts, 300.0);
         let out = serde_json::json!({
             "runtime": "native",
+            "kernel_limit": limit, "kernel_vertex_major": vertex_major,
             "inputs": o.inputs, "shapes": pop.n_shapes(), "vertices": pop.n_vertices(),
             "load_ms": load_ms, "fit_ms_median": fit_ms, "fit_ms_all": totals,
             "parts": m.n_parts(), "rmse": m.rmse(&pop), "stages": stages,

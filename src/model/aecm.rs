@@ -8,7 +8,7 @@
 use super::cm;
 use super::component::Component;
 use super::data::Data;
-use super::estep::{e_step, e_step_pruned};
+use super::estep::{e_step, EStep};
 use super::init;
 use super::memory;
 use super::params::{LambdaRule, Params};
@@ -29,6 +29,7 @@ pub struct StepInfo {
 #[derive(Debug, Clone)]
 pub struct Fit {
     data: Data,
+    estep: EStep,
     comps: Vec<Component>,
     gamma: Vec<f64>,
     trace: Vec<f64>,
@@ -38,6 +39,7 @@ pub struct Fit {
     max_iter: usize,
     floor: f64,
     rule: LambdaRule,
+    px: bool,
     min_mass: f64,
     best: Option<(f64, Vec<Component>)>,
     /// Floating-point operations and milliseconds spent in E-steps (for benchmarks).
@@ -76,6 +78,7 @@ impl Fit {
 
     pub fn from_components(data: Data, comps: Vec<Component>, params: &Params) -> Fit {
         let mut fit = Fit {
+            estep: EStep::new(&data),
             data,
             comps,
             gamma: Vec::new(),
@@ -86,6 +89,7 @@ impl Fit {
             max_iter: params.max_iter,
             floor: params.variance_floor,
             rule: params.lambda_rule,
+            px: params.px_em,
             min_mass: params.min_part_vertices as f64,
             best: None,
             estep_flops: 0.0,
@@ -100,10 +104,10 @@ impl Fit {
         self.max_iter = n.max(1);
     }
 
-    /// E-step with exact pruning of negligible components ([`super::estep::e_step_pruned`]).
+    /// E-step with exact pruning of negligible components ([`EStep::run`]).
     fn run_e_step(&mut self) -> f64 {
         let t0 = crate::clock::now_ms();
-        let (ll, shape_evals) = e_step_pruned(&self.data, &self.comps, &mut self.gamma);
+        let (ll, shape_evals) = self.estep.run(&self.data, &self.comps, &mut self.gamma);
         self.estep_ms += crate::clock::now_ms() - t0;
         // 28 flops per (vertex, component, shape) evaluated, see estep::flops_per_pair
         self.estep_flops += 28.0 * shape_evals as f64;
@@ -117,7 +121,7 @@ impl Fit {
         }
         cm::cycle1(&self.data, &self.gamma, &mut self.comps);
         self.run_e_step();
-        let masses = cm::cycle2(&self.data, &self.gamma, &mut self.comps, self.rule, self.floor);
+        let masses = cm::cycle2(&self.data, &self.gamma, &mut self.comps, self.rule, self.floor, self.px);
         // drop components whose responsibility mass fell below a few vertices (never the last one)
         let before = self.comps.len();
         if self.comps.len() > 1 {

@@ -66,11 +66,13 @@ struct Stats {
     cross: Vec<Mat3>,
     /// G_d = Σ γ E[z_d²]
     second: Vec3,
+    /// Σ γ E[z z^T] (the full matrix; its diagonal is `second`), for the parameter-expanded step
+    moment: Mat3,
     /// Σ γ x_i x_i^T (only for the literal eq 18)
     scatter: Vec<Mat3>,
 }
 
-fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, want_scatter: bool) -> Stats {
+fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
     let ns = data.n_shapes;
     let wb = c.woodbury();
     let mut st = Stats {
@@ -78,6 +80,7 @@ fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, wan
         sq: vec![0.0; ns],
         cross: vec![[[0.0; 3]; 3]; ns],
         second: [0.0; 3],
+        moment: [[0.0; 3]; 3],
         scatter: if want_scatter { vec![[[0.0; 3]; 3]; ns] } else { Vec::new() },
     };
     let mut xs = vec![[0.0; 3]; ns];
@@ -102,6 +105,13 @@ fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, wan
         for d in 0..3 {
             st.second[d] += g * (wb.post_var[d] + ez[d] * ez[d]);
         }
+        if want_moment {
+            for a in 0..3 {
+                for b in 0..3 {
+                    st.moment[a][b] += g * ez[a] * ez[b];
+                }
+            }
+        }
         let gez = [g * ez[0], g * ez[1], g * ez[2]];
         for i in 0..ns {
             let x = xs[i];
@@ -122,16 +132,22 @@ fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, wan
             }
         }
     }
+    if want_moment {
+        for d in 0..3 {
+            st.moment[d][d] += st.n * wb.post_var[d];
+        }
+    }
     st
 }
 
-/// Cycle 2 CM step (Λ, then R, then Φ) for every component. Returns n_k per component.
-pub fn cycle2(data: &Data, gamma: &[f64], comps: &mut [Component], rule: LambdaRule, floor: f64) -> Vec<f64> {
+/// Cycle 2 CM step (Λ, then R, then Φ, then optionally the parameter-expanded fold of [`px_fold`]) for every
+/// component. Returns n_k per component.
+pub fn cycle2(data: &Data, gamma: &[f64], comps: &mut [Component], rule: LambdaRule, floor: f64, px: bool) -> Vec<f64> {
     let m = comps.len();
     let ns = data.n_shapes;
     let mut masses = Vec::with_capacity(m);
     for k in 0..m {
-        let st = accumulate(data, gamma, k, m, &comps[k], rule == LambdaRule::PaperEq18);
+        let st = accumulate(data, gamma, k, m, &comps[k], rule == LambdaRule::PaperEq18, px);
         masses.push(st.n);
         if st.n <= 0.0 {
             continue;
@@ -193,6 +209,39 @@ pub fn cycle2(data: &Data, gamma: &[f64], comps: &mut [Component], rule: LambdaR
             let s = (st.sq[i] - 2.0 * inner + quad) / (3.0 * st.n);
             c.variances[i] = if s.is_finite() { s.max(floor) } else { floor };
         }
+        if px {
+            let sz = st.moment.map(|row| row.map(|v| v / st.n));
+            px_fold(c, &sz);
+        }
     }
     masses
+}
+
+/// The parameter-expanded step (PX-EM, Liu, Rubin & Wu 1998; METHOD_NOTES item 12). In the expanded model
+/// z ~ N(0, Σ_z); the CM steps above are its CM steps for A* = RΛ and Φ, and its maximiser for Σ_z is the
+/// average posterior second moment Σ_z = Σ_j γ_j E[z z^T | h_j] / n_k. Reducing back to z ~ N(0, I) gives
+/// A = A* Σ_z^{1/2}, and A A^T = R (Λ Σ_z Λ) R^T. With Λ Σ_z Λ = U D U^T (U a proper rotation), A = (R U) D^{1/2}
+/// up to a rotation of z, which leaves the density unchanged: R_i ← R_i U and Λ ← D^{1/2}. Each AECM iteration
+/// still cannot lower the likelihood (it is an ECM iteration of the expanded model), and the latent frame no
+/// longer has to creep towards the principal axes one small step at a time.
+pub fn px_fold(c: &mut Component, sigma_z: &Mat3) {
+    let l = c.lambda;
+    let m = nalgebra::Matrix3::from_fn(|a, b| l[a] * sigma_z[a][b] * l[b]);
+    if !m.iter().all(|v| v.is_finite()) {
+        return;
+    }
+    let eig = m.symmetric_eigen();
+    let mut u = eig.eigenvectors;
+    if u.determinant() < 0.0 {
+        u.column_mut(2).neg_mut();
+    }
+    let new_lambda = [0, 1, 2].map(|d| eig.eigenvalues[d].max(0.0).sqrt().max(LAMBDA_FLOOR));
+    if !new_lambda.iter().all(|v| v.is_finite()) {
+        return;
+    }
+    for r in c.rotations.iter_mut() {
+        let rm = nalgebra::Matrix3::from_fn(|a, b| r[a][b]) * u;
+        *r = [0, 1, 2].map(|a| [0, 1, 2].map(|b| rm[(a, b)]));
+    }
+    c.lambda = new_lambda;
 }

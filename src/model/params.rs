@@ -31,6 +31,9 @@ pub struct Params {
     pub variance_floor: f64,
     /// Λ update of cycle 2. Default [`LambdaRule::Exact`].
     pub lambda_rule: LambdaRule,
+    /// End cycle 2 with the parameter-expanded step ([`super::cm::px_fold`], METHOD_NOTES item 12): same
+    /// optimum, fewer iterations. Default true.
+    pub px_em: bool,
     /// k-means++ restarts (the best by k-means cost is kept). Default 4.
     pub restarts: usize,
     /// Run Algorithm 1's refinement and final stage; false stops after the coarse AECM. Default true.
@@ -63,6 +66,7 @@ impl Default for Params {
             max_iter: 300,
             variance_floor: 1e-7,
             lambda_rule: LambdaRule::Exact,
+            px_em: true,
             restarts: 4,
             refine: true,
             refine_threshold: 1e-5,
