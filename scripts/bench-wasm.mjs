@@ -1,61 +1,116 @@
-// Benchmark of the whole pipeline in wasm under Node (one thread), same figures as `posemfa bench`:
-//   node scripts/bench-wasm.mjs [DIR] [--repeat N] [--seed S]
-// DIR defaults to ../shared/data/horse-poses. Needs `npm run build:wasm` (pkg-node/).
-import { readFileSync, readdirSync, existsSync } from 'node:fs';
+// Benchmark of the whole pipeline in wasm, one thread, in headless Chromium (default) or in Node:
+//   node scripts/bench-wasm.mjs [INPUT...] [--node] [--repeat N] [--seed S] [--kernel-ms MS]
+// INPUT: a folder of registered OBJ files, or synth:PRESET[:VERTICES[:POSES[:SEED]]] (a generated population).
+// Default inputs: ../shared/data/horse-poses, ../shared/data/horse-gallop, synth:quadruped:50000:20 (a folder
+// that is absent is reported and skipped). Prints one JSON object per input (the same figures as
+// `posemfa bench`): time per stage, AECM iterations, E-step GFLOP/s, the measured kernel limit and the E-step's
+// fraction of it, peak wasm memory (linear memory only grows, and every input runs in a fresh instance).
+// Needs `npm run build:wasm` (www/pkg for Chromium, pkg-node for Node).
+import { readFileSync, readdirSync, existsSync, statSync } from 'node:fs';
 import { join, resolve } from 'node:path';
 import { createRequire } from 'node:module';
+import { fileURLToPath, pathToFileURL } from 'node:url';
+import { benchOne, synthSpec } from './bench-core.mjs';
 
-const require = createRequire(import.meta.url);
+const ROOT = resolve(fileURLToPath(new URL('..', import.meta.url)));
 const args = process.argv.slice(2);
 const opt = (name, dflt) => {
   const i = args.indexOf(name);
   return i >= 0 ? args.splice(i, 2)[1] : dflt;
 };
-const repeat = Number(opt('--repeat', '3'));
-const seed = Number(opt('--seed', '0'));
-const dir = resolve(args[0] ?? '../shared/data/horse-poses');
-if (!existsSync(dir)) {
-  console.error(`bench-wasm: data folder ${dir} is absent; pass a folder of registered OBJ files`);
-  process.exit(2);
+const flag = (name) => {
+  const i = args.indexOf(name);
+  return i >= 0 ? (args.splice(i, 1), true) : false;
+};
+const settings = {
+  repeat: Number(opt('--repeat', '3')),
+  seed: Number(opt('--seed', '0')),
+  kernelMs: Number(opt('--kernel-ms', '300')),
+};
+const inNode = flag('--node');
+const inputs = args.length ? args : [
+  resolve(ROOT, '../shared/data/horse-poses'), resolve(ROOT, '../shared/data/horse-gallop'), 'synth:quadruped:50000:20',
+];
+for (const a of args) {
+  if (a.startsWith('--')) {
+    console.error(`bench-wasm: unknown option ${a} (options: --node --repeat N --seed S --kernel-ms MS)`);
+    process.exit(2);
+  }
 }
-const pkg = resolve(process.env.POSEMFA_PKG ?? 'pkg-node/posemfa.js');
-if (!existsSync(pkg)) {
-  console.error('bench-wasm: pkg-node/ is missing; run `npm run build:wasm` first');
-  process.exit(2);
-}
-const wasm = require(pkg);
-const names = readdirSync(dir).filter((f) => f.toLowerCase().endsWith('.obj'));
-const files = names.map((f) => new Uint8Array(readFileSync(join(dir, f))));
 
-const t0 = performance.now();
-const pop = new wasm.Population(names, files);
-const loadMs = performance.now() - t0;
-
-const runs = [];
-let summary;
-for (let r = 0; r < repeat; r++) {
-  const t = performance.now();
-  const fitter = new wasm.Fitter(pop, { seed });
-  while (!fitter.isDone()) fitter.run(1e9);
-  const model = fitter.result();
-  runs.push(performance.now() - t);
-  summary = model.summary();
-  model.free();
-  fitter.free();
+/** Input descriptors; folders as lists of .obj names (natural order, as the page sorts them). */
+const collator = new Intl.Collator('en', { numeric: true });
+const described = [];
+for (const a of inputs) {
+  const spec = synthSpec(a);
+  if (spec) {
+    described.push({ label: a, synth: spec });
+    continue;
+  }
+  const dir = resolve(a);
+  if (!existsSync(dir) || !statSync(dir).isDirectory()) {
+    console.error(`bench-wasm: ${dir} is absent (skipped); pass a folder of registered OBJ files or synth:PRESET:V:P`);
+    continue;
+  }
+  const names = readdirSync(dir).filter((f) => f.toLowerCase().endsWith('.obj')).sort(collator.compare);
+  described.push({ label: dir, dir, names });
 }
-const sorted = [...runs].sort((a, b) => a - b);
-const stages = summary.stageStats.map((s) => ({
-  stage: s.name,
-  ms: s.ms,
-  iterations: s.iterations,
-  aecm_runs: s.aecmRuns,
-  estep_ms: s.estepMs,
-  estep_gflop: s.estepFlops / 1e9,
-  estep_gflops_per_s: s.estepMs > 0 ? s.estepFlops / s.estepMs / 1e6 : 0,
-}));
-console.log(JSON.stringify({
-  runtime: `wasm (node ${process.version})`,
-  inputs: [dir], shapes: pop.nShapes, vertices: pop.nVertices,
-  load_ms: loadMs, fit_ms_median: sorted[Math.floor(sorted.length / 2)], fit_ms_all: runs,
-  parts: summary.parts, rmse: summary.rmse, stages,
-}, null, 2));
+if (!described.length) process.exit(2);
+
+const results = [];
+if (inNode) {
+  const pkg = resolve(process.env.POSEMFA_PKG ?? join(ROOT, 'pkg-node/posemfa.js'));
+  if (!existsSync(pkg)) {
+    console.error('bench-wasm: pkg-node/ is missing; run `npm run build:wasm` first');
+    process.exit(2);
+  }
+  const require = createRequire(import.meta.url);
+  for (const d of described) {
+    // a fresh instance per input, so that its peak memory is its own
+    delete require.cache[require.resolve(pkg)];
+    const wasm = require(pkg);
+    const input = d.synth ? d : { label: d.label, names: d.names, files: d.names.map((n) => new Uint8Array(readFileSync(join(d.dir, n)))) };
+    results.push({ runtime: `wasm (node ${process.version})`, ...benchOne(wasm, input, settings) });
+  }
+} else {
+  if (!existsSync(join(ROOT, 'www/pkg/posemfa.js'))) {
+    console.error('bench-wasm: www/pkg/ is missing; run `npm run build:wasm` first');
+    process.exit(2);
+  }
+  const { serveStatic, launch } = await import(pathToFileURL(join(ROOT, 'tests/e2e/helpers.mjs')).href);
+  const server = await serveStatic(ROOT);
+  const browser = await launch();
+  try {
+    for (const d of described) {
+      const context = await browser.newContext();
+      const page = await context.newPage();
+      const errors = [];
+      page.on('pageerror', (e) => errors.push(String(e)));
+      // the population's files come from disk through this route (they are outside the served folder)
+      await page.route('**/__bench_data__/**', (route) => {
+        const name = decodeURIComponent(new URL(route.request().url()).pathname.split('/').pop());
+        route.fulfill({ body: readFileSync(join(d.dir, name)), contentType: 'text/plain' });
+      });
+      await page.goto(`${server.url}scripts/`).catch(() => {}); // any page of the origin; 404 is fine
+      const version = await page.evaluate(() => navigator.userAgent.match(/Chrom(e|ium)\/[\d.]+/)?.[0] ?? 'Chromium');
+      const out = await page.evaluate(async ([d, settings]) => {
+        const wasm = await import('/www/pkg/posemfa.js');
+        await wasm.default();
+        const { benchOne } = await import('/scripts/bench-core.mjs');
+        let input = d;
+        if (!d.synth) {
+          const files = await Promise.all(d.names.map(async (n) => new Uint8Array(await (await fetch(`/__bench_data__/${encodeURIComponent(n)}`)).arrayBuffer())));
+          input = { label: d.label, names: d.names, files };
+        }
+        return benchOne(wasm, input, settings);
+      }, [d, settings]);
+      if (errors.length) throw new Error(`page errors: ${errors.join('; ')}`);
+      results.push({ runtime: `wasm (headless ${version})`, ...out });
+      await context.close();
+    }
+  } finally {
+    await browser.close();
+    await server.close();
+  }
+}
+console.log(JSON.stringify(results.length === 1 ? results[0] : results, null, 2));

@@ -36,12 +36,12 @@ echo '{ "type": "commonjs" }' > pkg-node/package.json
 web_wasm="www/pkg/${crate}_bg.wasm"
 bound_size=$(size "$web_wasm")
 # Features of the wasm32-unknown-unknown target of current Rust (1.82+: multivalue, reference-types;
-# 1.87+: bulk-memory, nontrapping-fptoint) that wasm-bindgen's output keeps; wasm-opt rejects the module
-# without them.
+# 1.87+: bulk-memory, nontrapping-fptoint) that wasm-bindgen's output keeps, and simd128 (.cargo/config.toml);
+# wasm-opt rejects the module without them.
 say "wasm-opt -O3 $web_wasm"
 "$wasm_opt" -O3 \
   --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
-  --enable-reference-types --enable-multivalue --enable-mutable-globals \
+  --enable-reference-types --enable-multivalue --enable-mutable-globals --enable-simd \
   "$web_wasm" -o "$web_wasm.opt"
 mv "$web_wasm.opt" "$web_wasm"
 

@@ -266,11 +266,26 @@ impl FitModel {
         to_js(&v)
     }
 
+    /// The machine's limit for the E-step's arithmetic, measured for at least `min_ms` on this model's
+    /// components and its population ([`crate::model::estep::kernel_limit`]): {gflop, ms, gflopsPerS}.
+    #[wasm_bindgen(js_name = kernelLimit)]
+    pub fn kernel_limit(&self, min_ms: f64) -> Result<JsValue, JsError> {
+        let data = crate::model::data::Data::from_population(&self.pop);
+        let r = crate::model::estep::kernel_limit(&data, &self.model().parts, min_ms);
+        to_js(&serde_json::json!({ "gflop": r.gflop, "ms": r.ms, "gflopsPerS": r.gflops_per_s }))
+    }
+
     /// The full result as JSON text (same format as the CLI's --json).
     #[wasm_bindgen(js_name = toJson)]
     pub fn to_json(&self) -> String {
         crate::export::json::fit_to_json(&self.pop, &self.result)
     }
+}
+
+/// Bytes of wasm linear memory: it only grows, so this is the peak of the instance so far.
+#[wasm_bindgen(js_name = memoryBytes)]
+pub fn memory_bytes() -> f64 {
+    (core::arch::wasm32::memory_size(0) * 65536) as f64
 }
 
 /// The default fit parameters as a plain object (camelCase fields of `Params`), for the page's form.

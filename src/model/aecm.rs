@@ -32,6 +32,8 @@ pub struct Fit {
     estep: EStep,
     comps: Vec<Component>,
     gamma: Vec<f64>,
+    /// The responsibilities again, sparse, for the CM steps.
+    members: cm::Members,
     trace: Vec<f64>,
     initial_ll: f64,
     converged: bool,
@@ -82,6 +84,7 @@ impl Fit {
             data,
             comps,
             gamma: Vec::new(),
+            members: Vec::new(),
             trace: Vec::new(),
             initial_ll: f64::NEG_INFINITY,
             converged: false,
@@ -107,7 +110,7 @@ impl Fit {
     /// E-step with exact pruning of negligible components ([`EStep::run`]).
     fn run_e_step(&mut self) -> f64 {
         let t0 = crate::clock::now_ms();
-        let (ll, shape_evals) = self.estep.run(&self.data, &self.comps, &mut self.gamma);
+        let (ll, shape_evals) = self.estep.run(&self.data, &self.comps, &mut self.gamma, &mut self.members);
         self.estep_ms += crate::clock::now_ms() - t0;
         // 28 flops per (vertex, component, shape) evaluated, see estep::flops_per_pair
         self.estep_flops += 28.0 * shape_evals as f64;
@@ -119,9 +122,9 @@ impl Fit {
         if self.is_finished() {
             return self.info(0);
         }
-        cm::cycle1(&self.data, &self.gamma, &mut self.comps);
+        cm::cycle1(&self.data, &self.members, &mut self.comps);
         self.run_e_step();
-        let masses = cm::cycle2(&self.data, &self.gamma, &mut self.comps, self.rule, self.floor, self.px);
+        let masses = cm::cycle2(&self.data, &self.members, &mut self.comps, self.rule, self.floor, self.px);
         // drop components whose responsibility mass fell below a few vertices (never the last one)
         let before = self.comps.len();
         if self.comps.len() > 1 {
@@ -139,7 +142,9 @@ impl Fit {
         }
         let dropped = before - self.comps.len();
         if dropped > 0 {
-            self.gamma.clear(); // component indices changed: no hint for the next E-step
+            // component indices changed: no hint for the next E-step
+            self.gamma.clear();
+            self.estep.forget_owners();
         }
         let ll = self.run_e_step();
         let prev = self.trace.last().copied().unwrap_or(self.initial_ll);

@@ -20,24 +20,38 @@ use crate::geometry::{Mat3, Vec3};
 /// Responsibilities below this are skipped in the accumulations (their contribution is below rounding).
 pub const GAMMA_SKIP: f64 = 1e-14;
 
+/// The responsibilities the CM steps use, sparse: per component, (vertex, γ_kj) for every γ_kj >= [`GAMMA_SKIP`]
+/// (most vertices have one or two). The E-step writes them ([`super::estep::EStep::run`]).
+pub type Members = Vec<Vec<(u32, f64)>>;
+
+/// [`Members`] of a dense responsibility matrix `gamma[j * m + k]`.
+pub fn members_from_gamma(gamma: &[f64], m: usize) -> Members {
+    let mut members = vec![Vec::new(); m];
+    for (j, row) in gamma.chunks_exact(m.max(1)).enumerate() {
+        for (k, &g) in row.iter().enumerate() {
+            if g >= GAMMA_SKIP {
+                members[k].push((j as u32, g));
+            }
+        }
+    }
+    members
+}
+
 /// Smallest λ_d allowed (keeps M invertible and A = RΛ a proper, non-reflecting map).
 pub const LAMBDA_FLOOR: f64 = 1e-6;
 
 /// Cycle 1 CM step. Returns n_k (responsibility mass) per component. Components with no mass keep their b.
-pub fn cycle1(data: &Data, gamma: &[f64], comps: &mut [Component]) -> Vec<f64> {
+pub fn cycle1(data: &Data, members: &Members, comps: &mut [Component]) -> Vec<f64> {
     let m = comps.len();
     let ns = data.n_shapes;
     let mut mass = vec![0.0; m];
     let mut sums = vec![0.0; m * ns * 3];
-    for j in 0..data.n_vertices {
-        let h = &data.h[j * ns * 3..(j + 1) * ns * 3];
-        for k in 0..m {
-            let g = gamma[j * m + k];
-            if g < GAMMA_SKIP {
-                continue;
-            }
+    for (k, list) in members.iter().enumerate().take(m) {
+        let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
+        for &(j, g) in list {
+            let j = j as usize;
             mass[k] += g;
-            let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
+            let h = &data.h[j * ns * 3..(j + 1) * ns * 3];
             for (a, v) in acc.iter_mut().zip(h) {
                 *a += g * v;
             }
@@ -72,7 +86,7 @@ struct Stats {
     scatter: Vec<Mat3>,
 }
 
-fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
+fn accumulate(data: &Data, list: &[(u32, f64)], c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
     let ns = data.n_shapes;
     let wb = c.woodbury();
     let mut st = Stats {
@@ -84,12 +98,8 @@ fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, wan
         scatter: if want_scatter { vec![[[0.0; 3]; 3]; ns] } else { Vec::new() },
     };
     let mut xs = vec![[0.0; 3]; ns];
-    for j in 0..data.n_vertices {
-        let g = gamma[j * m + k];
-        if g < GAMMA_SKIP {
-            continue;
-        }
-        let h = data.vertex(j);
+    for &(j, g) in list {
+        let h = data.vertex(j as usize);
         let mut y = [0.0; 3];
         for i in 0..ns {
             let b = c.translations[i];
@@ -142,12 +152,12 @@ fn accumulate(data: &Data, gamma: &[f64], k: usize, m: usize, c: &Component, wan
 
 /// Cycle 2 CM step (Λ, then R, then Φ, then optionally the parameter-expanded fold of [`px_fold`]) for every
 /// component. Returns n_k per component.
-pub fn cycle2(data: &Data, gamma: &[f64], comps: &mut [Component], rule: LambdaRule, floor: f64, px: bool) -> Vec<f64> {
+pub fn cycle2(data: &Data, members: &Members, comps: &mut [Component], rule: LambdaRule, floor: f64, px: bool) -> Vec<f64> {
     let m = comps.len();
     let ns = data.n_shapes;
     let mut masses = Vec::with_capacity(m);
     for k in 0..m {
-        let st = accumulate(data, gamma, k, m, &comps[k], rule == LambdaRule::PaperEq18, px);
+        let st = accumulate(data, &members[k], &comps[k], rule == LambdaRule::PaperEq18, px);
         masses.push(st.n);
         if st.n <= 0.0 {
             continue;
@@ -230,12 +240,18 @@ pub fn px_fold(c: &mut Component, sigma_z: &Mat3) {
     if !m.iter().all(|v| v.is_finite()) {
         return;
     }
-    let eig = m.symmetric_eigen();
-    let mut u = eig.eigenvectors;
+    let mut u = m.symmetric_eigen().eigenvectors;
     if u.determinant() < 0.0 {
         u.column_mut(2).neg_mut();
     }
-    let new_lambda = [0, 1, 2].map(|d| eig.eigenvalues[d].max(0.0).sqrt().max(LAMBDA_FLOOR));
+    // Each column's own Rayleigh quotient, so that D always pairs with U's columns; and U must diagonalise M
+    // (else the fold is skipped: the plain CM step is still a proper one).
+    let d = [0, 1, 2].map(|i| u.column(i).dot(&(m * u.column(i))));
+    let recon = u * nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::from(d)) * u.transpose();
+    if !((recon - m).norm() <= 1e-9 * m.norm()) {
+        return;
+    }
+    let new_lambda = d.map(|v| v.max(0.0).sqrt().max(LAMBDA_FLOOR));
     if !new_lambda.iter().all(|v| v.is_finite()) {
         return;
     }
@@ -244,4 +260,60 @@ pub fn px_fold(c: &mut Component, sigma_z: &Mat3) {
         *r = [0, 1, 2].map(|a| [0, 1, 2].map(|b| rm[(a, b)]));
     }
     c.lambda = new_lambda;
+}
+
+#[cfg(test)]
+mod px_tests {
+    use super::*;
+    use crate::geometry::rotation::axis_angle;
+
+    fn component(lambda: Vec3) -> Component {
+        let ns = 4;
+        Component {
+            rotations: (0..ns).map(|i| axis_angle([0.3, 1.0, i as f64], 0.2 + i as f64)).collect(),
+            translations: (0..ns).map(|i| [0.1 * i as f64, 0.0, -0.05]).collect(),
+            lambda,
+            variances: vec![1e-4, 2e-4, 3e-4, 1e-6],
+            weight: 0.5,
+        }
+    }
+
+    /// With Σ_z = I the fold only relabels or flips latent axes: every log-density stays.
+    #[test]
+    fn px_fold_with_identity_keeps_every_density() {
+        for lambda in [[0.07, 0.02, 0.034], [0.0789, 0.0369, 0.0221], [0.0726, 0.0203, 0.0341]] {
+            let mut c = component(lambda);
+            let hs: Vec<Vec<Vec3>> = (0..20)
+                .map(|j| (0..4).map(|i| [0.01 * j as f64, 0.02 * i as f64 - 0.01 * j as f64, 0.003 * (j * i) as f64]).collect())
+                .collect();
+            let before: Vec<f64> = hs.iter().map(|h| c.log_weighted_density(&c.woodbury(), h)).collect();
+            px_fold(&mut c, &[[1.0, 1e-15, 0.0], [1e-15, 1.0, -2e-15], [0.0, -2e-15, 1.0]]);
+            for (h, b) in hs.iter().zip(&before) {
+                let a = c.log_weighted_density(&c.woodbury(), h);
+                assert!((a - b).abs() < 1e-9 * b.abs().max(1.0), "{b} -> {a}, lambda {lambda:?} -> {:?}", c.lambda);
+            }
+        }
+    }
+
+    /// R_i Λ Σ_z Λ R_i^T before the fold equals R_i' Λ'² R_i'^T after it, for every shape; R_i' are rotations.
+    #[test]
+    fn px_fold_moves_the_latent_covariance_into_lambda_and_r() {
+        let sz = [[0.54, -0.03, 0.02], [-0.03, 0.94, 0.006], [0.02, 0.006, 1.2]];
+        let eye = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        for lambda in [[0.07, 0.02, 0.034], [0.0789, 0.0369, 0.0221], [0.05, 0.05, 0.01]] {
+            let mut c = component(lambda);
+            let cov = |c: &Component, i: usize, mid: &Mat3| {
+                let r = nalgebra::Matrix3::from_fn(|a, b| c.rotations[i][a][b]);
+                let l = nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::from(c.lambda));
+                let s = nalgebra::Matrix3::from_fn(|a, b| mid[a][b]);
+                r * l * s * l * r.transpose()
+            };
+            let before: Vec<_> = (0..4).map(|i| cov(&c, i, &sz)).collect();
+            px_fold(&mut c, &sz);
+            for (i, b) in before.iter().enumerate() {
+                assert!((cov(&c, i, &eye) - b).norm() < 1e-12, "shape {i}, lambda {lambda:?}");
+                assert!((crate::geometry::det(&c.rotations[i]) - 1.0).abs() < 1e-12);
+            }
+        }
+    }
 }

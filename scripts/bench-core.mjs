@@ -1,0 +1,71 @@
+// The benchmark itself, shared by Node and the browser (no Node imports here): fits one population with the
+// wasm module `wasm` (the glue of www/pkg or pkg-node) and returns the figures `posemfa bench` prints natively.
+//   input: { label, names, files } (OBJ bytes) or { label, synth: spec } (a generated population)
+
+const median = (xs) => [...xs].sort((a, b) => a - b)[(xs.length - 1) >> 1];
+
+export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 300 } = {}) {
+  const t0 = performance.now();
+  let pop;
+  let truth = null;
+  if (input.synth) {
+    truth = new wasm.Synthetic(input.synth);
+    pop = truth.population();
+  } else {
+    pop = new wasm.Population(input.names, input.files);
+  }
+  const loadMs = performance.now() - t0;
+  const runs = [];
+  let summary;
+  let kernel;
+  let groundTruth = null;
+  for (let r = 0; r < repeat; r++) {
+    const t = performance.now();
+    const fitter = new wasm.Fitter(pop, { seed });
+    while (!fitter.isDone()) fitter.run(1e9);
+    const model = fitter.result();
+    runs.push(performance.now() - t);
+    summary = model.summary();
+    if (r === repeat - 1) {
+      kernel = model.kernelLimit(kernelMs);
+      if (truth) groundTruth = truth.groundTruth(model);
+    }
+    model.free();
+    fitter.free();
+  }
+  const limit = kernel.gflopsPerS;
+  const stages = summary.stageStats.map((s) => {
+    const rate = s.estepMs > 0 ? s.estepFlops / s.estepMs / 1e6 : 0;
+    return {
+      stage: s.name, ms: s.ms, iterations: s.iterations, aecm_runs: s.aecmRuns, estep_ms: s.estepMs,
+      estep_gflop: s.estepFlops / 1e9, estep_gflops_per_s: rate, estep_fraction_of_limit: rate / limit,
+    };
+  });
+  const flops = summary.stageStats.reduce((a, s) => a + s.estepFlops, 0);
+  const estepMs = summary.stageStats.reduce((a, s) => a + s.estepMs, 0);
+  const out = {
+    input: input.label, shapes: pop.nShapes, vertices: pop.nVertices,
+    load_ms: loadMs, fit_ms_median: median(runs), fit_ms_all: runs,
+    parts: summary.parts, rmse: summary.rmse, iterations: stages.reduce((a, s) => a + s.iterations, 0),
+    stages,
+    estep_gflops_per_s: estepMs > 0 ? flops / estepMs / 1e6 : 0,
+    kernel_limit_gflops_per_s: limit,
+    estep_fraction_of_limit: estepMs > 0 ? flops / estepMs / 1e6 / limit : 0,
+    peak_memory_bytes: wasm.memoryBytes(),
+    ground_truth: groundTruth,
+  };
+  pop.free();
+  if (truth) truth.free();
+  return out;
+}
+
+/** `synth:PRESET[:VERTICES[:POSES[:SEED]]]` as a generator spec, or null. */
+export function synthSpec(arg) {
+  if (!arg.startsWith('synth:')) return null;
+  const [preset, vertices, poses, seed] = arg.slice(6).split(':');
+  const spec = { preset };
+  if (vertices) spec.vertices = Number(vertices);
+  if (poses) spec.poses = Number(poses);
+  if (seed) spec.seed = Number(seed);
+  return spec;
+}
