@@ -20,22 +20,19 @@ use crate::geometry::{Mat3, Vec3};
 /// Responsibilities below this are skipped in the accumulations (their contribution is below rounding).
 pub const GAMMA_SKIP: f64 = 1e-14;
 
-/// The responsibilities the CM steps use, sparse: per component, (vertex, γ_kj) for every γ_kj >= [`GAMMA_SKIP`]
-/// (most vertices have one or two). The E-step writes them ([`super::estep::EStep::run`]).
-pub type Members = Vec<Vec<(u32, f64)>>;
-
-/// [`Members`] of a dense responsibility matrix `gamma[j * m + k]`.
-pub fn members_from_gamma(gamma: &[f64], m: usize) -> Members {
-    let mut members = vec![Vec::new(); m];
-    for (j, row) in gamma.chunks_exact(m.max(1)).enumerate() {
-        for (k, &g) in row.iter().enumerate() {
-            if g >= GAMMA_SKIP {
-                members[k].push((j as u32, g));
-            }
-        }
-    }
-    members
+/// One (vertex, responsibility) pair of a component, with y = Σ_i R_i^T (h_i - b_i) / s_i from the E-step
+/// (so E[z|h] = post_gain y needs no second pass over the shapes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Member {
+    pub j: u32,
+    pub g: f64,
+    pub y: Vec3,
 }
+
+/// The responsibilities the CM steps use, sparse: per component, every vertex with γ_kj >= [`GAMMA_SKIP`]
+/// (most vertices have one or two). The E-step writes them ([`super::estep::EStep::run`]); the y they carry
+/// belong to the parameters of that E-step, which are the ones cycle 2 starts from.
+pub type Members = Vec<Vec<Member>>;
 
 /// Smallest λ_d allowed (keeps M invertible and A = RΛ a proper, non-reflecting map).
 pub const LAMBDA_FLOOR: f64 = 1e-6;
@@ -48,7 +45,7 @@ pub fn cycle1(data: &Data, members: &Members, comps: &mut [Component]) -> Vec<f6
     let mut sums = vec![0.0; m * ns * 3];
     for (k, list) in members.iter().enumerate().take(m) {
         let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
-        for &(j, g) in list {
+        for &Member { j, g, .. } in list {
             let j = j as usize;
             mass[k] += g;
             let h = &data.h[j * ns * 3..(j + 1) * ns * 3];
@@ -86,7 +83,7 @@ struct Stats {
     scatter: Vec<Mat3>,
 }
 
-fn accumulate(data: &Data, list: &[(u32, f64)], c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
+fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
     let ns = data.n_shapes;
     let wb = c.woodbury();
     let mut st = Stats {
@@ -97,19 +94,8 @@ fn accumulate(data: &Data, list: &[(u32, f64)], c: &Component, want_scatter: boo
         moment: [[0.0; 3]; 3],
         scatter: if want_scatter { vec![[[0.0; 3]; 3]; ns] } else { Vec::new() },
     };
-    let mut xs = vec![[0.0; 3]; ns];
-    for &(j, g) in list {
+    for &Member { j, g, y } in list {
         let h = data.vertex(j as usize);
-        let mut y = [0.0; 3];
-        for i in 0..ns {
-            let b = c.translations[i];
-            let x = [h[i][0] - b[0], h[i][1] - b[1], h[i][2] - b[2]];
-            xs[i] = x;
-            let r = &wb.rt_over_s[i];
-            for d in 0..3 {
-                y[d] += r[d][0] * x[0] + r[d][1] * x[1] + r[d][2] * x[2];
-            }
-        }
         let ez = [wb.post_gain[0] * y[0], wb.post_gain[1] * y[1], wb.post_gain[2] * y[2]];
         st.n += g;
         for d in 0..3 {
@@ -124,7 +110,8 @@ fn accumulate(data: &Data, list: &[(u32, f64)], c: &Component, want_scatter: boo
         }
         let gez = [g * ez[0], g * ez[1], g * ez[2]];
         for i in 0..ns {
-            let x = xs[i];
+            let b = c.translations[i];
+            let x = [h[i][0] - b[0], h[i][1] - b[1], h[i][2] - b[2]];
             st.sq[i] += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
             let cr = &mut st.cross[i];
             for a in 0..3 {

@@ -2,7 +2,7 @@
 //! log-sum-exp (log-densities of different components differ by 1e5-1e8 nats).
 
 use super::component::{Component, Woodbury};
-use super::cm::{Members, GAMMA_SKIP};
+use super::cm::{Member, Members, GAMMA_SKIP};
 use super::data::Data;
 
 /// Floating-point operations of one (vertex, component) log-density with n_s shapes, as counted in
@@ -163,7 +163,8 @@ impl Blocked {
 }
 
 /// Shapes in farthest-first order: shape 0, then repeatedly the shape whose smallest summed squared vertex
-/// distance to the shapes already taken is largest.
+/// distance to the shapes already taken is largest, for as many shapes as the early-exit checks look at (8);
+/// the rest follow in their own order.
 fn farthest_first_shapes(data: &Data) -> Vec<usize> {
     let ns = data.n_shapes;
     let dist = |a: usize, b: usize| -> f64 {
@@ -175,22 +176,31 @@ fn farthest_first_shapes(data: &Data) -> Vec<usize> {
             })
             .sum()
     };
+    if ns == 0 {
+        return Vec::new();
+    }
     let mut order = vec![0];
+    let mut taken = vec![false; ns];
+    taken[0] = true;
     let mut nearest: Vec<f64> = (0..ns).map(|i| if i == 0 { -1.0 } else { dist(0, i) }).collect();
-    while order.len() < ns {
-        let mut next = usize::MAX;
-        for i in 0..ns {
-            if !order.contains(&i) && (next == usize::MAX || nearest[i] > nearest[next]) {
-                next = i;
-            }
-        }
+    let chosen = ns.min(CHECK_AFTER[CHECK_AFTER.len() - 1]);
+    while order.len() < chosen {
+        let next = (0..ns).filter(|&i| !taken[i]).fold(None, |a: Option<usize>, i| match a {
+            Some(b) if nearest[b] >= nearest[i] => Some(b),
+            _ => Some(i),
+        });
+        let Some(next) = next else { break };
         order.push(next);
-        for i in 0..ns {
-            if !order.contains(&i) {
-                nearest[i] = nearest[i].min(dist(next, i));
+        taken[next] = true;
+        if order.len() < chosen {
+            for i in 0..ns {
+                if !taken[i] {
+                    nearest[i] = nearest[i].min(dist(next, i));
+                }
             }
         }
     }
+    order.extend((0..ns).filter(|&i| !taken[i]));
     order
 }
 
@@ -269,6 +279,8 @@ fn log_density_lanes(log_norm: f64, shrink: &[f64; 3], y: &[Lanes; 3], sq: &Lane
 pub struct EStep {
     blocked: Blocked,
     vals: Vec<Lanes>,
+    /// y = Σ_i R_i^T x_i / s_i per component and lane (E[z|h] = post_gain y), kept for cycle 2.
+    ys: Vec<[Lanes; 3]>,
     is_hint: Vec<bool>,
     alive: Vec<usize>,
     /// Per component, the packed constants of the screened shapes in f32, and the screen's constants.
@@ -284,6 +296,7 @@ impl EStep {
         EStep {
             blocked: Blocked::new(data),
             vals: Vec::new(),
+            ys: Vec::new(),
             is_hint: Vec::new(),
             alive: Vec::new(),
             packed32: Vec::new(),
@@ -342,6 +355,8 @@ impl EStep {
         members.iter_mut().for_each(|l| l.clear());
         self.vals.clear();
         self.vals.resize(m, [f64::NEG_INFINITY; LANES]);
+        self.ys.clear();
+        self.ys.resize(m, [[0.0; LANES]; 3]);
         self.is_hint.clear();
         self.is_hint.resize(m, false);
         let checks: Vec<usize> = CHECK_AFTER.iter().copied().filter(|&t| t < ns).collect();
@@ -384,6 +399,7 @@ impl EStep {
                     best[l] = best[l].max(v[l]);
                 }
                 self.vals[k] = v;
+                self.ys[k] = y;
                 evals += ns * LANES;
             }
             // the others, each stopped early once negligible in every lane
@@ -422,6 +438,7 @@ impl EStep {
                     best[l] = best[l].max(v[l]);
                 }
                 self.vals[k] = v;
+                self.ys[k] = y;
                 self.alive.push(k);
             }
             for &k in &self.alive {
@@ -436,7 +453,10 @@ impl EStep {
                     // no component gives this vertex a density (or NaN): share it evenly, nothing divides by 0
                     let u = 1.0 / m as f64;
                     row.iter_mut().for_each(|g| *g = u);
-                    members.iter_mut().for_each(|list| list.push((j as u32, u)));
+                    for (c, list) in comps.iter().zip(members.iter_mut()) {
+                        let (y, _) = super::component::project_packed(&c.woodbury().packed, data.vertex(j));
+                        list.push(Member { j: j as u32, g: u, y });
+                    }
                     self.owner[j] = 0;
                     ll += mx;
                     continue;
@@ -457,7 +477,8 @@ impl EStep {
                     let g = row[k] * inv;
                     row[k] = g;
                     if g >= GAMMA_SKIP {
-                        members[k].push((j as u32, g));
+                        let y = &self.ys[k];
+                        members[k].push(Member { j: j as u32, g, y: [y[0][l], y[1][l], y[2][l]] });
                     }
                 }
                 self.owner[j] = top as u32;
