@@ -266,13 +266,14 @@ impl FitModel {
         to_js(&v)
     }
 
-    /// The machine's limit for the E-step's arithmetic, measured for at least `min_ms` on this model's
-    /// components and its population ([`crate::model::estep::kernel_limit`]): {gflop, ms, gflopsPerS}.
+    /// The machine's limit for the E-step's arithmetic, measured for at least `min_ms` per kernel on this
+    /// model's components and its population, against this fit's E-step figures
+    /// ([`crate::model::limit::limit_report`]): {f64: {gflop, ms, gflopsPerS}, f32: {...}, stageFractions,
+    /// fraction}.
     #[wasm_bindgen(js_name = kernelLimit)]
     pub fn kernel_limit(&self, min_ms: f64) -> Result<JsValue, JsError> {
         let data = crate::model::data::Data::from_population(&self.pop);
-        let r = crate::model::estep::kernel_limit(&data, &self.model().parts, min_ms);
-        to_js(&serde_json::json!({ "gflop": r.gflop, "ms": r.ms, "gflopsPerS": r.gflops_per_s }))
+        to_js(&crate::model::limit::limit_report(&data, &self.model().parts, &self.result.stats, min_ms))
     }
 
     /// The full result as JSON text (same format as the CLI's --json).

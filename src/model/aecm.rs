@@ -31,8 +31,7 @@ pub struct Fit {
     data: Data,
     estep: EStep,
     comps: Vec<Component>,
-    gamma: Vec<f64>,
-    /// The responsibilities again, sparse, for the CM steps.
+    /// The responsibilities, sparse (every γ_kj >= 1e-14), as the CM steps use them.
     members: cm::Members,
     trace: Vec<f64>,
     initial_ll: f64,
@@ -46,6 +45,8 @@ pub struct Fit {
     best: Option<(f64, Vec<Component>)>,
     /// Floating-point operations and milliseconds spent in E-steps (for benchmarks).
     pub estep_flops: f64,
+    /// The part of `estep_flops` done in f32 (the screen).
+    pub estep_flops_f32: f64,
     pub estep_ms: f64,
 }
 
@@ -83,7 +84,6 @@ impl Fit {
             estep: EStep::new(&data),
             data,
             comps,
-            gamma: Vec::new(),
             members: Vec::new(),
             trace: Vec::new(),
             initial_ll: f64::NEG_INFINITY,
@@ -96,6 +96,7 @@ impl Fit {
             min_mass: params.min_part_vertices as f64,
             best: None,
             estep_flops: 0.0,
+            estep_flops_f32: 0.0,
             estep_ms: 0.0,
         };
         fit.initial_ll = fit.run_e_step();
@@ -110,10 +111,10 @@ impl Fit {
     /// E-step with exact pruning of negligible components ([`EStep::run`]).
     fn run_e_step(&mut self) -> f64 {
         let t0 = crate::clock::now_ms();
-        let (ll, shape_evals) = self.estep.run(&self.data, &self.comps, &mut self.gamma, &mut self.members);
+        let (ll, _shape_evals) = self.estep.run(&self.data, &self.comps, &mut self.members);
         self.estep_ms += crate::clock::now_ms() - t0;
-        // 28 flops per (vertex, component, shape) evaluated, see estep::flops_per_pair
-        self.estep_flops += 28.0 * shape_evals as f64;
+        self.estep_flops += self.estep.flops_f64 + self.estep.flops_f32;
+        self.estep_flops_f32 += self.estep.flops_f32;
         ll
     }
 
@@ -143,7 +144,6 @@ impl Fit {
         let dropped = before - self.comps.len();
         if dropped > 0 {
             // component indices changed: no hint for the next E-step
-            self.gamma.clear();
             self.estep.forget_owners();
         }
         let ll = self.run_e_step();
@@ -214,9 +214,9 @@ impl Fit {
         &self.data
     }
 
-    /// Current responsibilities, `gamma[j * parts + k]`.
-    pub fn responsibilities(&self) -> &[f64] {
-        &self.gamma
+    /// Current responsibilities, dense: `gamma[j * parts + k]` (those below 1e-14 are 0).
+    pub fn responsibilities(&self) -> Vec<f64> {
+        cm::dense_responsibilities(&self.members, self.data.n_vertices, self.comps.len())
     }
 
     /// Mean variance of the components, weighted by their mass (Algorithm 1's err, mass-weighted).
@@ -233,7 +233,7 @@ impl Fit {
 
     /// Labels of the current state: I_j = argmax_k γ_kj (eq 20).
     pub fn labels(&self) -> Vec<u32> {
-        labels_from_gamma(&self.gamma, self.comps.len())
+        labels_from_gamma(&self.responsibilities(), self.comps.len())
     }
 
     /// The model of the current state (converged) or of the best state seen (not converged, e.g. the literal
@@ -242,7 +242,7 @@ impl Fit {
         let current_is_best = self.converged
             || self.best.as_ref().is_none_or(|b| self.trace.last().is_some_and(|&l| l >= b.0));
         if current_is_best {
-            self.model_of(&self.comps, &self.gamma)
+            self.model_of(&self.comps, &self.responsibilities())
         } else {
             let comps = self.best.as_ref().map(|b| b.1.clone()).unwrap_or_default();
             let mut gamma = Vec::new();

@@ -34,6 +34,17 @@ pub struct Member {
 /// belong to the parameters of that E-step, which are the ones cycle 2 starts from.
 pub type Members = Vec<Vec<Member>>;
 
+/// The dense matrix `gamma[j * m + k]` of sparse responsibilities (entries below [`GAMMA_SKIP`] are 0).
+pub fn dense_responsibilities(members: &Members, n_vertices: usize, m: usize) -> Vec<f64> {
+    let mut gamma = vec![0.0; n_vertices * m];
+    for (k, list) in members.iter().enumerate().take(m) {
+        for mb in list {
+            gamma[mb.j as usize * m + k] = mb.g;
+        }
+    }
+    gamma
+}
+
 /// Smallest λ_d allowed (keeps M invertible and A = RΛ a proper, non-reflecting map).
 pub const LAMBDA_FLOOR: f64 = 1e-6;
 

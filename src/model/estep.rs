@@ -5,10 +5,17 @@ use super::component::{Component, Woodbury};
 use super::cm::{Member, Members, GAMMA_SKIP};
 use super::data::Data;
 
-/// Floating-point operations of one (vertex, component) log-density with n_s shapes, as counted in
-/// [`log_densities`]: per shape 3 (x = h - b) + 6 (|x|²/s) + 18 (y += R^T x / s) + 1, plus 10 per pair.
+/// Floating-point operations per (vertex, shape) of the kernel: 3 (x = h - b) + 6 (|x|²/s) + 18
+/// (y += R^T x / s) + 1.
+pub const FLOPS_PER_SHAPE: usize = 28;
+/// Per vertex, one log-density from y and Σ|x|²/s (6 + 2 + 1 + 2), a bound or a final value.
+pub const FLOPS_PER_BOUND: usize = 11;
+/// Per vertex, one check of the f32 screen (8 for the Woodbury term, 4 for the lower bound, 3 for the threshold).
+pub const FLOPS_PER_SCREEN_CHECK: usize = 15;
+
+/// Floating-point operations of one (vertex, component) log-density with n_s shapes.
 pub fn flops_per_pair(n_shapes: usize) -> f64 {
-    28.0 * n_shapes as f64 + 10.0
+    (FLOPS_PER_SHAPE * n_shapes + FLOPS_PER_BOUND) as f64
 }
 
 /// Log of π_k N(h_j | Θ_k) for one vertex and every component, written into `out` (len = comps.len()).
@@ -286,6 +293,10 @@ pub struct EStep {
     /// Per component, the packed constants of the screened shapes in f32, and the screen's constants.
     packed32: Vec<[f32; 13]>,
     screen: Vec<Screen>,
+    /// Floating-point operations of the last run: in f64 (shape evaluations, bounds and final densities) and
+    /// in f32 (the screen and its checks).
+    pub flops_f64: f64,
+    pub flops_f32: f64,
     /// Most responsible component of every vertex after the last run, for `owner_parts` components.
     owner: Vec<u32>,
     owner_parts: usize,
@@ -301,6 +312,8 @@ impl EStep {
             alive: Vec::new(),
             packed32: Vec::new(),
             screen: Vec::new(),
+            flops_f64: 0.0,
+            flops_f32: 0.0,
             owner: Vec::new(),
             owner_parts: 0,
         }
@@ -315,6 +328,15 @@ impl EStep {
         self.owner_parts = 0;
     }
 
+    /// Takes each vertex's most responsible component in a dense matrix `gamma[j * m + k]` as its owner.
+    pub fn set_owners(&mut self, gamma: &[f64], m: usize) {
+        if m == 0 || gamma.len() % m != 0 {
+            return;
+        }
+        self.owner = gamma.chunks_exact(m).map(|row| argmax(row) as u32).collect();
+        self.owner_parts = m;
+    }
+
     /// The E-step with exact pruning, a block of [`LANES`] vertices at a time. In each block the components
     /// that were most responsible before (each vertex's previous owner: from the last run, else the argmax of
     /// its incoming `gamma` row when that has the same number of components, else component 0) are evaluated
@@ -325,16 +347,15 @@ impl EStep {
     /// sum can only lower the minimum, which is again a Woodbury form over the first t shapes. So
     /// log_norm - q_t / 2 bounds the log-density from above for every t.
     ///
-    /// Writes the responsibilities densely into `gamma` (`gamma[j * m + k]`) and sparsely into `members`
-    /// (for the CM steps). The result equals [`e_step`] to rounding. Returns (log-likelihood, shape
+    /// Writes the responsibilities into `members`, sparsely (every γ >= [`GAMMA_SKIP`]; the rest are below
+    /// rounding of the CM sums). The result equals [`e_step`] to rounding. Returns (log-likelihood, shape
     /// evaluations done, counting every lane).
-    pub fn run(&mut self, data: &Data, comps: &[Component], gamma: &mut Vec<f64>, members: &mut Members) -> (f64, usize) {
+    pub fn run(&mut self, data: &Data, comps: &[Component], members: &mut Members) -> (f64, usize) {
         let m = comps.len();
         let ns = data.n_shapes;
         let nv = data.n_vertices;
         debug_assert_eq!(ns, self.blocked.n_shapes);
         if m == 0 {
-            gamma.clear();
             members.clear();
             return (f64::NEG_INFINITY, 0);
         }
@@ -342,14 +363,8 @@ impl EStep {
         let shrinks = prefix_shrinks(comps, &self.blocked.order);
         if self.owner_parts != m || self.owner.len() != nv {
             self.owner.clear();
-            if gamma.len() == nv * m && m > 0 {
-                self.owner.extend(gamma.chunks_exact(m).map(|row| argmax(row) as u32));
-            } else {
-                self.owner.resize(nv, 0);
-            }
+            self.owner.resize(nv, 0);
         }
-        gamma.clear();
-        gamma.resize(nv * m, 0.0);
         members.resize_with(m, Vec::new);
         members.truncate(m);
         members.iter_mut().for_each(|l| l.clear());
@@ -376,6 +391,9 @@ impl EStep {
         }
         let mut ll = 0.0;
         let mut evals = 0usize;
+        let mut screen_evals = 0usize;
+        let mut bounds = 0usize; // lanes x log-density evaluations (checks and final values), f64
+        let mut screens = 0usize; // lanes x screen checks, f32
         for b in 0..self.blocked.n_blocks() {
             let h = self.blocked.block(b);
             let h32 = self.blocked.block32(b);
@@ -395,6 +413,7 @@ impl EStep {
                 let mut sq = [0.0; LANES];
                 accumulate_block(&wbs[k].packed, h, &mut y, &mut sq);
                 let v = log_density_lanes(wbs[k].log_norm, &wbs[k].shrink, &y, &sq);
+                bounds += LANES;
                 for l in 0..LANES {
                     best[l] = best[l].max(v[l]);
                 }
@@ -410,7 +429,10 @@ impl EStep {
                 let wb = &wbs[k];
                 if ts > 0 {
                     evals += ts * LANES;
-                    if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], &best) {
+                    screen_evals += ts * LANES;
+                    screens += LANES;
+                    let best_min = best.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+                    if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], best_min) {
                         continue;
                     }
                 }
@@ -422,6 +444,7 @@ impl EStep {
                     accumulate_block(&wb.packed[start..t], &h[3 * start..3 * t], &mut y, &mut sq);
                     start = t;
                     let ub = log_density_lanes(wb.log_norm, &shrinks[k][t - 1], &y, &sq);
+                    bounds += LANES;
                     if (0..LANES).all(|l| ub[l] < best[l] - PRUNE_MARGIN) {
                         pruned = true;
                         break;
@@ -434,6 +457,7 @@ impl EStep {
                 accumulate_block(&wb.packed[start..], &h[3 * start..], &mut y, &mut sq);
                 evals += (ns - start) * LANES;
                 let v = log_density_lanes(wb.log_norm, &wb.shrink, &y, &sq);
+                bounds += LANES;
                 for l in 0..LANES {
                     best[l] = best[l].max(v[l]);
                 }
@@ -447,12 +471,10 @@ impl EStep {
             // normalise over the components still alive (the pruned ones are exactly 0 after rounding)
             for (l, &j) in ids.iter().enumerate().take(nvalid) {
                 let j = j as usize;
-                let row = &mut gamma[j * m..(j + 1) * m];
                 let mx = best[l];
                 if !mx.is_finite() {
                     // no component gives this vertex a density (or NaN): share it evenly, nothing divides by 0
                     let u = 1.0 / m as f64;
-                    row.iter_mut().for_each(|g| *g = u);
                     for (c, list) in comps.iter().zip(members.iter_mut()) {
                         let (y, _) = super::component::project_packed(&c.woodbury().packed, data.vertex(j));
                         list.push(Member { j: j as u32, g: u, y });
@@ -465,8 +487,15 @@ impl EStep {
                 let mut top = self.alive[0];
                 for &k in &self.alive {
                     let v = self.vals[k][l];
-                    let e = if v < mx - 2.0 * PRUNE_MARGIN { 0.0 } else { (v - mx).exp() };
-                    row[k] = e;
+                    // exp(0) = 1 exactly, and far below the best is 0 after rounding: only the rest need exp
+                    let e = if v == mx {
+                        1.0
+                    } else if v < mx - 2.0 * PRUNE_MARGIN {
+                        0.0
+                    } else {
+                        (v - mx).exp()
+                    };
+                    self.vals[k][l] = e;
                     s += e;
                     if v == mx {
                         top = k;
@@ -474,21 +503,22 @@ impl EStep {
                 }
                 let inv = 1.0 / s;
                 for &k in &self.alive {
-                    let g = row[k] * inv;
-                    row[k] = g;
+                    let g = self.vals[k][l] * inv;
                     if g >= GAMMA_SKIP {
                         let y = &self.ys[k];
                         members[k].push(Member { j: j as u32, g, y: [y[0][l], y[1][l], y[2][l]] });
                     }
                 }
                 self.owner[j] = top as u32;
-                ll += mx + s.ln();
+                ll += if s == 1.0 { mx } else { mx + s.ln() };
             }
             for &k in &self.alive {
                 self.vals[k] = [f64::NEG_INFINITY; LANES];
             }
         }
         self.owner_parts = m;
+        self.flops_f64 = (FLOPS_PER_SHAPE * (evals - screen_evals) + FLOPS_PER_BOUND * bounds) as f64;
+        self.flops_f32 = (FLOPS_PER_SHAPE * screen_evals + FLOPS_PER_SCREEN_CHECK * screens) as f64;
         (ll, evals)
     }
 }
@@ -513,7 +543,14 @@ struct Screen {
 /// 1e-6 relative. So q_t >= sq (1 - 1e-4) - r (1 + 1e-4) - t (1 + 5e-8/s_min), with sq and r the f32 values
 /// of Σ|x|²/s and Σ shrink y²: that lower bound is what is compared (NaN never prunes).
 #[inline(always)]
-fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, best: &Lanes) -> bool {
+fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, best_min: f64) -> bool {
+    // log_norm - q_low / 2 < best - margin in every lane follows from q_low > 2 (log_norm - min best + margin),
+    // one threshold per block, rounded up to f32
+    let thr = 2.0 * (sc.log_norm - best_min + PRUNE_MARGIN);
+    let mut thr32 = thr as f32;
+    if (thr32 as f64) < thr {
+        thr32 = thr32.next_up();
+    }
     let mut y = [[0.0f32; LANES]; 3];
     let mut sq = [0.0f32; LANES];
     accumulate_block(packed, h32, &mut y, &mut sq);
@@ -521,8 +558,7 @@ fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, best: &
     for l in 0..LANES {
         let r = sc.shrink[0] * y[0][l] * y[0][l] + sc.shrink[1] * y[1][l] * y[1][l] + sc.shrink[2] * y[2][l] * y[2][l];
         let q_low = sq[l] * (1.0 - SCREEN_REL) - r * (1.0 + SCREEN_REL) - sc.abs;
-        // log_norm - q_low / 2 < best - margin
-        out &= (q_low as f64) > 2.0 * (sc.log_norm - best[l] + PRUNE_MARGIN);
+        out &= q_low > thr32;
     }
     out
 }
@@ -537,14 +573,22 @@ fn argmax(row: &[f64]) -> usize {
     a
 }
 
-/// [`EStep::run`] with a fresh layout (tests and one-off calls; a fit keeps its [`EStep`]).
+/// [`EStep::run`] with a fresh layout and dense responsibilities (tests and one-off calls; a fit keeps its
+/// [`EStep`]): an incoming `gamma` of the right size gives the owners to try first.
 pub fn e_step_pruned(data: &Data, comps: &[Component], gamma: &mut Vec<f64>) -> (f64, usize) {
+    let mut estep = EStep::new(data);
+    if gamma.len() == data.n_vertices * comps.len() {
+        estep.set_owners(gamma, comps.len());
+    }
     let mut members = Members::new();
-    EStep::new(data).run(data, comps, gamma, &mut members)
+    let out = estep.run(data, comps, &mut members);
+    *gamma = super::cm::dense_responsibilities(&members, data.n_vertices, comps.len());
+    out
 }
 
 /// Arithmetic rate of a kernel, measured.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "camelCase")]
 pub struct KernelRate {
     pub gflop: f64,
     pub ms: f64,
@@ -558,26 +602,74 @@ pub struct KernelRate {
 pub fn kernel_limit(data: &Data, comps: &[Component], min_ms: f64) -> KernelRate {
     let blocked = Blocked::new(data);
     let wbs = ordered_woodbury(comps, &blocked.order);
+    let packed: Vec<Vec<[f64; 13]>> = wbs.iter().map(|wb| wb.packed.clone()).collect();
     let per_pass = (blocked.n_blocks() * LANES * comps.len()) as f64 * flops_per_pair(data.n_shapes);
-    measure(per_pass, min_ms, || kernel_pass(&blocked, &wbs))
+    measure(per_pass, min_ms, || kernel_pass(&blocked.h, data.n_shapes, &packed))
+}
+
+/// The same for the f32 screen: every block x every component, the first [`SCREEN_SHAPES`] shapes in f32 and
+/// the check's arithmetic (as [`screened_out`] does it), no branches. This is the limit of the screened part of
+/// the E-step's work, which comes in short pieces of 2 shapes.
+pub fn kernel_limit_f32(data: &Data, comps: &[Component], min_ms: f64) -> KernelRate {
+    let blocked = Blocked::new(data);
+    let ts = blocked.screen;
+    if ts == 0 {
+        return KernelRate { gflop: 0.0, ms: 0.0, gflops_per_s: f64::INFINITY };
+    }
+    let wbs = ordered_woodbury(comps, &blocked.order);
+    let packed: Vec<[f32; 13]> = wbs.iter().flat_map(|wb| wb.packed[..ts].iter().map(|q| q.map(|v| v as f32))).collect();
+    let m = comps.len();
+    let per_pass = (blocked.n_blocks() * LANES * m * (FLOPS_PER_SHAPE * ts + FLOPS_PER_SCREEN_CHECK)) as f64;
+    measure(per_pass, min_ms, || screen_pass(&blocked, &packed, m, ts) as f64)
 }
 
 #[inline(never)]
-fn kernel_pass(blocked: &Blocked, wbs: &[Woodbury]) -> f64 {
-    let mut sink: Lanes = [f64::NEG_INFINITY; LANES];
+fn screen_pass(blocked: &Blocked, packed: &[[f32; 13]], m: usize, ts: usize) -> f32 {
+    let mut sink = [0.0f32; LANES];
+    let shrink = [0.5f32, 0.25, 0.125];
     for b in 0..blocked.n_blocks() {
-        let h = blocked.block(b);
-        for wb in wbs {
-            let mut y = [[0.0; LANES]; 3];
-            let mut sq = [0.0; LANES];
-            accumulate_block(&wb.packed, h, &mut y, &mut sq);
-            let v = log_density_lanes(wb.log_norm, &wb.shrink, &y, &sq);
+        let h32 = blocked.block32(b);
+        for k in 0..m {
+            let mut y = [[0.0f32; LANES]; 3];
+            let mut sq = [0.0f32; LANES];
+            accumulate_block(&packed[k * ts..(k + 1) * ts], h32, &mut y, &mut sq);
+            let thr = k as f32;
             for l in 0..LANES {
-                sink[l] = sink[l].max(v[l]);
+                let r = shrink[0] * y[0][l] * y[0][l] + shrink[1] * y[1][l] * y[1][l] + shrink[2] * y[2][l] * y[2][l];
+                let q_low = sq[l] * (1.0 - SCREEN_REL) - r * (1.0 + SCREEN_REL) - 1.0;
+                if q_low > thr {
+                    sink[l] += q_low;
+                }
             }
         }
     }
     sink.iter().sum()
+}
+
+#[inline(never)]
+fn kernel_pass<T: Real + PartialOrd + From<f32>>(h: &[[T; LANES]], ns: usize, packed: &[Vec<[T; 13]>]) -> T {
+    let zero = T::from(0.0);
+    let mut sink = [zero; LANES];
+    for hb in h.chunks_exact(ns * 3) {
+        for p in packed {
+            let mut y = [[zero; LANES]; 3];
+            let mut sq = [zero; LANES];
+            accumulate_block(p, hb, &mut y, &mut sq);
+            // q = sq - y·y (the Woodbury correction's arithmetic), kept so nothing is optimised away
+            for l in 0..LANES {
+                let q = sq[l] - (y[0][l] * y[0][l] + y[1][l] * y[1][l] + y[2][l] * y[2][l]);
+                if q > sink[l] {
+                    sink[l] = q;
+                }
+            }
+        }
+    }
+    // every lane feeds the result, so no lane's arithmetic can be dropped as dead code
+    let mut total = zero;
+    for v in sink {
+        total += v;
+    }
+    total
 }
 
 /// The same arithmetic one vertex at a time on the vertex-major layout

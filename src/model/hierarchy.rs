@@ -55,6 +55,8 @@ pub struct StageStats {
     pub ms: f64,
     pub estep_ms: f64,
     pub estep_flops: f64,
+    /// The part of `estep_flops` done in f32.
+    pub estep_flops_f32: f64,
 }
 
 /// Part counts of the three stages.
@@ -224,6 +226,7 @@ impl Pipeline {
         s.aecm_runs += 1;
         s.estep_ms += fit.estep_ms;
         s.estep_flops += fit.estep_flops;
+        s.estep_flops_f32 += fit.estep_flops_f32;
     }
 
     fn close_stage(&mut self, next: Option<&str>) {

@@ -11,6 +11,7 @@
 //! - [`aecm`]: a [`aecm::Fit`] in progress: `step()` (one AECM iteration), `run()`, trace, convergence.
 //! - [`hierarchy`]: Algorithm 1 (coarse, refinement, final), every stage kept.
 //! - [`result`]: the fitted [`Model`]: labels (eq 20), latent shape (eq 21), reconstruction (eq 22).
+//! - [`limit`]: the E-step's speed against the machine's limit (tight kernels, measured).
 
 pub mod aecm;
 pub mod cm;
@@ -19,6 +20,7 @@ pub mod data;
 pub mod estep;
 pub mod hierarchy;
 pub mod init;
+pub mod limit;
 pub mod memory;
 pub mod params;
 pub mod result;
