@@ -385,7 +385,7 @@ impl EStep {
                 self.screen.push(Screen {
                     shrink: shrinks[k][ts - 1].map(|v| v as f32),
                     abs: (ts as f64 * (1.0 + SCREEN_ABS_S / s_min)) as f32,
-                    log_norm: wb.log_norm,
+                    thr_base: 2.0 * (wb.log_norm + PRUNE_MARGIN),
                 });
             }
         }
@@ -422,6 +422,7 @@ impl EStep {
                 evals += ns * LANES;
             }
             // the others, each stopped early once negligible in every lane
+            let mut best_min = best.iter().fold(f64::INFINITY, |a, &b| a.min(b));
             for k in 0..m {
                 if self.is_hint[k] {
                     continue;
@@ -431,7 +432,6 @@ impl EStep {
                     evals += ts * LANES;
                     screen_evals += ts * LANES;
                     screens += LANES;
-                    let best_min = best.iter().fold(f64::INFINITY, |a, &b| a.min(b));
                     if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], best_min) {
                         continue;
                     }
@@ -461,6 +461,7 @@ impl EStep {
                 for l in 0..LANES {
                     best[l] = best[l].max(v[l]);
                 }
+                best_min = best.iter().fold(f64::INFINITY, |a, &b| a.min(b));
                 self.vals[k] = v;
                 self.ys[k] = y;
                 self.alive.push(k);
@@ -530,7 +531,8 @@ struct Screen {
     shrink: [f32; 3],
     /// Absolute error allowed per block value: per shape 1 + SCREEN_ABS_S / s_min.
     abs: f32,
-    log_norm: f64,
+    /// 2 (log_norm + margin): the screen's threshold is this minus twice the block's smallest best.
+    thr_base: f64,
 }
 
 /// The first early-exit check in f32: true when, in every lane, even a lower bound of the prefix quadratic
@@ -546,7 +548,7 @@ struct Screen {
 fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, best_min: f64) -> bool {
     // log_norm - q_low / 2 < best - margin in every lane follows from q_low > 2 (log_norm - min best + margin),
     // one threshold per block, rounded up to f32
-    let thr = 2.0 * (sc.log_norm - best_min + PRUNE_MARGIN);
+    let thr = sc.thr_base - 2.0 * best_min;
     let mut thr32 = thr as f32;
     if (thr32 as f64) < thr {
         thr32 = thr32.next_up();

@@ -250,6 +250,53 @@ test('a dropped .zip is opened, natural-sorted and fitted', async () => {
   await context.close();
 });
 
+test('a dropped folder is walked through webkitGetAsEntry, readEntries called until it returns nothing', async () => {
+  const { page, context } = await fresh();
+  const tube = tubePopulation({ segments: 2, poses: 10, seed: 5 });
+  const n = await counters(page);
+  const calls = await page.evaluate((texts) => {
+    // Playwright cannot make FileSystemEntry objects, so the drop carries stand-ins with the same interface:
+    // a folder whose reader hands out 3 entries per call (Chromium: at most 100), a subfolder, a text file.
+    const log = { readEntries: 0 };
+    const fileEntry = (path, text) => {
+      const file = new File([text], path.split('/').pop());
+      return { isFile: true, isDirectory: false, name: file.name, fullPath: path, file: (ok) => setTimeout(() => ok(file)) };
+    };
+    const dirEntry = (path, children) => ({
+      isFile: false, isDirectory: true, fullPath: path,
+      createReader() {
+        let i = 0;
+        return {
+          readEntries(ok) {
+            log.readEntries += 1;
+            const batch = children.slice(i, i + 3);
+            i += batch.length;
+            setTimeout(() => ok(batch));
+          },
+        };
+      },
+    });
+    const top = texts.slice(0, 8).map((t, i) => fileEntry(`/poses/p${i + 1}.obj`, t));
+    const sub = dirEntry('/poses/q', texts.slice(8).map((t, i) => fileEntry(`/poses/q/p${i + 9}.obj`, t)));
+    const root = dirEntry('/poses', [...top, sub, fileEntry('/poses/notes.txt', 'not a mesh')]);
+    const dt = { items: [{ kind: 'file', webkitGetAsEntry: () => root }], files: [] };
+    const ev = new Event('drop', { bubbles: true, cancelable: true });
+    Object.defineProperty(ev, 'dataTransfer', { value: dt });
+    window.dispatchEvent(ev);
+    window.__folderLog = log;
+    return log;
+  }, tube.files.map((f) => f.text));
+  assert.ok(calls, 'the drop was dispatched');
+  assert.equal(await waitFit(page, n), 'fitted');
+  const names = await page.locator('#names li').allTextContents();
+  const expected = [...Array.from({ length: 8 }, (_, i) => `poses/p${i + 1}.obj`), 'poses/q/p9.obj', 'poses/q/p10.obj'];
+  assert.deepEqual(names, expected);
+  // 10 entries in the top folder at 3 per call: 4 batches and the empty answer; 2 + 1 in the subfolder
+  assert.equal(await page.evaluate(() => window.__folderLog.readEntries), 5 + 2);
+  assert.equal((await summary(page)).shapes, 10);
+  await context.close();
+});
+
 test('Cancel stops a fit within a slice and keeps its best state so far', async () => {
   const { page, context } = await fresh();
   // A tolerance no fit reaches: the coarse stage would run to its iteration cap (seconds to minutes). With the
