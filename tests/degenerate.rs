@@ -25,6 +25,9 @@
 //!   (1 GiB in wasm32, 8 GiB natively, `POSEMFA_MEMORY_BUDGET` to change it natively) and what to change,
 //!   before the fit allocates its working set (see posemfa::model::memory).
 
+#[macro_use]
+mod common;
+
 use posemfa::geometry::rotation::{angle_between, axis_angle};
 use posemfa::geometry::{add, det, mat_mul, mat_vec, orthonormality_error, transpose, Mat3, Vec3};
 use posemfa::mesh::{Mesh, Population};
@@ -35,13 +38,6 @@ use posemfa::model::memory;
 use posemfa::model::{Model, Params};
 use posemfa::Error;
 
-macro_rules! dual_test {
-    ($(fn $name:ident() $body:block)*) => {$(
-        #[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
-        #[cfg_attr(not(target_arch = "wasm32"), test)]
-        fn $name() $body
-    )*};
-}
 
 /// Small and fast fit settings (the cases are about answers, not accuracy).
 fn quick(parts: usize) -> Params {

@@ -6,19 +6,14 @@
 //! issue 6 (commit 96d236b), each fix applied in turn, until a run found nothing more; the inputs below are
 //! libFuzzer's crash files of those runs.
 
+#[macro_use]
+mod common;
+
 use posemfa::mesh::Population;
 use posemfa::model::hierarchy::fit;
 use posemfa::model::Params;
 use posemfa::Error;
 
-macro_rules! dual_test {
-    ($($(#[$meta:meta])* fn $name:ident() $body:block)*) => {$(
-        $(#[$meta])*
-        #[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
-        #[cfg_attr(not(target_arch = "wasm32"), test)]
-        fn $name() $body
-    )*};
-}
 
 /// fuzz/src/lib.rs `params_from`: the fit settings chosen by a target's config byte.
 fn params_from(cfg: u8) -> Params {

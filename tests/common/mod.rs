@@ -4,7 +4,8 @@
 /// (`cargo test`) and in wasm (Node and headless Chromium, see scripts/test.sh).
 #[macro_export]
 macro_rules! dual_test {
-    ($(fn $name:ident() $body:block)*) => {$(
+    ($($(#[$meta:meta])* fn $name:ident() $body:block)*) => {$(
+        $(#[$meta])*
         #[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
         #[cfg_attr(not(target_arch = "wasm32"), test)]
         fn $name() $body
