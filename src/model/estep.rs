@@ -293,6 +293,8 @@ pub struct EStep {
     /// Per component, the packed constants of the screened shapes in f32, and the screen's constants.
     packed32: Vec<[f32; 13]>,
     screen: Vec<Screen>,
+    /// The screen's threshold per component for the current block.
+    thr32: Vec<f32>,
     /// Floating-point operations of the last run: in f64 (shape evaluations, bounds and final densities) and
     /// in f32 (the screen and its checks).
     pub flops_f64: f64,
@@ -312,6 +314,7 @@ impl EStep {
             alive: Vec::new(),
             packed32: Vec::new(),
             screen: Vec::new(),
+            thr32: Vec::new(),
             flops_f64: 0.0,
             flops_f32: 0.0,
             owner: Vec::new(),
@@ -422,7 +425,9 @@ impl EStep {
                 evals += ns * LANES;
             }
             // the others, each stopped early once negligible in every lane
-            let mut best_min = best.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+            if ts > 0 {
+                thresholds(&self.screen, &best, &mut self.thr32);
+            }
             for k in 0..m {
                 if self.is_hint[k] {
                     continue;
@@ -432,7 +437,7 @@ impl EStep {
                     evals += ts * LANES;
                     screen_evals += ts * LANES;
                     screens += LANES;
-                    if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], best_min) {
+                    if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], self.thr32[k]) {
                         continue;
                     }
                 }
@@ -461,7 +466,9 @@ impl EStep {
                 for l in 0..LANES {
                     best[l] = best[l].max(v[l]);
                 }
-                best_min = best.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+                if ts > 0 {
+                    thresholds(&self.screen, &best, &mut self.thr32);
+                }
                 self.vals[k] = v;
                 self.ys[k] = y;
                 self.alive.push(k);
@@ -545,14 +552,7 @@ struct Screen {
 /// 1e-6 relative. So q_t >= sq (1 - 1e-4) - r (1 + 1e-4) - t (1 + 5e-8/s_min), with sq and r the f32 values
 /// of Σ|x|²/s and Σ shrink y²: that lower bound is what is compared (NaN never prunes).
 #[inline(always)]
-fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, best_min: f64) -> bool {
-    // log_norm - q_low / 2 < best - margin in every lane follows from q_low > 2 (log_norm - min best + margin),
-    // one threshold per block, rounded up to f32
-    let thr = sc.thr_base - 2.0 * best_min;
-    let mut thr32 = thr as f32;
-    if (thr32 as f64) < thr {
-        thr32 = thr32.next_up();
-    }
+fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, thr32: f32) -> bool {
     let mut y = [[0.0f32; LANES]; 3];
     let mut sq = [0.0f32; LANES];
     accumulate_block(packed, h32, &mut y, &mut sq);
@@ -563,6 +563,18 @@ fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, best_mi
         out &= q_low > thr32;
     }
     out
+}
+
+/// Per component, the screen's threshold for the block: log_norm - q_low / 2 < best - margin in every lane
+/// follows from q_low > 2 (log_norm + margin) - 2 min(best). Rounded up to f32: the conversion errs by at most
+/// half an f32 ulp (6e-8 relative), so 2.4e-7 relative is added first (NaN stays NaN and never prunes).
+fn thresholds(screen: &[Screen], best: &Lanes, thr32: &mut Vec<f32>) {
+    let best_min = best.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    thr32.clear();
+    thr32.extend(screen.iter().map(|sc| {
+        let thr = sc.thr_base - 2.0 * best_min;
+        (thr + thr.abs() * 2.4e-7) as f32
+    }));
 }
 
 fn argmax(row: &[f64]) -> usize {
