@@ -21,6 +21,14 @@ wasm_opt=node_modules/.bin/wasm-opt
 command -v wasm-bindgen >/dev/null || die "wasm-bindgen not found: run npm run setup"
 [ -x "$wasm_opt" ] || die "$wasm_opt not found: run npm run setup"
 
+# One build at a time: two builds at once would overwrite each other's www/pkg and pkg-node.
+mkdir -p "$target_dir"
+exec 9>"$target_dir/.posemfa-build-wasm.lock"
+if ! flock -n 9; then
+  say "another wasm build is running in this checkout; waiting for it (up to 20 minutes)"
+  flock -w 1200 9 || die "timed out waiting for the other wasm build (lock $target_dir/.posemfa-build-wasm.lock)"
+fi
+
 t0=$(date +%s)
 say "cargo build --release --target wasm32-unknown-unknown --lib"
 cargo build --release --target wasm32-unknown-unknown --lib
