@@ -52,19 +52,6 @@ fn decode_shapes(data: &[u8]) -> (u8, Vec<String>, Vec<[u32; 3]>, Vec<Vec<[f64; 
     (*cfg, (0..n_shapes).map(|i| format!("s{i}")).collect(), faces, shapes)
 }
 
-/// fuzz/fuzz_targets/population.rs: (config byte, files).
-fn decode_population(data: &[u8]) -> (u8, Vec<(String, Vec<u8>)>) {
-    const NAMES: [&str; 8] = ["pose10.obj", "pose2.obj", "Pose1.obj", "pose02.obj", "a.obj", "A.obj", "pose1.obj", "b9.obj"];
-    let (&cfg, rest) = data.split_first().expect("not empty");
-    let files = rest
-        .split(|&b| b == 0)
-        .take(8)
-        .enumerate()
-        .map(|(i, bytes)| (NAMES[(i + cfg as usize) % NAMES.len()].to_string(), bytes.to_vec()))
-        .collect();
-    (cfg, files)
-}
-
 /// The fit of the targets must give a model with every number finite and every rotation proper.
 fn assert_fits(pop: &Population, cfg: u8) {
     let result = fit(pop, &params_from(cfg), &mut |_| true).unwrap_or_else(|e| panic!("the fit refused: {e}"));
