@@ -1,7 +1,7 @@
 // Wires the page to the worker: sends what a person asks for, shows what comes back. Nothing here fits or
 // parses; the worker (and the Rust core in it) does. Test contract: document.body.dataset.state, the
 // data-testid elements of index.html, and window.posemfa (see the end of this file).
-import { worker } from './worker-client.js'; // first: the worker starts loading wasm while three.js evaluates
+import { worker as firstWorker, startWorker } from './worker-client.js'; // first: wasm loads while three.js evaluates
 import { installUrlState } from './urlstate.js'; // second: an embedded page hides its controls at once
 import { Viewer } from './viewer.js';
 import { Plot } from './plot.js';
@@ -38,6 +38,10 @@ const app = {
   loadId: null,
   liveShown: 0,
   fitCount: 0, // fits ended (finished, cancelled or failed)
+  restartCount: 0, // workers replaced after a crash
+  workerReady: false,
+  source: null, // what the current population came from: { names, bytes } or { spec }, and a label
+  reload: null, // set while a restarted worker starts: { source, message }
   loadErrorCount: 0, // drops or picks refused (the previous population kept)
   cache: new Map(), // `${gen}:${method}:${args}` -> query result
   pick: null, // { slot, vertex }
@@ -47,6 +51,7 @@ const app = {
 };
 
 // ------------------------------------------------------------------ worker and its protocol (see worker.js)
+let worker = firstWorker; // replaced by a fresh one when it crashes (see onWorkerCrash)
 let nextId = 1;
 const waiting = new Map();
 function send(msg, transfer = []) {
@@ -65,7 +70,10 @@ function query(method, ...args) {
   });
 }
 
-worker.onmessage = ({ data: m }) => {
+function onWorkerMessage({ data: m }) {
+  if (m.type === 'crashed') return onWorkerCrash(m.message);
+  if (m.type === 'ready') app.workerReady = true;
+  if (m.type === 'ready' && app.reload) return reloadAfterCrash();
   if (extensions.some((x) => x.onMessage(m))) return; // presets, URL state, teaching mode (see the end)
   switch (m.type) {
     case 'ready': return onReady(m);
@@ -84,11 +92,60 @@ worker.onmessage = ({ data: m }) => {
       return w.resolve(m.result);
     }
   }
-};
-worker.onerror = (e) => {
+}
+function onWorkerError(e) {
+  if (app.workerReady) return onWorkerCrash(e.message || String(e));
   showProblems([{ file: null, line: null, reason: `the worker failed: ${e.message || e}` }], 'The page cannot run');
   setState('error');
-};
+}
+// Events of a worker that was replaced are ignored.
+function wire(w) {
+  w.onmessage = (e) => w === worker && onWorkerMessage(e);
+  w.onerror = (e) => w === worker && onWorkerError(e);
+}
+wire(worker);
+
+// The worker's wasm instance trapped or ran out of memory (it says 'crashed'), or the worker died: a fresh
+// worker takes its place and gets the population the page had (its files or its generator spec), fitted again
+// with the parameters in the form. Unanswered questions are refused; the page keeps showing what it had.
+function onWorkerCrash(message) {
+  worker.terminate();
+  app.workerReady = false;
+  app.restartCount++;
+  for (const w of waiting.values()) w.reject(new Error('the worker was restarted'));
+  waiting.clear();
+  if (app.fitId) app.fitCount++;
+  app.fitId = null;
+  app.loadId = null;
+  app.reload = { source: app.source, message };
+  worker = startWorker();
+  wire(worker);
+  showProblems([{ file: null, line: null, reason: `the worker stopped (${message}); a new one is starting${app.source ? ' and gets the population again' : ''}` }], 'The worker was restarted');
+}
+
+function reloadAfterCrash() {
+  const { source, message } = app.reload;
+  app.reload = null;
+  const notes = [{ file: null, line: null, reason: `the worker stopped (${message}) and was restarted; the population was loaded again and is being fitted again` }];
+  if (!source) {
+    showProblems([{ file: null, line: null, reason: `the worker stopped (${message}) and was restarted` }], 'The worker was restarted');
+    setState(restingState());
+    return;
+  }
+  app.pendingFit = fitRequest();
+  app.pendingSource = source.label;
+  app.pendingExample = source.example ?? null;
+  app.pendingSpec = source.spec ?? null;
+  app.pendingNotes = notes;
+  if (source.spec) {
+    app.loadId = send({ type: 'generate', spec: source.spec, fit: app.pendingFit });
+  } else {
+    const buffers = source.bytes.map((b) => b.buffer.slice(b.byteOffset, b.byteOffset + b.byteLength));
+    app.loadId = send({ type: 'load', names: source.names, files: buffers, fit: app.pendingFit }, buffers);
+  }
+  app.pendingSourceData = source;
+  setState('loading');
+}
 
 // ------------------------------------------------------------------ state
 function setState(s) {
@@ -152,6 +209,7 @@ function generate(spec, example = null, params = null) {
   app.loadId = send({ type: 'generate', spec, fit: app.pendingFit });
   app.pendingSource = example ? `example “${example.title}”` : `generated ${spec.preset}, seed ${spec.seed ?? 0}`;
   app.pendingExample = example;
+  app.pendingSourceData = { spec, example, label: app.pendingSource };
   setState('loading');
 }
 
@@ -171,6 +229,8 @@ async function loadFiles(got) {
   app.pendingSpec = null;
   app.baseParams = app.defaults; // the form's values stay; hidden ones back to the defaults
   const buffers = files.map((f) => f.bytes.buffer.slice(f.bytes.byteOffset, f.bytes.byteOffset + f.bytes.byteLength));
+  // the page keeps the files' bytes (the copies go to the worker): a restarted worker gets them again
+  app.pendingSourceData = { names: files.map((f) => f.name), bytes: files.map((f) => f.bytes), label: app.pendingSource };
   app.pendingFit = fitRequest();
   app.loadId = send({ type: 'load', names: files.map((f) => f.name), files: buffers, fit: app.pendingFit }, buffers);
   setState('loading');
@@ -185,6 +245,7 @@ function onLoadError(problems) {
 
 function onLoaded(pop) {
   app.loadId = null;
+  app.source = app.pendingSourceData ?? null;
   pop.source = app.pendingSource;
   app.pop = pop;
   app.model = null;
@@ -813,6 +874,10 @@ window.posemfa = {
   /** Number of poses, and the view mode. */
   poses: () => app.pop?.nShapes ?? 0,
   mode: () => app.mode,
+  /** Workers replaced after a crash since the page opened. */
+  restartCount: () => app.restartCount,
+  /** Fault injection for the page tests: the worker reports a wasm trap as if the core had crashed. */
+  crashWorkerForTest: () => worker.postMessage({ type: 'test-crash' }),
 };
 
 // Presets, URL state (location.hash) and the teaching mode: each sees the worker's messages first.

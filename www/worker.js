@@ -46,6 +46,18 @@ let cancelRequested = false;
 
 const post = (msg, transfer = []) => self.postMessage(msg, transfer);
 
+// A trap of the wasm instance (a Rust panic aborts; an allocation that fails aborts) or the engine running out
+// of memory: the instance cannot be trusted any more. The worker says so once and stops; the page starts a new
+// worker and gives it the population again (main.js, onWorkerCrash).
+const isCrash = (e) => e instanceof WebAssembly.RuntimeError
+  || (e instanceof RangeError && /memory|allocat/i.test(String(e.message)));
+let dead = false;
+function crashed(e) {
+  if (!dead) post({ type: 'crashed', message: String(e.message ?? e) });
+  dead = true;
+  self.close();
+}
+
 // Yields to the event loop without the 4 ms clamp of nested timers: a message posted to ourselves is queued
 // behind any message the page already sent (a 'cancel').
 const channel = new MessageChannel();
@@ -101,6 +113,7 @@ function load(data) {
   try {
     pop = new wasm.Population(names, files.map((b) => new Uint8Array(b)));
   } catch (e) {
+    if (isCrash(e)) return crashed(e);
     post({ type: 'load-error', id, problems: problemsOf(e.message ?? e) });
     return;
   }
@@ -119,6 +132,7 @@ function generate(data) {
   try {
     synth = new (binding('Synthetic'))(spec);
   } catch (e) {
+    if (isCrash(e)) return crashed(e);
     post({ type: 'load-error', id, problems: problemsOf(e.message ?? e) });
     return;
   }
@@ -159,6 +173,7 @@ async function fit({ id, params }) {
   try {
     f = new wasm.Fitter(population, params);
   } catch (e) {
+    if (isCrash(e)) return crashed(e);
     post({ type: 'fit-error', id, message: String(e.message ?? e) });
     return;
   }
@@ -176,9 +191,10 @@ async function fit({ id, params }) {
     if (token !== fitToken) return; // a new fit or population superseded this one: it keeps nothing
     finishFit(f, id, t0);
   } catch (e) {
+    if (isCrash(e)) return crashed(e);
     post({ type: 'fit-error', id, message: String(e.message ?? e) });
   } finally {
-    f.free();
+    if (!dead) f.free();
     if (fitter === f) fitter = null;
   }
 }
@@ -217,6 +233,7 @@ async function teach(data) {
     else if (data.type === 'teach-step') await teacher.step(population, data);
     else if (data.type === 'teach-run') await teacher.run(population, data);
   } catch (e) {
+    if (isCrash(e)) return crashed(e);
     teacher.drop();
     post({ type: 'fit-error', id: data.id, message: String(e.message ?? e) });
   }
@@ -241,6 +258,7 @@ function query({ id, method, args }) {
     const result = QUERIES[method](...(args ?? []));
     post({ type: 'reply', id, result }, ArrayBuffer.isView(result) ? [result.buffer] : []);
   } catch (e) {
+    if (isCrash(e)) return crashed(e);
     post({ type: 'reply', id, error: String(e.message ?? e) });
   }
 }
@@ -256,6 +274,12 @@ const ready = init({ module_or_path: wasmUrl }).then(
 );
 
 self.onmessage = async ({ data }) => {
+  if (dead) return;
+  if (data.type === 'test-crash') {
+    // fault injection for the page tests: the same report as a real trap of the instance
+    crashed(new WebAssembly.RuntimeError('unreachable (a crash simulated by the page test)'));
+    return;
+  }
   if (data.type === 'cancel') {
     cancelRequested = true;
     return;

@@ -297,6 +297,27 @@ test('a dropped folder is walked through webkitGetAsEntry, readEntries called un
   await context.close();
 });
 
+test('a worker that crashes is replaced, gets the population again, and the page stays usable', async () => {
+  const { page, context } = await fresh();
+  const tube = tubePopulation({ segments: 2, poses: 6, seed: 9 });
+  assert.equal(await fitFiles(page, tube.files), 'fitted');
+  const before = await summary(page);
+  const n = await counters(page);
+  // the worker reports a trap of its wasm instance, as a Rust panic or a failed allocation would
+  await page.evaluate(() => window.posemfa.crashWorkerForTest());
+  await page.waitForFunction(() => window.posemfa.restartCount() === 1, null, { timeout: 30000 });
+  assert.equal(await waitFit(page, n), 'fitted');
+  const after = await summary(page);
+  assert.deepEqual([after.shapes, after.vertices, after.parts], [before.shapes, before.vertices, before.parts]);
+  assert.match(await page.locator('[data-testid=errors]').innerText(), /worker stopped .*restarted/);
+  assert.equal(await page.locator('[data-testid=parts-count]').innerText(), String(after.parts));
+  // the new worker answers questions about the model: the JSON export (a query to the worker) works
+  const download = page.waitForEvent('download');
+  await page.click('#export-json');
+  assert.equal((await download).suggestedFilename(), 'posemfa-model.json');
+  await context.close();
+});
+
 test('Cancel stops a fit within a slice and keeps its best state so far', async () => {
   const { page, context } = await fresh();
   // A tolerance no fit reaches: the coarse stage would run to its iteration cap (seconds to minutes). With the
