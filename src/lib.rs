@@ -14,6 +14,7 @@ pub mod metrics;
 pub mod model;
 pub mod articulate;
 pub mod export;
+pub mod fuzzing;
 pub mod synth;
 
 #[cfg(target_arch = "wasm32")]

@@ -3,7 +3,8 @@
 
 use posemfa::mesh::Population;
 use posemfa::model::hierarchy::fit;
-use posemfa::model::{Model, Params};
+pub use posemfa::fuzzing::params_from;
+use posemfa::model::Model;
 use posemfa::Error;
 
 /// Largest population that the targets fit (the fit is the slow part: keep executions fast).
@@ -57,21 +58,6 @@ pub fn check_model(model: &Model, pop: &Population) {
     }
     let rmse = model.rmse(pop);
     assert!(rmse.is_finite(), "rmse {rmse}");
-}
-
-/// Small, fast parameters chosen by the fuzzer's config byte.
-pub fn params_from(cfg: u8) -> Params {
-    Params {
-        parts: 1 + (cfg as usize >> 4) % 5,
-        seed: cfg as u64,
-        max_iter: 4,
-        restarts: 1,
-        refine: cfg & 1 == 1,
-        max_subparts: 2,
-        refine_max_iter: 3,
-        min_part_vertices: 1 + (cfg as usize >> 1) % 3,
-        ..Params::default()
-    }
 }
 
 /// Runs Algorithm 1 with small caps on a small population and checks the outcome: a sane model, or an
