@@ -4,6 +4,7 @@ import http from 'node:http';
 import { readFile, stat } from 'node:fs/promises';
 import { extname, join, normalize, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { before, after } from 'node:test';
 import { chromium } from 'playwright-core';
 
 export const ROOT = resolve(fileURLToPath(new URL('../..', import.meta.url)));
@@ -63,9 +64,21 @@ export async function launch() {
   });
 }
 
-/** A page at 1280x800 that records console errors, page errors, dialogs and requests leaving loopback. */
+/** A page at 1280x800 that records console errors, page errors, dialogs and requests leaving loopback. The
+ * page gets `window.__viewImage()`: the pixels of the view's canvas as ImageData (for the pixel checks). */
 export async function openPage(browser, url, { width = 1280, height = 800 } = {}) {
   const context = await browser.newContext({ viewport: { width, height } });
+  await context.addInitScript(() => {
+    window.__viewImage = () => {
+      const src = document.querySelector('#view canvas');
+      const c = document.createElement('canvas');
+      c.width = src.width;
+      c.height = src.height;
+      const g = c.getContext('2d');
+      g.drawImage(src, 0, 0);
+      return g.getImageData(0, 0, c.width, c.height);
+    };
+  });
   const page = await context.newPage();
   const log = { errors: [], dialogs: [], external: [] };
   page.on('pageerror', (e) => log.errors.push(String(e)));
@@ -80,6 +93,23 @@ export async function openPage(browser, url, { width = 1280, height = 800 } = {}
   });
   await page.goto(url);
   return { page, context, log };
+}
+
+/**
+ * For a test file: starts the static server (dist/) and the browser before its tests and stops them after.
+ * `open(path, opts)` opens a page (see openPage) at the server's address + `path`.
+ */
+export function pageSession() {
+  const s = {};
+  before(async () => {
+    s.server = await serveStatic();
+    s.browser = await launch();
+  });
+  after(async () => {
+    await s.browser?.close();
+    await s.server?.close();
+  });
+  return { open: (path = '', opts) => openPage(s.browser, `${s.server.url}${path}`, opts) };
 }
 
 /** Waits until document.body.dataset.state is one of `states`; returns it. */
@@ -192,13 +222,7 @@ export const asPayload = (files) => files.map((f) => ({ name: f.name, mimeType: 
  */
 export async function paletteCounts(page, tol = 3) {
   return page.evaluate((tol) => {
-    const src = document.querySelector('#view canvas');
-    const c = document.createElement('canvas');
-    c.width = src.width;
-    c.height = src.height;
-    const g = c.getContext('2d');
-    g.drawImage(src, 0, 0);
-    const { data } = g.getImageData(0, 0, c.width, c.height);
+    const { data } = window.__viewImage();
     const pal = window.posemfa.palette.map((h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16)));
     const counts = Object.fromEntries(window.posemfa.palette.map((h) => [h, 0]));
     for (let p = 0; p < data.length; p += 4) {
@@ -217,13 +241,7 @@ export async function paletteCounts(page, tol = 3) {
 /** A hash-like fingerprint of the view's canvas pixels (to tell whether the picture changed). */
 export async function canvasFingerprint(page) {
   return page.evaluate(() => {
-    const src = document.querySelector('#view canvas');
-    const c = document.createElement('canvas');
-    c.width = src.width;
-    c.height = src.height;
-    const g = c.getContext('2d');
-    g.drawImage(src, 0, 0);
-    const { data } = g.getImageData(0, 0, c.width, c.height);
+    const { data } = window.__viewImage();
     let h = 2166136261;
     for (let i = 0; i < data.length; i++) h = Math.imul(h ^ data[i], 16777619);
     return h >>> 0;

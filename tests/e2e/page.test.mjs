@@ -1,30 +1,21 @@
 // The built page (dist/) in headless Chromium, through its test contract: document.body.dataset.state,
 // the data-testid elements, window.posemfa.summary(). Populations are generated here (helpers.mjs).
 // Run: npm run build && node --test tests/e2e/
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { zipSync, strToU8 } from 'fflate';
 import {
-  serveStatic, launch, openPage, waitState, tubePopulation, asPayload, paletteCounts, canvasFingerprint,
+  pageSession, waitState, tubePopulation, asPayload, paletteCounts, canvasFingerprint,
 } from './helpers.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveStatic();
-  browser = await launch();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const session = pageSession();
 
 const SUMMARY_KEYS = ['shapes', 'vertices', 'parts', 'rmse', 'iterations', 'fitMs'];
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
 
 // Opens the page and waits until it has settled (its default fitted, or idle in a build without one).
 async function fresh(opts) {
-  const p = await openPage(browser, server.url, opts);
+  const p = await session.open('', opts);
   await waitState(p.page, ['fitted', 'idle', 'error'], 60000);
   return p;
 }
@@ -140,19 +131,13 @@ test('the interpolation slider changes the geometry, part-wise beside linear ble
   await page.waitForFunction(() => window.posemfa.shown().join() === 'part-wise,linear');
   await setT(0.5);
   const [left, right] = await page.evaluate(() => {
-    const src = document.querySelector('#view canvas');
-    const c = document.createElement('canvas');
-    c.width = src.width;
-    c.height = src.height;
-    const g = c.getContext('2d');
-    g.drawImage(src, 0, 0);
-    const half = (x0) => {
-      const { data } = g.getImageData(x0, 0, c.width / 2, c.height);
-      let n = 0;
-      for (let i = 0; i < data.length; i += 4) if (data[i] !== 0xee || data[i + 1] !== 0xf0 || data[i + 2] !== 0xf3) n++;
-      return n;
-    };
-    return [half(0), half(c.width / 2)];
+    // pixels that are not the background, in the left and the right half of the view
+    const { data, width } = window.__viewImage();
+    const n = [0, 0];
+    for (let i = 0; i < data.length; i += 4) {
+      if (data[i] !== 0xee || data[i + 1] !== 0xf0 || data[i + 2] !== 0xf3) n[(i / 4) % width < width / 2 ? 0 : 1]++;
+    }
+    return n;
   });
   assert.ok(left > 500 && right > 500, `both halves draw a mesh: ${left}, ${right}`);
   await context.close();

@@ -2,22 +2,13 @@
 // Reset on the core's single-step API), the state in location.hash, and embedding (embed=1, mount()).
 // The step-by-step values are checked against the same core run in Node (pkg-node/, built with the page).
 // Run: npm run build && node --test tests/e2e/teach.test.mjs
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
-import { serveStatic, launch, openPage, waitState, canvasFingerprint, ROOT } from './helpers.mjs';
+import { pageSession, waitState, canvasFingerprint, ROOT } from './helpers.mjs';
 
-let server;
-let browser;
-before(async () => {
-  server = await serveStatic();
-  browser = await launch();
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const session = pageSession();
 
 const core = () => createRequire(import.meta.url)(join(ROOT, 'pkg-node', 'posemfa.js'));
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
@@ -26,7 +17,7 @@ const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimation
 
 // Opens `hash` (or the default) and waits until the page is fitted and any view in the link is applied.
 async function fitted(hash = '', opts) {
-  const p = await openPage(browser, `${server.url}${hash}`, opts);
+  const p = await session.open(hash, opts);
   const state = await waitState(p.page, ['fitted', 'error'], 60000);
   assert.equal(state, 'fitted', await p.page.locator('[data-testid=errors]').innerText());
   await p.page.waitForFunction(() => !window.posemfa.restoring(), null, { polling: 20 });
@@ -289,7 +280,7 @@ test('embed=1 and the hide/show flags give a minimal view', async () => {
 });
 
 test('the embed page shows a fitted model in an iframe and through mount()', async () => {
-  const { page, context, log } = await openPage(browser, `${server.url}www/embed-demo.html`);
+  const { page, context, log } = await session.open('www/embed-demo.html');
   const frame = page.frameLocator('[data-testid=embed-iframe]');
   const inner = page.frames().find((f) => f.url().includes('index.html'));
   await inner.waitForFunction(() => document.body.dataset.state === 'fitted', null, { timeout: 90000, polling: 50 });
