@@ -38,9 +38,6 @@ pub type PackedShape = [f64; 13];
 pub struct Woodbury {
     /// Everything the inner loop reads per shape, contiguous (see [`PackedShape`]).
     pub packed: Vec<PackedShape>,
-    /// R_i^T / s_i, row-major, per shape.
-    pub rt_over_s: Vec<Mat3>,
-    pub inv_s: Vec<f64>,
     /// λ_d² / (1 + w λ_d²): the Woodbury correction of the quadratic form.
     pub shrink: Vec3,
     /// λ_d / (1 + w λ_d²): E[z|h]_d = post_gain_d * y_d.
@@ -90,7 +87,7 @@ impl Component {
                 [b[0], b[1], b[2], inv_s[i], r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2]]
             })
             .collect();
-        Woodbury { packed, rt_over_s, inv_s, shrink, post_gain, post_var, log_norm }
+        Woodbury { packed, shrink, post_gain, post_var, log_norm }
     }
 
     /// y = Σ_i R_i^T (h_i - b_i) / s_i and Σ_i |h_i - b_i|² / s_i for one data vector h (one point per shape).

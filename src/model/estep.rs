@@ -160,13 +160,6 @@ impl Blocked {
     fn block32(&self, b: usize) -> &[[f32; LANES]] {
         &self.h32[b * self.screen * 3..(b + 1) * self.screen * 3]
     }
-
-    /// Bytes held.
-    pub fn bytes(&self) -> usize {
-        self.h.len() * std::mem::size_of::<Lanes>()
-            + self.h32.len() * std::mem::size_of::<[f32; LANES]>()
-            + self.idx.len() * (std::mem::size_of::<[u32; LANES]>() + 1)
-    }
 }
 
 /// Shapes in farthest-first order: shape 0, then repeatedly the shape whose smallest summed squared vertex
@@ -320,10 +313,6 @@ impl EStep {
             owner: Vec::new(),
             owner_parts: 0,
         }
-    }
-
-    pub fn blocked(&self) -> &Blocked {
-        &self.blocked
     }
 
     /// Forgets the previous owners (the components were renumbered).
