@@ -9,7 +9,7 @@ export default defineConfig({
   base: './',
   publicDir: false,
   // Scan only the page for dependencies (not target/, which holds HTML of its own).
-  optimizeDeps: { entries: ['index.html'] },
+  optimizeDeps: { entries: ['index.html', 'explain.html'] },
   server: { host: '127.0.0.1', port: 5173, strictPort: false, watch: { ignored } },
   preview: { host: '127.0.0.1', port: 4173, strictPort: false },
   // www/main.js starts www/worker.js as a module worker ({ type: 'module' }): keep it an ES module when built.
@@ -17,10 +17,10 @@ export default defineConfig({
   // three.js alone is about 550 KB minified: one chunk is fine for a page loaded once from a local host.
   build: {
     outDir: 'dist', emptyOutDir: true, target: 'es2022', assetsInlineLimit: 0, chunkSizeWarningLimit: 1024,
-    // The page, the embedding demo (www/embed-demo.html), and www/mount.js as dist/mount.js: a stable name
-    // with its exports kept, for other pages to import (mount(element, options)).
+    // The page, the article (explain.html), the embedding demo (www/embed-demo.html), and www/mount.js as
+    // dist/mount.js: a stable name with its exports kept, for other pages to import (mount(element, options)).
     rolldownOptions: {
-      input: { index: 'index.html', 'embed-demo': 'www/embed-demo.html', mount: 'www/mount.js' },
+      input: { index: 'index.html', explain: 'explain.html', 'embed-demo': 'www/embed-demo.html', mount: 'www/mount.js' },
       preserveEntrySignatures: 'exports-only',
       output: { entryFileNames: (chunk) => (chunk.name === 'mount' ? 'mount.js' : 'assets/[name]-[hash].js') },
     },

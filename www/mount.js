@@ -10,8 +10,13 @@
 //
 // options: example (id of a built-in example; default: the first, the quadruped), or spec (a generator spec,
 // see Synthetic in src/wasm.rs); params (fit parameters over the example's); pose (0-based, default 0);
-// view: 'parts' (default) | 'truth' (the generator's ground truth); flat (unlit colours, default false).
+// view: 'parts' (default) | 'truth' (the generator's ground truth); flat (unlit colours, default false);
+// worker: a Worker-like object that speaks www/worker.js's protocol, used instead of a worker of its own (the
+// article's shared pool, www/explain/pool.js, hands out such channels; unmount() terminates it).
 // The element gets data-state = loading | fitting | fitted | error.
+// Besides ready / summary / unmount, the handle gives what a page that builds on the view needs: viewer (the
+// www/viewer.js Viewer), population() and model() (as the worker sent them), post(msg, transfer) to the
+// worker, query(method, ...args) (a promise of the worker's reply) and on(f) (f(msg) for every message).
 import { Viewer } from './viewer.js';
 import { labelColours } from './colors.js';
 
@@ -32,9 +37,14 @@ export function mount(element, options = {}) {
   caption.textContent = 'Loading…';
   const viewer = new Viewer(view);
   if (options.flat) viewer.setFlat(true);
-  const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+  const worker = options.worker ?? new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
   let pop = null;
   let summary = null;
+  let fittedModel = null;
+  let title = '';
+  const listeners = new Set();
+  const replies = new Map();
+  let nextId = 1000;
   let resolveReady;
   let rejectReady;
   const ready = new Promise((ok, fail) => { resolveReady = ok; rejectReady = fail; });
@@ -47,27 +57,40 @@ export function mount(element, options = {}) {
   };
 
   worker.onmessage = ({ data: m }) => {
+    if (m.type === 'reply' && replies.has(m.id)) {
+      const r = replies.get(m.id);
+      replies.delete(m.id);
+      if (m.error) r.fail(new Error(m.error));
+      else r.ok(m.result);
+    }
+    handle(m);
+    for (const f of listeners) f(m);
+  };
+  const handle = (m) => {
     if (m.type === 'ready') {
       const ex = options.spec ? null : (m.examples.find((e) => e.id === options.example) ?? m.examples[0]);
       if (!ex && !options.spec) return fail('this build has no built-in examples');
       if (options.example && ex && ex.id !== options.example) return fail(`no example "${options.example}"`);
       const params = { ...m.defaults, ...(ex?.params ?? {}), ...(options.params ?? {}) };
       worker.postMessage({ type: 'generate', id: 1, spec: options.spec ?? ex.spec, fit: { id: 2, params } });
-      caption.textContent = ex ? ex.title : `generated ${options.spec.preset ?? ''}`;
+      title = ex ? ex.title : `generated ${options.spec.preset ?? ''}`;
+      caption.textContent = title;
     } else if (m.type === 'loaded') {
       pop = m.population;
       viewer.setTopology(pop.faces, pop.positions[0]);
       setState('fitting');
     } else if (m.type === 'fitted') {
+      const first = !summary; // a later fit (a teaching run's end) keeps the camera where the reader put it
       summary = m.model.summary;
+      fittedModel = m.model;
       const pose = Math.min(Math.max(Number(options.pose) || 0, 0), pop.nShapes - 1);
       const truth = options.view === 'truth' && pop.truth;
       const labels = truth ? pop.truth.partOfVertex : m.model.labels;
-      viewer.show([{ positions: pop.positions[pose], colours: labelColours(labels, pop.faces).vertexColours }], { frame: true });
+      viewer.show([{ positions: pop.positions[pose], colours: labelColours(labels, pop.faces).vertexColours }], { frame: first });
       const acc = summary.groundTruth ? `, adjusted Rand ${summary.groundTruth.ari.toFixed(3)}` : '';
-      caption.textContent += truth
+      caption.textContent = title + (truth
         ? ` — ground truth, ${pop.truth.partNames.length} parts`
-        : ` — ${summary.parts} parts fitted in ${Math.round(summary.fitMs)} ms${acc}`;
+        : ` — ${summary.parts} parts fitted in ${Math.round(summary.fitMs)} ms${acc}`);
       setState('fitted');
       resolveReady({ ...summary });
     } else if (m.type === 'load-error') {
@@ -83,6 +106,23 @@ export function mount(element, options = {}) {
     /** Resolves to the fit's summary ({parts, rmse, fitMs, groundTruth: {ari, rotationErrorDeg}, ...}). */
     ready,
     summary: () => (summary ? { ...summary } : null),
+    viewer,
+    caption,
+    population: () => pop,
+    model: () => fittedModel,
+    post: (msg, transfer) => worker.postMessage(msg, transfer),
+    /** The worker's answer to a query (see QUERIES in www/worker.js). */
+    query(method, ...args) {
+      const id = nextId++;
+      return new Promise((ok, fail) => {
+        replies.set(id, { ok, fail });
+        worker.postMessage({ type: 'query', id, method, args });
+      });
+    },
+    on(f) {
+      listeners.add(f);
+      return () => listeners.delete(f);
+    },
     /** Stops the worker, frees the WebGL context and removes what mount() added. */
     unmount() {
       if (!mounted) return;
