@@ -14,12 +14,18 @@
 //! - a trailing backslash continues a line (OBJ spec), comments included; a comment whose backslash
 //!   would swallow a following `v`/`f`/... statement is reported instead of silently hiding it.
 //! - LF, CRLF and lone CR line ends; a UTF-8 byte-order mark and a final Ctrl-Z are skipped.
+//! - the text is read as bytes: only the numbers and indices must be ASCII. Names, comments and material
+//!   names in any 8-bit encoding load (3ds Max writes Latin-1 `usemtl` and `o` names).
 //!
 //! Everything else is an error that names the file and the (first physical) line, says what is wrong and
-//! what to do: non-UTF-8 text, UTF-16, NUL and other control bytes (binary data), numbers that do not parse
-//! or are not finite (`nan`, `inf`, `1.#IND`, exponents that overflow), `3.1+e2` and such, indices that are
-//! 0 or out of range (positive ones must refer to lines above the face, negative ones count back from the
-//! latest), faces with fewer than 3 vertices, and a file without any vertex.
+//! what to do: UTF-16, NUL and other control bytes (binary data), numbers that do not parse or are not
+//! finite (`nan`, `inf`, `1.#IND`, exponents that overflow), `3.1+e2` and such, indices that are 0 or out of
+//! range (positive ones must refer to lines above the face, negative ones count back from the latest), faces
+//! with fewer than 3 vertices, and a file without any vertex.
+//!
+//! Speed: lines are found with `memchr` and numbers parsed from the bytes in place by `fast-float2`
+//! (Eisel-Lemire; the maintained fork of `fast-float`), so no line is copied or validated as UTF-8 first;
+//! the binary-data check is one branch-free pass over the file.
 //!
 //! Why not tobj: tobj (kept in Cargo.toml) re-indexes the vertices of each model in order of first use by
 //! a face and drops the vertices no face uses, so the `v` order cannot be recovered from its output; it also
@@ -54,8 +60,12 @@ type Res<T> = std::result::Result<T, Fail>;
 fn parse(bytes: &[u8]) -> Res<Mesh> {
     let text = decode(bytes)?;
     let mut reader = Reader::default();
+    // A capacity guess from the file's size (bounded by the bytes present, never by a number in the file):
+    // pages reserved but never written cost nothing, and growing a vector copies it.
+    reader.mesh.positions.reserve(text.len() / 64);
+    reader.mesh.faces.reserve(text.len() / 32);
     let mut lines = PhysicalLines { rest: text, done: false };
-    let mut joined = String::new();
+    let mut joined: Vec<u8> = Vec::new();
     let mut lineno = 0usize;
     while let Some(first) = lines.next() {
         lineno += 1;
@@ -69,12 +79,12 @@ fn parse(bytes: &[u8]) -> Res<Mesh> {
         // Once a comment has started, the continuation makes the next lines part of it.
         let mut in_comment = has_comment(head);
         joined.clear();
-        joined.push_str(head);
+        joined.extend_from_slice(head);
         while continued {
             let Some(next) = lines.next() else { break };
             lineno += 1;
             if in_comment {
-                if let Some(kw) = next.split_ascii_whitespace().next().filter(|k| is_element_keyword(k)) {
+                if let Some(kw) = tokens(next).next().filter(|k| is_element_keyword(k)) {
                     return fail(
                         lineno - 1,
                         format!(
@@ -88,8 +98,8 @@ fn parse(bytes: &[u8]) -> Res<Mesh> {
             }
             let (part, more) = split_continuation(next);
             in_comment = in_comment || has_comment(part);
-            joined.push(' ');
-            joined.push_str(part);
+            joined.push(b' ');
+            joined.extend_from_slice(part);
             continued = more;
         }
         reader.statement(&joined, start, lineno)?;
@@ -97,57 +107,144 @@ fn parse(bytes: &[u8]) -> Res<Mesh> {
     reader.finish()
 }
 
+/// Separators between tokens (what `str::split_ascii_whitespace` splits on).
+fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\n' | b'\r' | 0x0C)
+}
+
+/// The whitespace-separated tokens of a line.
+fn tokens(line: &[u8]) -> Tokens<'_> {
+    Tokens { rest: line }
+}
+
+struct Tokens<'a> {
+    rest: &'a [u8],
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a [u8];
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let start = self.rest.iter().position(|&b| !is_space(b))?;
+        let rest = self.rest.get(start..).unwrap_or(&[]);
+        let len = rest.iter().position(|&b| is_space(b)).unwrap_or(rest.len());
+        let (token, after) = rest.split_at(len.min(rest.len()));
+        self.rest = after;
+        Some(token)
+    }
+}
+
+/// `bytes` without its leading separators.
+fn skip_space(bytes: &[u8]) -> &[u8] {
+    let n = bytes.iter().position(|&b| !is_space(b)).unwrap_or(bytes.len());
+    bytes.get(n..).unwrap_or(&[])
+}
+
+/// Whether a token ends here: end of line or a separator.
+fn at_token_end(bytes: &[u8]) -> bool {
+    bytes.first().is_none_or(|&b| is_space(b))
+}
+
+/// An optionally signed decimal integer of at most 18 digits at the start of `bytes`, and the bytes after it.
+fn leading_int(bytes: &[u8]) -> Option<(i64, &[u8])> {
+    let (negative, digits) = match bytes {
+        [b'-', rest @ ..] => (true, rest),
+        [b'+', rest @ ..] => (false, rest),
+        _ => (false, bytes),
+    };
+    let n = digits.iter().take(19).position(|b| !b.is_ascii_digit()).unwrap_or(digits.len().min(19));
+    if n == 0 || n > 18 {
+        return None;
+    }
+    let (number, after) = digits.split_at(n);
+    let value = number.iter().fold(0i64, |acc, &d| acc * 10 + i64::from(d - b'0'));
+    Some((if negative { -value } else { value }, after))
+}
+
+/// Resolves a 1-based or negative OBJ index against `count` items read so far; `None` when out of range
+/// (the slow path then says why).
+fn resolve_fast(index: i64, count: usize) -> Option<usize> {
+    let count = i64::try_from(count).ok()?;
+    let resolved = if index > 0 { index - 1 } else { count + index };
+    if index != 0 && (0..count).contains(&resolved) {
+        usize::try_from(resolved).ok()
+    } else {
+        None
+    }
+}
+
 /// Whether a line holds a comment (a token starting with '#').
-fn has_comment(line: &str) -> bool {
-    line.split_ascii_whitespace().any(|t| t.starts_with('#'))
+fn has_comment(line: &[u8]) -> bool {
+    tokens(line).any(|t| t.first() == Some(&b'#'))
 }
 
 /// Statements whose loss would change the mesh or the numbering of its references.
-fn is_element_keyword(k: &str) -> bool {
-    matches!(k, "v" | "vt" | "vn" | "vp" | "f" | "fo" | "l" | "p")
+fn is_element_keyword(k: &[u8]) -> bool {
+    matches!(k, b"v" | b"vt" | b"vn" | b"vp" | b"f" | b"fo" | b"l" | b"p")
 }
 
 /// Removes a trailing backslash (spaces or tabs after it allowed). Returns the line without it and whether
 /// the line continues.
-fn split_continuation(line: &str) -> (&str, bool) {
-    let t = line.trim_end_matches([' ', '\t']);
-    match t.strip_suffix('\\') {
-        Some(head) => (head, true),
-        None => (line, false),
+fn split_continuation(line: &[u8]) -> (&[u8], bool) {
+    let mut t = line;
+    while let [rest @ .., b' ' | b'\t'] = t {
+        t = rest;
+    }
+    match t {
+        [head @ .., b'\\'] => (head, true),
+        _ => (line, false),
     }
 }
 
 /// Physical lines ended by LF, CRLF or a lone CR.
 struct PhysicalLines<'a> {
-    rest: &'a str,
+    rest: &'a [u8],
     done: bool,
 }
 
 impl<'a> Iterator for PhysicalLines<'a> {
-    type Item = &'a str;
-    fn next(&mut self) -> Option<&'a str> {
+    type Item = &'a [u8];
+    fn next(&mut self) -> Option<&'a [u8]> {
         if self.done {
             return None;
         }
-        let bytes = self.rest.as_bytes();
-        match bytes.iter().position(|&b| b == b'\n' || b == b'\r') {
+        let bytes = self.rest;
+        match memchr::memchr2(b'\n', b'\r', bytes) {
             Some(i) => {
                 let end = if bytes.get(i) == Some(&b'\r') && bytes.get(i + 1) == Some(&b'\n') { i + 2 } else { i + 1 };
-                // `i` and `end` are at ASCII bytes, so both are char boundaries.
-                let line = self.rest.get(..i).unwrap_or("");
-                self.rest = self.rest.get(end..).unwrap_or("");
+                let line = bytes.get(..i).unwrap_or(&[]);
+                self.rest = bytes.get(end..).unwrap_or(&[]);
                 Some(line)
             }
             None => {
                 self.done = true;
-                Some(self.rest)
+                Some(bytes)
             }
         }
     }
 }
 
-/// Checks that the bytes are OBJ text (UTF-8, no binary control bytes) and returns them as `str`.
-fn decode(bytes: &[u8]) -> Res<&str> {
+/// A byte that marks binary data: C0 controls other than tab, LF, CR and form feed, and DEL.
+fn is_binary(b: u8) -> bool {
+    (b < 0x20 && b != b'\t' && b != b'\n' && b != b'\r' && b != 0x0C) || b == 0x7F
+}
+
+/// Position of the first binary byte. Whole 64-byte chunks are tested branch-free (vectorised), so it costs
+/// a few milliseconds on tens of megabytes; the chunk with a hit and the tail are then searched bytewise.
+fn first_binary(bytes: &[u8]) -> Option<usize> {
+    let mut base = 0;
+    for chunk in bytes.chunks_exact(64) {
+        if chunk.iter().fold(0u8, |acc, &b| acc | u8::from(is_binary(b))) != 0 {
+            break;
+        }
+        base += 64;
+    }
+    bytes.get(base..).and_then(|rest| rest.iter().position(|&b| is_binary(b))).map(|i| base + i)
+}
+
+/// Checks that the bytes are OBJ text (no UTF-16, no binary control bytes) and returns the body without
+/// a UTF-8 byte-order mark and DOS end-of-file markers. Other bytes >= 0x80 are left to the statements:
+/// only numbers must be ASCII.
+fn decode(bytes: &[u8]) -> Res<&[u8]> {
     if bytes.is_empty() {
         return fail(0, "the file is empty (0 bytes); export the mesh again as a Wavefront OBJ".into());
     }
@@ -165,21 +262,7 @@ fn decode(bytes: &[u8]) -> Res<&str> {
         end -= 1; // DOS end-of-file marker
     }
     let body = bytes.get(bom..end).unwrap_or(&[]);
-    let control = body.iter().position(|&b| (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0C)) || b == 0x7F);
-    let checked = body.get(..control.unwrap_or(body.len())).unwrap_or(&[]);
-    if let Err(e) = std::str::from_utf8(checked) {
-        let at = e.valid_up_to();
-        let (line, col) = line_and_column(body, at);
-        let byte = body.get(at).copied().unwrap_or(0);
-        return fail(
-            line,
-            format!(
-                "byte 0x{byte:02X} at column {col} is not UTF-8 text: this is binary data or text in another \
-                 encoding; OBJ files must be ASCII or UTF-8, so export or save the mesh again as UTF-8"
-            ),
-        );
-    }
-    if let Some(at) = control {
+    if let Some(at) = first_binary(body) {
         let (line, col) = line_and_column(body, at);
         let byte = body.get(at).copied().unwrap_or(0);
         let what = if byte == 0 { "a NUL byte (0x00)".to_string() } else { format!("the control byte 0x{byte:02X}") };
@@ -191,8 +274,7 @@ fn decode(bytes: &[u8]) -> Res<&str> {
             ),
         );
     }
-    // `checked` is the whole body here and has just been validated.
-    std::str::from_utf8(checked).or_else(|_| fail(0, "the file is not UTF-8 text".into()))
+    Ok(body)
 }
 
 /// 1-based line and column (in bytes) of byte `at`, with the same line ends as [`PhysicalLines`].
@@ -211,9 +293,10 @@ fn line_and_column(bytes: &[u8], at: usize) -> (usize, usize) {
     (line, at.saturating_sub(line_start) + 1)
 }
 
-/// A token for an error message: at most 40 characters.
-fn shown(token: &str) -> String {
-    let mut chars = token.chars();
+/// A token for an error message: at most 40 characters; bytes that are not UTF-8 are shown as U+FFFD.
+fn shown(token: &[u8]) -> String {
+    let text = String::from_utf8_lossy(token);
+    let mut chars = text.chars();
     let head: String = chars.by_ref().take(40).collect();
     if chars.next().is_some() {
         format!("{head}...")
@@ -265,24 +348,29 @@ struct Reader {
 }
 
 impl Reader {
-    fn statement(&mut self, line: &str, start: usize, end: usize) -> Res<()> {
-        let mut tokens = line.split_ascii_whitespace();
+    fn statement(&mut self, line: &[u8], start: usize, end: usize) -> Res<()> {
+        let mut tokens = tokens(line);
         let Some(keyword) = tokens.next() else { return Ok(()) };
+        let rest = tokens.rest;
         // A comment runs from a token that starts with '#' to the end of the line.
-        let tokens = tokens.take_while(|t| !t.starts_with('#'));
+        let tokens = tokens.take_while(|t| t.first() != Some(&b'#'));
         let r = match keyword {
-            "v" => self.vertex(tokens),
-            "vt" => {
+            // The common forms are read straight from the bytes; anything else (and every error) goes
+            // through the token-by-token path, which names the problem.
+            b"v" if self.vertex_fast(rest) => Ok(()),
+            b"f" if self.face_fast(rest) => Ok(()),
+            b"v" => self.vertex(tokens),
+            b"vt" => {
                 self.texcoords += 1;
                 Ok(())
             }
-            "vn" => {
+            b"vn" => {
                 self.normals += 1;
                 Ok(())
             }
-            "f" | "fo" => self.element(Element::Face, tokens),
-            "l" => self.element(Element::Line, tokens),
-            "p" => self.element(Element::Point, tokens),
+            b"f" | b"fo" => self.element(Element::Face, tokens),
+            b"l" => self.element(Element::Line, tokens),
+            b"p" => self.element(Element::Point, tokens),
             // Comments, groups, objects, materials, smoothing groups, free-form geometry, vendor
             // extensions (`vw`, `t`, ...): nothing posemfa uses.
             _ => Ok(()),
@@ -300,7 +388,76 @@ impl Reader {
         })
     }
 
-    fn vertex<'a>(&mut self, tokens: impl Iterator<Item = &'a str>) -> std::result::Result<(), String> {
+    /// `x y z` (then a comment or nothing): true when read and stored.
+    fn vertex_fast(&mut self, line: &[u8]) -> bool {
+        let mut rest = line;
+        let mut xyz = [0.0f64; 3];
+        for slot in &mut xyz {
+            rest = skip_space(rest);
+            let Ok((x, n)) = fast_float2::parse_partial::<f64, _>(rest) else { return false };
+            rest = rest.get(n..).unwrap_or(&[]);
+            if !x.is_finite() || !at_token_end(rest) {
+                return false;
+            }
+            *slot = x;
+        }
+        rest = skip_space(rest);
+        if !(rest.is_empty() || rest.first() == Some(&b'#')) || self.mesh.positions.len() >= u32::MAX as usize {
+            return false;
+        }
+        self.mesh.positions.push(xyz);
+        true
+    }
+
+    /// A face of `v`, `v/vt`, `v//vn` or `v/vt/vn` references, all in range: true when read and stored.
+    fn face_fast(&mut self, line: &[u8]) -> bool {
+        self.corners.clear();
+        let mut rest = skip_space(line);
+        while let Some(&first) = rest.first() {
+            if first == b'#' {
+                break;
+            }
+            let Some((v, after)) = leading_int(rest) else { return false };
+            let Some(v) = resolve_fast(v, self.mesh.positions.len()).and_then(|v| u32::try_from(v).ok()) else {
+                return false;
+            };
+            rest = after;
+            if let [b'/', after @ ..] = rest {
+                rest = after;
+                if let Some((t, after)) = leading_int(rest) {
+                    if resolve_fast(t, self.texcoords).is_none() {
+                        return false;
+                    }
+                    rest = after;
+                }
+                if let [b'/', after @ ..] = rest {
+                    let Some((n, after)) = leading_int(after) else { return false };
+                    if resolve_fast(n, self.normals).is_none() {
+                        return false;
+                    }
+                    rest = after;
+                }
+            }
+            if !at_token_end(rest) {
+                return false;
+            }
+            self.corners.push(v);
+            rest = skip_space(rest);
+        }
+        if self.corners.len() < 3 {
+            return false;
+        }
+        if let Some((&first, others)) = self.corners.split_first() {
+            for pair in others.windows(2) {
+                if let [b, c] = *pair {
+                    self.mesh.faces.push([first, b, c]);
+                }
+            }
+        }
+        true
+    }
+
+    fn vertex<'a>(&mut self, tokens: impl Iterator<Item = &'a [u8]>) -> std::result::Result<(), String> {
         let mut xyz = [0.0f64; 3];
         let mut count = 0usize;
         for token in tokens {
@@ -333,7 +490,11 @@ impl Reader {
         Ok(())
     }
 
-    fn element<'a>(&mut self, kind: Element, tokens: impl Iterator<Item = &'a str>) -> std::result::Result<(), String> {
+    fn element<'a>(
+        &mut self,
+        kind: Element,
+        tokens: impl Iterator<Item = &'a [u8]>,
+    ) -> std::result::Result<(), String> {
         self.corners.clear();
         for token in tokens {
             let index = self.reference(kind, token)?;
@@ -368,7 +529,7 @@ impl Reader {
     }
 
     /// Checks one `v`, `v/vt`, `v//vn` or `v/vt/vn` reference and returns the 0-based position index.
-    fn reference(&self, kind: Element, token: &str) -> std::result::Result<u32, String> {
+    fn reference(&self, kind: Element, token: &[u8]) -> std::result::Result<u32, String> {
         let bad = || {
             format!(
                 "`{}` is not a valid {} vertex: write an integer index as in `7`, `7/2`, `7//3` or `7/2/3` \
@@ -377,10 +538,10 @@ impl Reader {
                 kind.name()
             )
         };
-        let mut parts = token.split('/');
-        let position = parts.next().unwrap_or("");
-        let texcoord = parts.next().unwrap_or("");
-        let normal = parts.next().unwrap_or("");
+        let mut parts = token.split(|&b| b == b'/');
+        let position = parts.next().unwrap_or(&[]);
+        let texcoord = parts.next().unwrap_or(&[]);
+        let normal = parts.next().unwrap_or(&[]);
         if parts.next().is_some() || position.is_empty() {
             return Err(bad());
         }
@@ -397,63 +558,62 @@ impl Reader {
 
     /// Resolves a 1-based or negative (relative) index against what has been read so far.
     /// `None` when the text is not an integer at all.
-    fn resolve(&self, kind: Element, target: Target, text: &str) -> Option<std::result::Result<usize, String>> {
-        let digits = text.strip_prefix(['+', '-']).unwrap_or(text);
-        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+    fn resolve(&self, kind: Element, target: Target, text: &[u8]) -> Option<std::result::Result<usize, String>> {
+        let (negative, digits) = match text {
+            [b'-', rest @ ..] => (true, rest),
+            [b'+', rest @ ..] => (false, rest),
+            _ => (false, text),
+        };
+        if digits.is_empty() || !digits.iter().all(u8::is_ascii_digit) {
             return None;
         }
-        let (count, what, lines, advice) = match target {
-            Target::Position => (self.mesh.positions.len(), "index", "vertices", ""),
-            Target::TexCoord => (
-                self.texcoords,
-                "texture-coordinate index",
-                "texture coordinates (`vt` lines)",
-                "; texture coordinates are not used here, but a reference to a missing one means the file is \
-                 damaged or cut: export it again (or without texture coordinates)",
-            ),
-            Target::Normal => (
-                self.normals,
-                "normal index",
-                "normals (`vn` lines)",
-                "; normals are not used here, but a reference to a missing one means the file is damaged or cut: \
-                 export it again (or without normals)",
-            ),
+        let count = match target {
+            Target::Position => self.mesh.positions.len(),
+            Target::TexCoord => self.texcoords,
+            Target::Normal => self.normals,
         };
-        let element = kind.name();
-        let out_of_range = |shown_index: &str| {
-            let lines = if count == 1 { singular(lines) } else { lines.to_string() };
-            if text.starts_with('-') {
-                format!(
-                    "{element} {what} {shown_index} is out of range: negative indices count back from the latest \
-                     one, and the file has {count} {lines} so far{advice}"
-                )
-            } else {
-                format!(
-                    "{element} {what} {shown_index} is out of range (the file has {count} {lines} so far); OBJ \
-                     indices are 1-based and refer to lines above the {element}{}",
-                    if advice.is_empty() { "; the file is damaged or cut: export it again" } else { advice }
-                )
-            }
-        };
-        let Ok(index) = text.parse::<i64>() else {
-            // Only digits with an optional sign: the number is too large for 64 bits.
-            return Some(Err(out_of_range(&shown(text))));
-        };
+        // The digits as a number; None when it does not fit in 64 bits.
+        let magnitude = digits.iter().try_fold(0i64, |acc, &d| acc.checked_mul(10)?.checked_add(i64::from(d - b'0')));
         let count_i = i64::try_from(count).unwrap_or(i64::MAX);
-        let resolved = if index == 0 {
-            return Some(Err(format!(
-                "{element} {what} 0 is invalid: OBJ indices start at 1 (1 = the first line of its kind, -1 = the \
-                 latest one); fix the index or export the file again"
-            )));
-        } else if index > 0 {
-            index - 1
-        } else {
-            count_i + index // no overflow: count_i >= 0 and index < 0
-        };
-        if resolved < 0 || resolved >= count_i {
-            return Some(Err(out_of_range(&index.to_string())));
+        if let Some(m) = magnitude {
+            // The common case, without building any message.
+            let resolved = if negative { count_i - m } else { m - 1 };
+            if m != 0 && resolved >= 0 && resolved < count_i {
+                return Some(
+                    usize::try_from(resolved).map_err(|_| self.index_error(kind, target, negative, &shown(text), count)),
+                );
+            }
+            if m == 0 {
+                let (what, ..) = describe(target);
+                return Some(Err(format!(
+                    "{} {what} 0 is invalid: OBJ indices start at 1 (1 = the first line of its kind, -1 = the \
+                     latest one); fix the index or export the file again",
+                    kind.name()
+                )));
+            }
+            let signed = if negative { -m } else { m };
+            return Some(Err(self.index_error(kind, target, negative, &signed.to_string(), count)));
         }
-        Some(usize::try_from(resolved).map_err(|_| out_of_range(&index.to_string())))
+        // Only digits with an optional sign: the number is too large for 64 bits.
+        Some(Err(self.index_error(kind, target, negative, &shown(text), count)))
+    }
+
+    fn index_error(&self, kind: Element, target: Target, negative: bool, shown_index: &str, count: usize) -> String {
+        let (what, lines, advice) = describe(target);
+        let element = kind.name();
+        let lines = if count == 1 { singular(lines) } else { lines.to_string() };
+        if negative {
+            format!(
+                "{element} {what} {shown_index} is out of range: negative indices count back from the latest \
+                 one, and the file has {count} {lines} so far{advice}"
+            )
+        } else {
+            format!(
+                "{element} {what} {shown_index} is out of range (the file has {count} {lines} so far); OBJ \
+                 indices are 1-based and refer to lines above the {element}{}",
+                if advice.is_empty() { "; the file is damaged or cut: export it again" } else { advice }
+            )
+        }
     }
 
     fn finish(self) -> Res<Mesh> {
@@ -469,6 +629,25 @@ impl Reader {
     }
 }
 
+/// How an index target is named in messages: (what, lines, advice).
+fn describe(target: Target) -> (&'static str, &'static str, &'static str) {
+    match target {
+        Target::Position => ("index", "vertices", ""),
+        Target::TexCoord => (
+            "texture-coordinate index",
+            "texture coordinates (`vt` lines)",
+            "; texture coordinates are not used here, but a reference to a missing one means the file is \
+             damaged or cut: export it again (or without texture coordinates)",
+        ),
+        Target::Normal => (
+            "normal index",
+            "normals (`vn` lines)",
+            "; normals are not used here, but a reference to a missing one means the file is damaged or cut: \
+             export it again (or without normals)",
+        ),
+    }
+}
+
 /// "vertices" -> "vertex", "normals (`vn` lines)" -> "normal (`vn` line)", ...
 fn singular(plural: &str) -> String {
     plural
@@ -479,8 +658,8 @@ fn singular(plural: &str) -> String {
 }
 
 /// Parses the `k`-th (0-based) number of a `v` line; it must be a finite decimal number.
-fn number(token: &str, k: usize) -> std::result::Result<f64, String> {
-    let parsed = token.parse::<f64>();
+fn number(token: &[u8], k: usize) -> std::result::Result<f64, String> {
+    let parsed = fast_float2::parse::<f64, _>(token);
     if let Ok(x) = parsed {
         if x.is_finite() {
             return Ok(x);
@@ -495,7 +674,7 @@ fn number(token: &str, k: usize) -> std::result::Result<f64, String> {
     };
     match parsed {
         Ok(x) => {
-            let looks_numeric = token.bytes().any(|b| b.is_ascii_digit());
+            let looks_numeric = token.iter().any(u8::is_ascii_digit);
             Err(if looks_numeric {
                 format!(
                     "{which} `{}` overflows (beyond 1.8e308, read as {x}); fix this vertex in the tool that wrote \
@@ -510,15 +689,22 @@ fn number(token: &str, k: usize) -> std::result::Result<f64, String> {
                 )
             })
         }
-        Err(_) if token.contains('#') => Err(format!(
+        Err(_) if token.contains(&b'#') => Err(format!(
             "{which} is `{}`, Microsoft's notation for NaN or infinity, not a finite number; the exporting tool \
              wrote an invalid vertex: fix it there and export again",
             shown(token)
         )),
-        Err(_) => Err(format!(
-            "{which} `{}` is not a number; write decimal numbers such as `1.5`, `-2`, `.5` or `3.1e2`",
-            shown(token)
-        )),
+        Err(_) => match token.iter().find(|&&b| b >= 0x80) {
+            Some(b) => Err(format!(
+                "{which} `{}` holds the byte 0x{b:02X}, which is not ASCII: numbers must be written with ASCII \
+                 digits; this is binary data or text in another encoding (UTF-16?), so export the mesh again",
+                shown(token)
+            )),
+            None => Err(format!(
+                "{which} `{}` is not a number; write decimal numbers such as `1.5`, `-2`, `.5` or `3.1e2`",
+                shown(token)
+            )),
+        },
     }
 }
 
@@ -716,9 +902,15 @@ mod tests {
         let (l, m) = err_bytes(b"\xFE\xFF\x00v\x00 \x001");
         assert_eq!(l, 1);
         assert!(m.contains("UTF-16"), "{m}");
-        let (l, m) = err_bytes(b"v 0 0 0\nv 1 0 0\r\n# caf\xE9\nv 0 1 0\n");
+        // Latin-1 (3ds Max) names and comments load; only numbers must be ASCII.
+        let latin1 = b"# caf\xE9\nmtllib m\xFC.mtl\no Fl\xFCgel\nv 0 0 0\nv 1 0 0\r\nusemtl \xC9t\xE9\nv 0 1 0\nf 1 2 3 # \xA9\n";
+        assert_eq!(parse_obj("t.obj", latin1).map(|m| (m.positions.len(), m.faces.len())), Ok((3, 1)));
+        let (l, m) = err_bytes(b"v 0 0 0\nv 1 0 0\r\nv 0 1\xE9 0\n");
         assert_eq!(l, 3);
-        assert!(m.contains("0xE9") && m.contains("column 6") && m.contains("UTF-8"), "{m}");
+        assert!(m.contains("0xE9") && m.contains("y coordinate") && m.contains("ASCII"), "{m}");
+        let (l, m) = err_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \xB3\n");
+        assert_eq!(l, 4);
+        assert!(m.contains("not a valid face vertex"), "{m}");
         let (l, m) = err_bytes(b"v 0 0 0\nv 1 0\x00 0\n");
         assert_eq!(l, 2);
         assert!(m.contains("NUL") && m.contains("column 6") && m.contains("binary"), "{m}");
@@ -727,7 +919,7 @@ mod tests {
         assert!(m.contains("0x01"), "{m}");
         // The earliest problem wins.
         assert_eq!(err_bytes(b"v 0 0 0\n\x00\n\xFF\n").0, 2);
-        assert_eq!(err_bytes(b"v 0 0 0\n\xFF\n\x00\n").0, 2);
+        assert_eq!(err_bytes(b"v 0 0 0\n\xFF\n\x00\n").0, 3);
         // UTF-16 without a byte-order mark is NUL bytes.
         assert_eq!(err_bytes(b"v\x00 \x000\x00").0, 1);
     }

@@ -1,0 +1,42 @@
+//! Reading speed: `cargo run --release --example bench_read -- DIR_OR_FILES... [--repeat N]`.
+//! Prints JSON: bytes, files, and per repeat the time to parse every file (no population assembly) and to
+//! build the population (parse + checks + unit box).
+use std::time::Instant;
+
+fn main() {
+    let mut paths = Vec::new();
+    let mut repeat = 5usize;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        if a == "--repeat" {
+            repeat = args.next().and_then(|r| r.parse().ok()).unwrap_or(5);
+        } else {
+            paths.push(std::path::PathBuf::from(a));
+        }
+    }
+    let mut files = Vec::new();
+    for p in &paths {
+        if p.is_dir() {
+            let mut entries: Vec<_> = std::fs::read_dir(p).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_file()).collect();
+            entries.sort();
+            for e in entries {
+                files.push((e.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(&e).unwrap()));
+            }
+        } else {
+            files.push((p.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(p).unwrap()));
+        }
+    }
+    let bytes: usize = files.iter().map(|f| f.1.len()).sum();
+    let mut parse_ms = Vec::new();
+    for _ in 0..repeat {
+        let t = Instant::now();
+        for (name, b) in &files {
+            let m = posemfa::mesh::obj::parse_obj(name, b).unwrap();
+            std::hint::black_box(m);
+        }
+        parse_ms.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    parse_ms.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let med = parse_ms[parse_ms.len() / 2];
+    println!("{{\"files\": {}, \"bytes\": {bytes}, \"parse_ms\": {parse_ms:?}, \"median_ms\": {med:.1}, \"mb_per_s\": {:.0}}}", files.len(), bytes as f64 / 1e6 / (med / 1e3));
+}
