@@ -1,9 +1,22 @@
-//! posemfa command line: `inspect`, `fit`, `bench` (and more as they land). Run `posemfa help`.
+//! posemfa command line. Run `posemfa help`.
+//!
+//! Layout, so that a subcommand or an option is added in one place:
+//! - [`commands`] lists every subcommand: name, synopsis, one line of what it does, its arguments type and its
+//!   function (`cmd_*`, one per subcommand).
+//! - Every option is one row ([`Opt`]) of an option group ([`Group`]): name, value name, help, and how it sets its
+//!   field. Groups shared by several subcommands (the fit options, the articulation band) are written once,
+//!   generic over the subcommands' argument types through [`HasFit`] / [`HasBand`].
+//! - [`parse`] turns the words after the subcommand into its arguments type with `lexopt` (which does the
+//!   tokenising: `--name value`, `--name=value`, `--`), and `help` prints the same tables, so the help can never
+//!   miss an option.
 
-use posemfa::export::json::{fit_to_json, FitJson};
+use posemfa::articulate::{Blend, RootRule, Skin};
+use posemfa::export::gltf::Weights;
+use posemfa::export::json::fit_to_json;
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::{Pipeline, Progress, Stage};
+use posemfa::model::hierarchy::{FitResult, Pipeline, Progress, Stage};
 use posemfa::model::{LambdaRule, Params};
+use std::ffi::OsString;
 use std::io::Write;
 use std::process::ExitCode;
 
@@ -14,88 +27,445 @@ macro_rules! out {
     }};
 }
 
-const USAGE: &str = "posemfa: learn rigid parts and their motion from registered triangle meshes
+// ================================================================ the option machinery
 
-USAGE:
-  posemfa inspect FILE.obj                  print vertices and triangles as JSON (exit 1 on error)
-  posemfa fit DIR_OR_FILES... [options]      fit the model (Algorithm 1) and print a summary
-  posemfa bench DIR_OR_FILES... [options]    fit and print per-stage figures as JSON
-  posemfa generate PRESET [--vertices N] [--poses P] [--seed S] [--band B] [--noise X] --out DIR
-                                             write a generated population (quadruped, arm, snake, blob) as OBJ
-  Instead of DIR_OR_FILES, fit and bench accept synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]], a generated
-  population whose ground truth (adjusted Rand index, rotation error) is then reported too.
+/// One option of a subcommand whose arguments are a `T`.
+struct Opt<T> {
+    /// `--name`.
+    name: &'static str,
+    help: &'static str,
+    kind: Kind<T>,
+}
 
-FIT OPTIONS:
-  --parts M          coarse parts (default 11)
-  --seed S           random seed (default 0)
-  --tol T            convergence tolerance on |dL|/n_v (default 1e-3)
-  --max-iter N       iteration cap per AECM run (default 300)
-  --floor F          variance floor, unit-box units^2 (default 1e-7)
-  --literal-eq18     use the paper's literal eq 18 for Lambda (breaks monotonicity; for teaching)
-  --no-px            no parameter-expanded step at the end of cycle 2 (PX-EM, on by default; same optimum)
-  --refine-threshold E   Algorithm 1: stop splitting a part below this mean variance (default 1e-5)
-  --max-subparts N   Algorithm 1: most sub-parts per coarse part (default 6)
-  --refine-tol T     tolerance of the coarse and refinement AECM runs (default 1e-2)
-  --no-refine        stop after the coarse AECM
-  --json OUT         write the result as JSON
-  --quiet            no per-stage progress on stderr
-";
+enum Kind<T> {
+    /// `--name`: sets its field.
+    Flag(fn(&mut T)),
+    /// `--name VALUE` (the value's name in the help): stores the value, or says what is wrong with it (the caller
+    /// names the option).
+    Value(&'static str, fn(&mut T, &str) -> Result<(), String>),
+}
 
-struct Opts {
+fn val<T>(
+    name: &'static str,
+    value: &'static str,
+    help: &'static str,
+    set: fn(&mut T, &str) -> Result<(), String>,
+) -> Opt<T> {
+    Opt { name, help, kind: Kind::Value(value, set) }
+}
+
+fn flag<T>(name: &'static str, help: &'static str, set: fn(&mut T)) -> Opt<T> {
+    Opt { name, help, kind: Kind::Flag(set) }
+}
+
+/// A titled list of options. `shared` groups (used by several subcommands) are printed once by `posemfa help`.
+struct Group<T> {
+    title: &'static str,
+    shared: bool,
+    opts: Vec<Opt<T>>,
+}
+
+/// A subcommand's arguments: its option groups and what it does with a word that is not an option.
+trait Args: Default + 'static {
+    fn groups() -> Vec<Group<Self>>;
+    fn positional(&mut self, word: String) -> Result<(), String>;
+}
+
+/// Stores a text value.
+fn text(slot: &mut Option<String>, v: &str) -> Result<(), String> {
+    *slot = Some(v.to_string());
+    Ok(())
+}
+
+fn num<N: std::str::FromStr>(v: &str) -> Result<N, String> {
+    v.parse().map_err(|_| format!("'{v}' is not a valid number"))
+}
+
+/// Parses `words` (the arguments after the subcommand) into `T`; `Ok(None)` when `--help` / `-h` was asked for.
+fn parse<T: Args>(cmd: &str, words: Vec<OsString>) -> Result<Option<T>, String> {
+    use lexopt::prelude::*;
+    let groups = T::groups();
+    let mut args = T::default();
+    let mut p = lexopt::Parser::from_args(words);
+    let see = format!("(`posemfa help {cmd}` lists its options)");
+    while let Some(arg) = p.next().map_err(|e| format!("{cmd}: {e} {see}"))? {
+        match arg {
+            Long("help") | Short('h') => return Ok(None),
+            Long(name) => {
+                let name = format!("--{name}");
+                let opt = groups
+                    .iter()
+                    .flat_map(|g| &g.opts)
+                    .find(|o| o.name == name)
+                    .ok_or_else(|| format!("{cmd}: unknown option {name} {see}"))?;
+                match opt.kind {
+                    Kind::Flag(set) => set(&mut args),
+                    Kind::Value(what, set) => {
+                        let missing = || format!("{cmd}: {name} needs a value ({name} {what})");
+                        let v =
+                            p.value().map_err(|_| missing())?.string().map_err(|e| format!("{cmd}: {name}: {e}"))?;
+                        if v.starts_with("--") {
+                            return Err(format!("{} (got the option {v})", missing()));
+                        }
+                        set(&mut args, &v).map_err(|e| format!("{cmd}: {name}: {e}"))?;
+                    }
+                }
+            }
+            Short(c) => return Err(format!("{cmd}: unknown option -{c} {see}")),
+            Value(word) => {
+                let word = word.string().map_err(|e| format!("{cmd}: {e}"))?;
+                args.positional(word).map_err(|e| format!("{cmd}: {e} {see}"))?;
+            }
+        }
+    }
+    Ok(Some(args))
+}
+
+/// Help text of a group, one option per line.
+struct GroupHelp {
+    title: &'static str,
+    shared: bool,
+    lines: Vec<(String, &'static str)>,
+}
+
+/// One subcommand.
+struct Command {
+    name: &'static str,
+    synopsis: &'static str,
+    about: &'static str,
+    groups: Vec<GroupHelp>,
+    run: Box<dyn Fn(Vec<OsString>) -> Result<(), String>>,
+}
+
+fn command<T: Args>(
+    name: &'static str,
+    synopsis: &'static str,
+    about: &'static str,
+    run: fn(T) -> Result<(), String>,
+) -> Command {
+    let groups = T::groups()
+        .into_iter()
+        .map(|g| GroupHelp {
+            title: g.title,
+            shared: g.shared,
+            lines: g
+                .opts
+                .iter()
+                .map(|o| match o.kind {
+                    Kind::Flag(_) => (o.name.to_string(), o.help),
+                    Kind::Value(v, _) => (format!("{} {v}", o.name), o.help),
+                })
+                .collect(),
+        })
+        .collect();
+    Command {
+        name,
+        synopsis,
+        about,
+        groups,
+        run: Box::new(move |words| match parse::<T>(name, words)? {
+            Some(args) => run(args),
+            None => {
+                out!("{}", command_help(&commands(), name).unwrap_or_default());
+                Ok(())
+            }
+        }),
+    }
+}
+
+const HEADER: &str = "posemfa: learn rigid parts and their motion from registered triangle meshes
+
+Inputs (DIR_OR_FILES): a folder of OBJ files, the files themselves (natural order of the names), or
+synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]], a generated population (quadruped, arm, snake, blob)
+whose ground truth (adjusted Rand index, rotation error) is then reported too. Poses are numbered from 1.";
+
+fn group_text(g: &GroupHelp) -> String {
+    let mut s = format!("  {}:\n", g.title);
+    for (left, help) in &g.lines {
+        if left.len() <= 22 {
+            s += &format!("    {left:<22} {help}\n");
+        } else {
+            s += &format!("    {left}\n    {:<22} {help}\n", "");
+        }
+    }
+    s
+}
+
+fn command_text(c: &Command, shared_in_full: bool) -> String {
+    let mut s = format!("posemfa {} {}\n    {}\n", c.name, c.synopsis, c.about);
+    let mut elsewhere = Vec::new();
+    for g in &c.groups {
+        if g.shared && !shared_in_full {
+            elsewhere.push(g.title);
+        } else {
+            s += &group_text(g);
+        }
+    }
+    if !elsewhere.is_empty() {
+        s += &format!("  and the {} (below)\n", elsewhere.join(", the "));
+    }
+    s
+}
+
+/// `posemfa help`: every subcommand with its options; each shared group once, at the end.
+fn full_help(cmds: &[Command]) -> String {
+    let mut s =
+        format!("{HEADER}\n\nUSAGE: posemfa COMMAND ARGS... [options]   (`posemfa help COMMAND`: one command)\n");
+    let mut shared: Vec<&GroupHelp> = Vec::new();
+    for c in cmds {
+        s += "\n";
+        s += &command_text(c, false);
+        for g in c.groups.iter().filter(|g| g.shared) {
+            if !shared.iter().any(|h| h.title == g.title) {
+                shared.push(g);
+            }
+        }
+    }
+    for g in shared {
+        s += "\n";
+        s += &group_text(g);
+    }
+    s += "\nposemfa help [COMMAND]\n    this help, or one command's (also `posemfa COMMAND --help`)\n";
+    s
+}
+
+fn command_help(cmds: &[Command], name: &str) -> Option<String> {
+    cmds.iter().find(|c| c.name == name).map(|c| format!("{HEADER}\n\n{}", command_text(c, true)))
+}
+
+// ================================================================ the subcommands
+
+/// Every subcommand, in the order `posemfa help` lists them.
+fn commands() -> Vec<Command> {
+    vec![
+        command::<InspectArgs>(
+            "inspect",
+            "FILE.obj",
+            "print vertices and triangles as JSON (exit 1 on error)",
+            cmd_inspect,
+        ),
+        command::<FitRun>(
+            "fit",
+            "DIR_OR_FILES... [options]",
+            "fit the model (Algorithm 1) and print a summary",
+            cmd_fit,
+        ),
+        command::<FitRun>(
+            "bench",
+            "DIR_OR_FILES... [options]",
+            "fit and print per-stage figures as JSON (time, iterations, E-step GFLOP/s, kernel limits, peak memory)",
+            cmd_bench,
+        ),
+        command::<GenerateArgs>(
+            "generate",
+            "PRESET --out DIR [options]",
+            "write a generated population (quadruped, arm, snake, blob) as OBJ files",
+            cmd_generate,
+        ),
+        command::<InterpolateArgs>(
+            "interpolate",
+            "DIR_OR_FILES... --from I --to J --t T --out pose.obj [options]",
+            "fit, then write one interpolated pose as OBJ in the original units with the population's faces",
+            cmd_interpolate,
+        ),
+        command::<GltfArgs>(
+            "export-gltf",
+            "DIR_OR_FILES... --out model.glb [options]",
+            "fit, then write binary glTF 2.0: mesh bound in one pose's rigid reconstruction, skeleton, skin,\n    \
+             clips \"training poses\" (one pose per second) and \"interpolated\"",
+            cmd_export_gltf,
+        ),
+        command::<ReportArgs>(
+            "articulate-report",
+            "DIR_OR_FILES... --from I --to J [options]",
+            "fit, then print endpoint errors, volume and edge stretch at t for every interpolation method, as JSON",
+            cmd_articulate_report,
+        ),
+    ]
+}
+
+fn main() -> ExitCode {
+    let mut words: Vec<OsString> = std::env::args_os().skip(1).collect();
+    let cmds = commands();
+    let first = words.first().map(|w| w.to_string_lossy().into_owned());
+    let res = match first.as_deref() {
+        None => Err(format!("no command\n\n{}", full_help(&cmds))),
+        Some("help" | "--help" | "-h") => match words.get(1).map(|w| w.to_string_lossy().into_owned()) {
+            None => {
+                out!("{}", full_help(&cmds));
+                Ok(())
+            }
+            Some(name) => match command_help(&cmds, &name) {
+                Some(h) => {
+                    out!("{h}");
+                    Ok(())
+                }
+                None => Err(format!("help: unknown command '{name}' (commands: {})", names(&cmds))),
+            },
+        },
+        Some(name) => match cmds.iter().find(|c| c.name == name) {
+            Some(c) => (c.run)(words.split_off(1)),
+            None => Err(format!("unknown command '{name}' (commands: {}; `posemfa help` lists them)", names(&cmds))),
+        },
+    };
+    match res {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn names(cmds: &[Command]) -> String {
+    cmds.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
+}
+
+// ---------------------------------------------------------------- shared option groups
+
+/// Inputs and fit parameters: every subcommand that fits.
+#[derive(Default)]
+struct FitArgs {
     inputs: Vec<String>,
     params: Params,
-    json: Option<String>,
-    quiet: bool,
-    repeat: usize,
 }
 
-fn parse_opts(args: &[String]) -> Result<Opts, String> {
-    let mut o = Opts { inputs: Vec::new(), params: Params::default(), json: None, quiet: false, repeat: 1 };
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = |name: &str| it.next().cloned().ok_or_else(|| format!("{name} needs a value"));
-        fn num<T: std::str::FromStr>(name: &str, v: String) -> Result<T, String> {
-            v.parse().map_err(|_| format!("{name}: '{v}' is not a valid number"))
+trait HasFit {
+    fn fit(&mut self) -> &mut FitArgs;
+}
+
+fn fit_group<T: HasFit>() -> Group<T> {
+    Group {
+        title: "fit options",
+        shared: true,
+        opts: vec![
+            val("--parts", "M", "coarse parts (default 11)", |o: &mut T, v| num(v).map(|n| o.fit().params.parts = n)),
+            val("--seed", "S", "random seed (default 0)", |o: &mut T, v| num(v).map(|n| o.fit().params.seed = n)),
+            val("--tol", "T", "convergence tolerance on |dL|/n_v (default 1e-3)", |o: &mut T, v| {
+                num(v).map(|n| o.fit().params.tol = n)
+            }),
+            val("--max-iter", "N", "iteration cap per AECM run (default 300)", |o: &mut T, v| {
+                num(v).map(|n| o.fit().params.max_iter = n)
+            }),
+            val("--floor", "F", "variance floor, unit-box units^2 (default 1e-7)", |o: &mut T, v| {
+                num(v).map(|n| o.fit().params.variance_floor = n)
+            }),
+            flag(
+                "--literal-eq18",
+                "the paper's literal eq 18 for Lambda (breaks monotonicity; for teaching)",
+                |o: &mut T| {
+                    o.fit().params.lambda_rule = LambdaRule::PaperEq18;
+                },
+            ),
+            flag(
+                "--no-px",
+                "no parameter-expanded step at the end of cycle 2 (PX-EM, on by default; same optimum)",
+                |o: &mut T| {
+                    o.fit().params.px_em = false;
+                },
+            ),
+            val(
+                "--refine-threshold",
+                "E",
+                "Algorithm 1: stop splitting a part below this mean variance (default 1e-5)",
+                |o: &mut T, v| num(v).map(|n| o.fit().params.refine_threshold = n),
+            ),
+            val("--max-subparts", "N", "Algorithm 1: most sub-parts per coarse part (default 6)", |o: &mut T, v| {
+                num(v).map(|n| o.fit().params.max_subparts = n)
+            }),
+            val(
+                "--refine-tol",
+                "T",
+                "tolerance of the coarse and refinement AECM runs (default 1e-2)",
+                |o: &mut T, v| num(v).map(|n| o.fit().params.refine_tol = n),
+            ),
+            flag("--no-refine", "stop after the coarse AECM", |o: &mut T| o.fit().params.refine = false),
+        ],
+    }
+}
+
+impl FitArgs {
+    /// The population (and its truth when generated), after checking the parameters.
+    fn load(&self) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
+        if self.inputs.is_empty() {
+            return Err("no input: give a folder of OBJ files, the files, or synth:PRESET".into());
         }
-        match a.as_str() {
-            "--parts" => o.params.parts = num("--parts", val("--parts")?)?,
-            "--seed" => o.params.seed = num("--seed", val("--seed")?)?,
-            "--tol" => o.params.tol = num("--tol", val("--tol")?)?,
-            "--max-iter" => o.params.max_iter = num("--max-iter", val("--max-iter")?)?,
-            "--floor" => o.params.variance_floor = num("--floor", val("--floor")?)?,
-            "--repeat" => o.repeat = num("--repeat", val("--repeat")?)?,
-            "--refine-threshold" => o.params.refine_threshold = num("--refine-threshold", val("--refine-threshold")?)?,
-            "--refine-tol" => o.params.refine_tol = num("--refine-tol", val("--refine-tol")?)?,
-            "--max-subparts" => o.params.max_subparts = num("--max-subparts", val("--max-subparts")?)?,
-            "--literal-eq18" => o.params.lambda_rule = LambdaRule::PaperEq18,
-            "--no-px" => o.params.px_em = false,
-            "--no-refine" => o.params.refine = false,
-            "--json" => o.json = Some(val("--json")?),
-            "--quiet" => o.quiet = true,
-            s if s.starts_with("--") => return Err(format!("unknown option {s}\n\n{USAGE}")),
-            s => o.inputs.push(s.to_string()),
+        self.params.validate().map_err(|e| e.to_string())?;
+        load_inputs(&self.inputs)
+    }
+}
+
+/// Half-width of the smooth skin weights' blend band: the articulation subcommands.
+trait HasBand {
+    fn band(&mut self) -> &mut Option<f64>;
+}
+
+fn band_group<T: HasBand>() -> Group<T> {
+    Group {
+        title: "articulation options",
+        shared: true,
+        opts: vec![val(
+            "--band",
+            "B",
+            "smooth weights: blend half-width as a fraction of the smaller part's RMS radius (default 1)",
+            |o: &mut T, v| num(v).map(|n| *o.band() = Some(n)),
+        )],
+    }
+}
+
+/// `HasFit` and `HasBand` for an articulation subcommand's arguments (fields `fit` and `band`).
+macro_rules! articulation_args {
+    ($t:ty) => {
+        impl HasFit for $t {
+            fn fit(&mut self) -> &mut FitArgs {
+                &mut self.fit
+            }
         }
-    }
-    if o.inputs.is_empty() {
-        return Err(format!("no input: give a folder of OBJ files or the files\n\n{USAGE}"));
-    }
-    o.params.validate().map_err(|e| e.to_string())?;
-    Ok(o)
+        impl HasBand for $t {
+            fn band(&mut self) -> &mut Option<f64> {
+                &mut self.band
+            }
+        }
+    };
 }
 
-fn stage_name(s: &Stage) -> String {
-    match s {
-        Stage::Coarse => "coarse".into(),
-        Stage::Refine { part, of, sub_parts } => format!("refining part {} of {of} ({sub_parts} sub-parts)", part + 1),
-        Stage::Final => "final".into(),
-        Stage::Done => "done".into(),
+fn pose_number(v: &str) -> Result<usize, String> {
+    v.parse::<usize>().map_err(|_| format!("'{v}' is not a pose number (poses are numbered from 1)"))
+}
+
+/// A 1-based pose number checked against the population; 0-based.
+fn pose_index(name: &str, k: Option<usize>, n: usize) -> Result<usize, String> {
+    let k = k.ok_or_else(|| format!("{name} is required"))?;
+    if k == 0 || k > n {
+        return Err(format!("{name} {k}: poses are numbered 1 to {n} (natural order of the file names)"));
+    }
+    Ok(k - 1)
+}
+
+// ---------------------------------------------------------------- inspect
+
+#[derive(Default)]
+struct InspectArgs {
+    file: Option<String>,
+}
+
+impl Args for InspectArgs {
+    fn groups() -> Vec<Group<Self>> {
+        Vec::new()
+    }
+    fn positional(&mut self, word: String) -> Result<(), String> {
+        if self.file.is_some() {
+            return Err(format!("inspect takes one file (got a second: {word})"));
+        }
+        self.file = Some(word);
+        Ok(())
     }
 }
 
-fn cmd_inspect(args: &[String]) -> Result<(), String> {
-    let [file] = args else { return Err(format!("inspect takes one file\n\n{USAGE}")) };
-    let bytes = std::fs::read(file).map_err(|e| format!("cannot read {file}: {e}"))?;
-    let name = std::path::Path::new(file).file_name().map_or(file.clone(), |n| n.to_string_lossy().into_owned());
+fn cmd_inspect(a: InspectArgs) -> Result<(), String> {
+    let file = a.file.ok_or("inspect: give one OBJ file (posemfa inspect FILE.obj)")?;
+    let bytes = std::fs::read(&file).map_err(|e| format!("cannot read {file}: {e}"))?;
+    let name = std::path::Path::new(&file).file_name().map_or(file.clone(), |n| n.to_string_lossy().into_owned());
     let mesh = posemfa::mesh::obj::parse_obj(&name, &bytes).map_err(|e| e.to_string())?;
     let out = serde_json::json!({
         "file": name,
@@ -108,9 +478,62 @@ fn cmd_inspect(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-fn run_fit(o: &Opts, pop: &Population) -> Result<posemfa::model::hierarchy::FitResult, String> {
-    let mut pipe = Pipeline::new(pop, &o.params).map_err(|e| e.to_string())?;
-    let quiet = o.quiet;
+// ---------------------------------------------------------------- fit, bench
+
+struct FitRun {
+    fit: FitArgs,
+    json: Option<String>,
+    quiet: bool,
+    repeat: usize,
+}
+
+impl Default for FitRun {
+    fn default() -> Self {
+        FitRun { fit: FitArgs::default(), json: None, quiet: false, repeat: 1 }
+    }
+}
+
+impl HasFit for FitRun {
+    fn fit(&mut self) -> &mut FitArgs {
+        &mut self.fit
+    }
+}
+
+impl Args for FitRun {
+    fn groups() -> Vec<Group<Self>> {
+        vec![
+            Group {
+                title: "output",
+                shared: false,
+                opts: vec![
+                    val("--json", "OUT", "write the result as JSON", |o: &mut Self, v| text(&mut o.json, v)),
+                    flag("--quiet", "no per-stage progress on stderr", |o: &mut Self| o.quiet = true),
+                    val("--repeat", "N", "fit N times; times are the median (default 1)", |o: &mut Self, v| {
+                        num::<usize>(v).map(|n| o.repeat = n.max(1))
+                    }),
+                ],
+            },
+            fit_group(),
+        ]
+    }
+    fn positional(&mut self, word: String) -> Result<(), String> {
+        self.fit.inputs.push(word);
+        Ok(())
+    }
+}
+
+fn stage_name(s: &Stage) -> String {
+    match s {
+        Stage::Coarse => "coarse".into(),
+        Stage::Refine { part, of, sub_parts } => format!("refining part {} of {of} ({sub_parts} sub-parts)", part + 1),
+        Stage::Final => "final".into(),
+        Stage::Done => "done".into(),
+    }
+}
+
+/// Fits `pop` with `params`; with `quiet` false, each stage's name goes to stderr as it starts.
+fn run_fit(params: &Params, pop: &Population, quiet: bool) -> Result<FitResult, String> {
+    let mut pipe = Pipeline::new(pop, params).map_err(|e| e.to_string())?;
     let mut last_stage = String::new();
     let mut observer = |p: &Progress| {
         let name = stage_name(&p.stage);
@@ -124,89 +547,102 @@ fn run_fit(o: &Opts, pop: &Population) -> Result<posemfa::model::hierarchy::FitR
     pipe.run(&mut observer).map_err(|e| e.to_string())
 }
 
-fn cmd_fit(args: &[String], bench: bool) -> Result<(), String> {
-    let o = parse_opts(args)?;
+fn cmd_fit(o: FitRun) -> Result<(), String> {
     let t_load = posemfa::clock::now_ms();
-    let (pop, truth) = load_inputs(&o.inputs)?;
+    let (pop, truth) = o.fit.load()?;
     let load_ms = posemfa::clock::now_ms() - t_load;
-    let mut result = None;
     let mut totals = Vec::new();
-    // bench: the kernels right after each fit, so that each fraction compares two measurements of one moment
-    let data = if bench { Some(posemfa::model::data::Data::from_population(&pop)) } else { None };
-    let mut limits = Vec::new();
-    for _ in 0..o.repeat.max(1) {
+    let mut result = None;
+    for _ in 0..o.repeat {
         let t0 = posemfa::clock::now_ms();
-        let r = run_fit(&o, &pop)?;
+        result = Some(run_fit(&o.fit.params, &pop, o.quiet)?);
         totals.push(posemfa::clock::now_ms() - t0);
-        if let Some(data) = &data {
-            limits.push(posemfa::model::limit::limit_report(data, &r.model.parts, &r.stats, 200.0));
-        }
-        result = Some(r);
     }
-    let result = result.expect("at least one run");
-    let fit_ms = median(&mut totals.clone());
+    let result = result.expect("repeat is at least 1");
     let m = &result.model;
-    if bench {
-        let data = data.as_ref().expect("bench keeps the data");
-        let mut fractions: Vec<f64> = limits.iter().map(|l| l.fraction).collect();
-        let limit = limits.last().expect("at least one run");
-        let vertex_major = posemfa::model::estep::kernel_rate_vertex_major(data, &m.parts, 200.0);
-        let stages: Vec<_> = result
-            .stats
-            .iter()
-            .zip(&limit.stage_fractions)
-            .map(|(s, fraction)| {
-                serde_json::json!({
-                    "stage": s.name, "ms": s.ms, "iterations": s.iterations, "aecm_runs": s.aecm_runs,
-                    "estep_ms": s.estep_ms, "estep_gflop": s.estep_flops / 1e9, "estep_gflop_f32": s.estep_flops_f32 / 1e9,
-                    "estep_gflops_per_s": if s.estep_ms > 0.0 { s.estep_flops / s.estep_ms / 1e6 } else { 0.0 },
-                    "estep_fraction_of_limit": fraction,
-                })
-            })
-            .collect();
-        let out = serde_json::json!({
-            "runtime": "native",
-            "inputs": o.inputs, "shapes": pop.n_shapes(), "vertices": pop.n_vertices(),
-            "load_ms": load_ms, "fit_ms_median": fit_ms, "fit_ms_all": totals,
-            "parts": m.n_parts(), "rmse": m.rmse(&pop), "iterations": result.stats.iter().map(|s| s.iterations).sum::<usize>(),
-            "stages": stages,
-            "kernel_limit_f64": limit.f64, "kernel_limit_f32": limit.f32,
-            "estep_fraction_of_limit": median(&mut fractions), "estep_fraction_of_limit_all": fractions,
-            "kernel_vertex_major_f64": vertex_major,
-            "peak_memory_bytes": peak_rss_bytes(),
-            "ground_truth": truth.as_ref().map(|g| ground_truth_json(g, m)),
-        });
-        out!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
-    } else {
-        let s = &result.stages;
-        out!(
-            "{} shapes x {} vertices | parts: coarse {} -> refined {} -> final {} | final AECM {} iterations ({}) | RMSE {:.5} (unit box) | {:.0} ms (load {:.0} ms)",
-            pop.n_shapes(),
-            pop.n_vertices(),
-            s.coarse_parts,
-            s.refined_parts,
-            s.final_parts,
-            m.iterations,
-            if m.converged { "converged" } else { "NOT converged: iteration cap reached" },
-            m.rmse(&pop),
-            fit_ms,
-            load_ms
-        );
-        if let Some(g) = &truth {
-            out!("  ground truth: {}", ground_truth_json(g, m));
-        }
-        for st in &result.stats {
-            out!("  {:<7} {:>8.1} ms  {:>5} iterations in {:>3} AECM runs", st.name, st.ms, st.iterations, st.aecm_runs);
-        }
+    let s = &result.stages;
+    out!(
+        "{} shapes x {} vertices | parts: coarse {} -> refined {} -> final {} | final AECM {} iterations ({}) | RMSE {:.5} (unit box) | {:.0} ms (load {:.0} ms)",
+        pop.n_shapes(),
+        pop.n_vertices(),
+        s.coarse_parts,
+        s.refined_parts,
+        s.final_parts,
+        m.iterations,
+        if m.converged { "converged" } else { "NOT converged: iteration cap reached" },
+        m.rmse(&pop),
+        median(&mut totals),
+        load_ms
+    );
+    if let Some(g) = &truth {
+        out!("  ground truth: {}", ground_truth_json(g, m));
+    }
+    for st in &result.stats {
+        out!("  {:<7} {:>8.1} ms  {:>5} iterations in {:>3} AECM runs", st.name, st.ms, st.iterations, st.aecm_runs);
     }
     if let Some(path) = &o.json {
-        let _ = FitJson::new(&pop, &result);
-        std::fs::write(path, fit_to_json(&pop, &result)).map_err(|e| format!("cannot write {path}: {e}"))?;
-        if !bench {
-            out!("wrote {path}");
-        }
+        write_json(path, &pop, &result)?;
+        out!("wrote {path}");
     }
     Ok(())
+}
+
+fn cmd_bench(o: FitRun) -> Result<(), String> {
+    let t_load = posemfa::clock::now_ms();
+    let (pop, truth) = o.fit.load()?;
+    let load_ms = posemfa::clock::now_ms() - t_load;
+    // the kernels right after each fit, so that each fraction compares two measurements of one moment
+    let data = posemfa::model::data::Data::from_population(&pop);
+    let mut totals = Vec::new();
+    let mut limits = Vec::new();
+    let mut result = None;
+    for _ in 0..o.repeat {
+        let t0 = posemfa::clock::now_ms();
+        let r = run_fit(&o.fit.params, &pop, o.quiet)?;
+        totals.push(posemfa::clock::now_ms() - t0);
+        limits.push(posemfa::model::limit::limit_report(&data, &r.model.parts, &r.stats, 200.0));
+        result = Some(r);
+    }
+    let result = result.expect("repeat is at least 1");
+    let m = &result.model;
+    let mut fractions: Vec<f64> = limits.iter().map(|l| l.fraction).collect();
+    let limit = limits.last().expect("repeat is at least 1");
+    let vertex_major = posemfa::model::estep::kernel_rate_vertex_major(&data, &m.parts, 200.0);
+    let stages: Vec<_> = result
+        .stats
+        .iter()
+        .zip(&limit.stage_fractions)
+        .map(|(s, fraction)| {
+            serde_json::json!({
+                "stage": s.name, "ms": s.ms, "iterations": s.iterations, "aecm_runs": s.aecm_runs,
+                "estep_ms": s.estep_ms, "estep_gflop": s.estep_flops / 1e9, "estep_gflop_f32": s.estep_flops_f32 / 1e9,
+                "estep_gflops_per_s": if s.estep_ms > 0.0 { s.estep_flops / s.estep_ms / 1e6 } else { 0.0 },
+                "estep_fraction_of_limit": fraction,
+            })
+        })
+        .collect();
+    let fit_ms = median(&mut totals.clone());
+    let out = serde_json::json!({
+        "runtime": "native",
+        "inputs": o.fit.inputs, "shapes": pop.n_shapes(), "vertices": pop.n_vertices(),
+        "load_ms": load_ms, "fit_ms_median": fit_ms, "fit_ms_all": totals,
+        "parts": m.n_parts(), "rmse": m.rmse(&pop), "iterations": result.stats.iter().map(|s| s.iterations).sum::<usize>(),
+        "stages": stages,
+        "kernel_limit_f64": limit.f64, "kernel_limit_f32": limit.f32,
+        "estep_fraction_of_limit": median(&mut fractions), "estep_fraction_of_limit_all": fractions,
+        "kernel_vertex_major_f64": vertex_major,
+        "peak_memory_bytes": peak_rss_bytes(),
+        "ground_truth": truth.as_ref().map(|g| ground_truth_json(g, m)),
+    });
+    out!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+    if let Some(path) = &o.json {
+        write_json(path, &pop, &result)?;
+    }
+    Ok(())
+}
+
+fn write_json(path: &str, pop: &Population, result: &FitResult) -> Result<(), String> {
+    std::fs::write(path, fit_to_json(pop, result)).map_err(|e| format!("cannot write {path}: {e}"))
 }
 
 /// Peak resident set of this process (Linux: VmHWM in /proc/self/status), or null elsewhere.
@@ -226,147 +662,254 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
-fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let res = match args.first().map(String::as_str) {
-        Some("inspect") => cmd_inspect(&args[1..]),
-        Some("generate") => cmd_generate(&args[1..]),
-        Some("fit") => cmd_fit(&args[1..], false),
-        Some("bench") => cmd_fit(&args[1..], true),
-        Some("interpolate") => cmd_interpolate(&args[1..]),
-        Some("export-gltf") => cmd_export_gltf(&args[1..]),
-        Some("articulate-report") => cmd_articulate_report(&args[1..]),
-        Some("help") | Some("--help") | Some("-h") => {
-            out!("{USAGE}");
-            Ok(())
-        }
-        Some(other) => Err(format!("unknown command '{other}'\n\n{USAGE}")),
-        None => Err(USAGE.to_string()),
-    };
-    match res {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-// ---------------------------------------------------------------- articulation (issue 4)
-
-const ARTICULATE_USAGE: &str = "ARTICULATION (each fits DIR first; fit options as for `fit`; poses are 1-based, natural order):
-  posemfa interpolate DIR --from I --to J --t T --out pose.obj [--skin rigid|smooth] [--blend dq|lbs]
-                      [--no-residual] [--paper-root] [--paper] [--linear]
-      one interpolated pose as OBJ in the original units with the population's faces.
-      --skin       rigid (default: every vertex on its part) or smooth (weights across part boundaries)
-      --blend      smooth skin blending: dq (dual quaternion, default) or lbs (linear blend)
-      --no-residual  leave out eq 24's residual (ends = rigid reconstructions)
-      --paper-root   the paper's root (smallest rotation) instead of the anchor (largest part)
-      --paper        Algorithm 2 as printed: paper root, BFS tree, no joint-offset blending (ends not exact)
-      --linear       plain linear vertex interpolation of the two poses (the baseline)
-      --band B       smooth weights: blend half-width as a fraction of the smaller part's RMS radius (default 1)
-  posemfa export-gltf DIR --out model.glb [--weights rigid|smooth] [--bind N] [--samples N]
-      binary glTF 2.0: mesh bound in pose N's rigid reconstruction (default 1), skeleton, skin, clips
-      \"training poses\" (one pose per second) and \"interpolated\" (N samples per second, default 10)
-  posemfa articulate-report DIR --from I --to J [--t T] [--glb OUT.glb [--validate]]
-      endpoint errors, volume and edge stretch at t (default 0.5) for every method, as JSON; with --glb
-      also writes the rigid .glb and checks its animation; --validate runs scripts/validate-gltf.mjs on it
-";
-
-/// Splits `args` into the articulation flags in `flags` (name -> takes a value) and the rest (fit options
-/// and inputs), which `parse_opts` reads.
-fn split_articulate_args(
-    args: &[String],
-    flags: &[(&str, bool)],
-) -> Result<(std::collections::BTreeMap<String, String>, Vec<String>), String> {
-    let mut mine = std::collections::BTreeMap::new();
-    let mut rest = Vec::new();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match flags.iter().find(|(n, _)| n == a) {
-            Some((name, true)) => {
-                let v = it.next().ok_or_else(|| format!("{name} needs a value"))?;
-                mine.insert(name.to_string(), v.clone());
+/// A folder / files, or `synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]]` (a generated population with its truth).
+fn load_inputs(inputs: &[String]) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
+    if let [one] = inputs {
+        if let Some(rest) = one.strip_prefix("synth:") {
+            let mut it = rest.split(':');
+            let preset = preset(it.next().unwrap_or("")).map_err(|e| format!("{e} (in '{one}')"))?;
+            let mut spec = posemfa::synth::Spec { preset, ..Default::default() };
+            let field = |v: Option<&str>, what: &str| -> Result<Option<f64>, String> {
+                v.map(|v| v.parse::<f64>().map_err(|_| format!("{what} '{v}' in '{one}' is not a number"))).transpose()
+            };
+            let whole = |v: Option<&str>, what: &str| -> Result<Option<u64>, String> {
+                v.map(|v| v.parse::<u64>().map_err(|_| format!("{what} '{v}' in '{one}' is not a number"))).transpose()
+            };
+            if let Some(v) = whole(it.next(), "vertex count")? {
+                spec.vertices = v as usize;
             }
-            Some((name, false)) => {
-                mine.insert(name.to_string(), String::new());
+            if let Some(v) = whole(it.next(), "pose count")? {
+                spec.poses = v as usize;
             }
-            None => rest.push(a.clone()),
+            if let Some(v) = whole(it.next(), "seed")? {
+                spec.seed = v;
+            }
+            if let Some(v) = field(it.next(), "joint band")? {
+                spec.joint_band = v;
+            }
+            if let Some(v) = field(it.next(), "max angle")? {
+                spec.max_angle_deg = v;
+            }
+            let g = posemfa::synth::generate(&spec).map_err(|e| e.to_string())?;
+            return Ok((g.population.clone(), Some(g)));
         }
     }
-    Ok((mine, rest))
+    Ok((Population::from_paths(inputs).map_err(|e| e.to_string())?, None))
 }
 
-fn pose_arg(m: &std::collections::BTreeMap<String, String>, name: &str, n: usize) -> Result<usize, String> {
-    let v = m.get(name).ok_or_else(|| format!("{name} is required\n\n{ARTICULATE_USAGE}"))?;
-    let k: usize = v.parse().map_err(|_| format!("{name}: '{v}' is not a pose number"))?;
-    if k == 0 || k > n {
-        return Err(format!("{name} {k}: poses are numbered 1 to {n} (natural order of the file names)"));
+fn preset(name: &str) -> Result<posemfa::synth::Preset, String> {
+    serde_json::from_value(serde_json::json!(name))
+        .map_err(|_| format!("unknown preset '{name}': use quadruped, arm, snake or blob"))
+}
+
+/// Adjusted Rand index of the labels and rotation errors (degrees) against a generated population's truth.
+fn ground_truth_json(g: &posemfa::synth::Generated, m: &posemfa::model::Model) -> serde_json::Value {
+    let ari = posemfa::metrics::adjusted_rand_index(&m.labels, &g.part_of_vertex);
+    let fitted: Vec<Vec<posemfa::geometry::Mat3>> = m.parts.iter().map(|p| p.rotations.clone()).collect();
+    let errs =
+        posemfa::metrics::rotation_errors_deg(&fitted, &m.labels, &g.rotations, &g.part_of_vertex).unwrap_or_default();
+    let max = errs.iter().cloned().fold(0.0, f64::max);
+    serde_json::json!({
+        "ari": ari, "true_parts": g.n_parts(),
+        "rotation_error_deg_median": posemfa::metrics::median(&errs), "rotation_error_deg_max": max,
+    })
+}
+
+// ---------------------------------------------------------------- generate
+
+#[derive(Default)]
+struct GenerateArgs {
+    spec: posemfa::synth::Spec,
+    preset_given: bool,
+    out: Option<String>,
+}
+
+impl Args for GenerateArgs {
+    fn groups() -> Vec<Group<Self>> {
+        vec![Group {
+            title: "generate options",
+            shared: false,
+            opts: vec![
+                val("--out", "DIR", "folder to write the OBJ files to (required)", |o: &mut Self, v| {
+                    text(&mut o.out, v)
+                }),
+                val("--vertices", "N", "vertex count (default 10000)", |o: &mut Self, v| {
+                    num(v).map(|n| o.spec.vertices = n)
+                }),
+                val("--poses", "P", "pose count (default 20)", |o: &mut Self, v| num(v).map(|n| o.spec.poses = n)),
+                val("--seed", "S", "random seed (default 0)", |o: &mut Self, v| num(v).map(|n| o.spec.seed = n)),
+                val(
+                    "--band",
+                    "B",
+                    "half-width of the flesh band around each joint (default 0.05)",
+                    |o: &mut Self, v| num(v).map(|n| o.spec.joint_band = n),
+                ),
+                val("--noise", "X", "vertex noise, standard deviation (default 0)", |o: &mut Self, v| {
+                    num(v).map(|n| o.spec.noise = n)
+                }),
+                val("--max-angle", "DEG", "largest joint angle, degrees (default 40)", |o: &mut Self, v| {
+                    num(v).map(|n| o.spec.max_angle_deg = n)
+                }),
+            ],
+        }]
     }
-    Ok(k - 1)
+    fn positional(&mut self, word: String) -> Result<(), String> {
+        if self.preset_given {
+            return Err(format!("unexpected argument '{word}' (generate takes one PRESET)"));
+        }
+        self.spec.preset = preset(&word)?;
+        self.preset_given = true;
+        Ok(())
+    }
 }
 
-fn articulate_fit(
-    rest: &[String],
-    m: &std::collections::BTreeMap<String, String>,
-) -> Result<(Population, posemfa::articulate::Articulation), String> {
-    let mut o = parse_opts(rest).map_err(|e| format!("{e}\n{ARTICULATE_USAGE}"))?;
-    o.quiet = true;
-    let band = match m.get("--band") {
-        Some(v) => v.parse().map_err(|_| format!("--band: '{v}' is not a number"))?,
-        None => posemfa::articulate::skin::DEFAULT_BAND,
-    };
-    let (pop, _truth) = load_inputs(&o.inputs)?;
-    let result = run_fit(&o, &pop)?;
+fn cmd_generate(a: GenerateArgs) -> Result<(), String> {
+    let out_dir = a.out.ok_or("generate needs --out DIR")?;
+    let g = posemfa::synth::generate(&a.spec).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&out_dir).map_err(|e| format!("cannot create {out_dir}: {e}"))?;
+    for (name, text) in posemfa::synth::obj_files(&g) {
+        let path = std::path::Path::new(&out_dir).join(&name);
+        std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    out!(
+        "wrote {} poses of the {} ({} vertices, {} parts) to {out_dir}",
+        g.population.n_shapes(),
+        a.spec.preset.name(),
+        g.population.n_vertices(),
+        g.n_parts()
+    );
+    Ok(())
+}
+
+// ---------------------------------------------------------------- articulation: interpolate, export-gltf, report
+
+/// Fits (quietly) and builds the articulated model.
+fn articulate_fit(fit: &FitArgs, band: Option<f64>) -> Result<(Population, posemfa::articulate::Articulation), String> {
+    let (pop, _truth) = fit.load()?;
+    let result = run_fit(&fit.params, &pop, true)?;
+    let band = band.unwrap_or(posemfa::articulate::skin::DEFAULT_BAND);
     let art = posemfa::articulate::Articulation::with_band(&result.model, &pop, band).map_err(|e| e.to_string())?;
     Ok((pop, art))
 }
 
-fn cmd_interpolate(args: &[String]) -> Result<(), String> {
-    use posemfa::articulate::{Blend, Options, RootRule, Skin};
-    let (m, rest) = split_articulate_args(
-        args,
-        &[
-            ("--from", true),
-            ("--to", true),
-            ("--t", true),
-            ("--out", true),
-            ("--skin", true),
-            ("--band", true),
-            ("--blend", true),
-            ("--no-residual", false),
-            ("--paper-root", false),
-            ("--paper", false),
-            ("--linear", false),
-        ],
-    )?;
-    let out = m.get("--out").ok_or_else(|| format!("--out is required\n\n{ARTICULATE_USAGE}"))?.clone();
-    let t: f64 = m
-        .get("--t")
-        .ok_or_else(|| format!("--t is required\n\n{ARTICULATE_USAGE}"))?
-        .parse()
-        .map_err(|_| "--t: not a number".to_string())?;
-    let mut opts = if m.contains_key("--paper") { Options::paper() } else { Options::default() };
-    if m.contains_key("--paper-root") {
+#[derive(Default)]
+struct InterpolateArgs {
+    fit: FitArgs,
+    band: Option<f64>,
+    from: Option<usize>,
+    to: Option<usize>,
+    t: Option<f64>,
+    out: Option<String>,
+    skin: Skin,
+    blend: Blend,
+    no_residual: bool,
+    paper_root: bool,
+    paper: bool,
+    linear: bool,
+}
+articulation_args!(InterpolateArgs);
+
+impl Args for InterpolateArgs {
+    fn groups() -> Vec<Group<Self>> {
+        vec![
+            Group {
+                title: "interpolate options",
+                shared: false,
+                opts: vec![
+                    val("--from", "I", "first pose (required)", |o: &mut Self, v| {
+                        pose_number(v).map(|n| o.from = Some(n))
+                    }),
+                    val("--to", "J", "second pose (required)", |o: &mut Self, v| {
+                        pose_number(v).map(|n| o.to = Some(n))
+                    }),
+                    val("--t", "T", "where between them: 0 = I, 1 = J (required)", |o: &mut Self, v| {
+                        num(v).map(|n| o.t = Some(n))
+                    }),
+                    val("--out", "pose.obj", "OBJ file to write (required)", |o: &mut Self, v| text(&mut o.out, v)),
+                    val(
+                        "--skin",
+                        "rigid|smooth",
+                        "rigid (default: every vertex on its part) or smooth (weights across part boundaries)",
+                        |o: &mut Self, v| {
+                            o.skin = match v {
+                                "rigid" => Skin::Rigid,
+                                "smooth" => Skin::Smooth,
+                                _ => return Err(format!("'{v}': use rigid or smooth")),
+                            };
+                            Ok(())
+                        },
+                    ),
+                    val(
+                        "--blend",
+                        "dq|lbs",
+                        "smooth skin blending: dq (dual quaternion, default) or lbs (linear blend)",
+                        |o: &mut Self, v| {
+                            o.blend = match v {
+                                "dq" => Blend::DualQuaternion,
+                                "lbs" => Blend::Linear,
+                                _ => return Err(format!("'{v}': use dq or lbs")),
+                            };
+                            Ok(())
+                        },
+                    ),
+                    flag(
+                        "--no-residual",
+                        "leave out eq 24's residual (ends = rigid reconstructions)",
+                        |o: &mut Self| {
+                            o.no_residual = true;
+                        },
+                    ),
+                    flag(
+                        "--paper-root",
+                        "the paper's root (smallest rotation) instead of the anchor (largest part)",
+                        |o: &mut Self| {
+                            o.paper_root = true;
+                        },
+                    ),
+                    flag(
+                        "--paper",
+                        "Algorithm 2 as printed: paper root, BFS tree, no joint-offset blending (ends not exact)",
+                        |o: &mut Self| {
+                            o.paper = true;
+                        },
+                    ),
+                    flag(
+                        "--linear",
+                        "plain linear vertex interpolation of the two poses (the baseline)",
+                        |o: &mut Self| {
+                            o.linear = true;
+                        },
+                    ),
+                ],
+            },
+            band_group(),
+            fit_group(),
+        ]
+    }
+    fn positional(&mut self, word: String) -> Result<(), String> {
+        self.fit.inputs.push(word);
+        Ok(())
+    }
+}
+
+fn cmd_interpolate(a: InterpolateArgs) -> Result<(), String> {
+    use posemfa::articulate::Options;
+    let out = a.out.clone().ok_or("interpolate: --out is required")?;
+    let t = a.t.ok_or("interpolate: --t is required")?;
+    // --paper first: the other choices refine it, whatever their order on the command line
+    let mut opts = if a.paper { Options::paper() } else { Options::default() };
+    if a.paper_root {
         opts.root = RootRule::Paper;
     }
-    if m.contains_key("--no-residual") {
+    if a.no_residual {
         opts.residual = false;
     }
-    opts.skin = match m.get("--skin").map(String::as_str) {
-        None | Some("rigid") => Skin::Rigid,
-        Some("smooth") => Skin::Smooth,
-        Some(o) => return Err(format!("--skin {o}: use rigid or smooth")),
-    };
-    opts.blend = match m.get("--blend").map(String::as_str) {
-        None | Some("dq") => Blend::DualQuaternion,
-        Some("lbs") => Blend::Linear,
-        Some(o) => return Err(format!("--blend {o}: use dq or lbs")),
-    };
-    let (pop, art) = articulate_fit(&rest, &m)?;
-    let i = pose_arg(&m, "--from", pop.n_shapes())?;
-    let j = pose_arg(&m, "--to", pop.n_shapes())?;
-    let (pos, how) = if m.contains_key("--linear") {
+    opts.skin = a.skin;
+    opts.blend = a.blend;
+    let (pop, art) = articulate_fit(&a.fit, a.band)?;
+    let i = pose_index("--from", a.from, pop.n_shapes())?;
+    let j = pose_index("--to", a.to, pop.n_shapes())?;
+    let (pos, how) = if a.linear {
         (art.linear(i, j, t).map_err(|e| e.to_string())?, "linear vertex interpolation".to_string())
     } else {
         let p = art.interpolate(i, j, t, &opts).map_err(|e| e.to_string())?;
@@ -381,59 +924,142 @@ fn cmd_interpolate(args: &[String]) -> Result<(), String> {
     );
     let text = posemfa::export::obj::write_obj(&art.to_original(&pos), &pop.faces, &header);
     std::fs::write(&out, text).map_err(|e| format!("cannot write {out}: {e}"))?;
-    println!("wrote {out}");
+    out!("wrote {out}");
     Ok(())
 }
 
-fn cmd_export_gltf(args: &[String]) -> Result<(), String> {
-    use posemfa::export::gltf::{GltfOptions, Weights};
-    let (m, rest) =
-        split_articulate_args(args, &[("--out", true), ("--weights", true), ("--bind", true), ("--samples", true), ("--band", true)])?;
-    let out = m.get("--out").ok_or_else(|| format!("--out is required\n\n{ARTICULATE_USAGE}"))?.clone();
-    let mut g = GltfOptions::default();
-    g.weights = match m.get("--weights").map(String::as_str) {
-        None | Some("rigid") => Weights::Rigid,
-        Some("smooth") => Weights::Smooth,
-        Some(o) => return Err(format!("--weights {o}: use rigid or smooth")),
-    };
-    if let Some(s) = m.get("--samples") {
-        g.samples_per_second = s.parse().map_err(|_| format!("--samples: '{s}' is not a number"))?;
+#[derive(Default)]
+struct GltfArgs {
+    fit: FitArgs,
+    band: Option<f64>,
+    out: Option<String>,
+    weights: Weights,
+    bind: Option<usize>,
+    samples: Option<usize>,
+}
+articulation_args!(GltfArgs);
+
+impl Args for GltfArgs {
+    fn groups() -> Vec<Group<Self>> {
+        vec![
+            Group {
+                title: "export-gltf options",
+                shared: false,
+                opts: vec![
+                    val("--out", "model.glb", "file to write (required)", |o: &mut Self, v| text(&mut o.out, v)),
+                    val("--weights", "rigid|smooth", "skin weights: rigid (default) or smooth", |o: &mut Self, v| {
+                        o.weights = match v {
+                            "rigid" => Weights::Rigid,
+                            "smooth" => Weights::Smooth,
+                            _ => return Err(format!("'{v}': use rigid or smooth")),
+                        };
+                        Ok(())
+                    }),
+                    val("--bind", "N", "pose the mesh is bound in (default 1)", |o: &mut Self, v| {
+                        pose_number(v).map(|n| o.bind = Some(n))
+                    }),
+                    val(
+                        "--samples",
+                        "N",
+                        "samples per second of the \"interpolated\" clip (default 10)",
+                        |o: &mut Self, v| num(v).map(|n| o.samples = Some(n)),
+                    ),
+                ],
+            },
+            band_group(),
+            fit_group(),
+        ]
     }
-    let (pop, art) = articulate_fit(&rest, &m)?;
-    if m.contains_key("--bind") {
-        g.bind_pose = pose_arg(&m, "--bind", pop.n_shapes())?;
+    fn positional(&mut self, word: String) -> Result<(), String> {
+        self.fit.inputs.push(word);
+        Ok(())
+    }
+}
+
+fn cmd_export_gltf(a: GltfArgs) -> Result<(), String> {
+    let out = a.out.clone().ok_or("export-gltf: --out is required")?;
+    let mut g = posemfa::export::gltf::GltfOptions { weights: a.weights, ..Default::default() };
+    if let Some(s) = a.samples {
+        g.samples_per_second = s;
+    }
+    let (pop, art) = articulate_fit(&a.fit, a.band)?;
+    if a.bind.is_some() {
+        g.bind_pose = pose_index("--bind", a.bind, pop.n_shapes())?;
     }
     let glb = posemfa::export::gltf::to_glb(&art, &g).map_err(|e| e.to_string())?;
     std::fs::write(&out, &glb).map_err(|e| format!("cannot write {out}: {e}"))?;
-    println!("wrote {out} ({} bytes, {} parts, {} poses)", glb.len(), art.graph.used_parts().len(), pop.n_shapes());
+    out!("wrote {out} ({} bytes, {} parts, {} poses)", glb.len(), art.graph.used_parts().len(), pop.n_shapes());
     Ok(())
 }
 
-fn cmd_articulate_report(args: &[String]) -> Result<(), String> {
-    let (m, rest) = split_articulate_args(
-        args,
-        &[("--from", true), ("--to", true), ("--t", true), ("--glb", true), ("--validate", false), ("--band", true)],
-    )?;
-    let t: f64 = match m.get("--t") {
-        Some(v) => v.parse().map_err(|_| format!("--t: '{v}' is not a number"))?,
-        None => 0.5,
-    };
+#[derive(Default)]
+struct ReportArgs {
+    fit: FitArgs,
+    band: Option<f64>,
+    from: Option<usize>,
+    to: Option<usize>,
+    t: Option<f64>,
+    glb: Option<String>,
+    validate: bool,
+}
+articulation_args!(ReportArgs);
+
+impl Args for ReportArgs {
+    fn groups() -> Vec<Group<Self>> {
+        vec![
+            Group {
+                title: "articulate-report options",
+                shared: false,
+                opts: vec![
+                    val("--from", "I", "first pose (required)", |o: &mut Self, v| {
+                        pose_number(v).map(|n| o.from = Some(n))
+                    }),
+                    val("--to", "J", "second pose (required)", |o: &mut Self, v| {
+                        pose_number(v).map(|n| o.to = Some(n))
+                    }),
+                    val("--t", "T", "where between them (default 0.5)", |o: &mut Self, v| {
+                        num(v).map(|n| o.t = Some(n))
+                    }),
+                    val("--glb", "OUT.glb", "also write the rigid .glb and check its animation", |o: &mut Self, v| {
+                        text(&mut o.glb, v)
+                    }),
+                    flag(
+                        "--validate",
+                        "with --glb: run scripts/validate-gltf.mjs (Khronos validator) on it",
+                        |o: &mut Self| {
+                            o.validate = true;
+                        },
+                    ),
+                ],
+            },
+            band_group(),
+            fit_group(),
+        ]
+    }
+    fn positional(&mut self, word: String) -> Result<(), String> {
+        self.fit.inputs.push(word);
+        Ok(())
+    }
+}
+
+fn cmd_articulate_report(a: ReportArgs) -> Result<(), String> {
+    let t = a.t.unwrap_or(0.5);
     let t0 = posemfa::clock::now_ms();
-    let (pop, art) = articulate_fit(&rest, &m)?;
+    let (pop, art) = articulate_fit(&a.fit, a.band)?;
     let fit_ms = posemfa::clock::now_ms() - t0;
-    let i = pose_arg(&m, "--from", pop.n_shapes())?;
-    let j = pose_arg(&m, "--to", pop.n_shapes())?;
+    let i = pose_index("--from", a.from, pop.n_shapes())?;
+    let j = pose_index("--to", a.to, pop.n_shapes())?;
     let rep = posemfa::articulate::report::report(&art, i, j, t).map_err(|e| e.to_string())?;
     let mut out = serde_json::to_value(&rep).map_err(|e| e.to_string())?;
-    out["inputs"] = serde_json::json!(rest.iter().filter(|a| !a.starts_with("--")).collect::<Vec<_>>());
+    out["inputs"] = serde_json::json!(a.fit.inputs);
     out["fit_ms"] = serde_json::json!(fit_ms);
-    if let Some(path) = m.get("--glb") {
+    if let Some(path) = &a.glb {
         let g = posemfa::export::gltf::GltfOptions::default();
         let glb = posemfa::export::gltf::to_glb(&art, &g).map_err(|e| e.to_string())?;
         std::fs::write(path, &glb).map_err(|e| format!("cannot write {path}: {e}"))?;
         let check = posemfa::export::gltf::check_glb(&art, &glb).map_err(|e| e.to_string())?;
         let mut gl = serde_json::json!({ "path": path, "bytes": glb.len(), "check": check });
-        if m.contains_key("--validate") {
+        if a.validate {
             let script = concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/validate-gltf.mjs");
             let res = std::process::Command::new("node")
                 .arg(script)
@@ -447,99 +1073,34 @@ fn cmd_articulate_report(args: &[String]) -> Result<(), String> {
         }
         out["gltf"] = gl;
     }
-    println!("{}", serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?);
+    out!("{}", serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?);
     Ok(())
 }
 
-/// A folder / files, or `synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]]` (a generated population with its truth).
-fn load_inputs(inputs: &[String]) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
-    if let [one] = inputs {
-        if let Some(rest) = one.strip_prefix("synth:") {
-            let mut it = rest.split(':');
-            let preset: posemfa::synth::Preset = serde_json::from_value(serde_json::json!(it.next().unwrap_or("")))
-                .map_err(|_| format!("unknown preset in '{one}': use quadruped, arm, snake or blob"))?;
-            let mut spec = posemfa::synth::Spec { preset, ..Default::default() };
-            let num = |v: Option<&str>, what: &str| -> Result<Option<u64>, String> {
-                v.map(|v| v.parse::<u64>().map_err(|_| format!("{what} '{v}' in '{one}' is not a number"))).transpose()
-            };
-            if let Some(v) = num(it.next(), "vertex count")? {
-                spec.vertices = v as usize;
-            }
-            if let Some(v) = num(it.next(), "pose count")? {
-                spec.poses = v as usize;
-            }
-            if let Some(v) = num(it.next(), "seed")? {
-                spec.seed = v;
-            }
-            let float = |v: Option<&str>, what: &str| -> Result<Option<f64>, String> {
-                v.map(|v| v.parse::<f64>().map_err(|_| format!("{what} '{v}' in '{one}' is not a number"))).transpose()
-            };
-            if let Some(v) = float(it.next(), "joint band")? {
-                spec.joint_band = v;
-            }
-            if let Some(v) = float(it.next(), "max angle")? {
-                spec.max_angle_deg = v;
-            }
-            let g = posemfa::synth::generate(&spec).map_err(|e| e.to_string())?;
-            return Ok((g.population.clone(), Some(g)));
-        }
-    }
-    Ok((Population::from_paths(inputs).map_err(|e| e.to_string())?, None))
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
 
-/// Adjusted Rand index of the labels and rotation errors (degrees) against a generated population's truth.
-fn ground_truth_json(g: &posemfa::synth::Generated, m: &posemfa::model::Model) -> serde_json::Value {
-    let ari = posemfa::metrics::adjusted_rand_index(&m.labels, &g.part_of_vertex);
-    let fitted: Vec<Vec<posemfa::geometry::Mat3>> = m.parts.iter().map(|p| p.rotations.clone()).collect();
-    let errs = posemfa::metrics::rotation_errors_deg(&fitted, &m.labels, &g.rotations, &g.part_of_vertex)
-        .unwrap_or_default();
-    let max = errs.iter().cloned().fold(0.0, f64::max);
-    serde_json::json!({
-        "ari": ari, "true_parts": g.n_parts(),
-        "rotation_error_deg_median": posemfa::metrics::median(&errs), "rotation_error_deg_max": max,
-    })
-}
-
-fn cmd_generate(args: &[String]) -> Result<(), String> {
-    let mut spec = posemfa::synth::Spec::default();
-    let mut out_dir = None;
-    let mut it = args.iter();
-    let mut preset_set = false;
-    while let Some(a) = it.next() {
-        let mut val = |name: &str| it.next().cloned().ok_or_else(|| format!("{name} needs a value"));
-        fn num<T: std::str::FromStr>(name: &str, v: String) -> Result<T, String> {
-            v.parse().map_err(|_| format!("{name}: '{v}' is not a valid number"))
-        }
-        match a.as_str() {
-            "--vertices" => spec.vertices = num("--vertices", val("--vertices")?)?,
-            "--poses" => spec.poses = num("--poses", val("--poses")?)?,
-            "--seed" => spec.seed = num("--seed", val("--seed")?)?,
-            "--band" => spec.joint_band = num("--band", val("--band")?)?,
-            "--noise" => spec.noise = num("--noise", val("--noise")?)?,
-            "--max-angle" => spec.max_angle_deg = num("--max-angle", val("--max-angle")?)?,
-            "--out" => out_dir = Some(val("--out")?),
-            s if s.starts_with("--") => return Err(format!("unknown option {s}\n\n{USAGE}")),
-            s if !preset_set => {
-                spec.preset = serde_json::from_value(serde_json::json!(s))
-                    .map_err(|_| format!("unknown preset '{s}': use quadruped, arm, snake or blob"))?;
-                preset_set = true;
+    #[test]
+    fn option_names_are_unique_within_each_command_and_well_formed() {
+        for c in commands() {
+            let mut seen = BTreeMap::new();
+            for g in &c.groups {
+                for (left, _) in &g.lines {
+                    let name = left.split(' ').next().unwrap_or_default().to_string();
+                    assert!(name.starts_with("--") && name.len() > 2, "{}: option '{name}'", c.name);
+                    assert!(seen.insert(name.clone(), g.title).is_none(), "{}: {name} is in two groups", c.name);
+                }
             }
-            s => return Err(format!("unexpected argument '{s}'\n\n{USAGE}")),
         }
     }
-    let out_dir = out_dir.ok_or_else(|| format!("generate needs --out DIR\n\n{USAGE}"))?;
-    let g = posemfa::synth::generate(&spec).map_err(|e| e.to_string())?;
-    std::fs::create_dir_all(&out_dir).map_err(|e| format!("cannot create {out_dir}: {e}"))?;
-    for (name, text) in posemfa::synth::obj_files(&g) {
-        let path = std::path::Path::new(&out_dir).join(&name);
-        std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+
+    #[test]
+    fn flags_refine_paper_whatever_the_order() {
+        let words = ["d", "--paper-root", "--paper", "--no-residual"].map(OsString::from).to_vec();
+        let a = parse::<InterpolateArgs>("interpolate", words).unwrap().unwrap();
+        assert!(a.paper && a.paper_root && a.no_residual);
+        assert_eq!(a.fit.inputs, vec!["d".to_string()]);
     }
-    out!(
-        "wrote {} poses of the {} ({} vertices, {} parts) to {out_dir}",
-        g.population.n_shapes(),
-        spec.preset.name(),
-        g.population.n_vertices(),
-        g.n_parts()
-    );
-    Ok(())
 }
