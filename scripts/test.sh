@@ -45,7 +45,10 @@ t_all=$(date +%s)
 banner() { printf '\n==================== [test %s] %s ====================\n' "$1" "$2"; }
 
 # Counts from the closing lines of cargo test / wasm-bindgen-test-runner ("test result: ok. N passed; M failed;
-# K ignored") and of node's test runner ("# pass N" / "ℹ pass N").
+# K ignored") and of node's test runner ("# pass N" / "ℹ pass N", "# skipped N").
+# A Rust test that needs ../shared (POSEMFA_SHARED) and finds it absent returns early, so cargo counts it as
+# passed; it prints "SKIPPED(needs ../shared): NAME" (tests/common/mod.rs, shared_dir), and each such line moves
+# one test from passed to skipped. Under CI=true those tests fail instead.
 count() {
   awk '
     match($0, /test result: [A-Za-z]+\. [0-9]+ passed; [0-9]+ failed; [0-9]+ ignored/) {
@@ -54,13 +57,14 @@ count() {
     /^(# |ℹ )pass [0-9]+/ { p += $3 }
     /^(# |ℹ )fail [0-9]+/ { f += $3 }
     /^(# |ℹ )skipped [0-9]+/ { i += $3 }
-    END { print p + 0, f + 0, i + 0 }
+    /SKIPPED\(needs \.\.\/shared\): / { s += 1 }
+    END { print p - s, f + 0, i + s, s + 0 }
   ' "$1"
 }
 
 # run_stage NAME DESCRIPTION COMMAND...: runs, tees to a log, records counts and time; exits on failure.
 run_stage() {
-  local name=$1 desc=$2 t0 rc p f i
+  local name=$1 desc=$2 t0 rc p f i s
   shift 2
   banner "$name" "$desc"
   t0=$(date +%s)
@@ -68,7 +72,7 @@ run_stage() {
   "$@" 2>&1 | tee "$logdir/$name.log"
   rc=${PIPESTATUS[0]}
   set -e
-  read -r p f i < <(count "$logdir/$name.log")
+  read -r p f i s < <(count "$logdir/$name.log")
   total_pass=$(( total_pass + p )); total_fail=$(( total_fail + f )); total_ignored=$(( total_ignored + i ))
   local dt=$(( $(date +%s) - t0 ))
   if [ "$rc" != 0 ]; then
@@ -83,7 +87,15 @@ run_stage() {
     printf '\n[test] FAILED at stage %s: no test ran\n' "$name"
     exit 1
   fi
-  summary+=("$(printf '%-14s ok     %4d s: %d passed, %d failed, %d ignored' "$name" "$dt" "$p" "$f" "$i")")
+  if [ "$s" != 0 ] && [ "${CI:-}" = true ]; then
+    summary+=("$(printf '%-14s FAILED after %4d s: %d tests skipped for want of ../shared, and CI=true' "$name" "$dt" "$s")")
+    print_summary
+    printf '\n[test] FAILED at stage %s: ../shared (POSEMFA_SHARED) is absent in CI\n' "$name"
+    exit 1
+  fi
+  local note=
+  [ "$s" = 0 ] || note=" ($s need ../shared, absent: SKIPPED lines above)"
+  summary+=("$(printf '%-14s ok     %4d s: %d passed, %d failed, %d skipped%s' "$name" "$dt" "$p" "$f" "$i" "$note")")
 }
 
 print_summary() {

@@ -287,11 +287,7 @@ dual_test! {
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn horse_poses_3_to_8() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/horse-poses");
-    if !dir.is_dir() {
-        eprintln!("SKIPPED horse_poses_3_to_8: {} is absent (nothing checked)", dir.display());
-        return;
-    }
+    let Some(dir) = common::shared_dir("data/horse-poses", "horse_poses_3_to_8") else { return };
     let pop = Population::from_paths(&[&dir]).unwrap();
     let model = fitted(&pop);
     let art = Articulation::new(&model, &pop).unwrap();

@@ -1,25 +1,24 @@
-//! Issue 2's figures on the real horse population (../shared/data/horse-poses, or POSEMFA_HORSE_POSES).
-//! Skipped, saying so, when the data is absent. The JSON is checked the way a user would: eq 22 recomputed
+//! Issue 2's figures on the real horse population (data/horse-poses in ../shared or POSEMFA_SHARED).
+//! Skipped, counted as skipped, when the data is absent (a failure under CI=true: `common::shared_dir`). The JSON is checked the way a user would: eq 22 recomputed
 //! from the written file gives the reported RMSE.
 
 use posemfa::export::json::fit_to_json;
 use posemfa::mesh::Population;
 use posemfa::model::hierarchy::fit;
 use posemfa::model::Params;
+use std::path::PathBuf;
 
-fn horse() -> Option<Population> {
-    let dir = std::env::var("POSEMFA_HORSE_POSES")
-        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/horse-poses").to_string());
-    if !std::path::Path::new(&dir).is_dir() {
-        println!("horse-poses not found at {dir}, skipping");
-        return None;
-    }
-    Some(Population::from_paths(&[dir]).expect("horse loads"))
+mod common;
+
+fn horse(test: &str) -> Option<(PathBuf, Population)> {
+    let dir = common::shared_dir("data/horse-poses", test)?;
+    let pop = Population::from_paths(&[&dir]).expect("horse loads");
+    Some((dir, pop))
 }
 
 #[test]
 fn horse_at_defaults_meets_the_figures_and_the_json_is_consistent() {
-    let Some(pop) = horse() else { return };
+    let Some((dir, pop)) = horse("horse_at_defaults_meets_the_figures_and_the_json_is_consistent") else { return };
     let result = fit(&pop, &Params::default(), &mut |_| true).unwrap();
     let json: serde_json::Value = serde_json::from_str(&fit_to_json(&pop, &result)).unwrap();
     let parts = json["parts"].as_array().unwrap();
@@ -50,13 +49,11 @@ fn horse_at_defaults_meets_the_figures_and_the_json_is_consistent() {
     let scale = n["scale"].as_f64().unwrap();
     let names: Vec<&str> = json["shapes"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
     assert_eq!(names, pop.names.iter().map(String::as_str).collect::<Vec<_>>());
-    let dir = std::env::var("POSEMFA_HORSE_POSES")
-        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/horse-poses").to_string());
     let mut s = 0.0;
     let mut count = 0usize;
     for (i, name) in names.iter().enumerate() {
         // the original file, moved into the unit box with the JSON's normalisation
-        let bytes = std::fs::read(format!("{dir}/{name}")).unwrap();
+        let bytes = std::fs::read(dir.join(name)).unwrap();
         let mesh = posemfa::mesh::obj::parse_obj(name, &bytes).unwrap();
         for (j, p) in mesh.positions.iter().enumerate() {
             let u: Vec<f64> = (0..3).map(|d| (p[d] - offset[d]) * scale).collect();
@@ -71,13 +68,14 @@ fn horse_at_defaults_meets_the_figures_and_the_json_is_consistent() {
             count += 1;
         }
     }
+    assert_eq!(count, pop.n_shapes() * pop.n_vertices(), "every vertex of every shape was read back");
     let recomputed = (s / count as f64).sqrt();
     assert!((recomputed - rmse).abs() <= 1e-9, "recomputed {recomputed} vs reported {rmse}");
 }
 
 #[test]
 fn horse_part_count_is_stable_over_seeds_0_to_4() {
-    let Some(pop) = horse() else { return };
+    let Some((_, pop)) = horse("horse_part_count_is_stable_over_seeds_0_to_4") else { return };
     let counts: Vec<usize> = (0..5)
         .map(|seed| fit(&pop, &Params { seed, ..Params::default() }, &mut |_| true).unwrap().model.n_parts())
         .collect();

@@ -1,42 +1,30 @@
 //! The OBJ importer against real third-party files.
 //!
-//! - `POSEMFA_OBJCORPUS` (default `../shared/objcorpus` next to the crate): every `.obj` listed in its
-//!   `MANIFEST.tsv` must give the outcome the manifest states ("loads: V=.. vertices, F=.. triangles" or
-//!   "should be rejected: ..."), without panicking.
-//! - `POSEMFA_HORSE_POSES` (default `../shared/data/horse-poses`): the horse population must load with
-//!   8431 vertices / 16843 triangles per file and one common face list.
+//! - `objcorpus` of the shared data folder (`POSEMFA_SHARED`, default `../shared` next to the crate): every
+//!   `.obj` listed in its `MANIFEST.tsv` must give the outcome the manifest states ("loads: V=.. vertices,
+//!   F=.. triangles" or "should be rejected: ..."), without panicking.
+//! - `data/horse-poses` there: the horse population must load with 8431 vertices / 16843 triangles per file and
+//!   one common face list.
 //!
 //! Positions are also checked against a naive reading of the `v` lines (file order), and triangles against
 //! tobj, an independent OBJ reader (same corners, same order).
 //!
-//! When a folder is missing, the tests say so and pass: the data are not part of the repository.
+//! When a folder is missing, the tests that need it are counted as skipped, and fail under CI=true
+//! (`common::shared_dir`): the data are not part of the repository.
 
 use posemfa::error::Error;
 use posemfa::mesh::obj::parse_obj;
 use posemfa::mesh::Mesh;
 use std::path::{Path, PathBuf};
 
-fn data_dir(env: &str, default: &str) -> Option<PathBuf> {
-    let dir =
-        std::env::var_os(env).map(PathBuf::from).unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(default));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!(
-            "{} not found at {}, skipping (set {env} to its path)",
-            default.rsplit('/').next().unwrap_or(default),
-            dir.display()
-        );
-        None
-    }
+mod common;
+
+fn corpus_dir(test: &str) -> Option<PathBuf> {
+    common::shared_dir("objcorpus", test)
 }
 
-fn corpus_dir() -> Option<PathBuf> {
-    data_dir("POSEMFA_OBJCORPUS", "../shared/objcorpus")
-}
-
-fn horse_dir() -> Option<PathBuf> {
-    data_dir("POSEMFA_HORSE_POSES", "../shared/data/horse-poses")
+fn horse_dir(test: &str) -> Option<PathBuf> {
+    common::shared_dir("data/horse-poses", test)
 }
 
 /// What the manifest allows for one file.
@@ -172,12 +160,13 @@ fn check(name: &str, bytes: &[u8], expect: &Expect) -> Result<String, String> {
 
 #[test]
 fn manifest_outcomes() {
-    let Some(dir) = corpus_dir() else { return };
+    let Some(dir) = corpus_dir("manifest_outcomes") else { return };
     let not_found = std::fs::read_to_string(dir.join("NOT_FOUND.txt")).unwrap_or_default();
     if let Some(first) = not_found.lines().next() {
         println!("NOT_FOUND.txt: {first}");
     }
     let entries = manifest(&dir);
+    assert!(!entries.is_empty(), "{}: MANIFEST.tsv lists no OBJ file", dir.display());
     let mut listed: Vec<&str> = entries.iter().map(|(f, _)| f.as_str()).collect();
     listed.sort_unstable();
     let mut on_disk: Vec<String> = std::fs::read_dir(&dir)
@@ -251,10 +240,13 @@ fn naive_positions(bytes: &[u8]) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// The loadable files whose lines are plain (no continuation), from the corpus and the horse population.
-fn plain_loadable_files() -> Vec<(String, Vec<u8>)> {
+/// The loadable files whose lines are plain (no continuation), from the corpus and the horse population; `None`
+/// (skipped) when either is absent.
+fn plain_loadable_files(test: &str) -> Option<Vec<(String, Vec<u8>)>> {
+    let (corpus, horse) = (corpus_dir(test)?, horse_dir(test)?);
     let mut out = Vec::new();
-    if let Some(dir) = corpus_dir() {
+    {
+        let dir = corpus;
         for (file, expect) in manifest(&dir) {
             if matches!(expect, Expect::Loads { .. }) {
                 let bytes = std::fs::read(dir.join(&file)).expect("read");
@@ -265,19 +257,16 @@ fn plain_loadable_files() -> Vec<(String, Vec<u8>)> {
             }
         }
     }
-    if let Some(dir) = horse_dir() {
-        for name in ["1.obj", "reference.obj"] {
-            if let Ok(bytes) = std::fs::read(dir.join(name)) {
-                out.push((format!("horse-poses/{name}"), bytes));
-            }
-        }
+    for name in ["1.obj", "reference.obj"] {
+        let bytes = std::fs::read(horse.join(name)).unwrap_or_else(|e| panic!("{}: {e}", horse.join(name).display()));
+        out.push((format!("horse-poses/{name}"), bytes));
     }
-    out
+    Some(out)
 }
 
 #[test]
 fn positions_are_the_v_lines_in_file_order() {
-    let files = plain_loadable_files();
+    let Some(files) = plain_loadable_files("positions_are_the_v_lines_in_file_order") else { return };
     for (name, bytes) in &files {
         let mesh = parse_obj(name, bytes).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(mesh.positions, naive_positions(bytes), "{name}: positions differ from the v lines");
@@ -318,7 +307,8 @@ fn tobj_triangles(bytes: &[u8]) -> Option<Vec<[[f32; 3]; 3]>> {
 #[test]
 fn triangles_agree_with_tobj() {
     let mut compared = 0;
-    for (name, bytes) in plain_loadable_files() {
+    let Some(files) = plain_loadable_files("triangles_agree_with_tobj") else { return };
+    for (name, bytes) in files {
         // tobj turns `l` polylines of 3+ vertices into triangles and divides x y z by `w`: not comparable.
         let text = String::from_utf8_lossy(&bytes);
         let has_polyline_or_w = text.lines().any(|l| {
@@ -351,11 +341,12 @@ fn triangles_agree_with_tobj() {
         compared += 1;
     }
     println!("{compared} files: triangles equal tobj's");
+    assert!(compared > 0, "no file was compared with tobj");
 }
 
 #[test]
 fn horse_poses_share_size_and_faces() {
-    let Some(dir) = horse_dir() else { return };
+    let Some(dir) = horse_dir("horse_poses_share_size_and_faces") else { return };
     let mut names: Vec<PathBuf> = std::fs::read_dir(&dir)
         .expect("read horse folder")
         .filter_map(|e| Some(e.ok()?.path()))

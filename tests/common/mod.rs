@@ -11,3 +11,28 @@ macro_rules! dual_test {
         fn $name() $body
     )*};
 }
+
+/// `rel` inside the shared data folder (`POSEMFA_SHARED`, default `../shared` next to the crate), or `None` when
+/// it is absent. Then the test `test` must return at once: this prints the line
+/// `SKIPPED(needs ../shared): TEST (...)`, which scripts/test.sh counts as skipped instead of passed. With
+/// `CI=true` an absent folder fails the test instead (the data must be there in CI).
+///
+/// The line goes straight to the process's stderr, past libtest's capture of `println!` / `eprintln!`, so it is
+/// in the log even when the test passes.
+#[allow(dead_code)]
+pub fn shared_dir(rel: &str, test: &str) -> Option<std::path::PathBuf> {
+    use std::io::Write;
+    let root = std::env::var_os("POSEMFA_SHARED")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    let dir = root.join(rel);
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    let why = format!("{} is absent (POSEMFA_SHARED or ../shared)", dir.display());
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("{test}: {why}, and CI=true: the data tests must run in CI");
+    }
+    let _ = writeln!(std::io::stderr().lock(), "SKIPPED(needs ../shared): {test} ({why})");
+    None
+}
