@@ -1,5 +1,6 @@
-// Turns what a person drops or picks (OBJ files, folders, .zip archives) into [{ name, bytes }] for the
-// worker. Nothing is parsed here: the Rust importer reads and validates the OBJ text.
+// Opening files: the file and folder pickers and drops anywhere on the page. Turns what a person drops or
+// picks (OBJ files, folders, .zip archives) into [{ name, bytes }] for the worker. Nothing is parsed here:
+// the Rust importer reads and validates the OBJ text.
 import { unzipSync } from 'fflate';
 
 const collator = new Intl.Collator(undefined, { numeric: true, sensitivity: 'base' });
@@ -16,7 +17,7 @@ async function fromFile(file, name, out) {
     try {
       entries = unzipSync(new Uint8Array(await file.arrayBuffer()), { filter: (f) => isObj(f.name) && !skip(f.name) });
     } catch (e) {
-      out.problems.push({ file: name, line: null, reason: `cannot open the zip archive (${e.message || e})` });
+      out.problems.push({ file: name, line: null, message: `cannot open the zip archive (${e.message || e})` });
       return;
     }
     for (const [inner, bytes] of Object.entries(entries)) out.files.push({ name: `${name}/${inner}`, bytes });
@@ -70,4 +71,34 @@ export async function filesFromList(list) {
   for (const f of list) await fromFile(f, f.webkitRelativePath || f.name, out);
   naturalSort(out.files);
   return out;
+}
+
+/** Wires the pickers (#file-input, #folder-input) and drops on the window to `open(promise of files)`. */
+export function installDrop(open) {
+  const $ = (id) => document.getElementById(id);
+  for (const id of ['file-input', 'folder-input']) {
+    $(id).addEventListener('change', (e) => {
+      open(filesFromList([...e.target.files])); // a copy: clearing the input empties its FileList
+      e.target.value = '';
+    });
+  }
+  let dragDepth = 0;
+  window.addEventListener('dragenter', (e) => {
+    e.preventDefault();
+    dragDepth++;
+    $('drop-overlay').hidden = false;
+  });
+  window.addEventListener('dragleave', () => {
+    if (--dragDepth <= 0) {
+      dragDepth = 0;
+      $('drop-overlay').hidden = true;
+    }
+  });
+  window.addEventListener('dragover', (e) => e.preventDefault());
+  window.addEventListener('drop', (e) => {
+    e.preventDefault();
+    dragDepth = 0;
+    $('drop-overlay').hidden = true;
+    open(filesFromDataTransfer(e.dataTransfer));
+  });
 }

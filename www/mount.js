@@ -94,7 +94,7 @@ export function mount(element, options = {}) {
       setState('fitted');
       resolveReady({ ...summary });
     } else if (m.type === 'load-error') {
-      fail(m.problems.map((p) => p.reason).join('; '));
+      fail(m.problems.map((p) => p.message).join('; '));
     } else if (m.type === 'fit-error' || m.type === 'fatal') {
       fail(m.message);
     }

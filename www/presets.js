@@ -2,10 +2,10 @@
 // notice, the ones that fail on purpose marked so; a click generates and fits it. And the fitted model's
 // accuracy against the generator's ground truth (computed in Rust, posemfa::metrics).
 import './teach.css';
+import { subscribe } from './state.js';
 
-/** ctx: { app, runExample }. Returns { onMessage(m) } (never consumes a message). */
-export function installPresets(ctx) {
-  const { app } = ctx;
+/** runExample(example): what a click on a preset does. */
+export function installPresets(runExample) {
   const $ = (id) => document.getElementById(id);
 
   function render(examples) {
@@ -17,7 +17,7 @@ export function installPresets(ctx) {
       b.type = 'button';
       b.dataset.id = ex.id;
       b.textContent = ex.title.replace(/^Fails on purpose: /, '');
-      b.addEventListener('click', () => ctx.runExample(ex));
+      b.addEventListener('click', () => runExample(ex));
       const note = document.createElement('span');
       note.className = 'note';
       note.textContent = ex.note; // one line; all of it on hover or focus, and its title
@@ -31,13 +31,10 @@ export function installPresets(ctx) {
     for (const b of $('presets').querySelectorAll('button')) b.setAttribute('aria-current', String(b.dataset.id === id));
   }
 
-  return {
-    onMessage(m) {
-      if (m.type === 'ready') render(m.examples ?? []);
-      else if (m.type === 'loaded' && m.id === app.loadId) mark(app.pendingExample?.id ?? null);
-      return false;
-    },
-  };
+  subscribe((s, changed) => {
+    if (changed.has('examples')) render(s.examples);
+    if (changed.has('pop')) mark(s.source?.example?.id ?? null);
+  });
 }
 
 /** One line of ground-truth accuracy: adjusted Rand index and rotation error (median and worst part). */

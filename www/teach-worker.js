@@ -5,14 +5,15 @@
 //   page -> worker
 //     { type: 'teach-reset', id, params }  a new teaching fit of the current population (iteration 0);
 //                                          supersedes any fit in progress
-//     { type: 'teach-step', id }           exactly one AECM iteration (starts a fit with `params` first
-//                                          if there is none: { type: 'teach-step', id, params })
+//     { type: 'teach-step', id, count }    exactly `count` AECM iterations (default 1; fewer when the fit
+//                                          ends first), one 'teach' message after them (starts a fit with
+//                                          `params` first if there is none: { type: 'teach-step', id, params })
 //     { type: 'teach-run', id }            iterations one by one (paced: RUN_MS each at least), a 'teach'
 //                                          message after each, until paused or done
 //     { type: 'teach-pause' }              stops a run after the iteration in progress
 //   worker -> page
-//     { type: 'teach', id, kind, step, stage, running, trace, labels, gamma, parts, vertices }
-//        kind: 'reset' | 'step' | 'paused'; step: the progress object of the iteration just made (null
+//     { type: 'teach', id, kind, steps, stage, running, trace, labels, gamma, parts, vertices }
+//        kind: 'reset' | 'step' | 'paused'; steps: the progress objects of the iterations just made (empty
 //        unless kind is 'step'); stage: where the
 //        pipeline is now; trace: the current AECM run's log-likelihoods; labels: per vertex (all vertices);
 //        gamma: responsibilities [j * parts + k] of the run's vertices (`vertices`: their ids during the
@@ -51,30 +52,32 @@ export class Teacher {
     this.fitter = new this.wasm.Fitter(population, params);
     this.id = id;
     this.t0 = performance.now();
-    this.report('reset', null);
+    this.report('reset', []);
     return true;
   }
 
   // After a step (or a reset): what the page shows.
-  report(kind, step) {
+  report(kind, steps) {
     const f = this.fitter;
     const trace = f.currentTrace();
     const labels = f.currentLabels();
     const r = f.currentResponsibilities();
-    const msg = { type: 'teach', id: this.id, kind, step, stage: f.stage(), running: this.running, trace, labels, parts: r.parts ?? 0, gamma: r.gamma ?? null, vertices: r.vertices ?? null };
+    const msg = { type: 'teach', id: this.id, kind, steps, stage: f.stage(), running: this.running, trace, labels, parts: r.parts ?? 0, gamma: r.gamma ?? null, vertices: r.vertices ?? null };
     const transfer = [trace.buffer, labels.buffer];
     if (msg.gamma) transfer.push(msg.gamma.buffer);
     if (msg.vertices) transfer.push(msg.vertices.buffer);
     this.post(msg, transfer);
   }
 
-  // One iteration; when the pipeline is done, its model goes to the page and the teaching fit ends.
-  stepOnce() {
+  // `count` iterations (fewer when the pipeline is done first), then one report; when the pipeline is done,
+  // its model goes to the page and the teaching fit ends.
+  stepOnce(count = 1) {
     const f = this.fitter;
-    const step = f.step();
+    const steps = [];
+    while (steps.length < count && !f.isDone()) steps.push(f.step());
     const done = f.isDone();
     if (done) this.running = false;
-    this.report('step', step);
+    this.report('step', steps);
     if (done) {
       const id = this.id;
       this.fitter = null;
@@ -87,10 +90,10 @@ export class Teacher {
     }
   }
 
-  async step(population, { id, params }) {
+  async step(population, { id, params, count = 1 }) {
     if (this.running) return;
     if (!this.fitter && !(await this.reset(population, { id, params }))) return;
-    this.stepOnce();
+    this.stepOnce(Math.max(1, Math.floor(count)));
   }
 
   async run(population, { id, params }) {
@@ -104,7 +107,7 @@ export class Teacher {
       const rest = RUN_MS - (performance.now() - t0);
       await (rest > 1 ? sleep(rest) : this.yieldToEvents()); // a 'teach-pause' (or a new fit) is read here
     }
-    if (this.fitter === f) this.report('paused', null);
+    if (this.fitter === f) this.report('paused', []);
   }
 
   pause() {

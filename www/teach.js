@@ -2,224 +2,209 @@
 // single-step API. One Step = one `fitter.step()` = one AECM iteration: the counter moves by one and the
 // log-likelihood plot gains one point. While stepping, the mesh shows the responsibilities as soft colours
 // (part colours blended by γ), the Algorithm 1 stage in progress, and beside the controls the equations the
-// iteration computes. Nothing is computed here but colours.
+// iteration computes. Nothing is computed here but colours. The teaching fit lives in the page state as
+// state.teach = { id, running, iteration, stage, values, runs, soft } (null when there is none).
 import { PALETTE, hexToRgb, colourParts } from './colors.js';
+import { state, update, subscribe } from './state.js';
+import { client, watchFit, jobKey } from './session.js';
+import { readParams } from './controls/form.js';
+import { renderView } from './views/render.js';
+import { plot } from './views/viewer-instance.js';
+import { showStep, stageText } from './views/result.js';
+import { showProblems } from './problems.js';
 
 const PALETTE_RGB = PALETTE.map(hexToRgb);
 const OUTSIDE = [0.86, 0.87, 0.89]; // vertices outside the part being refined
+const STAGES = ['coarse', 'refine', 'final', 'done'];
+const $ = (id) => document.getElementById(id);
 
-/**
- * ctx: { app, send, setState, plot, renderView, readParams, stageText } from main.js. Returns
- * { onMessage(m) }: true when the message was the teaching mode's alone.
- */
-export function installTeaching(ctx) {
-  const { app, send, setState, plot, renderView, readParams, stageText } = ctx;
-  const $ = (id) => document.getElementById(id);
-  const t = {
-    id: null, // request id of the teaching fit (app.fitId while it is the page's fit)
-    running: false,
-    values: [], // log-likelihood after every step, one point each
-    runs: [], // index in `values` where every AECM run starts
-    runKey: null, // the run the colour assignment belongs to
-    colourOf: [], // palette index of every component of that run
-    iteration: 0, // AECM iterations made (all runs)
-    stage: null,
-  };
-  const active = () => t.id !== null && app.fitId === t.id;
+const active = () => state.teach !== null && state.fitId === state.teach.id;
+const setTeach = (patch) => update({ teach: { ...state.teach, ...patch } });
 
-  function buttons() {
-    const on = active();
-    $('teach-run').disabled = on && t.running;
-    $('teach-step').disabled = on && t.running;
-    $('teach-pause').disabled = !(on && t.running);
-    $('teach-run').setAttribute('aria-pressed', String(on && t.running));
+function buttons() {
+  const on = active();
+  const running = on && state.teach.running;
+  $('teach-run').disabled = running;
+  $('teach-step').disabled = running;
+  $('teach-pause').disabled = !running;
+  $('teach-run').setAttribute('aria-pressed', String(running));
+}
+
+/** Step / Run / Reset: a step of the teaching fit in hand, or a new one (count: steps at once). */
+export function teach(type, { count = 1 } = {}) {
+  if (!state.pop) return;
+  if (type !== 'teach-reset' && active()) {
+    setTeach({ running: type === 'teach-run' });
+    client.post({ type, id: state.teach.id, count });
+    return;
   }
-
-  function begin(type) {
-    if (!app.pop) return;
-    if (type !== 'teach-reset' && active()) {
-      t.running = type === 'teach-run';
-      send({ type, id: t.id });
-      buttons();
-      return;
-    }
-    // A new teaching fit: the current model (and any fit in progress) gives way to it.
-    const id = send({ type, params: readParams() });
-    Object.assign(t, { id, running: type === 'teach-run', values: [], runs: [], runKey: null, iteration: 0, stage: null });
-    app.fitId = id;
-    app.model = null;
-    app.gen++;
-    app.cache.clear();
-    app.colours.live = null;
-    app.lastStep = null;
-    $('errors').replaceChildren();
-    $('stage').textContent = 'starting';
-    for (const k of ['iteration', 'elapsed', 'loglik']) $(k).textContent = '–';
-    $('teach-iteration').textContent = '0';
-    plot.set([], '');
-    setState('teaching');
-    showLambdaRule();
-    buttons();
-  }
-
-  $('teach-step').addEventListener('click', () => begin('teach-step'));
-  $('teach-run').addEventListener('click', () => begin('teach-run'));
-  $('teach-reset').addEventListener('click', () => begin('teach-reset'));
-  $('teach-pause').addEventListener('click', () => {
-    if (!active()) return;
-    send({ type: 'teach-pause' });
+  // A new teaching fit: the current model (and any fit in progress) gives way to it.
+  const params = readParams();
+  const { id, done } = client.request({ type, params, count }, { onEvent: onTeach, job: jobKey(state.source, params) });
+  update({
+    teach: { id, running: type === 'teach-run', values: [], runs: [], iteration: 0, stage: null, soft: null },
+    fitId: id, model: null, gen: state.gen + 1, colours: { ...state.colours, live: null }, lastStep: null, phase: 'teaching',
   });
-  $('params').elements.paperLambda.addEventListener('change', showLambdaRule);
-
-  // Which Λ update the next fit uses: the exact conditional maximiser, or the paper's literal eq 18.
-  function showLambdaRule() {
-    const literal = $('params').elements.paperLambda.checked;
-    $('teach-eq-lambda-exact').hidden = literal;
-    $('teach-eq-lambda-paper').hidden = !literal;
-  }
+  showProblems([]);
+  $('stage').textContent = 'starting';
+  for (const k of ['iteration', 'elapsed', 'loglik']) $(k).textContent = '–';
+  plot.set([], '');
   showLambdaRule();
+  watchFit(id, done);
+}
 
-  // Palette index of every component of the run: neighbours differ (colors.js); fixed for the whole run so
-  // that the colours do not jump between steps.
-  function assignColours(m, labels) {
-    const key = `${JSON.stringify(m.stage)}:${m.parts}`;
-    if (key === t.runKey) return;
-    t.runKey = key;
-    let full = labels;
-    if (m.vertices) {
-      full = new Uint32Array(app.pop.nVertices).fill(m.parts); // one extra label for the rest of the mesh
-      m.vertices.forEach((v, j) => { full[v] = labels[j]; });
-    }
-    const c = colourParts(full, app.pop.faces);
-    t.colourOf = Array.from({ length: m.parts }, (_, k) => (c[k] >= 0 ? c[k] : k % PALETTE.length));
-  }
+// Which Λ update the next fit uses: the exact conditional maximiser, or the paper's literal eq 18.
+function showLambdaRule() {
+  const literal = $('params').elements.paperLambda.checked;
+  $('teach-eq-lambda-exact').hidden = literal;
+  $('teach-eq-lambda-paper').hidden = !literal;
+}
 
-  // Soft colours: every vertex of the run gets its parts' colours blended by its responsibilities.
-  function softColours(m) {
-    const n = app.pop.nVertices;
-    const K = m.parts;
-    const out = new Float32Array(n * 3);
-    if (!m.gamma || !K) {
-      for (let v = 0; v < n; v++) out.set(OUTSIDE, 3 * v);
-      return out;
-    }
-    const rows = m.gamma.length / K;
-    const argmax = new Uint32Array(rows);
-    for (let j = 0; j < rows; j++) {
-      let best = 0;
-      for (let k = 1; k < K; k++) if (m.gamma[j * K + k] > m.gamma[j * K + best]) best = k;
-      argmax[j] = best;
-    }
-    assignColours(m, argmax);
-    if (m.vertices) for (let v = 0; v < n; v++) out.set(OUTSIDE, 3 * v);
-    const soft = { vertices: 0, blended: 0 }; // vertices with no part above γ = 0.9, and how many show a blend
-    for (let j = 0; j < rows; j++) {
-      let r = 0;
-      let g = 0;
-      let b = 0;
-      for (let k = 0; k < K; k++) {
-        const w = m.gamma[j * K + k];
-        if (w === 0) continue;
-        const c = PALETTE_RGB[t.colourOf[k]];
-        r += w * c[0];
-        g += w * c[1];
-        b += w * c[2];
-      }
-      out.set([r, g, b], 3 * (m.vertices ? m.vertices[j] : j));
-      if (m.gamma[j * K + argmax[j]] < 0.9) {
-        soft.vertices++;
-        if (!PALETTE_RGB.some((c) => Math.abs(c[0] - r) + Math.abs(c[1] - g) + Math.abs(c[2] - b) < 0.02)) soft.blended++;
-      }
-    }
-    t.soft = soft;
-    return out;
+// Palette index of every component of the run: neighbours differ (colors.js); fixed for the whole run so
+// that the colours do not jump between steps.
+const assigned = { key: null, colourOf: [] };
+function assignColours(m, labels) {
+  const key = `${JSON.stringify(m.stage)}:${m.parts}`;
+  if (key === assigned.key) return;
+  assigned.key = key;
+  let full = labels;
+  if (m.vertices) {
+    full = new Uint32Array(state.pop.nVertices).fill(m.parts); // one extra label for the rest of the mesh
+    m.vertices.forEach((v, j) => { full[v] = labels[j]; });
   }
+  const c = colourParts(full, state.pop.faces);
+  assigned.colourOf = Array.from({ length: m.parts }, (_, k) => (c[k] >= 0 ? c[k] : k % PALETTE.length));
+}
 
-  // Algorithm 1's stages, the current one marked.
-  function showStage(stage) {
-    t.stage = stage;
-    const kind = stage?.kind ?? 'coarse';
-    for (const li of $('teach-stages').children) {
-      const here = li.dataset.stage === kind;
-      li.classList.toggle('current', here);
-      if (here) li.setAttribute('aria-current', 'step');
-      else li.removeAttribute('aria-current');
-      li.classList.toggle('past', ['coarse', 'refine', 'final', 'done'].indexOf(li.dataset.stage) < ['coarse', 'refine', 'final', 'done'].indexOf(kind));
+// Soft colours: every vertex of the run gets its parts' colours blended by its responsibilities. Returns the
+// colours and { vertices: with no part above γ = 0.9, blended: how many of them show a blend }.
+function softColours(m) {
+  const n = state.pop.nVertices;
+  const K = m.parts;
+  const out = new Float32Array(n * 3);
+  if (!m.gamma || !K) {
+    for (let v = 0; v < n; v++) out.set(OUTSIDE, 3 * v);
+    return { colours: out, soft: null };
+  }
+  const rows = m.gamma.length / K;
+  const argmax = new Uint32Array(rows);
+  for (let j = 0; j < rows; j++) {
+    let best = 0;
+    for (let k = 1; k < K; k++) if (m.gamma[j * K + k] > m.gamma[j * K + best]) best = k;
+    argmax[j] = best;
+  }
+  assignColours(m, argmax);
+  if (m.vertices) for (let v = 0; v < n; v++) out.set(OUTSIDE, 3 * v);
+  const soft = { vertices: 0, blended: 0 };
+  for (let j = 0; j < rows; j++) {
+    let r = 0;
+    let g = 0;
+    let b = 0;
+    for (let k = 0; k < K; k++) {
+      const w = m.gamma[j * K + k];
+      if (w === 0) continue;
+      const c = PALETTE_RGB[assigned.colourOf[k]];
+      r += w * c[0];
+      g += w * c[1];
+      b += w * c[2];
     }
-    const note = {
-      coarse: 'Coarse stage: AECM with m parts on all vertices, started from k-means++.',
-      refine: stage?.kind === 'refine'
-        ? `Refinement of coarse part ${stage.part + 1} of ${stage.of}: AECM on its vertices alone (the rest grey) with m_k = ${stage.subParts} component${stage.subParts > 1 ? 's' : ''}; m_k grows while the mean variance falls.`
-        : '',
-      final: 'Final stage: AECM on all vertices, started from the refined labels (eq 20).',
-      done: 'Done: labels (eq 20), latent shape (eq 21), reconstruction (eq 22).',
-    }[kind];
-    $('teach-stage-note').textContent = note ?? '';
-  }
-
-  let pending = null;
-  function show() {
-    const m = pending;
-    pending = null;
-    if (!m || !active() || !app.pop) return;
-    app.colours.live = softColours(m);
-    if (app.model) return;
-    renderView().then(() => {
-      if (active() && app.mode === 'parts') {
-        const where = m.vertices ? `; grey: outside coarse part ${m.stage.part + 1}` : '';
-        $('caption').textContent = `Pose “${app.pop.names[app.pose]}”: responsibilities γ of the fit in progress as soft colours (part colours blended by γ${where})`;
-      }
-    });
-  }
-
-  function onTeach(m) {
-    if (m.id !== t.id) return;
-    t.running = m.running;
-    if (m.kind === 'step' && m.step) {
-      const s = m.step;
-      if (!t.values.length || s.iteration === 1) t.runs.push(t.values.length);
-      t.values.push(s.logLikelihood);
-      t.iteration = s.totalIterations;
-      app.lastStep = s;
-      $('teach-iteration').textContent = String(s.totalIterations);
-      $('stage').textContent = stageText(s.stage);
-      $('iteration').textContent = `${s.iteration} (total ${s.totalIterations})`;
-      $('loglik').textContent = s.logLikelihood.toFixed(2);
-      plot.set(t.values, `${stageText(s.stage)}: log-likelihood per step`, t.runs);
+    out.set([r, g, b], 3 * (m.vertices ? m.vertices[j] : j));
+    if (m.gamma[j * K + argmax[j]] < 0.9) {
+      soft.vertices++;
+      if (!PALETTE_RGB.some((c) => Math.abs(c[0] - r) + Math.abs(c[1] - g) + Math.abs(c[2] - b) < 0.02)) soft.blended++;
     }
-    showStage(m.stage);
-    buttons();
-    if (m.stage?.kind === 'done') return; // the 'fitted' message follows
-    if (!pending) requestAnimationFrame(show);
-    pending = m;
   }
+  return { colours: out, soft };
+}
+
+// Algorithm 1's stages, the current one marked.
+function showStage(stage) {
+  const kind = stage?.kind ?? 'coarse';
+  for (const li of $('teach-stages').children) {
+    const here = li.dataset.stage === kind;
+    li.classList.toggle('current', here);
+    if (here) li.setAttribute('aria-current', 'step');
+    else li.removeAttribute('aria-current');
+    li.classList.toggle('past', STAGES.indexOf(li.dataset.stage) < STAGES.indexOf(kind));
+  }
+  const note = {
+    coarse: 'Coarse stage: AECM with m parts on all vertices, started from k-means++.',
+    refine: stage?.kind === 'refine'
+      ? `Refinement of coarse part ${stage.part + 1} of ${stage.of}: AECM on its vertices alone (the rest grey) with m_k = ${stage.subParts} component${stage.subParts > 1 ? 's' : ''}; m_k grows while the mean variance falls.`
+      : '',
+    final: 'Final stage: AECM on all vertices, started from the refined labels (eq 20).',
+    done: 'Done: labels (eq 20), latent shape (eq 21), reconstruction (eq 22).',
+  }[kind];
+  $('teach-stage-note').textContent = note ?? '';
+}
+
+let pending = null;
+function show() {
+  const m = pending;
+  pending = null;
+  if (!m || !active() || !state.pop) return;
+  const { colours, soft } = softColours(m);
+  setTeach({ soft });
+  update({ colours: { ...state.colours, live: colours } });
+  if (state.model) return;
+  renderView().then(() => {
+    if (active() && state.mode === 'parts') {
+      const where = m.vertices ? `; grey: outside coarse part ${m.stage.part + 1}` : '';
+      $('caption').textContent = `Pose “${state.pop.names[state.pose]}”: responsibilities γ of the fit in progress as soft colours (part colours blended by γ${where})`;
+    }
+  });
+}
+
+// A 'teach' message of the worker: one step made (or several: m.steps), a reset, or a pause.
+function onTeach(m) {
+  if (!state.teach || m.id !== state.teach.id) return;
+  const t = { running: m.running, stage: m.stage };
+  const steps = m.steps ?? [];
+  if (steps.length) {
+    const values = state.teach.values.slice();
+    const runs = state.teach.runs.slice();
+    for (const s of steps) {
+      if (!values.length || s.iteration === 1) runs.push(values.length);
+      values.push(s.logLikelihood);
+    }
+    const s = steps[steps.length - 1];
+    Object.assign(t, { values, runs, iteration: s.totalIterations });
+    update({ lastStep: s });
+    $('teach-iteration').textContent = String(s.totalIterations);
+    showStep(s);
+    plot.set(values, `${stageText(s.stage)}: log-likelihood per step`, runs);
+  }
+  setTeach(t);
+  if (m.stage?.kind === 'done') return; // the 'fitted' message follows
+  if (!pending) requestAnimationFrame(show);
+  pending = m;
+}
+
+export function installTeaching() {
+  $('teach-step').addEventListener('click', () => teach('teach-step'));
+  $('teach-run').addEventListener('click', () => teach('teach-run'));
+  $('teach-reset').addEventListener('click', () => teach('teach-reset'));
+  $('teach-pause').addEventListener('click', () => active() && client.post({ type: 'teach-pause' }));
+  $('params').elements.paperLambda.addEventListener('change', showLambdaRule);
+  subscribe((s, changed) => {
+    if (changed.has('teach') || changed.has('fitId')) buttons();
+    if (changed.has('teach')) showStage(s.teach?.stage ?? null);
+    if (changed.has('pop') || changed.has('model')) showLambdaRule(); // the form was filled in code
+    if (changed.has('fitId') && s.teach && s.fitId !== s.teach.id && s.teach.running) setTeach({ running: false });
+  });
 
   window.posemfa.teaching = () => ({
     active: active(),
-    running: active() && t.running,
-    iteration: t.iteration,
-    points: t.values.length,
-    logLikelihood: t.values.slice(),
-    stage: t.stage,
-    soft: t.soft ?? null,
+    running: active() && state.teach.running,
+    iteration: state.teach?.iteration ?? 0,
+    points: state.teach?.values.length ?? 0,
+    logLikelihood: state.teach?.values.slice() ?? [],
+    stage: state.teach?.stage ?? null,
+    soft: state.teach?.soft ?? null,
   });
   /** Points on the log-likelihood plot now. */
   window.posemfa.plotPoints = () => plot.values.length;
-
   buttons();
+  showLambdaRule();
   showStage(null);
-  return {
-    onMessage(m) {
-      if (m.type === 'teach') {
-        onTeach(m);
-        return true;
-      }
-      if (m.type === 'loaded' || m.type === 'fitted') queueMicrotask(showLambdaRule); // the form was filled in code
-      if ((m.type === 'fitted' || m.type === 'fit-error') && m.id === t.id) {
-        t.running = false;
-        queueMicrotask(buttons);
-      }
-      return false;
-    },
-  };
 }

@@ -12,6 +12,7 @@
 //                              controls); hide=NAME,... hides more; show=NAME,... brings some back. Names:
 //                              header, panel, toolbar, modes, caption, poses, interp, info, presets, teach
 import './embed.css';
+import { state, subscribe } from './state.js';
 
 export const CONTROLS = ['header', 'panel', 'toolbar', 'modes', 'caption', 'poses', 'interp', 'info', 'presets', 'teach'];
 const EMBED_HIDES = ['header', 'panel', 'toolbar', 'poses', 'interp'];
@@ -96,11 +97,11 @@ export function applyEmbedFlags(s, body = document.body) {
 applyEmbedFlags(parseHash(location.hash));
 
 /**
- * ctx (from main.js): { app, viewer, readParams, renderView, runExample, generate, examples() }.
- * Returns { start(): true when the hash chose what to load (and loaded it), onMessage(m) }.
+ * ctx (from main.js): { viewer, readParams, renderView, runExample, generate, note }.
+ * Returns { start(): true when the hash chose what to load (and loaded it) }.
  */
 export function installUrlState(ctx) {
-  const { app, viewer } = ctx;
+  const { viewer } = ctx;
   const $ = (id) => document.getElementById(id);
   let restoring = null; // view state waiting for the fit to end
   let source = null; // { ex } | { gen } | { src: 'files' } of the population shown
@@ -109,6 +110,7 @@ export function installUrlState(ctx) {
   let written = location.hash.replace(/^#/, '');
   let timer = 0;
   let note = null; // shown once the first population is in
+  let lastTeachId = null;
 
   function current() {
     const s = { ...source };
@@ -116,11 +118,11 @@ export function installUrlState(ctx) {
       const { parts, seed, tol, varianceFloor, lambdaRule, refine } = fitParams;
       s.params = { parts, seed, tol, varianceFloor, lambdaRule, refine };
     }
-    if (app.pop && !s.src) {
+    if (state.pop && !s.src) {
       s.view = {
-        mode: app.mode,
+        mode: state.mode,
         flat: $('flat').checked,
-        pose: app.pose,
+        pose: state.pose,
         a: Number($('pose-a').value),
         b: Number($('pose-b').value),
         t: Number($('interp-t').value),
@@ -162,7 +164,7 @@ export function installUrlState(ctx) {
       $(id)[prop] = value;
       $(id).dispatchEvent(new Event(ev, { bubbles: true }));
     };
-    const n = app.pop.nShapes;
+    const n = state.pop.nShapes;
     const pose = (i) => (i === undefined ? undefined : String(Math.min(Math.max(Math.round(i), 0), n - 1)));
     set('flat', 'checked', v.flat, 'change');
     set('pose-a', 'value', pose(v.a), 'input');
@@ -189,7 +191,7 @@ export function installUrlState(ctx) {
 
   // Loads what a state names; its view waits for the fit. False when the state names no population.
   function load(s) {
-    const examples = ctx.examples();
+    const examples = state.examples;
     if (s.ex) {
       const ex = examples.find((e) => e.id === s.ex);
       if (!ex) return false;
@@ -213,13 +215,46 @@ export function installUrlState(ctx) {
     flags = s;
     applyEmbedFlags(s);
     const sameSource = formatHash({ ex: s.ex, gen: s.gen, params: s.params }) === formatHash({ ...source, params: current().params });
-    if (sameSource && app.model) applyView(s.view ?? {});
+    if (sameSource && state.model) applyView(s.view ?? {});
     else load(s);
   });
 
   /** The state now (as parseHash returns it), and whether a link's view is still waiting for its fit. */
   window.posemfa.urlState = () => current();
   window.posemfa.restoring = () => !!restoring;
+
+  subscribe((st, changed) => {
+    if (changed.has('pop')) {
+      const src = st.source;
+      source = src?.example ? { ex: src.example.id } : src?.spec ? { gen: src.spec } : { src: 'files' };
+      fitParams = null;
+      if (note) {
+        const text = note;
+        note = null;
+        queueMicrotask(() => ctx.note(text)); // after the load's own notes
+      }
+    }
+    const newTeachingFit = changed.has('teach') && st.teach && st.teach.id !== lastTeachId;
+    if (newTeachingFit) lastTeachId = st.teach.id;
+    if ((changed.has('model') && st.model) || newTeachingFit) {
+      fitParams = ctx.readParams();
+      if (changed.has('model') && restoring) {
+        const v = restoring;
+        queueMicrotask(async () => { // after the views have shown the model
+          try {
+            await applyView(v);
+          } finally {
+            restoring = null;
+            schedule();
+          }
+        });
+      } else {
+        schedule();
+      }
+    } else if (restoring && (changed.has('loadErrorCount') || (changed.has('fitCount') && !changed.has('model')))) {
+      restoring = null;
+    }
+  });
 
   return {
     /** At the worker's 'ready': loads the population the hash names. False: the page's default applies. */
@@ -229,35 +264,6 @@ export function installUrlState(ctx) {
         note = 'This link was made from opened files, which a link cannot carry: open them again. Showing the default example.';
       }
       return load(s);
-    },
-    onMessage(m) {
-      if (m.type === 'loaded' && m.id === app.loadId) {
-        source = app.pendingExample ? { ex: app.pendingExample.id } : app.pendingSpec ? { gen: app.pendingSpec } : { src: 'files' };
-        fitParams = null;
-        if (note) {
-          const text = note;
-          note = null;
-          queueMicrotask(() => ctx.note(text)); // after main.js has cleared the previous notes
-        }
-      } else if ((m.type === 'fitted' && m.id === app.fitId) || (m.type === 'teach' && m.kind === 'reset')) {
-        fitParams = ctx.readParams();
-        if (m.type === 'fitted' && restoring) {
-          const v = restoring;
-          queueMicrotask(async () => { // after main.js has shown the model
-            try {
-              await applyView(v);
-            } finally {
-              restoring = null;
-              schedule();
-            }
-          });
-        } else {
-          schedule();
-        }
-      } else if ((m.type === 'load-error' || m.type === 'fit-error') && restoring) {
-        restoring = null;
-      }
-      return false;
     },
   };
 }

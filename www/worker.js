@@ -11,14 +11,14 @@
 //     { type: 'cancel' }                                            stop the fit, keep its best state so far
 //     { type: 'query', id, method, args }                           a question about the model (see QUERIES)
 //   worker -> page
-//     { type: 'ready', defaults, examples, features }               wasm loaded; defaults: the fit parameters'
+//     { type: 'ready', defaults, examples }                         wasm loaded; defaults: the fit parameters'
 //                                                                   defaults; examples: the core's built-in
 //                                                                   examples ({id, title, note, failsOnPurpose,
-//                                                                   spec, params}); features: optional bindings
+//                                                                   spec, params})
 //     { type: 'loaded', id, population }                            population: names, nShapes, nVertices, faces,
 //                                                                   positions (one Float32Array per pose, unit
 //                                                                   box), normalization [ox, oy, oz, scale], truth
-//     { type: 'load-error', id, problems: [{ file, line, reason }] } the previous population is kept
+//     { type: 'load-error', id, problems: [{ file, line, message }] } the previous population is kept
 //     { type: 'progress', id, steps, trace, labels, elapsedMs }     after every slice: the AECM iterations made
 //                                                                   (one progress object each), the current run's
 //                                                                   log-likelihood trace and labels
@@ -31,9 +31,6 @@
 import init, * as wasm from './pkg/posemfa.js';
 import wasmUrl from './pkg/posemfa_bg.wasm?url';
 import { Teacher } from './teach-worker.js';
-
-// Bindings that newer builds add (looked up by name, so that this file builds with or without them).
-const binding = (name) => wasm[name];
 
 const SLICE_MS = 40; // one fitter.run(budget) call; the worker reads its messages between slices
 
@@ -65,14 +62,14 @@ const pending = [];
 channel.port1.onmessage = () => pending.shift()?.();
 const yieldToEvents = () => new Promise((resolve) => { pending.push(resolve); channel.port2.postMessage(0); });
 
-// "file X, line N: reason" / "file X: reason" / anything else, one problem per line.
+// "file X, line N: message" / "file X: message" / anything else, one problem per line.
 function problemsOf(message) {
   return String(message).split('\n').filter((l) => l.trim()).map((text) => {
     let m = /^file (.*), line (\d+): (.*)$/.exec(text);
-    if (m) return { file: m[1], line: Number(m[2]), reason: m[3] };
+    if (m) return { file: m[1], line: Number(m[2]), message: m[3] };
     m = /^file (.*?): (.*)$/.exec(text);
-    if (m) return { file: m[1], line: null, reason: m[2] };
-    return { file: null, line: null, reason: text };
+    if (m) return { file: m[1], line: null, message: m[2] };
+    return { file: null, line: null, message: text };
   });
 }
 
@@ -124,20 +121,16 @@ function load(data) {
 
 function generate(data) {
   const { id, spec } = data;
-  if (typeof wasm.Synthetic !== 'function') {
-    post({ type: 'load-error', id, problems: [{ file: null, line: null, reason: 'this build has no generator (posemfa::synth binding)' }] });
-    return;
-  }
   let synth;
   try {
-    synth = new (binding('Synthetic'))(spec);
+    synth = new wasm.Synthetic(spec);
   } catch (e) {
     if (isCrash(e)) return crashed(e);
     post({ type: 'load-error', id, problems: problemsOf(e.message ?? e) });
     return;
   }
   const groundTruth = { partNames: synth.partNames(), partOfVertex: synth.partOfVertex() };
-  replacePopulation(synth.population(), typeof synth.groundTruth === 'function' ? synth : (synth.free(), null));
+  replacePopulation(synth.population(), synth);
   sendPopulation(id, groundTruth);
   if (data.fit) fit(data.fit);
 }
@@ -155,9 +148,6 @@ function modelMessage(m) {
     coarseLabels: m.coarseLabels(),
     refinedLabels: m.refinedLabels(),
     latent: m.latent(),
-    interpolate: typeof m.interpolate === 'function',
-    gltf: typeof m.toGlb === 'function',
-    report: typeof m.articulationReport === 'function',
   };
 }
 
@@ -267,8 +257,7 @@ const ready = init({ module_or_path: wasmUrl }).then(
   () => post({
     type: 'ready',
     defaults: wasm.defaultParams(),
-    examples: typeof binding('examples') === 'function' ? binding('examples')() : [],
-    features: { synth: typeof binding('Synthetic') === 'function' },
+    examples: wasm.examples(),
   }),
   (e) => post({ type: 'fatal', message: `the wasm module failed to load: ${e.message ?? e}` }),
 );

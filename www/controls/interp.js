@@ -1,0 +1,103 @@
+// Interpolation between two poses: From / To, t (slider and Play), side by side with linear blending, the
+// skinning and the eq 24 residual, and "Measure at this t" (the core's articulation report).
+import { state, subscribe } from '../state.js';
+import { query } from '../session.js';
+import { renderView, poseName } from '../views/render.js';
+
+const $ = (id) => document.getElementById(id);
+const play = { playing: false, last: 0, dir: 1 };
+
+/** The interpolation asked for: poses a -> b at t, side by side or not, and the core's options. */
+export function interpValues() {
+  return {
+    a: Number($('pose-a').value),
+    b: Number($('pose-b').value),
+    t: Number($('interp-t').value),
+    side: $('side-by-side').checked,
+    opts: { skin: $('interp-skin').value, residual: $('interp-residual').checked },
+  };
+}
+
+function onInput() {
+  $('report').replaceChildren();
+  $('interp-t-out').textContent = Number($('interp-t').value).toFixed(2);
+  if (state.mode === 'interp') renderView();
+}
+
+function updateNote() {
+  const partwise = !!state.model;
+  for (const id of ['side-by-side', 'interp-skin', 'interp-residual', 'measure']) $(id).disabled = !partwise;
+  $('interp-note').textContent = partwise ? '' : 'Linear vertex blending until the fit ends; then the part-wise interpolation.';
+  $('report').replaceChildren();
+}
+
+// The core's figures of every interpolation method at this t: volume change and edge stretch.
+async function measure() {
+  const { a, b, t } = interpValues();
+  $('report').textContent = 'measuring…';
+  let r;
+  try {
+    r = await query('articulationReport', a, b, t);
+  } catch (e) {
+    $('report').textContent = e.message;
+    return;
+  }
+  const pct = (x) => `${(100 * x).toFixed(1)} %`;
+  const table = document.createElement('table');
+  const head = document.createElement('tr');
+  for (const h of ['method', 'volume change', 'edge stretch p99 (boundary)', 'largest stretch', 'error at t=0 / t=1']) {
+    head.append(Object.assign(document.createElement('th'), { textContent: h }));
+  }
+  table.append(head);
+  for (const m of r.methods) {
+    const tr = document.createElement('tr');
+    for (const c of [m.name, pct(m.volume_change), pct(m.stretch.boundary_p99), pct(m.stretch.all_max),
+      m.endpoint_error.map((e) => e.toExponential(1)).join(' / ')]) {
+      tr.append(Object.assign(document.createElement('td'), { textContent: c }));
+    }
+    table.append(tr);
+  }
+  const cap = document.createElement('div');
+  cap.textContent = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}; volume relative to (1-t)·V(from) + t·V(to); errors in unit-box units`;
+  $('report').replaceChildren(cap, table);
+}
+
+function stopPlay() {
+  play.playing = false;
+  $('play').textContent = 'Play';
+}
+
+// Play runs t back and forth between 0 and 1 in 2 s.
+function startPlay() {
+  if (play.playing) return stopPlay();
+  play.playing = true;
+  play.last = performance.now();
+  $('play').textContent = 'Pause';
+  const tick = async (now) => {
+    if (!play.playing) return;
+    const slider = $('interp-t');
+    let t = Number(slider.value) + (play.dir * (now - play.last)) / 2000;
+    play.last = now;
+    if (t >= 1 || t <= 0) {
+      play.dir *= -1;
+      t = Math.min(Math.max(t, 0), 1);
+    }
+    slider.value = t;
+    $('interp-t-out').textContent = t.toFixed(2);
+    await renderView();
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+}
+
+export function installInterp() {
+  for (const id of ['pose-a', 'pose-b', 'interp-t', 'interp-skin', 'interp-residual']) $(id).addEventListener('input', onInput);
+  $('side-by-side').addEventListener('change', () => renderView({ frame: true }));
+  $('measure').addEventListener('click', measure);
+  $('play').addEventListener('click', startPlay);
+  subscribe((s, changed) => {
+    if (changed.has('mode') && s.mode !== 'interp') stopPlay();
+    if (changed.has('pop') || changed.has('model')) updateNote();
+  });
+  updateNote();
+}

@@ -1,0 +1,70 @@
+// The pose list and the thumbnail strip (arrow keys step through it); the interpolation's From / To lists.
+import { state, update, subscribe } from '../state.js';
+import { viewer } from '../views/viewer-instance.js';
+import { partColours } from '../views/render.js';
+
+const $ = (id) => document.getElementById(id);
+
+function fillPoseLists(names) {
+  const opts = () => names.map((n, i) => Object.assign(document.createElement('option'), { value: i, textContent: n }));
+  $('pose-select').replaceChildren(...opts());
+  $('pose-a').replaceChildren(...opts());
+  $('pose-b').replaceChildren(...opts());
+  $('pose-a').value = 0;
+  $('pose-b').value = Math.min(1, names.length - 1);
+  $('pose-strip').replaceChildren(...names.map((n, i) => {
+    const b = document.createElement('button');
+    b.type = 'button';
+    b.title = n;
+    b.setAttribute('aria-pressed', String(i === state.pose));
+    b.setAttribute('aria-label', `pose ${n}`);
+    const c = document.createElement('canvas');
+    c.width = 160;
+    c.height = 120;
+    const label = document.createElement('span');
+    label.textContent = n.split('/').pop(); // the file's own name; the full path is in the title
+    b.append(c, label);
+    b.addEventListener('click', () => choosePose(i));
+    return b;
+  }));
+}
+
+/** Shows pose i. */
+export const choosePose = (i) => update({ pose: i, hoverPart: null });
+
+function showPose(i) {
+  $('pose-select').value = i;
+  [...$('pose-strip').children].forEach((b, k) => b.setAttribute('aria-pressed', String(k === i)));
+}
+
+let thumbsToken = 0;
+function drawThumbnails() {
+  const token = ++thumbsToken;
+  const canvases = [...$('pose-strip').querySelectorAll('canvas')];
+  const colours = partColours();
+  let i = 0;
+  const next = () => {
+    if (token !== thumbsToken || i >= canvases.length || !state.pop) return;
+    viewer.thumbnail(state.pop.positions[i], colours, canvases[i]);
+    i++;
+    setTimeout(next, 0);
+  };
+  next();
+}
+
+export function installPoses() {
+  $('pose-select').addEventListener('change', (e) => choosePose(Number(e.target.value)));
+  $('pose-strip').addEventListener('keydown', (e) => {
+    const step = { ArrowLeft: -1, ArrowRight: 1 }[e.key];
+    if (!step || !state.pop) return;
+    e.preventDefault();
+    const i = (state.pose + step + state.pop.nShapes) % state.pop.nShapes;
+    choosePose(i);
+    $('pose-strip').children[i].focus();
+  });
+  subscribe((s, changed) => {
+    if (changed.has('pop')) fillPoseLists(s.pop.names);
+    if (changed.has('pose')) showPose(s.pose);
+    if (changed.has('model') && s.model) setTimeout(drawThumbnails, 0);
+  });
+}

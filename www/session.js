@@ -1,0 +1,218 @@
+// What the page asks of the worker, and what it keeps of the answers: populations (files or generated), fits
+// (with live progress), questions about the model (cached per model), and a restarted worker given the work
+// again. Every change goes to the page state (state.js); the views and controls react to it.
+import { startWorker, worker as firstWorker } from './worker-client.js';
+import { WorkerClient, MAX_RESTARTS } from './protocol.js';
+import { state, update, subscribe } from './state.js';
+import { labelColours } from './colors.js';
+import { readParams, fillParams } from './controls/form.js';
+import { showProblems, note } from './problems.js';
+
+const GREY = 0.78;
+const LIVE_MS = 250; // the mesh is recoloured at most this often while a fit runs
+
+const readyHandlers = [];
+/** fn(readyMessage) when the first worker is ready ({ defaults, examples, features }). */
+export const onReady = (fn) => readyHandlers.push(fn);
+
+export const client = new WorkerClient({
+  start: startWorker,
+  first: firstWorker,
+  onReady: (m) => readyHandlers.forEach((f) => f(m)),
+  onFatal: (message) => {
+    showProblems([{ file: null, line: null, message }], 'The page cannot run');
+    update({ phase: 'error' });
+  },
+  onRestart: ({ message }) => restartWork(message),
+  onGiveUp: ({ message, restarts }) => giveUp(message, restarts),
+});
+
+// A key naming the work in hand (population and fit parameters): the restart cap counts per key.
+export const jobKey = (source, params) => JSON.stringify([source?.label, source?.spec ?? source?.names, params]);
+
+/** The state to return to when a load fails: whatever was there before. */
+export const restingState = () => (state.fitId ? 'fitting' : state.model ? 'fitted' : state.pop ? 'idle' : 'error');
+
+/** A generated population (an example's, or any generator spec), fitted at once with the form's parameters. */
+export function generate(spec, example = null, params = null) {
+  if (params) fillParams({ ...state.baseParams, ...params });
+  const label = example ? `example “${example.title}”` : `generated ${spec.preset}, seed ${spec.seed ?? 0}`;
+  startLoad({ label, example, spec }, []);
+}
+
+/** An example: its population generated and fitted with its own parameters (shown in the form). */
+export function runExample(ex, params = {}) {
+  document.getElementById('example').value = ex.id;
+  update({ baseParams: { ...state.defaults, ...ex.params } });
+  fillParams({ ...state.baseParams, ...params });
+  generate(ex.spec, ex);
+}
+
+/** Files from the picker or a drop ({ files, ignored, problems }, see drop.js), fitted at once. */
+export async function loadFiles(got) {
+  const { files, ignored, problems } = await got;
+  const notes = ignored.length ? [{ file: null, line: null, message: `ignored (not .obj or .zip): ${ignored.join(', ')}` }] : [];
+  if (problems.length || files.length === 0) {
+    if (!files.length) problems.push({ file: null, line: null, message: 'no .obj file in what was dropped or picked' });
+    showProblems([...problems, ...notes]);
+    update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
+    return;
+  }
+  update({ baseParams: state.defaults }); // the form's values stay; hidden ones back to the defaults
+  const label = files.length === 1 ? files[0].name : `${files.length} files`;
+  // the page keeps the files' bytes (copies go to the worker): a restarted worker gets them again
+  startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes);
+}
+
+// Loading and fitting go in one message: the worker starts the fit as soon as the population is in.
+function startLoad(source, notes) {
+  const fit = { id: client.id(), params: readParams() };
+  const job = jobKey(source, fit.params);
+  let req;
+  if (source.spec) {
+    req = client.request({ type: 'generate', spec: source.spec, fit }, { job });
+  } else {
+    const files = source.bytes.map((b) => b.buffer.slice(b.byteOffset, b.byteOffset + b.byteLength));
+    req = client.request({ type: 'load', names: source.names, files, fit }, { transfer: files, job });
+  }
+  update({ loading: { id: req.id, source, fit, notes }, phase: 'loading' });
+  const fitDone = client.expect(fit.id, { onEvent: onProgress });
+  fitDone.catch(() => {}); // settled below once the population is in
+  req.done.then(
+    (m) => {
+      if (state.loading?.id !== req.id) return;
+      onLoaded(m.population, fit.id);
+      watchFit(fit.id, fitDone);
+    },
+    (e) => {
+      client.forget(fit.id);
+      if (state.loading?.id !== req.id || e.kind === 'crashed') return;
+      update({ loading: null, loadErrorCount: state.loadErrorCount + 1 });
+      showProblems(e.problems);
+      update({ phase: restingState() });
+    },
+  );
+}
+
+function onLoaded(pop, fitId) {
+  const { source, notes } = state.loading;
+  const colours = { grey: new Float32Array(pop.nVertices * 3).fill(GREY) };
+  if (pop.truth) colours.truth = labelColours(pop.truth.partOfVertex, pop.faces).vertexColours;
+  pop.source = source.label;
+  showProblems(notes);
+  update({
+    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null,
+    hoverPart: null, lastStep: null, mode: !pop.truth && state.mode === 'truth' ? 'parts' : state.mode,
+    phase: 'fitting',
+  });
+  liveLabels = null;
+}
+
+/** A fit of the population shown, with the form's parameters. */
+export function startFit() {
+  if (!state.pop) return;
+  showProblems([]);
+  const params = readParams();
+  const { id, done } = client.request({ type: 'fit', params }, { onEvent: onProgress, job: jobKey(state.source, params) });
+  update({ fitId: id, lastStep: null, phase: 'fitting' });
+  liveLabels = null;
+  watchFit(id, done);
+}
+
+export const cancelFit = () => client.post({ type: 'cancel' });
+
+/** Follows the fit `id` to its end (done: its promise from the protocol): the model, or the failure. */
+export function watchFit(id, done) {
+  done.then(
+    (m) => state.fitId === id && onFitted(m),
+    (e) => {
+      if (state.fitId !== id || e.kind === 'crashed') return;
+      update({ fitId: null, fitCount: state.fitCount + 1 });
+      showProblems([{ file: null, line: null, message: e.message }], state.model ? 'The fit failed; the previous model is kept' : 'The fit failed');
+      update({ phase: state.model ? 'fitted' : 'error' });
+    },
+  );
+}
+
+// Progress arrives after every slice of the fit (and each teaching step); it is shown once per frame.
+const progressHandlers = [];
+/** fn(progress) once per animation frame while a fit runs: the latest steps, trace, labels, elapsedMs. */
+export const onFitProgress = (fn) => progressHandlers.push(fn);
+let pendingProgress = null;
+let liveLabels = null;
+let liveShown = 0;
+function onProgress(m) {
+  update({ lastStep: m.steps[m.steps.length - 1] ?? state.lastStep });
+  if (!pendingProgress) requestAnimationFrame(showProgress);
+  pendingProgress = { ...m, steps: [...(pendingProgress?.steps ?? []), ...m.steps] };
+}
+function showProgress() {
+  const m = pendingProgress;
+  pendingProgress = null;
+  if (!m || m.id !== state.fitId) return;
+  progressHandlers.forEach((f) => f(m));
+  // A software-rendered frame costs tens of ms that the fit (sharing the CPU) would otherwise lose.
+  const now = performance.now();
+  if (now - liveShown >= LIVE_MS && !sameLabels(m.labels, liveLabels)) {
+    liveShown = now;
+    liveLabels = m.labels;
+    update({ colours: { ...state.colours, live: labelColours(m.labels, state.pop.faces).vertexColours } });
+  }
+}
+const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
+
+function onFitted({ model }) {
+  const faces = state.pop.faces;
+  const colours = {
+    ...state.colours,
+    final: labelColours(model.labels, faces),
+    coarse: labelColours(model.coarseLabels, faces),
+    refined: labelColours(model.refinedLabels, faces),
+  };
+  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, phase: 'fitted' });
+}
+
+// ------------------------------------------------------------------ questions about the model
+// Answers kept for the model's lifetime (small, asked again and again); interpolations are not kept.
+const CACHED = new Set(['reconstruct', 'vertexErrors', 'responsibilities', 'rotationAngles']);
+const cache = new Map(); // `${gen}:${method}:${args}` -> answer
+
+/** Asks the worker about the model: query('reconstruct', pose) etc. (QUERIES in worker.js). */
+export function query(method, ...args) {
+  const key = `${state.gen}:${method}:${JSON.stringify(args)}`;
+  if (cache.has(key)) return Promise.resolve(cache.get(key));
+  const gen = state.gen;
+  return client.request({ type: 'query', method, args }).done.then((m) => {
+    if (gen === state.gen && CACHED.has(method)) cache.set(key, m.result);
+    return m.result;
+  });
+}
+subscribe((s, changed) => changed.has('gen') && cache.clear());
+
+// ------------------------------------------------------------------ faults
+// A fresh worker gets the population the page had (its files or its generator spec), fitted again with the
+// parameters in the form. Unanswered questions were refused; the page keeps showing what it had.
+function restartWork(message) {
+  update({ restartCount: client.restartCount });
+  const source = state.loading?.source ?? state.source;
+  const wasFitting = state.fitId !== null || state.loading !== null;
+  update({ fitId: null, loading: null, teach: null, fitCount: state.fitCount + (wasFitting ? 1 : 0) });
+  if (!source) {
+    showProblems([{ file: null, line: null, message: `the worker stopped (${message}) and was restarted` }], 'The worker was restarted');
+    update({ phase: restingState() });
+    return;
+  }
+  startLoad(source, [{ file: null, line: null, message: `the worker stopped (${message}) and was restarted; the population was loaded again and is being fitted again` }]);
+  showProblems([{ file: null, line: null, message: `the worker stopped (${message}); a new one is starting and gets the population again` }], 'The worker was restarted');
+}
+
+// The same work crashed the worker again after MAX_RESTARTS restarts: the page keeps what it shows and
+// waits for the next request (a new worker starts with it).
+function giveUp(message, restarts) {
+  const wasFitting = state.fitId !== null || state.loading !== null;
+  update({ fitId: null, loading: null, teach: null, fitCount: state.fitCount + (wasFitting ? 1 : 0) });
+  showProblems([{ file: null, line: null, message: `the worker stopped again (${message}) after ${restarts} restart${restarts === 1 ? '' : 's'} with this population and these parameters (at most ${MAX_RESTARTS}): it was not restarted. ${state.model ? 'The last model is still shown; its' : 'Its'} questions (reconstruction, interpolation, exports) need a new fit: change the parameters, open other files or choose an example.` }], 'The worker keeps crashing');
+  update({ phase: restingState() });
+}
+
+export { note };

@@ -1,0 +1,117 @@
+// Linked views: click a vertex to see its part, its responsibilities (eq 12) and its reconstruction error;
+// hover a part to see its rotation angle in every pose. The numbers come from the worker.
+import { state, update, subscribe } from '../state.js';
+import { query } from '../session.js';
+import { viewer } from './viewer-instance.js';
+import { poseName } from './render.js';
+
+const infoPick = document.createElement('div');
+const infoHover = document.createElement('div');
+
+function swatch(part) {
+  const s = document.createElement('span');
+  s.className = 'swatch';
+  s.style.background = state.colours.final?.partColour[part] ?? '#ccc';
+  return s;
+}
+
+function bar(fraction, width = 80) {
+  const b = document.createElement('span');
+  b.className = 'bar';
+  b.style.width = `${Math.max(1, Math.round(fraction * width))}px`;
+  return b;
+}
+
+function row(...cells) {
+  const tr = document.createElement('tr');
+  for (const c of cells) {
+    const td = document.createElement('td');
+    td.append(c);
+    tr.append(td);
+  }
+  return tr;
+}
+
+async function showPick() {
+  const hit = state.pick;
+  if (!hit || !state.model) {
+    infoPick.replaceChildren();
+    return;
+  }
+  const v = hit.vertex;
+  const part = state.model.labels[v];
+  const { gen, pose } = state;
+  let resp;
+  let errors;
+  try {
+    [resp, errors] = await Promise.all([query('responsibilities', v), query('vertexErrors', pose)]);
+  } catch (e) {
+    infoPick.textContent = e.message;
+    return;
+  }
+  if (gen !== state.gen || state.pick !== hit) return;
+  const s = state.pop.normalization[3];
+  const head = document.createElement('div');
+  head.append(`Vertex ${v} (${state.shown[hit.slot]?.name ?? ''}): part ${part} `, swatch(part));
+  const err = document.createElement('div');
+  err.textContent = `error in pose “${poseName(pose)}”: ${errors[v].toExponential(2)} unit box = ${(errors[v] / s).toExponential(2)} original`;
+  const order = [...resp.keys()].sort((a, b) => resp[b] - resp[a]).slice(0, 5);
+  const table = document.createElement('table');
+  table.append(row('P(part | vertex)', '', ''));
+  for (const k of order) table.append(row(Object.assign(swatch(k), { title: `part ${k}` }), `part ${k}`, resp[k].toFixed(4)));
+  infoPick.replaceChildren(head, err, table);
+}
+
+async function showHover() {
+  const part = state.hoverPart;
+  if (part === null || !state.model) {
+    infoHover.replaceChildren();
+    return;
+  }
+  const { gen, pose } = state;
+  let angles;
+  try {
+    angles = await query('rotationAngles', part, pose);
+  } catch (e) {
+    infoHover.textContent = e.message;
+    return;
+  }
+  if (gen !== state.gen || state.hoverPart !== part) return;
+  const head = document.createElement('div');
+  head.append(swatch(part), ` part ${part}: rotation from pose “${poseName(pose)}”`);
+  const table = document.createElement('table');
+  angles.forEach((a, i) => table.append(row(poseName(i), bar(a / 180), `${a.toFixed(1)}°`)));
+  infoHover.replaceChildren(head, table);
+}
+
+export function installInspect() {
+  document.getElementById('info').append(infoPick, infoHover);
+  const canvas = viewer.renderer.domElement;
+  let down = null;
+  canvas.addEventListener('pointerdown', (e) => { down = { x: e.clientX, y: e.clientY }; });
+  canvas.addEventListener('pointerup', (e) => {
+    if (!down || Math.hypot(e.clientX - down.x, e.clientY - down.y) > 4) return;
+    down = null;
+    const hit = viewer.pick(e.clientX, e.clientY);
+    if (hit) viewer.mark(hit.slot, hit.vertex);
+    else viewer.mark(null);
+    update({ pick: hit });
+    showPick();
+  });
+  let hoverQueued = false;
+  canvas.addEventListener('pointermove', (e) => {
+    if (e.buttons || hoverQueued || !state.model) return;
+    hoverQueued = true;
+    requestAnimationFrame(() => {
+      hoverQueued = false;
+      const hit = viewer.pick(e.clientX, e.clientY);
+      update({ hoverPart: hit ? state.model.labels[hit.vertex] : null });
+    });
+  });
+  canvas.addEventListener('pointerleave', () => update({ hoverPart: null }));
+  subscribe((s, changed) => {
+    if (changed.has('hoverPart')) showHover();
+    if (changed.has('pose') && s.pick) showPick();
+    if (changed.has('pop')) showPick(); // pick was cleared
+  });
+}

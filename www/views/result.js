@@ -1,0 +1,76 @@
+// The panel's figures: the population line (poses, vertices, source, ground truth), the example's note and
+// the file list; the fit's progress (stage, iteration, elapsed time, log-likelihood and its plot); the
+// result (parts, RMSE, iterations, fit time, ground-truth accuracy).
+import { state, subscribe } from '../state.js';
+import { onFitProgress } from '../session.js';
+import { accuracyText } from '../presets.js';
+import { plot } from './viewer-instance.js';
+
+const $ = (id) => document.getElementById(id);
+
+/** Algorithm 1's stage as words. */
+export function stageText(s) {
+  if (!s) return '–';
+  if (s.kind === 'refine') return `refining part ${s.part + 1} of ${s.of} (${s.subParts} sub-parts)`;
+  return { coarse: 'coarse', final: 'final', done: 'done' }[s.kind] ?? s.kind;
+}
+
+function showPopulation(pop, source) {
+  const tris = pop.faces.length / 3;
+  $('pop-info').textContent = `${pop.nShapes} poses × ${pop.nVertices} vertices, ${tris} triangles (${pop.source})`;
+  if (pop.truth) $('pop-info').textContent += `. Ground truth: ${pop.truth.partNames.length} parts.`;
+  const ex = source?.example;
+  $('example-note').hidden = !ex;
+  $('example-note').classList.toggle('fails', !!ex?.failsOnPurpose);
+  $('example-note').textContent = ex ? `${ex.failsOnPurpose ? 'Fails on purpose. ' : ''}${ex.note}` : '';
+  $('names').replaceChildren(...pop.names.map((n) => Object.assign(document.createElement('li'), { textContent: n })));
+}
+
+function showResult() {
+  const s = state.model?.summary;
+  $('parts-count').textContent = s ? s.parts : '–';
+  $('stage-parts').textContent = s ? `(coarse ${s.coarseParts}, refined ${s.refinedParts}${s.cancelled ? ', cancelled' : ''})` : '';
+  $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${(s.rmse / state.pop.normalization[3]).toExponential(3)} original units` : '–';
+  $('iterations').textContent = s ? `${s.iterations} in the final stage${s.converged ? ', converged' : ''}` : '–';
+  $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
+  $('truth-acc').textContent = accuracyText(s?.groundTruth);
+  $('truth-acc').classList.toggle('good', s?.groundTruth?.ari >= 0.95);
+}
+
+/** Shows one AECM iteration's progress object. */
+export function showStep(step) {
+  $('stage').textContent = stageText(step.stage);
+  $('iteration').textContent = `${step.iteration} (total ${step.totalIterations})`;
+  $('loglik').textContent = step.logLikelihood.toFixed(2);
+}
+
+function fitStarted() {
+  $('stage').textContent = 'starting';
+  for (const k of ['iteration', 'elapsed', 'loglik']) $(k).textContent = '–';
+  plot.set([], '');
+}
+
+function fitEnded(model) {
+  const { cancelled, fitMs } = model.summary;
+  $('stage').textContent = cancelled ? 'cancelled: best state so far' : 'done';
+  if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
+  $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
+  plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'best model so far' : 'final stage'}: log-likelihood`);
+}
+
+export function installResult() {
+  onFitProgress((m) => {
+    const last = m.steps[m.steps.length - 1];
+    if (last) {
+      showStep(last);
+      plot.set(m.trace, `${stageText(last.stage)}: log-likelihood`);
+    }
+    $('elapsed').textContent = `${(m.elapsedMs / 1000).toFixed(2)} s`;
+  });
+  subscribe((s, changed) => {
+    if (changed.has('pop')) showPopulation(s.pop, s.source);
+    if (changed.has('fitId') && s.fitId !== null && s.phase === 'fitting') fitStarted();
+    if (changed.has('model') && s.model) fitEnded(s.model);
+    if (changed.has('pop') || changed.has('model')) showResult();
+  });
+}
