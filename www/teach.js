@@ -170,7 +170,6 @@ function onTeach(m) {
     const s = steps[steps.length - 1];
     Object.assign(t, { values, runs, iteration: s.totalIterations });
     update({ lastStep: s });
-    $('teach-iteration').textContent = String(s.totalIterations);
     showStep(s);
     plot.set(values, `${stageText(s.stage)}: log-likelihood per step`, runs);
   }
@@ -188,7 +187,10 @@ export function installTeaching() {
   $('params').elements.paperLambda.addEventListener('change', showLambdaRule);
   subscribe((s, changed) => {
     if (changed.has('teach') || changed.has('fitId')) buttons();
-    if (changed.has('teach')) showStage(s.teach?.stage ?? null);
+    if (changed.has('teach')) {
+      showStage(s.teach?.stage ?? null);
+      $('teach-iteration').textContent = String(s.teach?.iteration ?? 0);
+    }
     if (changed.has('pop') || changed.has('model')) showLambdaRule(); // the form was filled in code
     if (changed.has('fitId') && s.teach && s.fitId !== s.teach.id && s.teach.running) setTeach({ running: false });
   });
