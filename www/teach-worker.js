@@ -12,9 +12,9 @@
 //                                          message after each, until paused or done
 //     { type: 'teach-pause' }              stops a run after the iteration in progress
 //   worker -> page
-//     { type: 'teach', id, kind, steps, stage, running, trace, labels, gamma, parts, vertices }
+//     { type: 'teach', id, kind, steps, step, stage, running, trace, labels, gamma, parts, vertices }
 //        kind: 'reset' | 'step' | 'paused'; steps: the progress objects of the iterations just made (empty
-//        unless kind is 'step'); stage: where the
+//        unless kind is 'step'), step: the last of them (or null); stage: where the
 //        pipeline is now; trace: the current AECM run's log-likelihoods; labels: per vertex (all vertices);
 //        gamma: responsibilities [j * parts + k] of the run's vertices (`vertices`: their ids during the
 //        refinement, else null)
@@ -62,7 +62,7 @@ export class Teacher {
     const trace = f.currentTrace();
     const labels = f.currentLabels();
     const r = f.currentResponsibilities();
-    const msg = { type: 'teach', id: this.id, kind, steps, stage: f.stage(), running: this.running, trace, labels, parts: r.parts ?? 0, gamma: r.gamma ?? null, vertices: r.vertices ?? null };
+    const msg = { type: 'teach', id: this.id, kind, steps, step: steps[steps.length - 1] ?? null, stage: f.stage(), running: this.running, trace, labels, parts: r.parts ?? 0, gamma: r.gamma ?? null, vertices: r.vertices ?? null };
     const transfer = [trace.buffer, labels.buffer];
     if (msg.gamma) transfer.push(msg.gamma.buffer);
     if (msg.vertices) transfer.push(msg.vertices.buffer);

@@ -146,7 +146,7 @@ class Figure {
       this.onTeach(v, m);
     } else if (['fit-error', 'load-error', 'fatal'].includes(m.type)) {
       this.stopLive?.();
-      this.setState('error', m.message ?? m.problems?.map((p) => p.reason).join('; '));
+      this.setState('error', m.message ?? m.problems?.map((p) => p.message).join('; '));
     }
   }
 

@@ -60,7 +60,7 @@ class Session {
     try {
       synth = new wasm.Synthetic(spec);
     } catch (e) {
-      this.post({ type: 'load-error', id, problems: [{ file: null, line: null, reason: String(e.message ?? e) }] });
+      this.post({ type: 'load-error', id, problems: [{ file: null, line: null, message: String(e.message ?? e) }] });
       return;
     }
     this.free();
