@@ -21,7 +21,7 @@ use super::graph::{mesh_edges, PartGraph};
 use super::{Blend, RigidMotion};
 use crate::geometry::rotation::{from_quat, to_quat};
 use crate::geometry::{norm, scale, sub, Mat3, Vec3};
-use glam::DQuat;
+use nalgebra::Quaternion;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -224,7 +224,8 @@ pub fn slerp_vector(a: Vec3, b: Vec3, t: f64) -> Vec3 {
         return mix(a, b);
     }
     let (ua, ub) = (scale(a, 1.0 / la), scale(b, 1.0 / lb));
-    let theta = crate::geometry::dot(ua, ub).clamp(-1.0, 1.0).acos();
+    // the angle between them as atan2(|a x b|, a . b): accurate near 0 and π, unlike acos of the dot product
+    let theta = norm(crate::geometry::cross(ua, ub)).atan2(crate::geometry::dot(ua, ub));
     let dir = if theta < 1e-9 || theta > std::f64::consts::PI - 1e-6 {
         mix(ua, ub)
     } else {
@@ -344,23 +345,23 @@ pub fn edge_blend(a: &[Vec3], b: &[Vec3], t: f64, edges: &[[u32; 2]], lengths: O
 /// A unit dual quaternion q_r + ε q_d for x -> R x + b: q_r = quat(R), q_d = (0, b) q_r / 2.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DualQuat {
-    pub real: DQuat,
-    pub dual: DQuat,
+    pub real: Quaternion<f64>,
+    pub dual: Quaternion<f64>,
 }
 
 impl DualQuat {
     pub fn from_motion(m: &RigidMotion) -> DualQuat {
-        let real = to_quat(&m.rotation);
-        let t = DQuat::from_xyzw(m.translation[0], m.translation[1], m.translation[2], 0.0);
+        let real = to_quat(&m.rotation).into_inner();
+        let t = Quaternion::new(0.0, m.translation[0], m.translation[1], m.translation[2]);
         DualQuat { real, dual: (t * real) * 0.5 }
     }
 
     /// Normalised (by the real part's length) and turned back into a rigid motion.
     pub fn to_motion(&self) -> RigidMotion {
-        let n = self.real.length();
+        let n = self.real.norm();
         let (r, d) = (self.real * (1.0 / n), self.dual * (1.0 / n));
         let t = (d * r.conjugate()) * 2.0;
-        RigidMotion { rotation: from_quat(r), translation: [t.x, t.y, t.z] }
+        RigidMotion { rotation: from_quat(r), translation: [t.i, t.j, t.k] }
     }
 }
 
@@ -399,7 +400,7 @@ pub fn blend_motion(motions: &[RigidMotion], weights: &SkinWeights, v: usize, bl
             let mut dual = q0.dual * w0;
             for (k, w) in rest {
                 let q = DualQuat::from_motion(&motions[k]);
-                let s = if q.real.dot(q0.real) < 0.0 { -w } else { w };
+                let s = if q.real.dot(&q0.real) < 0.0 { -w } else { w };
                 real = real + q.real * s;
                 dual = dual + q.dual * s;
             }

@@ -169,8 +169,8 @@ fn locals(art: &Articulation, tree: &Tree, motions: &[RigidMotion]) -> Vec<(Vec3
                 None => world[k],
                 Some(p) => world[p].inverse().then_after(&world[k]),
             };
-            let q = to_quat(&local.rotation).normalize();
-            (local.translation, [q.x, q.y, q.z, q.w])
+            let q = to_quat(&local.rotation);
+            (local.translation, [q.i, q.j, q.k, q.w])
         })
         .collect()
 }
@@ -522,7 +522,8 @@ fn affine_mul(a: &Affine, b: &Affine) -> Affine {
 }
 
 fn trs(t: Vec3, q: [f64; 4], s: Vec3) -> Affine {
-    let r = crate::geometry::rotation::from_quat(glam::DQuat::from_xyzw(q[0], q[1], q[2], q[3]));
+    // glTF stores (x, y, z, w); nalgebra's Quaternion::new takes w first
+    let r = crate::geometry::rotation::from_quat(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]));
     let m = [[r[0][0] * s[0], r[0][1] * s[1], r[0][2] * s[2]], [r[1][0] * s[0], r[1][1] * s[1], r[1][2] * s[2]], [
         r[2][0] * s[0],
         r[2][1] * s[1],
