@@ -34,6 +34,8 @@ pub struct FitJson {
     pub converged: bool,
     pub complete: bool,
     pub rmse: f64,
+    /// Extra connected pieces of the labels (Σ over parts of pieces - 1; 0: every part is one piece).
+    pub islands: usize,
     pub timings_ms: std::collections::BTreeMap<String, f64>,
     pub stage_stats: Vec<StageStats>,
 }
@@ -77,6 +79,7 @@ impl FitJson {
             converged: m.converged,
             complete: result.complete,
             rmse: m.rmse(pop),
+            islands: crate::model::islands::island_count(&m.labels, &pop.faces),
             timings_ms,
             stage_stats: result.stats.clone(),
         }

@@ -6,7 +6,8 @@
 //!    the mass-weighted mean variance of the sub-components (the paper's plain average is fragile,
 //!    METHOD_NOTES item 8). Stop when err < `refine_threshold`, when m_k does not lower err by at least the
 //!    fraction `refine_min_gain`, when a component died, or at `max_subparts`; keep the best m_k.
-//! 3. Final: AECM on all vertices started from the refined labels.
+//! 3. Final: AECM on all vertices started from the refined labels; then every part is made one connected
+//!    piece of the mesh ([`super::islands`]).
 //!
 //! Every stage is kept (coarse labels, refined labels, final model).
 
@@ -288,7 +289,9 @@ impl Pipeline {
                 } else {
                     self.close_stage(None);
                     self.refined_labels = self.coarse_labels.clone();
-                    self.final_model = self.coarse.clone();
+                    let mut model = self.coarse.clone().expect("just set");
+                    super::islands::connect_parts(&mut model, &self.pop, true, self.params.min_part_vertices);
+                    self.final_model = Some(model);
                     State::Done
                 }
             }
@@ -300,7 +303,9 @@ impl Pipeline {
             State::Final(fit) => {
                 self.account(&fit);
                 self.close_stage(None);
-                self.final_model = Some(fit.model());
+                let mut model = fit.model();
+                super::islands::connect_parts(&mut model, &self.pop, true, self.params.min_part_vertices);
+                self.final_model = Some(model);
                 State::Done
             }
             State::Done => State::Done,

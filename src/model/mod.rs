@@ -10,6 +10,7 @@
 //! - [`init`]: k-means++ with restarts and the per-cluster Procrustes start.
 //! - [`aecm`]: a [`aecm::Fit`] in progress: `step()` (one AECM iteration), `run()`, trace, convergence.
 //! - [`hierarchy`]: Algorithm 1 (coarse, refinement, final), every stage kept.
+//! - [`islands`]: every part one connected piece of the mesh (islands moved to the best adjacent part).
 //! - [`result`]: the fitted [`Model`]: labels (eq 20), latent shape (eq 21), reconstruction (eq 22).
 //! - [`limit`]: the E-step's speed against the machine's limit (tight kernels, measured).
 
@@ -20,6 +21,7 @@ pub mod data;
 pub mod estep;
 pub mod hierarchy;
 pub mod init;
+pub mod islands;
 pub mod limit;
 pub mod memory;
 pub mod params;
