@@ -2,3 +2,4 @@
 pub mod gltf;
 pub mod json;
 pub mod obj;
+pub mod ply;

@@ -1,6 +1,10 @@
 //! Triangle meshes and populations of registered meshes.
 
+pub mod cache;
+pub mod gltf;
+pub mod load;
 pub mod obj;
+pub mod ply;
 pub mod population;
 
 pub use population::{Normalization, Population};

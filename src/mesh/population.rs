@@ -34,6 +34,9 @@ pub struct Population {
     pub shapes: Vec<Vec<[f64; 3]>>,
     /// How the original coordinates were mapped into the unit box.
     pub normalization: Normalization,
+    /// Where the shapes came from, for people: "11 OBJ files", "48 morph targets of mesh 'horse' in
+    /// horse.glb, ...", "241 frames of animation 'Walk' (sampled at its keyframes, 24 fps) ...".
+    pub source: String,
 }
 
 /// Natural order of names: digit runs compare as numbers ("2.obj" < "10.obj"), the rest byte-wise,
@@ -196,35 +199,34 @@ impl Population {
             shapes.push(mesh.positions.iter().map(|&p| normalization.to_unit(p)).collect());
             names.push(name);
         }
-        Ok(Population { names, faces, shapes, normalization })
+        let source = format!("{} shapes", names.len());
+        Ok(Population { names, faces, shapes, normalization, source })
     }
 
-    /// Parses every file (name, bytes) with the OBJ importer, then [`Population::from_meshes`].
-    /// The first file that fails stops the load; use [`Population::from_files_all_errors`] to list all.
+    /// Reads every file (name, bytes) with the reader its extension calls for ([`super::load`]: OBJ, PLY,
+    /// glTF, point caches), then [`Population::from_meshes`]. The first file that fails stops the load; use
+    /// [`Population::from_files_all_errors`] to list all.
     pub fn from_files(files: Vec<(String, Vec<u8>)>) -> Result<Population> {
-        let mut named = Vec::with_capacity(files.len());
-        for (name, bytes) in files {
-            let mesh = super::obj::parse_obj(&name, &bytes)?;
-            named.push((name, mesh));
-        }
-        Population::from_meshes(named)
+        Population::from_loaded(files).map_err(|mut errors| {
+            if errors.is_empty() {
+                Error::Io("no files were given".into())
+            } else {
+                errors.swap_remove(0)
+            }
+        })
     }
 
     /// Like [`Population::from_files`] but reports every file's error, in natural order of the names.
     pub fn from_files_all_errors(mut files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
         files.sort_by(|a, b| natural_cmp(&a.0, &b.0));
-        let mut named = Vec::with_capacity(files.len());
-        let mut errors = Vec::new();
-        for (name, bytes) in files {
-            match super::obj::parse_obj(&name, &bytes) {
-                Ok(mesh) => named.push((name, mesh)),
-                Err(e) => errors.push(e),
-            }
-        }
-        if !errors.is_empty() {
-            return Err(errors);
-        }
-        Population::from_meshes(named).map_err(|e| vec![e])
+        Population::from_loaded(files).map_err(|e| if e.is_empty() { vec![Error::Io("no files were given".into())] } else { e })
+    }
+
+    fn from_loaded(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
+        let loaded = super::load::load(files)?;
+        let mut population = Population::from_meshes(loaded.poses).map_err(|e| vec![e])?;
+        population.source = loaded.source;
+        Ok(population)
     }
 
     /// Builds a population directly from unit-box shapes (generated data, tests).
@@ -243,7 +245,8 @@ impl Population {
         Population::from_meshes(named)
     }
 
-    /// Loads the OBJ files of a directory (every `*.obj`, any case) or an explicit list of files.
+    /// Loads the mesh files of a directory (every `.obj`, `.ply`, `.glb`, `.gltf`, `.bin`, `.pc2`, `.mdd`, any
+    /// case) or an explicit list of files.
     // (compiles on wasm32 too, where std::fs reports "unsupported" at run time)
     pub fn from_paths<P: AsRef<std::path::Path>>(paths: &[P]) -> Result<Population> {
         let mut files = Vec::new();
@@ -254,7 +257,8 @@ impl Population {
                 for entry in rd {
                     let entry = entry.map_err(|e| Error::Io(format!("cannot read directory {}: {e}", p.display())))?;
                     let path = entry.path();
-                    if path.is_file() && path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+                    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+                    if path.is_file() && super::load::FileKind::is_known_extension(&name) {
                         files.push(path);
                     }
                 }
@@ -263,7 +267,11 @@ impl Population {
             }
         }
         if files.is_empty() {
-            return Err(Error::Io("no .obj files found in the given paths; pass a folder of OBJ files or the files themselves".into()));
+            return Err(Error::Io(
+                "no mesh files (.obj .ply .glb .gltf .pc2 .mdd) found in the given paths; pass a folder of them or the \
+                 files themselves"
+                    .into(),
+            ));
         }
         let mut loaded = Vec::with_capacity(files.len());
         for f in files {

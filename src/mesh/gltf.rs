@@ -1,0 +1,1110 @@
+//! glTF 2.0 import (`.glb`, and `.gltf` with data-URI buffers or its `.bin` files given alongside): the poses
+//! of one mesh.
+//!
+//! The document is parsed and validated by the `gltf` crate (every index it holds names an existing object);
+//! the GLB container is split here and every accessor is read here with its bounds checked against its
+//! buffer view and buffer in 64-bit arithmetic *before* anything is allocated, so a file that claims 4 G
+//! vertices is refused at once.
+//!
+//! Which mesh: the one with the most vertices (all its triangle primitives, in order), or the one named by
+//! [`Options::mesh`]. Which poses, in this order of preference ([`Options::source`] to choose):
+//! - **animation**: an animation that moves the mesh (its morph weights, or the joints of its skin), sampled
+//!   at its keyframe times, or at [`Options::frames`] evenly spaced times. Skinned meshes are posed by linear
+//!   blend skinning over the node hierarchy (JOINTS_0/WEIGHTS_0 and JOINTS_1/WEIGHTS_1: 4 or 8 influences);
+//!   morph weights are applied first. LINEAR, STEP and CUBICSPLINE samplers. Several animations: the one with
+//!   the most keyframes, or [`Options::animation`].
+//! - **morph targets**: the base mesh and then the base plus each target (weight 1, the others 0).
+//!
+//! Exporters split vertices along normal and UV seams (Blender writes one vertex per face corner unless
+//! normals are shared); such exact duplicates of a position in the base pose are welded back into one vertex
+//! (the first), so that the part graph sees the real surface. [`Gltf::source`] says which mesh, which poses
+//! and both vertex counts.
+//!
+//! Errors name the file and the accessor / buffer view / animation at fault and say what to do: an index
+//! out of range, an accessor past its buffer, a sparse accessor, a skin without inverse bind matrices, an
+//! animation without keyframes, a missing `.bin`.
+
+use super::Mesh;
+use crate::error::{Error, Result};
+use nalgebra::{Matrix4, Point3, Quaternion, UnitQuaternion, Vector3};
+
+type DVec3 = Vector3<f64>;
+type DQuat = UnitQuaternion<f64>;
+type DMat4 = Matrix4<f64>;
+
+/// A unit quaternion from glTF's (x, y, z, w) order.
+fn quat(x: f64, y: f64, z: f64, w: f64) -> DQuat {
+    let q = Quaternion::new(w, x, y, z);
+    if q.norm() > 0.0 && q.norm().is_finite() {
+        UnitQuaternion::from_quaternion(q)
+    } else {
+        UnitQuaternion::identity()
+    }
+}
+
+/// (x, y, z, w) of a unit quaternion.
+fn xyzw(q: &DQuat) -> Vec<f64> {
+    let c = q.coords;
+    vec![c.x, c.y, c.z, c.w]
+}
+
+/// Shorter-arc slerp that never panics (nearly equal or opposite quaternions fall back to the nearer end).
+fn slerp(a: &DQuat, b: &DQuat, t: f64) -> DQuat {
+    let b = if a.coords.dot(&b.coords) < 0.0 { UnitQuaternion::new_unchecked(-b.into_inner()) } else { *b };
+    a.try_slerp(&b, t, 1e-12).unwrap_or(if t < 0.5 { *a } else { b })
+}
+
+fn trs(t: DVec3, r: DQuat, s: DVec3) -> DMat4 {
+    Matrix4::new_translation(&t) * r.to_homogeneous() * Matrix4::new_nonuniform_scaling(&s)
+}
+
+fn apply(m: &DMat4, p: &DVec3) -> DVec3 {
+    m.transform_point(&Point3::from(*p)).coords
+}
+use std::collections::HashMap;
+
+/// Where the poses come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PoseSource {
+    /// The animation if one moves the mesh, else the morph targets.
+    #[default]
+    Auto,
+    Animation,
+    MorphTargets,
+}
+
+/// Choices for reading a glTF file.
+#[derive(Debug, Clone, Default)]
+pub struct Options {
+    /// Mesh name or index (default: the mesh with the most vertices).
+    pub mesh: Option<String>,
+    /// Animation name or index (default: the one with the most keyframes that moves the mesh).
+    pub animation: Option<String>,
+    /// Sample the animation at this many evenly spaced times instead of at its keyframes.
+    pub frames: Option<usize>,
+    pub source: PoseSource,
+}
+
+/// The poses read from a glTF file.
+#[derive(Debug, Clone)]
+pub struct Gltf {
+    /// The glTF file's name.
+    pub file: String,
+    /// One (name, mesh) per pose, names in pose order.
+    pub poses: Vec<(String, Mesh)>,
+    /// For people: "49 frames of animation 'Gallop' (keyframes, 24 fps) of mesh 'horse' in horse.glb;
+    /// 50528 vertices welded to 8431".
+    pub source: String,
+    /// Vertices as stored in the file, and after welding.
+    pub vertices_in_file: usize,
+    pub vertices_welded: usize,
+}
+
+/// Reads the glTF file in `files` (the one `.glb`/`.gltf`), taking external buffers from the other files.
+pub fn load_files(files: &[(String, Vec<u8>)], options: &Options) -> std::result::Result<Gltf, Vec<Error>> {
+    let is_gltf = |n: &str| {
+        let l = n.to_ascii_lowercase();
+        l.ends_with(".glb") || l.ends_with(".gltf") || l.ends_with(".vrm")
+    };
+    let Some((name, bytes)) = files.iter().find(|(n, _)| is_gltf(n)) else {
+        return Err(vec![Error::Io("no .glb or .gltf file was given".into())]);
+    };
+    let resources: Vec<(&str, &[u8])> =
+        files.iter().filter(|(n, _)| n != name).map(|(n, b)| (n.as_str(), b.as_slice())).collect();
+    read(name, bytes, &resources, options).map_err(|e| vec![e])
+}
+
+fn err(file: &str, message: String) -> Error {
+    Error::Obj { file: file.to_string(), line: 0, message }
+}
+
+/// Splits a GLB container into its JSON and BIN chunks, checking every length against the bytes present.
+fn split_glb(file: &str, bytes: &[u8]) -> Result<(Vec<u8>, Option<Vec<u8>>)> {
+    let u32_at = |at: usize| -> Option<u32> { Some(u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?)) };
+    let bad = |what: String| err(file, format!("{what}; the .glb file is cut or damaged: export it again"));
+    let version = u32_at(4).ok_or_else(|| bad("the GLB header is shorter than 12 bytes".into()))?;
+    if version != 2 {
+        return Err(err(file, format!("GLB version {version} is not supported; export the file as glTF 2.0")));
+    }
+    let total = u32_at(8).unwrap_or(0) as usize;
+    if total < 12 || total > bytes.len() {
+        return Err(bad(format!("the GLB header says {total} bytes but the file has {}", bytes.len())));
+    }
+    let body = bytes.get(..total).unwrap_or(bytes);
+    let mut at = 12usize;
+    let mut json = None;
+    let mut bin = None;
+    while at + 8 <= body.len() {
+        let len = u32::from_le_bytes(body.get(at..at + 4).and_then(|s| s.try_into().ok()).unwrap_or([0; 4])) as usize;
+        let kind = body.get(at + 4..at + 8).unwrap_or(&[]);
+        let data = body
+            .get(at + 8..)
+            .and_then(|rest| rest.get(..len))
+            .ok_or_else(|| bad(format!("the chunk at byte {at} claims {len} bytes, past the end of the file")))?;
+        match kind {
+            b"JSON" if json.is_none() => json = Some(data.to_vec()),
+            b"BIN\0" if bin.is_none() => bin = Some(data.to_vec()),
+            _ => {} // unknown chunks are skipped (glTF 2.0, GLB)
+        }
+        at = at + 8 + len;
+        at = (at + 3) & !3;
+    }
+    let json = json.ok_or_else(|| bad("the GLB file has no JSON chunk".into()))?;
+    Ok((json, bin))
+}
+
+/// The bytes of every buffer: GLB's BIN chunk, data URIs, or files given alongside.
+fn buffers(file: &str, doc: &gltf::Document, blob: Option<Vec<u8>>, resources: &[(&str, &[u8])]) -> Result<Vec<Vec<u8>>> {
+    use base64::Engine as _;
+    let mut blob = blob;
+    let mut out = Vec::new();
+    for b in doc.buffers() {
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                err(file, format!("buffer {} is the GLB's binary chunk, but the file has none; export it again", b.index()))
+            })?,
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let Some((_, payload)) = uri.split_once(";base64,") else {
+                    return Err(err(
+                        file,
+                        format!("buffer {}: only base64 data URIs are supported; export with embedded buffers", b.index()),
+                    ));
+                };
+                base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| {
+                    err(file, format!("buffer {}: its data URI is not valid base64 ({e}); export it again", b.index()))
+                })?
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                let wanted = percent_decode(uri.rsplit('/').next().unwrap_or(uri));
+                let found = resources
+                    .iter()
+                    .find(|(n, _)| n.rsplit('/').next() == Some(wanted.as_str()))
+                    .or_else(|| resources.iter().find(|(n, _)| n.rsplit('/').next().is_some_and(|n| n.eq_ignore_ascii_case(&wanted))));
+                match found {
+                    Some((_, bytes)) => bytes.to_vec(),
+                    None => {
+                        return Err(err(
+                            file,
+                            format!(
+                                "buffer {} is stored in the separate file `{uri}`, which was not given; drop or pass it \
+                                 together with the .gltf file (or export a single .glb)",
+                                b.index()
+                            ),
+                        ))
+                    }
+                }
+            }
+        };
+        if data.len() < b.length() {
+            return Err(err(
+                file,
+                format!(
+                    "buffer {} should hold {} bytes but has {}; the file (or its .bin) is cut: export it again",
+                    b.index(),
+                    b.length(),
+                    data.len()
+                ),
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while let Some(&c) = b.get(i) {
+        if c == b'%' {
+            if let Some(v) = b.get(i + 1..i + 3).and_then(|h| std::str::from_utf8(h).ok()).and_then(|h| u8::from_str_radix(h, 16).ok()) {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(c);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Reads accessors with their bounds checked.
+struct Data<'a> {
+    file: &'a str,
+    buffers: Vec<Vec<u8>>,
+}
+
+impl Data<'_> {
+    /// Every element of an accessor as f64 components (`dims` per element), normalised integers mapped to
+    /// [0, 1] / [-1, 1]. `what` says what the accessor is for, in messages.
+    fn read(&self, a: &gltf::Accessor, what: &str) -> Result<Vec<f64>> {
+        use gltf::accessor::DataType;
+        let file = self.file;
+        let idx = a.index();
+        if a.sparse().is_some() {
+            return Err(err(
+                file,
+                format!(
+                    "accessor {idx} ({what}) is sparse, which posemfa does not read; export without sparse accessors \
+                     (in Blender: uncheck 'Use Sparse Accessor')"
+                ),
+            ));
+        }
+        let dims = a.dimensions().multiplicity();
+        let comp = a.data_type().size();
+        let count = a.count();
+        let Some(view) = a.view() else {
+            // No buffer view and no sparse storage: every value is zero (glTF 2.0, 3.6.2.3). Bounded: the
+            // allocation must not come from an unchecked count.
+            return Err(err(
+                file,
+                format!("accessor {idx} ({what}) has no buffer view (all zeros by the spec); export the file again"),
+            ));
+        };
+        let elem = (dims * comp) as u64;
+        let stride = view.stride().map_or(elem, |s| s as u64);
+        let data = self.buffers.get(view.buffer().index()).map(Vec::as_slice).unwrap_or(&[]);
+        let view_end = view.offset() as u64 + view.length() as u64;
+        if view_end > data.len() as u64 {
+            return Err(err(
+                file,
+                format!(
+                    "buffer view {} (bytes {}..{view_end}) runs past the end of buffer {} ({} bytes); the file is \
+                     damaged: export it again",
+                    view.index(),
+                    view.offset(),
+                    view.buffer().index(),
+                    data.len()
+                ),
+            ));
+        }
+        let need = if count == 0 { 0 } else { a.offset() as u64 + stride * (count as u64 - 1) + elem };
+        if need > view.length() as u64 || stride < elem {
+            return Err(err(
+                file,
+                format!(
+                    "accessor {idx} ({what}: {count} elements of {elem} bytes, stride {stride}, from byte {}) reads \
+                     past the end of its buffer view {} ({} bytes); the file is damaged or cut: export it again",
+                    a.offset(),
+                    view.index(),
+                    view.length()
+                ),
+            ));
+        }
+        let start = view.offset() + a.offset();
+        let bytes = data.get(start..view_end as usize).unwrap_or(&[]);
+        let norm = a.normalized();
+        let mut out = Vec::with_capacity(count * dims);
+        for i in 0..count {
+            let base = i * stride as usize;
+            for c in 0..dims {
+                let at = base + c * comp;
+                let s = bytes.get(at..at + comp).unwrap_or(&[]);
+                let v = match (a.data_type(), s) {
+                    (DataType::F32, &[a, b, c, d]) => f64::from(f32::from_le_bytes([a, b, c, d])),
+                    (DataType::U32, &[a, b, c, d]) => f64::from(u32::from_le_bytes([a, b, c, d])),
+                    (DataType::U16, &[a, b]) => {
+                        let v = f64::from(u16::from_le_bytes([a, b]));
+                        if norm { v / 65535.0 } else { v }
+                    }
+                    (DataType::I16, &[a, b]) => {
+                        let v = f64::from(i16::from_le_bytes([a, b]));
+                        if norm { (v / 32767.0).max(-1.0) } else { v }
+                    }
+                    (DataType::U8, &[a]) => {
+                        let v = f64::from(a);
+                        if norm { v / 255.0 } else { v }
+                    }
+                    (DataType::I8, &[a]) => {
+                        let v = f64::from(a as i8);
+                        if norm { (v / 127.0).max(-1.0) } else { v }
+                    }
+                    _ => 0.0, // not reached: the bounds were checked above
+                };
+                if !v.is_finite() {
+                    return Err(err(
+                        file,
+                        format!("accessor {idx} ({what}): element {i} is not a finite number; export the file again"),
+                    ));
+                }
+                out.push(v);
+            }
+        }
+        Ok(out)
+    }
+
+    fn read_vec3(&self, a: &gltf::Accessor, what: &str) -> Result<Vec<DVec3>> {
+        self.expect(a, what, 3)?;
+        Ok(self.read(a, what)?.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect())
+    }
+
+    fn expect(&self, a: &gltf::Accessor, what: &str, dims: usize) -> Result<()> {
+        if a.dimensions().multiplicity() != dims {
+            return Err(err(
+                self.file,
+                format!(
+                    "accessor {} ({what}) has {} components per element, expected {dims}; the file is damaged",
+                    a.index(),
+                    a.dimensions().multiplicity()
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One mesh's vertices, as stored (all triangle primitives, concatenated).
+struct MeshData {
+    positions: Vec<DVec3>,
+    faces: Vec<[u32; 3]>,
+    /// targets[k][j]: position delta of vertex j in morph target k.
+    targets: Vec<Vec<DVec3>>,
+    /// Up to 8 (joint, weight) per vertex.
+    influences: Vec<Vec<(usize, f64)>>,
+}
+
+fn mesh_vertex_count(mesh: &gltf::Mesh) -> u64 {
+    mesh.primitives().filter_map(|p| p.get(&gltf::Semantic::Positions)).map(|a| a.count() as u64).sum()
+}
+
+fn name_of(name: Option<&str>, kind: &str, index: usize) -> String {
+    match name {
+        Some(n) if !n.is_empty() => format!("{kind} '{n}'"),
+        _ => format!("{kind} {index}"),
+    }
+}
+
+fn pick<'a, T>(items: Vec<T>, wanted: &str, name: impl Fn(&T) -> Option<&'a str>, index: impl Fn(&T) -> usize) -> Option<T> {
+    let by_index = wanted.parse::<usize>().ok();
+    items.into_iter().find(|t| name(t) == Some(wanted) || Some(index(t)) == by_index)
+}
+
+fn read_mesh(data: &Data, mesh: &gltf::Mesh) -> Result<MeshData> {
+    use gltf::mesh::Mode;
+    let file = data.file;
+    let mname = name_of(mesh.name(), "mesh", mesh.index());
+    let mut md = MeshData { positions: Vec::new(), faces: Vec::new(), targets: Vec::new(), influences: Vec::new() };
+    let n_targets = mesh.primitives().map(|p| p.morph_targets().len()).max().unwrap_or(0);
+    md.targets = vec![Vec::new(); n_targets];
+    for (pi, p) in mesh.primitives().enumerate() {
+        if p.mode() != Mode::Triangles && p.mode() != Mode::TriangleStrip && p.mode() != Mode::TriangleFan {
+            continue; // points and lines: no surface
+        }
+        let Some(pos) = p.get(&gltf::Semantic::Positions) else { continue };
+        let offset = md.positions.len();
+        let what = format!("POSITION of primitive {pi} of {mname}");
+        let positions = data.read_vec3(&pos, &what)?;
+        let n = positions.len();
+        md.positions.extend(positions);
+        let indices: Vec<u64> = match p.indices() {
+            Some(a) => {
+                data.expect(&a, "indices", 1)?;
+                if a.data_type() == gltf::accessor::DataType::F32 {
+                    return Err(err(
+                        file,
+                        format!("accessor {} (indices of primitive {pi} of {mname}) holds floats; indices are unsigned integers: the file is damaged", a.index()),
+                    ));
+                }
+                data.read(&a, &format!("indices of primitive {pi} of {mname}"))?.into_iter().map(|v| v as u64).collect()
+            }
+            None => (0..n as u64).collect(),
+        };
+        if let Some((k, &bad)) = indices.iter().enumerate().find(|(_, &i)| i >= n as u64) {
+            return Err(err(
+                file,
+                format!(
+                    "index {k} of primitive {pi} of {mname} (accessor {}) is {bad}, but the primitive has {n} vertices; \
+                     the file is damaged: export it again",
+                    p.indices().map_or(0, |a| a.index())
+                ),
+            ));
+        }
+        let v = |i: u64| (i as usize + offset) as u32;
+        match p.mode() {
+            Mode::Triangles => {
+                for t in indices.chunks_exact(3) {
+                    md.faces.push([v(t[0]), v(t[1]), v(t[2])]);
+                }
+            }
+            Mode::TriangleStrip => {
+                for (k, w) in indices.windows(3).enumerate() {
+                    md.faces.push(if k % 2 == 0 { [v(w[0]), v(w[1]), v(w[2])] } else { [v(w[1]), v(w[0]), v(w[2])] });
+                }
+            }
+            _ => {
+                if let Some((&first, rest)) = indices.split_first() {
+                    for w in rest.windows(2) {
+                        md.faces.push([v(first), v(w[0]), v(w[1])]);
+                    }
+                }
+            }
+        }
+        let targets: Vec<_> = p.morph_targets().collect();
+        for (k, slot) in md.targets.iter_mut().enumerate() {
+            match targets.get(k).and_then(|t| t.positions()) {
+                Some(a) => {
+                    let d = data.read_vec3(&a, &format!("morph target {k} of primitive {pi} of {mname}"))?;
+                    if d.len() != n {
+                        return Err(err(
+                            file,
+                            format!(
+                                "morph target {k} of primitive {pi} of {mname} (accessor {}) has {} positions for {n} \
+                                 vertices; the file is damaged",
+                                a.index(),
+                                d.len()
+                            ),
+                        ));
+                    }
+                    slot.extend(d);
+                }
+                None => slot.extend(std::iter::repeat(DVec3::zeros()).take(n)),
+            }
+        }
+        let mut infl = vec![Vec::new(); n];
+        for set in 0..2u32 {
+            let (Some(j), Some(w)) = (p.get(&gltf::Semantic::Joints(set)), p.get(&gltf::Semantic::Weights(set))) else {
+                continue;
+            };
+            data.expect(&j, "JOINTS", 4)?;
+            data.expect(&w, "WEIGHTS", 4)?;
+            let jv = data.read(&j, &format!("JOINTS_{set} of primitive {pi} of {mname}"))?;
+            let wv = data.read(&w, &format!("WEIGHTS_{set} of primitive {pi} of {mname}"))?;
+            if jv.len() != 4 * n || wv.len() != 4 * n {
+                return Err(err(file, format!("JOINTS_{set}/WEIGHTS_{set} of primitive {pi} of {mname} do not have one entry per vertex")));
+            }
+            for (i, slot) in infl.iter_mut().enumerate() {
+                for c in 0..4 {
+                    let (jj, ww) = (jv[4 * i + c], wv[4 * i + c]);
+                    if ww != 0.0 {
+                        slot.push((jj as usize, ww));
+                    }
+                }
+            }
+        }
+        md.influences.extend(infl);
+    }
+    if md.positions.is_empty() || md.faces.is_empty() {
+        return Err(err(file, format!("{mname} has no triangles; posemfa needs a triangle mesh")));
+    }
+    if md.positions.len() > u32::MAX as usize {
+        return Err(err(file, format!("{mname} has more than 4294967295 vertices")));
+    }
+    Ok(md)
+}
+
+/// The local transform of every node at rest.
+fn rest_transforms(doc: &gltf::Document) -> Vec<(DVec3, DQuat, DVec3)> {
+    doc.nodes()
+        .map(|n| {
+            let (t, r, s) = n.transform().decomposed();
+            (
+                DVec3::new(t[0].into(), t[1].into(), t[2].into()),
+                quat(r[0].into(), r[1].into(), r[2].into(), r[3].into()),
+                DVec3::new(s[0].into(), s[1].into(), s[2].into()),
+            )
+        })
+        .collect()
+}
+
+/// Global transforms from local ones over the node hierarchy (roots have no parent).
+fn globals(parents: &[Option<usize>], local: &[(DVec3, DQuat, DVec3)]) -> Vec<DMat4> {
+    let n = local.len();
+    let mut out: Vec<Option<DMat4>> = vec![None; n];
+    for start in 0..n {
+        // Walk up to a computed ancestor (bounded: the document is validated to be a forest; the walk stops
+        // after n steps anyway).
+        let mut chain = vec![start];
+        let mut cur = start;
+        for _ in 0..n {
+            match parents.get(cur).copied().flatten() {
+                Some(p) if out.get(p).is_some_and(Option::is_none) && !chain.contains(&p) => {
+                    chain.push(p);
+                    cur = p;
+                }
+                _ => break,
+            }
+        }
+        for &i in chain.iter().rev() {
+            if out.get(i).is_some_and(Option::is_some) {
+                continue;
+            }
+            let (t, r, s) = local.get(i).copied().unwrap_or((DVec3::zeros(), DQuat::identity(), DVec3::repeat(1.0)));
+            let m = trs(t, r, s);
+            let parent = parents.get(i).copied().flatten().and_then(|p| out.get(p).copied().flatten());
+            if let Some(slot) = out.get_mut(i) {
+                *slot = Some(parent.map_or(m, |pm| pm * m));
+            }
+        }
+    }
+    out.into_iter().map(|m| m.unwrap_or_else(DMat4::identity)).collect()
+}
+
+/// One animation channel, read.
+struct Channel {
+    node: usize,
+    property: gltf::animation::Property,
+    interpolation: gltf::animation::Interpolation,
+    times: Vec<f64>,
+    /// `values[k]`: the output of key k (CUBICSPLINE: in-tangent, value, out-tangent).
+    values: Vec<Vec<f64>>,
+}
+
+impl Channel {
+    fn sample(&self, t: f64) -> Vec<f64> {
+        use gltf::animation::Interpolation::*;
+        let cubic = self.interpolation == CubicSpline;
+        let value = |k: usize| -> Vec<f64> {
+            let v = self.values.get(k).cloned().unwrap_or_default();
+            if cubic {
+                let w = v.len() / 3;
+                v.get(w..2 * w).map(<[f64]>::to_vec).unwrap_or_default()
+            } else {
+                v
+            }
+        };
+        let n = self.times.len();
+        let (Some(&first), Some(&last)) = (self.times.first(), self.times.last()) else { return Vec::new() };
+        if t <= first {
+            return value(0);
+        }
+        if t >= last {
+            return value(n - 1);
+        }
+        let k = self.times.partition_point(|&x| x <= t).saturating_sub(1).min(n.saturating_sub(2));
+        let (t0, t1) = (self.times[k], self.times[k + 1]);
+        let dt = t1 - t0;
+        let u = if dt > 0.0 { (t - t0) / dt } else { 0.0 };
+        match self.interpolation {
+            Step => value(k),
+            Linear => {
+                let (a, b) = (value(k), value(k + 1));
+                if self.property == gltf::animation::Property::Rotation && a.len() == 4 && b.len() == 4 {
+                    let q = slerp(&quat(a[0], a[1], a[2], a[3]), &quat(b[0], b[1], b[2], b[3]), u);
+                    xyzw(&q)
+                } else {
+                    a.iter().zip(&b).map(|(x, y)| x + (y - x) * u).collect()
+                }
+            }
+            CubicSpline => {
+                let (va, vb) = (self.values.get(k).cloned().unwrap_or_default(), self.values.get(k + 1).cloned().unwrap_or_default());
+                let w = va.len() / 3;
+                let (u2, u3) = (u * u, u * u * u);
+                let out: Vec<f64> = (0..w)
+                    .map(|c| {
+                        let p0 = va.get(w + c).copied().unwrap_or(0.0);
+                        let m0 = va.get(2 * w + c).copied().unwrap_or(0.0) * dt;
+                        let p1 = vb.get(w + c).copied().unwrap_or(0.0);
+                        let m1 = vb.get(c).copied().unwrap_or(0.0) * dt;
+                        (2.0 * u3 - 3.0 * u2 + 1.0) * p0 + (u3 - 2.0 * u2 + u) * m0 + (-2.0 * u3 + 3.0 * u2) * p1 + (u3 - u2) * m1
+                    })
+                    .collect();
+                if self.property == gltf::animation::Property::Rotation && out.len() == 4 {
+                    xyzw(&quat(out[0], out[1], out[2], out[3]))
+                } else {
+                    out
+                }
+            }
+        }
+    }
+}
+
+fn read_channels(data: &Data, anim: &gltf::Animation, aname: &str) -> Result<Vec<Channel>> {
+    let mut out = Vec::new();
+    for (ci, ch) in anim.channels().enumerate() {
+        let s = ch.sampler();
+        let input = s.input();
+        let output = s.output();
+        let times = data.read(&input, &format!("keyframe times of channel {ci} of {aname}"))?;
+        if times.is_empty() {
+            return Err(err(
+                data.file,
+                format!("channel {ci} of {aname} has no keyframes (accessor {} is empty); export the animation again with its keys", input.index()),
+            ));
+        }
+        if times.windows(2).any(|w| w[1] < w[0]) {
+            return Err(err(data.file, format!("the keyframe times of channel {ci} of {aname} (accessor {}) are not increasing; the file is damaged", input.index())));
+        }
+        let flat = data.read(&output, &format!("keyframe values of channel {ci} of {aname}"))?;
+        let per_key_parts = if s.interpolation() == gltf::animation::Interpolation::CubicSpline { 3 } else { 1 };
+        let per_key = flat.len() / times.len();
+        if per_key == 0 || flat.len() % times.len() != 0 || per_key % per_key_parts != 0 {
+            return Err(err(
+                data.file,
+                format!(
+                    "channel {ci} of {aname}: {} output values for {} keyframes (accessor {}); the file is damaged",
+                    flat.len(),
+                    times.len(),
+                    output.index()
+                ),
+            ));
+        }
+        let values = flat.chunks_exact(per_key).map(<[f64]>::to_vec).collect();
+        out.push(Channel { node: ch.target().node().index(), property: ch.target().property(), interpolation: s.interpolation(), times, values });
+    }
+    if out.is_empty() {
+        return Err(err(data.file, format!("{aname} has no channels: no keyframes to sample; export the animation again")));
+    }
+    Ok(out)
+}
+
+/// Reads the poses of one glTF file.
+pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Options) -> Result<Gltf> {
+    let (json, blob) = if bytes.starts_with(b"glTF") { split_glb(file, bytes)? } else { (bytes.to_vec(), None) };
+    let g = gltf::Gltf::from_slice(&json)
+        .map_err(|e| err(file, format!("not a valid glTF 2.0 document: {e}; export the file again as glTF 2.0")))?;
+    let doc = g.document;
+    let buffers = buffers(file, &doc, blob, resources)?;
+    let data = Data { file, buffers };
+
+    // The mesh, and the node that shows it (for its skin and morph weights).
+    let meshes: Vec<gltf::Mesh> = doc.meshes().collect();
+    if meshes.is_empty() {
+        return Err(err(file, "the file holds no mesh; export the model with its mesh".into()));
+    }
+    let mesh = match &options.mesh {
+        Some(w) => pick(meshes.clone(), w, |m| m.name(), |m| m.index()).ok_or_else(|| {
+            let names: Vec<String> = meshes.iter().map(|m| name_of(m.name(), "mesh", m.index())).collect();
+            err(file, format!("no mesh is called or numbered `{w}`; the file has {}", names.join(", ")))
+        })?,
+        None => meshes.iter().max_by_key(|m| (mesh_vertex_count(m), std::cmp::Reverse(m.index()))).cloned().ok_or_else(|| err(file, "no mesh".into()))?,
+    };
+    let mname = name_of(mesh.name(), "mesh", mesh.index());
+    let others = meshes.len() - 1;
+    let node = doc.nodes().find(|n| n.mesh().is_some_and(|m| m.index() == mesh.index()));
+    let md = read_mesh(&data, &mesh)?;
+    let n_file = md.positions.len();
+
+    let mut parents = vec![None; doc.nodes().len()];
+    for n in doc.nodes() {
+        for c in n.children() {
+            if let Some(slot) = parents.get_mut(c.index()) {
+                *slot = Some(n.index());
+            }
+        }
+    }
+    let rest = rest_transforms(&doc);
+    let skin = node.as_ref().and_then(|n| n.skin());
+    let default_weights: Vec<f64> = node
+        .as_ref()
+        .and_then(|n| n.weights())
+        .or_else(|| mesh.weights())
+        .map(|w| w.iter().map(|&x| f64::from(x)).collect())
+        .unwrap_or_else(|| vec![0.0; md.targets.len()]);
+
+    // Skinning data: joints and inverse bind matrices.
+    let skinning = match &skin {
+        Some(s) => {
+            let Some(ibm) = s.inverse_bind_matrices() else {
+                return Err(err(
+                    file,
+                    format!(
+                        "skin {} of {mname} has no inverse bind matrices, so its rest pose is unknown; export the skin \
+                         with them (every exporter that writes skins can)",
+                        s.index()
+                    ),
+                ));
+            };
+            data.expect(&ibm, "inverse bind matrices", 16)?;
+            let m = data.read(&ibm, &format!("inverse bind matrices of skin {}", s.index()))?;
+            let joints: Vec<usize> = s.joints().map(|j| j.index()).collect();
+            if m.len() != 16 * joints.len() {
+                return Err(err(file, format!("skin {} has {} joints but {} inverse bind matrices (accessor {})", s.index(), joints.len(), m.len() / 16, ibm.index())));
+            }
+            let ibms: Vec<DMat4> = m.chunks_exact(16).map(|c| DMat4::from_column_slice(c)).collect();
+            if let Some((j, _)) = md.influences.iter().flatten().find(|(j, _)| *j >= joints.len()) {
+                return Err(err(file, format!("a vertex of {mname} is bound to joint {j}, but skin {} has {} joints; the file is damaged", s.index(), joints.len())));
+            }
+            Some((joints, ibms))
+        }
+        None => None,
+    };
+
+    // Which animation moves this mesh: one with morph weights on its node, or one moving a joint of its skin.
+    let moves_mesh = |a: &gltf::Animation| {
+        a.channels().any(|c| {
+            let t = c.target();
+            let n = t.node().index();
+            (t.property() == gltf::animation::Property::MorphTargetWeights && node.as_ref().is_some_and(|x| x.index() == n))
+                || skinning.as_ref().is_some_and(|(joints, _)| {
+                    // a joint or any ancestor of a joint
+                    joints.iter().any(|&j| {
+                        let mut cur = Some(j);
+                        let mut steps = 0;
+                        while let Some(c) = cur {
+                            if c == n {
+                                return true;
+                            }
+                            steps += 1;
+                            if steps > parents.len() {
+                                break;
+                            }
+                            cur = parents.get(c).copied().flatten();
+                        }
+                        false
+                    })
+                })
+        })
+    };
+    let animations: Vec<gltf::Animation> = doc.animations().filter(|a| moves_mesh(a)).collect();
+    let use_animation = match options.source {
+        PoseSource::Animation => true,
+        PoseSource::MorphTargets => false,
+        PoseSource::Auto => !animations.is_empty() || options.animation.is_some(),
+    };
+
+    let mut poses_raw: Vec<(String, Vec<DVec3>)> = Vec::new();
+    let description;
+    if use_animation {
+        let all: Vec<gltf::Animation> = doc.animations().collect();
+        let anim = match &options.animation {
+            Some(w) => pick(all.clone(), w, |a| a.name(), |a| a.index()).ok_or_else(|| {
+                let names: Vec<String> = all.iter().map(|a| name_of(a.name(), "animation", a.index())).collect();
+                err(file, format!("no animation is called or numbered `{w}`; the file has {}", if names.is_empty() { "none".into() } else { names.join(", ") }))
+            })?,
+            None => {
+                let mut best = None;
+                let mut best_keys = 0usize;
+                for a in &animations {
+                    let keys = a.channels().map(|c| c.sampler().input().count()).max().unwrap_or(0);
+                    if best.is_none() || keys > best_keys {
+                        best = Some(a.clone());
+                        best_keys = keys;
+                    }
+                }
+                best.ok_or_else(|| {
+                    err(file, format!("no animation moves {mname} (its morph weights or the joints of its skin); read its morph targets instead, or export the animation"))
+                })?
+            }
+        };
+        let aname = name_of(anim.name(), "animation", anim.index());
+        let channels = read_channels(&data, &anim, &aname)?;
+        let mut keys: Vec<f64> = channels.iter().flat_map(|c| c.times.iter().copied()).collect();
+        keys.sort_by(f64::total_cmp);
+        keys.dedup_by(|a, b| (*a - *b).abs() <= 1e-6);
+        let (lo, hi) = (keys.first().copied().unwrap_or(0.0), keys.last().copied().unwrap_or(0.0));
+        let times: Vec<f64> = match options.frames {
+            Some(0) => return Err(err(file, "--frames must be at least 2".into())),
+            Some(f) => (0..f).map(|i| if f == 1 { lo } else { lo + (hi - lo) * i as f64 / (f - 1) as f64 }).collect(),
+            None => keys.clone(),
+        };
+        // The poses must fit in the memory budget: refuse before computing them.
+        crate::model::memory::check(n_file, times.len(), 1, crate::model::memory::budget_bytes()?)
+            .map_err(|e| err(file, format!("{aname} sampled at {} times: {e}; sample it at fewer times (--frames N)", times.len())))?;
+        let how = match options.frames {
+            Some(f) => format!("sampled at {f} evenly spaced times"),
+            None => {
+                let steps: Vec<f64> = keys.windows(2).map(|w| w[1] - w[0]).collect();
+                let even = steps.first().is_some_and(|&d| d > 0.0 && steps.iter().all(|s| (s - d).abs() <= 1e-3 * d));
+                match steps.first() {
+                    Some(&d) if even => format!("sampled at its keyframes, {:.3} fps", 1.0 / d).replace(".000 fps", " fps"),
+                    _ => "sampled at its keyframes".into(),
+                }
+            }
+        };
+        description = format!("{} frames of {aname} ({how}) of {mname}", times.len());
+        for (fi, &t) in times.iter().enumerate() {
+            let mut local = rest.clone();
+            let mut weights = default_weights.clone();
+            for c in &channels {
+                let v = c.sample(t);
+                use gltf::animation::Property::*;
+                match (c.property, v.as_slice()) {
+                    (Translation, &[x, y, z]) => {
+                        if let Some(l) = local.get_mut(c.node) {
+                            l.0 = DVec3::new(x, y, z)
+                        }
+                    }
+                    (Rotation, &[x, y, z, w]) => {
+                        if let Some(l) = local.get_mut(c.node) {
+                            l.1 = quat(x, y, z, w)
+                        }
+                    }
+                    (Scale, &[x, y, z]) => {
+                        if let Some(l) = local.get_mut(c.node) {
+                            l.2 = DVec3::new(x, y, z)
+                        }
+                    }
+                    (MorphTargetWeights, w) if node.as_ref().is_some_and(|n| n.index() == c.node) => {
+                        for (slot, &x) in weights.iter_mut().zip(w) {
+                            *slot = x;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            let g = globals(&parents, &local);
+            let morphed = morph(&md, &weights);
+            let posed = match &skinning {
+                Some((joints, ibms)) => {
+                    let mats: Vec<DMat4> = joints.iter().zip(ibms).map(|(&j, ibm)| g.get(j).copied().unwrap_or_else(DMat4::identity) * *ibm).collect();
+                    skin_positions(&morphed, &md.influences, &mats)
+                }
+                None => {
+                    let m = node.as_ref().and_then(|n| g.get(n.index()).copied()).unwrap_or_else(DMat4::identity);
+                    morphed.iter().map(|p| apply(&m, p)).collect()
+                }
+            };
+            poses_raw.push((format!("frame {:0w$}", fi + 1, w = times.len().to_string().len()), posed));
+        }
+    } else {
+        if md.targets.is_empty() {
+            return Err(err(
+                file,
+                format!(
+                    "{mname} has no morph targets and no animation moves it, so the file holds one pose; export the poses \
+                     as shape keys / morph targets or as an animation"
+                ),
+            ));
+        }
+        let names: Vec<String> = mesh
+            .extras()
+            .as_ref()
+            .and_then(|e| serde_json::from_str::<serde_json::Value>(e.get()).ok())
+            .and_then(|v| v.get("targetNames").and_then(|t| t.as_array().cloned()))
+            .map(|a| a.iter().map(|v| v.as_str().unwrap_or("").to_string()).collect())
+            .unwrap_or_default();
+        description = format!("{} morph targets of {mname}, plus the base (the first pose)", md.targets.len());
+        let w = md.targets.len().to_string().len();
+        poses_raw.push((format!("target {:0w$} base", 0), md.positions.clone()));
+        for k in 0..md.targets.len() {
+            let mut weights = vec![0.0; md.targets.len()];
+            weights[k] = 1.0;
+            let label = names.get(k).filter(|n| !n.is_empty()).map(|n| format!(" {n}")).unwrap_or_default();
+            poses_raw.push((format!("target {:0w$}{label}", k + 1), morph(&md, &weights)));
+        }
+    }
+
+    // Weld exact duplicates of the base positions.
+    let mut first_of: HashMap<[u64; 3], u32> = HashMap::with_capacity(n_file);
+    let mut map = Vec::with_capacity(n_file);
+    let mut kept: Vec<usize> = Vec::new();
+    for (j, p) in md.positions.iter().enumerate() {
+        let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+        let next = kept.len() as u32;
+        let w = *first_of.entry(key).or_insert(next);
+        if w == next {
+            kept.push(j);
+        }
+        map.push(w);
+    }
+    let faces: Vec<[u32; 3]> = md.faces.iter().map(|f| f.map(|v| map.get(v as usize).copied().unwrap_or(0))).collect();
+    let n_welded = kept.len();
+    let weld_note = if n_welded == n_file {
+        format!("{n_file} vertices")
+    } else {
+        format!("{n_file} vertices welded to {n_welded} (seams split by the exporter)")
+    };
+    let more = if others > 0 { format!(" (the largest of {} meshes)", others + 1) } else { String::new() };
+    let source = format!("{description} in {file}{more}; {weld_note}");
+    let poses = poses_raw
+        .into_iter()
+        .map(|(name, pos)| {
+            let positions = kept.iter().map(|&j| pos.get(j).map_or([0.0; 3], |p| [p.x, p.y, p.z])).collect();
+            (format!("{file} {name}"), Mesh { positions, faces: faces.clone() })
+        })
+        .collect();
+    Ok(Gltf { file: file.to_string(), poses, source, vertices_in_file: n_file, vertices_welded: n_welded })
+}
+
+fn morph(md: &MeshData, weights: &[f64]) -> Vec<DVec3> {
+    let mut out = md.positions.clone();
+    for (t, &w) in md.targets.iter().zip(weights) {
+        if w != 0.0 {
+            for (p, d) in out.iter_mut().zip(t) {
+                *p += *d * w;
+            }
+        }
+    }
+    out
+}
+
+fn skin_positions(positions: &[DVec3], influences: &[Vec<(usize, f64)>], mats: &[DMat4]) -> Vec<DVec3> {
+    positions
+        .iter()
+        .zip(influences)
+        .map(|(&p, infl)| {
+            let total: f64 = infl.iter().map(|(_, w)| w).sum();
+            if infl.is_empty() || total <= 0.0 {
+                return p;
+            }
+            infl.iter().map(|&(j, w)| mats.get(j).map_or(p, |m| apply(m, &p)) * (w / total)).sum()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use base64::Engine as _;
+    use serde_json::json;
+
+    /// A quad split along a seam (vertex 4 = vertex 0), two morph targets, two joints, as a .gltf with a
+    /// data-URI buffer. `edit` changes the JSON before it is written.
+    fn quad(edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
+        let mut bin: Vec<u8> = Vec::new();
+        let f32s = |bin: &mut Vec<u8>, v: &[f32]| v.iter().for_each(|x| bin.extend(x.to_le_bytes()));
+        // 0: positions (5 x vec3) at 0
+        f32s(&mut bin, &[0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0., 0., 0., 0.]);
+        // 60: target 0 (vertex 1 up), 120: target 1 (vertex 3 up)
+        f32s(&mut bin, &[0., 0., 0., 0., 0., 1., 0., 0., 0., 0., 0., 0., 0., 0., 0.]);
+        f32s(&mut bin, &[0., 0., 0., 0., 0., 0., 0., 0., 0., 0., 0., 1., 0., 0., 0.]);
+        // 180: indices (6 x u16) + 4 bytes padding
+        for i in [0u16, 1, 2, 4, 2, 3] {
+            bin.extend(i.to_le_bytes());
+        }
+        bin.extend([0u8; 4]);
+        // 196: joints (5 x 4 u8), 216: weights (5 x vec4 f32)
+        for j in [0u8, 0, 1, 1, 0] {
+            bin.extend([j, 0, 0, 0]);
+        }
+        for _ in 0..5 {
+            f32s(&mut bin, &[1., 0., 0., 0.]);
+        }
+        // 296: times (3 f32), 308: weights output (6 f32), 332: rotations (3 x vec4), 380: 2 identity matrices
+        f32s(&mut bin, &[0., 1., 2.]);
+        f32s(&mut bin, &[0., 0., 1., 0., 0., 1.]);
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        f32s(&mut bin, &[0., 0., 0., 1., 0., 0., h, h, 0., 0., 0., 1.]);
+        for _ in 0..2 {
+            f32s(&mut bin, &[1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.]);
+        }
+        let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+        let view = |o: usize, l: usize| json!({"buffer": 0, "byteOffset": o, "byteLength": l});
+        let acc = |v: usize, ct: u32, n: usize, t: &str| json!({"bufferView": v, "componentType": ct, "count": n, "type": t});
+        let mut pos = acc(0, 5126, 5, "VEC3");
+        pos["min"] = json!([0, 0, 0]);
+        pos["max"] = json!([1, 1, 0]);
+        let mut v = json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"byteLength": bin.len(), "uri": uri}],
+            "bufferViews": [view(0, 60), view(60, 60), view(120, 60), view(180, 12), view(196, 20), view(216, 80),
+                            view(296, 12), view(308, 24), view(332, 48), view(380, 128)],
+            "accessors": [pos, acc(1, 5126, 5, "VEC3"), acc(2, 5126, 5, "VEC3"), acc(3, 5123, 6, "SCALAR"),
+                          acc(4, 5121, 5, "VEC4"), acc(5, 5126, 5, "VEC4"), acc(6, 5126, 3, "SCALAR"),
+                          acc(7, 5126, 6, "SCALAR"), acc(8, 5126, 3, "VEC4"), acc(9, 5126, 2, "MAT4")],
+            "meshes": [{"name": "quad", "primitives": [{"attributes": {"POSITION": 0}, "indices": 3,
+                        "targets": [{"POSITION": 1}, {"POSITION": 2}]}]}],
+            "nodes": [{"name": "body", "mesh": 0}],
+            "scenes": [{"nodes": [0]}],
+            "animations": [{"name": "Walk", "samplers": [{"input": 6, "output": 7}],
+                            "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}]}]
+        });
+        edit(&mut v);
+        serde_json::to_vec(&v).unwrap()
+    }
+
+    /// The quad with a skin instead of morph targets: vertices 2, 3 follow joint 1, which turns 90 degrees
+    /// about z at t = 1.
+    fn skinned(v: &mut serde_json::Value) {
+        v["meshes"][0]["primitives"][0] = json!({"attributes": {"POSITION": 0, "JOINTS_0": 4, "WEIGHTS_0": 5}, "indices": 3});
+        v["nodes"] = json!([{"name": "body", "mesh": 0, "skin": 0}, {"name": "root", "children": [2]}, {"name": "arm"}]);
+        v["scenes"] = json!([{"nodes": [0, 1]}]);
+        v["skins"] = json!([{"joints": [1, 2], "inverseBindMatrices": 9}]);
+        v["animations"] = json!([{"name": "Bend", "samplers": [{"input": 6, "output": 8}],
+                                  "channels": [{"sampler": 0, "target": {"node": 2, "path": "rotation"}}]}]);
+    }
+
+    fn load(bytes: &[u8], options: &Options) -> Result<Gltf> {
+        read("t.gltf", bytes, &[], options)
+    }
+
+    fn error(bytes: &[u8]) -> String {
+        let e = load(bytes, &Options::default()).unwrap_err().to_string();
+        assert!(e.starts_with("file t.gltf"), "{e}");
+        e
+    }
+
+    #[test]
+    fn morph_targets_and_weight_animation_give_the_poses_welded() {
+        let g = load(&quad(|_| {}), &Options { source: PoseSource::MorphTargets, ..Options::default() }).unwrap();
+        assert_eq!((g.vertices_in_file, g.vertices_welded), (5, 4));
+        assert_eq!(g.poses.len(), 3);
+        assert_eq!(g.poses[0].1.faces, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(g.poses[1].1.positions[1], [1.0, 0.0, 1.0]);
+        assert_eq!(g.poses[2].1.positions[3], [0.0, 1.0, 1.0]);
+        assert!(g.source.starts_with("2 morph targets of mesh 'quad', plus the base"), "{}", g.source);
+        assert!(g.source.contains("5 vertices welded to 4"), "{}", g.source);
+        // Auto prefers the animation: frame k shows target k.
+        let a = load(&quad(|_| {}), &Options::default()).unwrap();
+        assert!(a.source.starts_with("3 frames of animation 'Walk' (sampled at its keyframes, 1 fps) of mesh 'quad' in t.gltf"), "{}", a.source);
+        for k in 0..3 {
+            assert_eq!(a.poses[k].1.positions, g.poses[k].1.positions);
+        }
+        // --frames 5: halfway between keys is half of each target.
+        let f = load(&quad(|_| {}), &Options { frames: Some(5), ..Options::default() }).unwrap();
+        assert_eq!(f.poses.len(), 5);
+        assert_eq!(f.poses[1].1.positions[1], [1.0, 0.0, 0.5]);
+    }
+
+    #[test]
+    fn skinned_animation_is_posed_by_the_joints() {
+        let g = load(&quad(skinned), &Options::default()).unwrap();
+        assert_eq!(g.poses.len(), 3);
+        assert!(g.source.starts_with("3 frames of animation 'Bend'"), "{}", g.source);
+        let p = &g.poses[1].1.positions;
+        // vertex 2 = (1, 1, 0) turned 90 degrees about z by joint 1 -> (-1, 1, 0); vertex 1 stays.
+        assert!((p[2][0] + 1.0).abs() < 1e-6 && (p[2][1] - 1.0).abs() < 1e-6, "{:?}", p[2]);
+        assert_eq!(p[1], [1.0, 0.0, 0.0]);
+        assert_eq!(g.poses[0].1.positions, g.poses[2].1.positions);
+    }
+
+    #[test]
+    fn errors_name_the_accessor_and_say_what_to_do() {
+        let e = error(&quad(|v| v["accessors"][3]["sparse"] = json!({"count": 1, "indices": {"bufferView": 3, "componentType": 5123}, "values": {"bufferView": 3}})));
+        assert!(e.contains("accessor 3") && e.contains("sparse"), "{e}");
+        let e = error(&quad(|v| v["accessors"][0]["count"] = json!(4_000_000_000u64)));
+        assert!(e.contains("accessor 0") && e.contains("past the end of its buffer view 0"), "{e}");
+        let e = error(&quad(|v| v["bufferViews"][0]["byteLength"] = json!(100_000)));
+        assert!(e.contains("buffer view 0") && e.contains("past the end of buffer 0"), "{e}");
+        let e = error(&quad(|v| v["accessors"][0]["count"] = json!(4)));
+        assert!(e.contains("index 3 of primitive 0 of mesh 'quad' (accessor 3) is 4") && e.contains("4 vertices"), "{e}");
+        let e = error(&quad(|v| v["meshes"][0]["primitives"][0]["indices"] = json!(6)));
+        assert!(e.contains("accessor 6") && e.contains("unsigned integers"), "{e}");
+        let e = error(&quad(|v| {
+            skinned(v);
+            v["skins"][0].as_object_mut().unwrap().remove("inverseBindMatrices");
+        }));
+        assert!(e.contains("skin 0") && e.contains("inverse bind matrices"), "{e}");
+        let e = error(&quad(|v| {
+            v["bufferViews"][6]["byteLength"] = json!(0);
+            v["accessors"][6]["count"] = json!(0);
+        }));
+        assert!(e.contains("no keyframes") || e.contains("not a valid glTF"), "{e}");
+        let e = error(&quad(|v| {
+            v["meshes"][0]["primitives"][0]["targets"] = json!([]);
+            v.as_object_mut().unwrap().remove("animations");
+        }));
+        assert!(e.contains("no morph targets and no animation"), "{e}");
+        let e = error(&quad(|v| v["buffers"][0]["uri"] = json!("quad.bin")));
+        assert!(e.contains("`quad.bin`, which was not given"), "{e}");
+    }
+
+    #[test]
+    fn glb_container_lengths_are_checked() {
+        let json = quad(|_| {});
+        let mut glb = b"glTF".to_vec();
+        glb.extend(2u32.to_le_bytes());
+        let total = 12 + 8 + json.len().div_ceil(4) * 4;
+        glb.extend((total as u32).to_le_bytes());
+        glb.extend((json.len().div_ceil(4) as u32 * 4).to_le_bytes());
+        glb.extend(b"JSON");
+        glb.extend(&json);
+        while glb.len() < total {
+            glb.push(b' ');
+        }
+        let g = read("t.glb", &glb, &[], &Options::default()).unwrap();
+        assert_eq!(g.poses.len(), 3);
+        let mut bad = glb.clone();
+        bad[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
+        let e = read("t.glb", &bad, &[], &Options::default()).unwrap_err().to_string();
+        assert!(e.contains("GLB header says 4294967295 bytes"), "{e}");
+        let mut bad = glb.clone();
+        bad[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        let e = read("t.glb", &bad, &[], &Options::default()).unwrap_err().to_string();
+        assert!(e.contains("past the end of the file"), "{e}");
+        for n in 0..20 {
+            let _ = read("t.glb", &glb[..n], &[], &Options::default());
+        }
+    }
+}
