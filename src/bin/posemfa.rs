@@ -413,7 +413,8 @@ fn band_group<T: HasBand>() -> Group<T> {
     }
 }
 
-/// `HasFit` and `HasBand` for an articulation subcommand's arguments (fields `fit` and `band`).
+/// For an articulation subcommand's arguments (fields `fit` and `band`, options in `options()`): `HasFit`,
+/// `HasBand`, and `Args` with its own options, then the articulation and fit options; words are inputs.
 macro_rules! articulation_args {
     ($t:ty) => {
         impl HasFit for $t {
@@ -424,6 +425,15 @@ macro_rules! articulation_args {
         impl HasBand for $t {
             fn band(&mut self) -> &mut Option<f64> {
                 &mut self.band
+            }
+        }
+        impl Args for $t {
+            fn groups() -> Vec<Group<Self>> {
+                vec![<$t>::options(), band_group(), fit_group()]
+            }
+            fn positional(&mut self, word: String) -> Result<(), String> {
+                self.fit.inputs.push(word);
+                Ok(())
             }
         }
     };
@@ -809,86 +819,70 @@ struct InterpolateArgs {
 }
 articulation_args!(InterpolateArgs);
 
-impl Args for InterpolateArgs {
-    fn groups() -> Vec<Group<Self>> {
-        vec![
-            Group {
-                title: "interpolate options",
-                shared: false,
-                opts: vec![
-                    val("--from", "I", "first pose (required)", |o: &mut Self, v| {
-                        pose_number(v).map(|n| o.from = Some(n))
-                    }),
-                    val("--to", "J", "second pose (required)", |o: &mut Self, v| {
-                        pose_number(v).map(|n| o.to = Some(n))
-                    }),
-                    val("--t", "T", "where between them: 0 = I, 1 = J (required)", |o: &mut Self, v| {
-                        num(v).map(|n| o.t = Some(n))
-                    }),
-                    val("--out", "pose.obj", "OBJ file to write (required)", |o: &mut Self, v| text(&mut o.out, v)),
-                    val(
-                        "--skin",
-                        "rigid|smooth",
-                        "rigid (default: every vertex on its part) or smooth (weights across part boundaries)",
-                        |o: &mut Self, v| {
-                            o.skin = match v {
-                                "rigid" => Skin::Rigid,
-                                "smooth" => Skin::Smooth,
-                                _ => return Err(format!("'{v}': use rigid or smooth")),
-                            };
-                            Ok(())
-                        },
-                    ),
-                    val(
-                        "--blend",
-                        "dq|lbs",
-                        "smooth skin blending: dq (dual quaternion, default) or lbs (linear blend)",
-                        |o: &mut Self, v| {
-                            o.blend = match v {
-                                "dq" => Blend::DualQuaternion,
-                                "lbs" => Blend::Linear,
-                                _ => return Err(format!("'{v}': use dq or lbs")),
-                            };
-                            Ok(())
-                        },
-                    ),
-                    flag(
-                        "--no-residual",
-                        "leave out eq 24's residual (ends = rigid reconstructions)",
-                        |o: &mut Self| {
-                            o.no_residual = true;
-                        },
-                    ),
-                    flag(
-                        "--paper-root",
-                        "the paper's root (smallest rotation) instead of the anchor (largest part)",
-                        |o: &mut Self| {
-                            o.paper_root = true;
-                        },
-                    ),
-                    flag(
-                        "--paper",
-                        "Algorithm 2 as printed: paper root, BFS tree, no joint-offset blending (ends not exact)",
-                        |o: &mut Self| {
-                            o.paper = true;
-                        },
-                    ),
-                    flag(
-                        "--linear",
-                        "plain linear vertex interpolation of the two poses (the baseline)",
-                        |o: &mut Self| {
-                            o.linear = true;
-                        },
-                    ),
-                ],
-            },
-            band_group(),
-            fit_group(),
-        ]
-    }
-    fn positional(&mut self, word: String) -> Result<(), String> {
-        self.fit.inputs.push(word);
-        Ok(())
+impl InterpolateArgs {
+    fn options() -> Group<Self> {
+        Group {
+            title: "interpolate options",
+            shared: false,
+            opts: vec![
+                val("--from", "I", "first pose (required)", |o: &mut Self, v| pose_number(v).map(|n| o.from = Some(n))),
+                val("--to", "J", "second pose (required)", |o: &mut Self, v| pose_number(v).map(|n| o.to = Some(n))),
+                val("--t", "T", "where between them: 0 = I, 1 = J (required)", |o: &mut Self, v| {
+                    num(v).map(|n| o.t = Some(n))
+                }),
+                val("--out", "pose.obj", "OBJ file to write (required)", |o: &mut Self, v| text(&mut o.out, v)),
+                val(
+                    "--skin",
+                    "rigid|smooth",
+                    "rigid (default: every vertex on its part) or smooth (weights across part boundaries)",
+                    |o: &mut Self, v| {
+                        o.skin = match v {
+                            "rigid" => Skin::Rigid,
+                            "smooth" => Skin::Smooth,
+                            _ => return Err(format!("'{v}': use rigid or smooth")),
+                        };
+                        Ok(())
+                    },
+                ),
+                val(
+                    "--blend",
+                    "dq|lbs",
+                    "smooth skin blending: dq (dual quaternion, default) or lbs (linear blend)",
+                    |o: &mut Self, v| {
+                        o.blend = match v {
+                            "dq" => Blend::DualQuaternion,
+                            "lbs" => Blend::Linear,
+                            _ => return Err(format!("'{v}': use dq or lbs")),
+                        };
+                        Ok(())
+                    },
+                ),
+                flag("--no-residual", "leave out eq 24's residual (ends = rigid reconstructions)", |o: &mut Self| {
+                    o.no_residual = true;
+                }),
+                flag(
+                    "--paper-root",
+                    "the paper's root (smallest rotation) instead of the anchor (largest part)",
+                    |o: &mut Self| {
+                        o.paper_root = true;
+                    },
+                ),
+                flag(
+                    "--paper",
+                    "Algorithm 2 as printed: paper root, BFS tree, no joint-offset blending (ends not exact)",
+                    |o: &mut Self| {
+                        o.paper = true;
+                    },
+                ),
+                flag(
+                    "--linear",
+                    "plain linear vertex interpolation of the two poses (the baseline)",
+                    |o: &mut Self| {
+                        o.linear = true;
+                    },
+                ),
+            ],
+        }
     }
 }
 
@@ -939,40 +933,32 @@ struct GltfArgs {
 }
 articulation_args!(GltfArgs);
 
-impl Args for GltfArgs {
-    fn groups() -> Vec<Group<Self>> {
-        vec![
-            Group {
-                title: "export-gltf options",
-                shared: false,
-                opts: vec![
-                    val("--out", "model.glb", "file to write (required)", |o: &mut Self, v| text(&mut o.out, v)),
-                    val("--weights", "rigid|smooth", "skin weights: rigid (default) or smooth", |o: &mut Self, v| {
-                        o.weights = match v {
-                            "rigid" => Weights::Rigid,
-                            "smooth" => Weights::Smooth,
-                            _ => return Err(format!("'{v}': use rigid or smooth")),
-                        };
-                        Ok(())
-                    }),
-                    val("--bind", "N", "pose the mesh is bound in (default 1)", |o: &mut Self, v| {
-                        pose_number(v).map(|n| o.bind = Some(n))
-                    }),
-                    val(
-                        "--samples",
-                        "N",
-                        "samples per second of the \"interpolated\" clip (default 10)",
-                        |o: &mut Self, v| num(v).map(|n| o.samples = Some(n)),
-                    ),
-                ],
-            },
-            band_group(),
-            fit_group(),
-        ]
-    }
-    fn positional(&mut self, word: String) -> Result<(), String> {
-        self.fit.inputs.push(word);
-        Ok(())
+impl GltfArgs {
+    fn options() -> Group<Self> {
+        Group {
+            title: "export-gltf options",
+            shared: false,
+            opts: vec![
+                val("--out", "model.glb", "file to write (required)", |o: &mut Self, v| text(&mut o.out, v)),
+                val("--weights", "rigid|smooth", "skin weights: rigid (default) or smooth", |o: &mut Self, v| {
+                    o.weights = match v {
+                        "rigid" => Weights::Rigid,
+                        "smooth" => Weights::Smooth,
+                        _ => return Err(format!("'{v}': use rigid or smooth")),
+                    };
+                    Ok(())
+                }),
+                val("--bind", "N", "pose the mesh is bound in (default 1)", |o: &mut Self, v| {
+                    pose_number(v).map(|n| o.bind = Some(n))
+                }),
+                val(
+                    "--samples",
+                    "N",
+                    "samples per second of the \"interpolated\" clip (default 10)",
+                    |o: &mut Self, v| num(v).map(|n| o.samples = Some(n)),
+                ),
+            ],
+        }
     }
 }
 
@@ -1004,41 +990,27 @@ struct ReportArgs {
 }
 articulation_args!(ReportArgs);
 
-impl Args for ReportArgs {
-    fn groups() -> Vec<Group<Self>> {
-        vec![
-            Group {
-                title: "articulate-report options",
-                shared: false,
-                opts: vec![
-                    val("--from", "I", "first pose (required)", |o: &mut Self, v| {
-                        pose_number(v).map(|n| o.from = Some(n))
-                    }),
-                    val("--to", "J", "second pose (required)", |o: &mut Self, v| {
-                        pose_number(v).map(|n| o.to = Some(n))
-                    }),
-                    val("--t", "T", "where between them (default 0.5)", |o: &mut Self, v| {
-                        num(v).map(|n| o.t = Some(n))
-                    }),
-                    val("--glb", "OUT.glb", "also write the rigid .glb and check its animation", |o: &mut Self, v| {
-                        text(&mut o.glb, v)
-                    }),
-                    flag(
-                        "--validate",
-                        "with --glb: run scripts/validate-gltf.mjs (Khronos validator) on it",
-                        |o: &mut Self| {
-                            o.validate = true;
-                        },
-                    ),
-                ],
-            },
-            band_group(),
-            fit_group(),
-        ]
-    }
-    fn positional(&mut self, word: String) -> Result<(), String> {
-        self.fit.inputs.push(word);
-        Ok(())
+impl ReportArgs {
+    fn options() -> Group<Self> {
+        Group {
+            title: "articulate-report options",
+            shared: false,
+            opts: vec![
+                val("--from", "I", "first pose (required)", |o: &mut Self, v| pose_number(v).map(|n| o.from = Some(n))),
+                val("--to", "J", "second pose (required)", |o: &mut Self, v| pose_number(v).map(|n| o.to = Some(n))),
+                val("--t", "T", "where between them (default 0.5)", |o: &mut Self, v| num(v).map(|n| o.t = Some(n))),
+                val("--glb", "OUT.glb", "also write the rigid .glb and check its animation", |o: &mut Self, v| {
+                    text(&mut o.glb, v)
+                }),
+                flag(
+                    "--validate",
+                    "with --glb: run scripts/validate-gltf.mjs (Khronos validator) on it",
+                    |o: &mut Self| {
+                        o.validate = true;
+                    },
+                ),
+            ],
+        }
     }
 }
 

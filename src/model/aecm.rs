@@ -103,11 +103,6 @@ impl Fit {
         fit
     }
 
-    /// Overrides the iteration cap (the refinement uses a smaller one).
-    pub fn set_max_iter(&mut self, n: usize) {
-        self.max_iter = n.max(1);
-    }
-
     /// E-step with exact pruning of negligible components ([`EStep::run`]).
     fn run_e_step(&mut self) -> f64 {
         let t0 = crate::clock::now_ms();

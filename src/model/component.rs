@@ -9,7 +9,7 @@
 //!
 //! No 3n_s x 3n_s matrix is ever formed.
 
-use crate::geometry::{mat_t_vec, sub, Mat3, Vec3};
+use crate::geometry::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 
 pub const LN_2PI: f64 = 1.837_877_066_409_345_3;
@@ -124,11 +124,6 @@ impl Component {
             r[1][0] * v[0] + r[1][1] * v[1] + r[1][2] * v[2] + b[1],
             r[2][0] * v[0] + r[2][1] * v[1] + r[2][2] * v[2] + b[2],
         ]
-    }
-
-    /// R^iT (p - b^i): a point of shape i taken back into this part's latent frame.
-    pub fn unplace(&self, shape: usize, p: Vec3) -> Vec3 {
-        mat_t_vec(&self.rotations[shape], sub(p, self.translations[shape]))
     }
 }
 
