@@ -30,7 +30,7 @@ fn horse_at_defaults_meets_the_figures_and_the_json_is_consistent() {
     for p in parts {
         for r in p["rotations"].as_array().unwrap() {
             let r: Vec<f64> = r.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-            let m = [[r[0], r[1], r[2]], [r[3], r[4], r[5]], [r[6], r[7], r[8]]];
+            let m = posemfa::geometry::Mat3::from_row_slice(&r);
             assert!((posemfa::geometry::det(&m) - 1.0).abs() < 1e-9);
             assert!(posemfa::geometry::orthonormality_error(&m) < 1e-9);
         }

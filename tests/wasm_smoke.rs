@@ -8,11 +8,15 @@
 mod common;
 
 use posemfa::geometry::procrustes::{best_rotation, needs_flip};
-use posemfa::geometry::Mat3;
+use posemfa::geometry::{from_rows, rows};
 use posemfa::mesh::population::natural_cmp;
 use posemfa::mesh::{Mesh, Population};
 use posemfa::model::component::LN_2PI;
 use posemfa::model::Component;
+
+/// The test's own 3x3 matrices: rows, with its own products (the library's `Mat3` only at its API, through
+/// `from_rows` / `rows`).
+type Mat3 = [[f64; 3]; 3];
 
 /// Rotation of `angle` about `axis` (Rodrigues), row-major: the test's own, not the library's.
 fn rodrigues(axis: [f64; 3], angle: f64) -> Mat3 {
@@ -107,7 +111,7 @@ fn dense_gaussian(s: &[Vec<f64>], x: &[f64]) -> (f64, Vec<f64>) {
 
 fn component(ns: usize) -> Component {
     Component {
-        rotations: (0..ns).map(|i| rodrigues([1.0, 0.3 * i as f64, -0.7], 0.4 + 0.9 * i as f64)).collect(),
+        rotations: (0..ns).map(|i| from_rows(rodrigues([1.0, 0.3 * i as f64, -0.7], 0.4 + 0.9 * i as f64))).collect(),
         translations: (0..ns).map(|i| [0.1 * i as f64, -0.05 * i as f64, 0.2]).collect(),
         lambda: [0.45, 0.3, 0.08],
         variances: (0..ns).map(|i| 2e-3 + 1e-3 * i as f64).collect(),
@@ -171,8 +175,8 @@ dual_test! {
                 }
             }
         }
-        assert!(!needs_flip(&c));
-        let got = best_rotation(&c);
+        assert!(!needs_flip(&from_rows(c)));
+        let got = rows(&best_rotation(&from_rows(c)));
         assert!(max_abs_diff(&got, &r) < 1e-10, "{got:?} vs {r:?}");
     }
 
@@ -184,8 +188,8 @@ dual_test! {
         let p = rodrigues([-0.6, 0.1, 0.9], -2.4);
         let d = [[3.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, -1.0]];
         let c = mul(&mul(&q, &d), &tr(&p));
-        assert!(needs_flip(&c));
-        let got = best_rotation(&c);
+        assert!(needs_flip(&from_rows(c)));
+        let got = rows(&best_rotation(&from_rows(c)));
         let want = mul(&q, &tr(&p));
         assert!(max_abs_diff(&got, &want) < 1e-9, "{got:?} vs {want:?}");
         assert!((det3(&got) - 1.0).abs() < 1e-12, "det {}", det3(&got));
@@ -209,7 +213,7 @@ dual_test! {
             let n = 3 * ns;
             let a: Vec<[f64; 3]> = (0..n).map(|row| {
                 let (i, r) = (row / 3, row % 3);
-                [0, 1, 2].map(|d| comp.rotations[i][r][d] * comp.lambda[d])
+                [0, 1, 2].map(|d| comp.rotations[i][(r, d)] * comp.lambda[d])
             }).collect();
             let sigma: Vec<Vec<f64>> = (0..n).map(|r| (0..n).map(|s| {
                 let aa: f64 = (0..3).map(|d| a[r][d] * a[s][d]).sum();

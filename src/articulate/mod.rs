@@ -129,6 +129,7 @@ impl Options {
 /// x -> R x + b.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RigidMotion {
+    #[serde(with = "crate::geometry::serde_rows")]
     pub rotation: Mat3,
     pub translation: Vec3,
 }

@@ -366,12 +366,12 @@ impl DualQuat {
 }
 
 fn motion_sum(ms: &[(RigidMotion, f64)]) -> RigidMotion {
-    let mut r: Mat3 = [[0.0; 3]; 3];
+    let mut r = Mat3::zeros();
     let mut b = [0.0; 3];
     for (m, w) in ms {
         for a in 0..3 {
             for c in 0..3 {
-                r[a][c] += w * m.rotation[a][c];
+                r[(a, c)] += w * m.rotation[(a, c)];
             }
             b[a] += w * m.translation[a];
         }

@@ -25,7 +25,7 @@ use crate::articulate::graph::{Tree, TreeRule};
 use crate::articulate::{Articulation, Options, RigidMotion, Skin};
 use crate::error::{Error, Result};
 use crate::geometry::rotation::to_quat;
-use crate::geometry::{mat_mul, mat_vec, sub, Vec3};
+use crate::geometry::{mat_mul, mat_vec, sub, Mat3, Vec3};
 use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use serde::Serialize;
@@ -66,9 +66,9 @@ const CHUNK_JSON: u32 = 0x4E4F_534A;
 const CHUNK_BIN: u32 = 0x004E_4942;
 
 /// Column-major 4x4 of an affine map x -> A x + c (A row-major 3x3).
-fn mat4(a: &[[f64; 3]; 3], c: Vec3) -> [f64; 16] {
+fn mat4(a: &Mat3, c: Vec3) -> [f64; 16] {
     [
-        a[0][0], a[1][0], a[2][0], 0.0, a[0][1], a[1][1], a[2][1], 0.0, a[0][2], a[1][2], a[2][2], 0.0, c[0], c[1], c[2], 1.0,
+        a[(0, 0)], a[(1, 0)], a[(2, 0)], 0.0, a[(0, 1)], a[(1, 1)], a[(2, 1)], 0.0, a[(0, 2)], a[(1, 2)], a[(2, 2)], 0.0, c[0], c[1], c[2], 1.0,
     ]
 }
 
@@ -252,7 +252,7 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
         let g = RigidMotion { rotation: bind_motions[k].rotation, translation: bind_motions[k].apply(art.node_offset(&tree, k)) };
         let gi = g.inverse();
         let s = norm.scale;
-        let a = gi.rotation.map(|r| r.map(|x| x * s));
+        let a = gi.rotation.map(|x| x * s);
         let c = sub(gi.translation, mat_vec(&a, norm.offset));
         ibm.extend(mat4(&a, c).iter().map(|&x| x as f32));
     }
@@ -515,7 +515,7 @@ pub struct GlbCheck {
     pub max_frame_error: f64,
 }
 
-type Affine = ([[f64; 3]; 3], Vec3);
+type Affine = (Mat3, Vec3);
 
 fn affine_mul(a: &Affine, b: &Affine) -> Affine {
     (mat_mul(&a.0, &b.0), crate::geometry::add(mat_vec(&a.0, b.1), a.1))
@@ -524,12 +524,7 @@ fn affine_mul(a: &Affine, b: &Affine) -> Affine {
 fn trs(t: Vec3, q: [f64; 4], s: Vec3) -> Affine {
     // glTF stores (x, y, z, w); nalgebra's Quaternion::new takes w first
     let r = crate::geometry::rotation::from_quat(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]));
-    let m = [[r[0][0] * s[0], r[0][1] * s[1], r[0][2] * s[2]], [r[1][0] * s[0], r[1][1] * s[1], r[1][2] * s[2]], [
-        r[2][0] * s[0],
-        r[2][1] * s[1],
-        r[2][2] * s[2],
-    ]];
-    (m, t)
+    (Mat3::from_fn(|a, b| r[(a, b)] * s[b]), t)
 }
 
 /// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe, from the file's
@@ -604,7 +599,8 @@ pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
             .map(|(s, j)| {
                 let w = world_of(j.value(), &parent, &local, &mut world);
                 let m = &ibm[16 * s..16 * s + 16];
-                let b: Affine = ([[m[0], m[4], m[8]], [m[1], m[5], m[9]], [m[2], m[6], m[10]]], [m[12], m[13], m[14]]);
+                // glTF matrices are column-major, like nalgebra's storage
+                let b: Affine = (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]]);
                 affine_mul(&w, &b)
             })
             .collect();

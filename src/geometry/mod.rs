@@ -1,20 +1,38 @@
 //! Small fixed-size geometry: 3x3 matrices, SO(3) Procrustes, quaternions and slerp.
+//!
+//! One representation for the maths: nalgebra. A 3x3 matrix is `Mat3` = `nalgebra::Matrix3<f64>` (indexed
+//! `m[(row, col)]`), a rotation's quaternion `rotation::Quat` = `nalgebra::UnitQuaternion<f64>`, and the SVD and
+//! symmetric eigen-decompositions work on `Mat3` directly. Points and vectors are `[f64; 3]`, the storage of
+//! meshes and populations (one contiguous buffer, passed to JS as is); [`mat_vec`] and friends apply a `Mat3`
+//! to them. The products below are written out term by term in a fixed order, so results do not depend on how
+//! nalgebra orders its sums.
 
 pub mod procrustes;
 pub mod rotation;
 
 pub type Vec3 = [f64; 3];
-/// Row-major 3x3 matrix.
-pub type Mat3 = [[f64; 3]; 3];
+pub type Mat3 = nalgebra::Matrix3<f64>;
 
-pub const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+pub const IDENTITY: Mat3 = Mat3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+
+/// A matrix from its rows.
+#[inline]
+pub fn from_rows(r: [[f64; 3]; 3]) -> Mat3 {
+    Mat3::new(r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2])
+}
+
+/// Its rows.
+#[inline]
+pub fn rows(m: &Mat3) -> [[f64; 3]; 3] {
+    [[m[(0, 0)], m[(0, 1)], m[(0, 2)]], [m[(1, 0)], m[(1, 1)], m[(1, 2)]], [m[(2, 0)], m[(2, 1)], m[(2, 2)]]]
+}
 
 #[inline]
 pub fn mat_vec(m: &Mat3, v: Vec3) -> Vec3 {
     [
-        m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
-        m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
-        m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2],
+        m[(0, 0)] * v[0] + m[(0, 1)] * v[1] + m[(0, 2)] * v[2],
+        m[(1, 0)] * v[0] + m[(1, 1)] * v[1] + m[(1, 2)] * v[2],
+        m[(2, 0)] * v[0] + m[(2, 1)] * v[1] + m[(2, 2)] * v[2],
     ]
 }
 
@@ -22,29 +40,53 @@ pub fn mat_vec(m: &Mat3, v: Vec3) -> Vec3 {
 #[inline]
 pub fn mat_t_vec(m: &Mat3, v: Vec3) -> Vec3 {
     [
-        m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],
-        m[0][1] * v[0] + m[1][1] * v[1] + m[2][1] * v[2],
-        m[0][2] * v[0] + m[1][2] * v[1] + m[2][2] * v[2],
+        m[(0, 0)] * v[0] + m[(1, 0)] * v[1] + m[(2, 0)] * v[2],
+        m[(0, 1)] * v[0] + m[(1, 1)] * v[1] + m[(2, 1)] * v[2],
+        m[(0, 2)] * v[0] + m[(1, 2)] * v[1] + m[(2, 2)] * v[2],
     ]
 }
 
 pub fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
-    let mut c = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            c[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
-        }
-    }
-    c
+    Mat3::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
 }
 
 pub fn transpose(a: &Mat3) -> Mat3 {
-    [[a[0][0], a[1][0], a[2][0]], [a[0][1], a[1][1], a[2][1]], [a[0][2], a[1][2], a[2][2]]]
+    a.transpose()
 }
 
+/// Determinant by the first row's cofactors.
 pub fn det(a: &Mat3) -> f64 {
-    a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-        + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    a[(0, 0)] * (a[(1, 1)] * a[(2, 2)] - a[(1, 2)] * a[(2, 1)])
+        - a[(0, 1)] * (a[(1, 0)] * a[(2, 2)] - a[(1, 2)] * a[(2, 0)])
+        + a[(0, 2)] * (a[(1, 0)] * a[(2, 1)] - a[(1, 1)] * a[(2, 0)])
+}
+
+/// serde for a `Mat3` as its rows (`[[r00, r01, r02], ...]`), the layout of the JSON export.
+pub mod serde_rows {
+    use super::Mat3;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(m: &Mat3, s: S) -> Result<S::Ok, S::Error> {
+        super::rows(m).serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Mat3, D::Error> {
+        Ok(super::from_rows(<[[f64; 3]; 3]>::deserialize(d)?))
+    }
+
+    /// The same for a list of matrices.
+    pub mod vec {
+        use super::super::{from_rows, rows, Mat3};
+        use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+        pub fn serialize<S: Serializer>(ms: &[Mat3], s: S) -> Result<S::Ok, S::Error> {
+            ms.iter().map(rows).collect::<Vec<_>>().serialize(s)
+        }
+
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Mat3>, D::Error> {
+            Ok(Vec::<[[f64; 3]; 3]>::deserialize(d)?.into_iter().map(from_rows).collect())
+        }
+    }
 }
 
 #[inline]
@@ -79,12 +121,5 @@ pub fn norm(a: Vec3) -> f64 {
 
 /// Largest deviation of R^T R from I, and det R: for checking rotations.
 pub fn orthonormality_error(r: &Mat3) -> f64 {
-    let rtr = mat_mul(&transpose(r), r);
-    let mut e: f64 = 0.0;
-    for i in 0..3 {
-        for j in 0..3 {
-            e = e.max((rtr[i][j] - if i == j { 1.0 } else { 0.0 }).abs());
-        }
-    }
-    e
+    (mat_mul(&transpose(r), r) - IDENTITY).amax()
 }

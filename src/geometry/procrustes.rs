@@ -3,13 +3,12 @@
 //! the SMALLEST singular value. Every rotation returned has det = +1.
 
 use super::Mat3;
-use nalgebra::Matrix3;
 
 /// The rotation R in SO(3) maximising trace(R^T C) = Σ R_ab C_ab, for any 3x3 C (a "cross-covariance").
 ///
 /// With C = Σ_j w_j y_j x_j^T this is the R minimising Σ_j w_j |y_j - R x_j|². Returns the identity for C = 0.
 pub fn best_rotation(c: &Mat3) -> Mat3 {
-    let m = Matrix3::new(c[0][0], c[0][1], c[0][2], c[1][0], c[1][1], c[1][2], c[2][0], c[2][1], c[2][2]);
+    let m = *c;
     if !m.iter().all(|x| x.is_finite()) || m.iter().all(|x| *x == 0.0) {
         return super::IDENTITY;
     }
@@ -25,24 +24,16 @@ pub fn best_rotation(c: &Mat3) -> Mat3 {
         }
     }
     let d = (u * v_t).determinant();
-    let mut flip = Matrix3::identity();
+    let mut flip = Mat3::identity();
     if d < 0.0 {
         flip[(smallest, smallest)] = -1.0;
     }
-    let r = u * flip * v_t;
-    let mut out = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            out[i][j] = r[(i, j)];
-        }
-    }
-    out
+    u * flip * v_t
 }
 
 /// How many calls of [`best_rotation`] needed the handedness flip (for diagnostics): true if this one did.
 pub fn needs_flip(c: &Mat3) -> bool {
-    let m = Matrix3::new(c[0][0], c[0][1], c[0][2], c[1][0], c[1][1], c[1][2], c[2][0], c[2][1], c[2][2]);
-    let svd = m.svd(true, true);
+    let svd = c.svd(true, true);
     match (svd.u, svd.v_t) {
         (Some(u), Some(v_t)) => (u * v_t).determinant() < 0.0,
         _ => false,
@@ -52,14 +43,14 @@ pub fn needs_flip(c: &Mat3) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{det, mat_mul, mat_vec, orthonormality_error, rotation::axis_angle};
+    use crate::geometry::{det, mat_vec, orthonormality_error, rotation::axis_angle};
 
     fn cross_cov(ys: &[[f64; 3]], xs: &[[f64; 3]]) -> Mat3 {
-        let mut c = [[0.0; 3]; 3];
+        let mut c = Mat3::zeros();
         for (y, x) in ys.iter().zip(xs) {
             for a in 0..3 {
                 for b in 0..3 {
-                    c[a][b] += y[a] * x[b];
+                    c[(a, b)] += y[a] * x[b];
                 }
             }
         }
@@ -72,11 +63,7 @@ mod tests {
         let xs = [[1.0, 0.2, 0.0], [0.0, 1.0, 0.5], [0.3, 0.0, 1.0], [-1.0, 0.4, 0.2]];
         let ys: Vec<_> = xs.iter().map(|&x| mat_vec(&r, x)).collect();
         let got = best_rotation(&cross_cov(&ys, &xs));
-        for i in 0..3 {
-            for j in 0..3 {
-                assert!((got[i][j] - r[i][j]).abs() < 1e-10);
-            }
-        }
+        assert!((got - r).amax() < 1e-10);
         assert!((det(&got) - 1.0).abs() < 1e-12);
     }
 
@@ -84,7 +71,7 @@ mod tests {
     fn reflection_needs_the_flip_and_still_gives_a_rotation() {
         // y = mirror(x): the unconstrained optimum is a reflection; the best rotation keeps det +1
         // and flips the direction of the smallest singular value.
-        let mirror = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]];
+        let mirror = Mat3::from_diagonal(&[1.0, 1.0, -1.0].into());
         let xs = [[3.0, 0.0, 0.1], [-3.0, 0.0, 0.1], [0.0, 2.0, -0.1], [0.0, -2.0, -0.1]];
         let ys: Vec<_> = xs.iter().map(|&x| mat_vec(&mirror, x)).collect();
         let c = cross_cov(&ys, &xs);
@@ -93,10 +80,9 @@ mod tests {
         assert!((det(&got) - 1.0).abs() < 1e-12, "det {}", det(&got));
         assert!(orthonormality_error(&got) < 1e-12);
         // the planar points (large singular values) are matched exactly, so R = identity here
-        let id = mat_mul(&got, &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
-        assert!((id[0][0] - 1.0).abs() < 1e-9 && (id[1][1] - 1.0).abs() < 1e-9);
+        assert!((got[(0, 0)] - 1.0).abs() < 1e-9 && (got[(1, 1)] - 1.0).abs() < 1e-9);
         // it beats every other rotation tried
-        let score = |r: &Mat3| (0..3).map(|a| (0..3).map(|b| r[a][b] * c[a][b]).sum::<f64>()).sum::<f64>();
+        let score = |r: &Mat3| r.component_mul(&c).sum();
         for k in 0..50 {
             let t = k as f64 * 0.37;
             let other = axis_angle([t.sin(), t.cos(), 0.3], t);

@@ -2,7 +2,7 @@
 //! π), and shorter-arc slerp.
 
 use super::Mat3;
-use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion};
+use nalgebra::{Quaternion, Rotation3, UnitQuaternion};
 
 /// A unit quaternion (w, x, y, z) for a rotation.
 pub type Quat = UnitQuaternion<f64>;
@@ -15,24 +15,27 @@ pub fn axis_angle(axis: [f64; 3], angle: f64) -> Mat3 {
     let (sin, cos) = angle.sin_cos();
     let omc = 1.0 - cos;
     let (xy, xz, yz) = (x * y * omc, x * z * omc, y * z * omc);
-    [
-        [x * x * omc + cos, xy - z * sin, xz + y * sin],
-        [xy + z * sin, y * y * omc + cos, yz - x * sin],
-        [xz - y * sin, yz + x * sin, z * z * omc + cos],
-    ]
+    Mat3::new(
+        x * x * omc + cos,
+        xy - z * sin,
+        xz + y * sin,
+        xy + z * sin,
+        y * y * omc + cos,
+        yz - x * sin,
+        xz - y * sin,
+        yz + x * sin,
+        z * z * omc + cos,
+    )
 }
 
 /// Unit quaternion of a rotation matrix (which must be a rotation: it is not re-orthogonalised).
 pub fn to_quat(m: &Mat3) -> Quat {
-    let r = Matrix3::from_fn(|a, b| m[a][b]);
-    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r))
+    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*m))
 }
 
 /// Rotation matrix of a quaternion (normalised first, so any non-zero quaternion will do).
 pub fn from_quat(q: Quaternion<f64>) -> Mat3 {
-    let r = UnitQuaternion::from_quaternion(q).to_rotation_matrix();
-    let m = r.matrix();
-    [[m[(0, 0)], m[(0, 1)], m[(0, 2)]], [m[(1, 0)], m[(1, 1)], m[(1, 2)]], [m[(2, 0)], m[(2, 1)], m[(2, 2)]]]
+    UnitQuaternion::from_quaternion(q).to_rotation_matrix().into_inner()
 }
 
 /// Rotation angle θ in [0, π] of a rotation matrix R, as atan2(|axis part|, trace part) with
@@ -42,9 +45,9 @@ pub fn from_quat(q: Quaternion<f64>) -> Mat3 {
 /// absolute error at every angle. acos of the trace part alone loses half the digits near 0 (cos θ = 1 - θ²/2:
 /// a 1e-9 rad rotation has the same trace as the identity) and near π.
 pub fn angle(r: &Mat3) -> f64 {
-    let axis = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
+    let axis = [r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]];
     let sin = 0.5 * super::norm(axis);
-    let cos = 0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0);
+    let cos = 0.5 * (r[(0, 0)] + r[(1, 1)] + r[(2, 2)] - 1.0);
     sin.atan2(cos)
 }
 
@@ -139,7 +142,7 @@ mod tests {
         // the brief's example, and what acos of the trace part gave: 1e-9 rad read as 0 or as 2.1e-8
         let r = axis_angle([0.3, 0.4, 0.5], 1e-9);
         assert!((angle(&r) / 1e-9 - 1.0).abs() < 1e-6);
-        let acos_form = (0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0)).clamp(-1.0, 1.0).acos();
+        let acos_form = (0.5 * (r.trace() - 1.0)).clamp(-1.0, 1.0).acos();
         assert!((acos_form / 1e-9 - 1.0).abs() > 0.5, "acos of the trace is not accurate near 0: {acos_form}");
     }
 

@@ -100,10 +100,10 @@ fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, w
     let mut st = Stats {
         n: 0.0,
         sq: vec![0.0; ns],
-        cross: vec![[[0.0; 3]; 3]; ns],
+        cross: vec![Mat3::zeros(); ns],
         second: [0.0; 3],
-        moment: [[0.0; 3]; 3],
-        scatter: if want_scatter { vec![[[0.0; 3]; 3]; ns] } else { Vec::new() },
+        moment: Mat3::zeros(),
+        scatter: if want_scatter { vec![Mat3::zeros(); ns] } else { Vec::new() },
     };
     for &Member { j, g, y } in list {
         let h = data.vertex(j as usize);
@@ -115,7 +115,7 @@ fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, w
         if want_moment {
             for a in 0..3 {
                 for b in 0..3 {
-                    st.moment[a][b] += g * ez[a] * ez[b];
+                    st.moment[(a, b)] += g * ez[a] * ez[b];
                 }
             }
         }
@@ -127,14 +127,14 @@ fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, w
             let cr = &mut st.cross[i];
             for a in 0..3 {
                 for b in 0..3 {
-                    cr[a][b] += x[a] * gez[b];
+                    cr[(a, b)] += x[a] * gez[b];
                 }
             }
             if want_scatter {
                 let sc = &mut st.scatter[i];
                 for a in 0..3 {
                     for b in 0..3 {
-                        sc[a][b] += g * x[a] * x[b];
+                        sc[(a, b)] += g * x[a] * x[b];
                     }
                 }
             }
@@ -142,7 +142,7 @@ fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, w
     }
     if want_moment {
         for d in 0..3 {
-            st.moment[d][d] += st.n * wb.post_var[d];
+            st.moment[(d, d)] += st.n * wb.post_var[d];
         }
     }
     st
@@ -171,7 +171,7 @@ pub fn cycle2(data: &Data, members: &Members, comps: &mut [Component], rule: Lam
                         let r = &c.rotations[i];
                         let cr = &st.cross[i];
                         // (R_i^T C_i)_dd = Σ_a R_ad C_ad
-                        let rc = r[0][d] * cr[0][d] + r[1][d] * cr[1][d] + r[2][d] * cr[2][d];
+                        let rc = r[(0, d)] * cr[(0, d)] + r[(1, d)] * cr[(1, d)] + r[(2, d)] * cr[(2, d)];
                         num += rc / c.variances[i];
                     }
                     let den = w * st.second[d];
@@ -183,7 +183,7 @@ pub fn cycle2(data: &Data, members: &Members, comps: &mut [Component], rule: Lam
                 let mut eig_sum = [0.0; 3];
                 for i in 0..ns {
                     let sc = &st.scatter[i];
-                    let cov = nalgebra::Matrix3::from_fn(|a, b| sc[a][b] / st.n);
+                    let cov = sc / st.n;
                     let mut ev: Vec<f64> = cov.symmetric_eigenvalues().iter().cloned().collect();
                     ev.sort_by(|a, b| b.partial_cmp(a).unwrap_or(std::cmp::Ordering::Equal));
                     for d in 0..3 {
@@ -198,19 +198,14 @@ pub fn cycle2(data: &Data, members: &Members, comps: &mut [Component], rule: Lam
         // R_i = argmax trace(R^T C_i Λ)
         for i in 0..ns {
             let cr = &st.cross[i];
-            let mut cl = [[0.0; 3]; 3];
-            for a in 0..3 {
-                for b in 0..3 {
-                    cl[a][b] = cr[a][b] * c.lambda[b];
-                }
-            }
+            let cl = Mat3::from_fn(|a, b| cr[(a, b)] * c.lambda[b]);
             c.rotations[i] = best_rotation(&cl);
             // Φ: s_i
             let r = &c.rotations[i];
             let mut inner = 0.0;
             for a in 0..3 {
                 for b in 0..3 {
-                    inner += r[a][b] * cl[a][b];
+                    inner += r[(a, b)] * cl[(a, b)];
                 }
             }
             let quad: f64 = (0..3).map(|d| c.lambda[d] * c.lambda[d] * st.second[d]).sum();
@@ -218,7 +213,7 @@ pub fn cycle2(data: &Data, members: &Members, comps: &mut [Component], rule: Lam
             c.variances[i] = if s.is_finite() { s.max(floor) } else { floor };
         }
         if px {
-            let sz = st.moment.map(|row| row.map(|v| v / st.n));
+            let sz = st.moment / st.n;
             px_fold(c, &sz);
         }
     }
@@ -234,7 +229,7 @@ pub fn cycle2(data: &Data, members: &Members, comps: &mut [Component], rule: Lam
 /// longer has to creep towards the principal axes one small step at a time.
 pub fn px_fold(c: &mut Component, sigma_z: &Mat3) {
     let l = c.lambda;
-    let m = nalgebra::Matrix3::from_fn(|a, b| l[a] * sigma_z[a][b] * l[b]);
+    let m = Mat3::from_fn(|a, b| l[a] * sigma_z[(a, b)] * l[b]);
     if !m.iter().all(|v| v.is_finite()) {
         return;
     }
@@ -245,7 +240,7 @@ pub fn px_fold(c: &mut Component, sigma_z: &Mat3) {
     // Each column's own Rayleigh quotient, so that D always pairs with U's columns; and U must diagonalise M
     // (else the fold is skipped: the plain CM step is still a proper one).
     let d = [0, 1, 2].map(|i| u.column(i).dot(&(m * u.column(i))));
-    let recon = u * nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::from(d)) * u.transpose();
+    let recon = u * Mat3::from_diagonal(&d.into()) * u.transpose();
     if !((recon - m).norm() <= 1e-9 * m.norm()) {
         return;
     }
@@ -254,8 +249,7 @@ pub fn px_fold(c: &mut Component, sigma_z: &Mat3) {
         return;
     }
     for r in c.rotations.iter_mut() {
-        let rm = nalgebra::Matrix3::from_fn(|a, b| r[a][b]) * u;
-        *r = [0, 1, 2].map(|a| [0, 1, 2].map(|b| rm[(a, b)]));
+        *r *= u;
     }
     c.lambda = new_lambda;
 }
@@ -285,7 +279,7 @@ mod px_tests {
                 .map(|j| (0..4).map(|i| [0.01 * j as f64, 0.02 * i as f64 - 0.01 * j as f64, 0.003 * (j * i) as f64]).collect())
                 .collect();
             let before: Vec<f64> = hs.iter().map(|h| c.log_weighted_density(&c.woodbury(), h)).collect();
-            px_fold(&mut c, &[[1.0, 1e-15, 0.0], [1e-15, 1.0, -2e-15], [0.0, -2e-15, 1.0]]);
+            px_fold(&mut c, &Mat3::new(1.0, 1e-15, 0.0, 1e-15, 1.0, -2e-15, 0.0, -2e-15, 1.0));
             for (h, b) in hs.iter().zip(&before) {
                 let a = c.log_weighted_density(&c.woodbury(), h);
                 assert!((a - b).abs() < 1e-9 * b.abs().max(1.0), "{b} -> {a}, lambda {lambda:?} -> {:?}", c.lambda);
@@ -296,15 +290,13 @@ mod px_tests {
     /// R_i Λ Σ_z Λ R_i^T before the fold equals R_i' Λ'² R_i'^T after it, for every shape; R_i' are rotations.
     #[test]
     fn px_fold_moves_the_latent_covariance_into_lambda_and_r() {
-        let sz = [[0.54, -0.03, 0.02], [-0.03, 0.94, 0.006], [0.02, 0.006, 1.2]];
-        let eye = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let sz = Mat3::new(0.54, -0.03, 0.02, -0.03, 0.94, 0.006, 0.02, 0.006, 1.2);
+        let eye = Mat3::identity();
         for lambda in [[0.07, 0.02, 0.034], [0.0789, 0.0369, 0.0221], [0.05, 0.05, 0.01]] {
             let mut c = component(lambda);
             let cov = |c: &Component, i: usize, mid: &Mat3| {
-                let r = nalgebra::Matrix3::from_fn(|a, b| c.rotations[i][a][b]);
-                let l = nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::from(c.lambda));
-                let s = nalgebra::Matrix3::from_fn(|a, b| mid[a][b]);
-                r * l * s * l * r.transpose()
+                let (r, l) = (c.rotations[i], Mat3::from_diagonal(&c.lambda.into()));
+                r * l * mid * l * r.transpose()
             };
             let before: Vec<_> = (0..4).map(|i| cov(&c, i, &sz)).collect();
             px_fold(&mut c, &sz);

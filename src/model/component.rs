@@ -18,7 +18,8 @@ pub const LN_2PI: f64 = 1.837_877_066_409_345_3;
 /// isotropic variances s^i and mixing weight π.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Component {
-    /// R_k^i, one per shape, row-major.
+    /// R_k^i, one per shape (serialised as rows).
+    #[serde(with = "crate::geometry::serde_rows::vec")]
     pub rotations: Vec<Mat3>,
     /// b_k^i, one per shape.
     pub translations: Vec<Vec3>,
@@ -71,20 +72,14 @@ impl Component {
         }
         let rt_over_s: Vec<Mat3> = (0..ns)
             .map(|i| {
-                let r = &self.rotations[i];
-                let is = inv_s[i];
-                [
-                    [r[0][0] * is, r[1][0] * is, r[2][0] * is],
-                    [r[0][1] * is, r[1][1] * is, r[2][1] * is],
-                    [r[0][2] * is, r[1][2] * is, r[2][2] * is],
-                ]
+                self.rotations[i].transpose() * inv_s[i]
             })
             .collect();
         let log_norm = self.weight.ln() - 0.5 * (3.0 * ns as f64 * LN_2PI + log_det);
         let packed = (0..ns)
             .map(|i| {
                 let (b, r): (&Vec3, &Mat3) = (&self.translations[i], &rt_over_s[i]);
-                [b[0], b[1], b[2], inv_s[i], r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2]]
+                [b[0], b[1], b[2], inv_s[i], r[(0, 0)], r[(0, 1)], r[(0, 2)], r[(1, 0)], r[(1, 1)], r[(1, 2)], r[(2, 0)], r[(2, 1)], r[(2, 2)]]
             })
             .collect();
         Woodbury { packed, shrink, post_gain, post_var, log_norm }
@@ -120,9 +115,9 @@ impl Component {
         let r = &self.rotations[shape];
         let b = self.translations[shape];
         [
-            r[0][0] * v[0] + r[0][1] * v[1] + r[0][2] * v[2] + b[0],
-            r[1][0] * v[0] + r[1][1] * v[1] + r[1][2] * v[2] + b[1],
-            r[2][0] * v[0] + r[2][1] * v[1] + r[2][2] * v[2] + b[2],
+            r[(0, 0)] * v[0] + r[(0, 1)] * v[1] + r[(0, 2)] * v[2] + b[0],
+            r[(1, 0)] * v[0] + r[(1, 1)] * v[1] + r[(1, 2)] * v[2] + b[1],
+            r[(2, 0)] * v[0] + r[(2, 1)] * v[1] + r[(2, 2)] * v[2] + b[2],
         ]
     }
 }
@@ -158,7 +153,7 @@ mod tests {
         for i in 0..ns {
             for r in 0..3 {
                 for d in 0..3 {
-                    a[(3 * i + r, d)] = c.rotations[i][r][d] * c.lambda[d];
+                    a[(3 * i + r, d)] = c.rotations[i][(r, d)] * c.lambda[d];
                 }
                 phi[(3 * i + r, 3 * i + r)] = c.variances[i];
                 x[3 * i + r] = h[i][r] - c.translations[i][r];

@@ -132,22 +132,19 @@ pub fn kmeans(data: &Data, m: usize, seed: u64, restarts: usize) -> Vec<u32> {
 
 /// Symmetric 3x3 eigen-decomposition: eigenvalues descending, eigenvector matrix with det +1 (columns).
 fn principal_axes(cov: &Mat3) -> (Vec3, Mat3) {
-    let m = nalgebra::Matrix3::from_fn(|a, b| cov[a][b]);
-    let eig = m.symmetric_eigen();
+    let eig = cov.symmetric_eigen();
     let mut idx = [0usize, 1, 2];
     idx.sort_by(|&a, &b| eig.eigenvalues[b].partial_cmp(&eig.eigenvalues[a]).unwrap_or(std::cmp::Ordering::Equal));
-    let mut p = [[0.0; 3]; 3];
+    let mut p = Mat3::zeros();
     let mut vals = [0.0; 3];
     for (col, &e) in idx.iter().enumerate() {
         vals[col] = eig.eigenvalues[e];
         for r in 0..3 {
-            p[r][col] = eig.eigenvectors[(r, e)];
+            p[(r, col)] = eig.eigenvectors[(r, e)];
         }
     }
     if crate::geometry::det(&p) < 0.0 {
-        for r in 0..3 {
-            p[r][2] = -p[r][2];
-        }
+        p.column_mut(2).neg_mut();
     }
     (vals, p)
 }
@@ -170,12 +167,12 @@ pub fn component_from_points(data: &Data, members: &[usize], n_total: usize, flo
     let mut rots = vec![crate::geometry::IDENTITY; ns];
     for _ in 0..4 {
         for (i, rot) in rots.iter_mut().enumerate() {
-            let mut c = [[0.0; 3]; 3];
+            let mut c = Mat3::zeros();
             for (mm, &j) in mean.iter().zip(members) {
                 let x = pts(i, j);
                 for a in 0..3 {
                     for b in 0..3 {
-                        c[a][b] += x[a] * mm[b];
+                        c[(a, b)] += x[a] * mm[b];
                     }
                 }
             }
@@ -193,11 +190,11 @@ pub fn component_from_points(data: &Data, members: &[usize], n_total: usize, flo
         }
     }
     // principal axes of the mean shape
-    let mut cov = [[0.0; 3]; 3];
+    let mut cov = Mat3::zeros();
     for mm in &mean {
         for a in 0..3 {
             for b in 0..3 {
-                cov[a][b] += mm[a] * mm[b] / n;
+                cov[(a, b)] += mm[a] * mm[b] / n;
             }
         }
     }

@@ -174,12 +174,12 @@ pub fn best_rigid(rest: &[Vec3], pose: &[Vec3]) -> (Mat3, Vec3) {
     let n = rest.len().max(1) as f64;
     let mean = |v: &[Vec3]| v.iter().fold([0.0; 3], |a, &b| add(a, b)).map(|c| c / n);
     let (mx, my) = (mean(rest), mean(pose));
-    let mut c = [[0.0; 3]; 3];
+    let mut c = Mat3::zeros();
     for (x, y) in rest.iter().zip(pose) {
         let (dx, dy) = (sub(*x, mx), sub(*y, my));
         for a in 0..3 {
             for b in 0..3 {
-                c[a][b] += dy[a] * dx[b];
+                c[(a, b)] += dy[a] * dx[b];
             }
         }
     }
