@@ -139,7 +139,7 @@ mod tests {
                 }
             }
         }
-        // the brief's example, and what acos of the trace part gave: 1e-9 rad read as 0 or as 2.1e-8
+        // a 1e-9 rad rotation to relative 1e-6, where acos of the trace part reads 0 (or 1.5e-8 one ulp away)
         let r = axis_angle([0.3, 0.4, 0.5], 1e-9);
         assert!((angle(&r) / 1e-9 - 1.0).abs() < 1e-6);
         let acos_form = (0.5 * (r.trace() - 1.0)).clamp(-1.0, 1.0).acos();
