@@ -115,3 +115,87 @@ fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
         assert!(ari >= 0.99, "{what}: ARI {ari}");
     }
 }
+
+/// The population the Blender fixtures were made from (scripts/fixtures/make-blender-fixtures.sh).
+fn blender_source() -> posemfa::synth::Generated {
+    generate(&Spec { preset: Preset::Quadruped, vertices: 1200, poses: 6, seed: 5, ..Spec::default() }).unwrap()
+}
+
+/// glTF is Y-up: Blender writes (x, y, z) as (x, z, -y).
+fn y_up(p: [f64; 3]) -> [f64; 3] {
+    [p[0], p[2], -p[1]]
+}
+
+fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter().zip(b).map(|(p, q)| (0..3).map(|d| (p[d] - q[d]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max)
+}
+
+fn fit_summary(pop: &Population) -> (usize, f64, Vec<u32>) {
+    let r = posemfa::model::hierarchy::fit(pop, &posemfa::model::Params::default(), &mut |_| true).unwrap();
+    let rmse = r.model.rmse(pop);
+    (r.model.parts.len(), rmse, r.model.labels)
+}
+
+dual_test! {
+    /// Blender's PLY exporter (ASCII and binary) renumbers vertices by first use, so the check maps every
+    /// PLY vertex to the generator's vertex at the same position: all 1198 found, and the same triangles.
+    fn blender_ply_ascii_and_binary_load_as_the_generated_pose() {
+        let g = blender_source();
+        let pose = &g.population.shapes[0];
+        for (name, bytes, tol) in [
+            ("pose01-ascii.ply", &include_bytes!("fixtures/blender/pose01-ascii.ply")[..], 1e-6),
+            ("pose01-binary.ply", &include_bytes!("fixtures/blender/pose01-binary.ply")[..], 1e-7),
+        ] {
+            let m = posemfa::mesh::ply::parse_ply(name, bytes).unwrap();
+            assert_eq!((m.positions.len(), m.faces.len()), (pose.len(), g.population.faces.len()), "{name}");
+            let to_obj: Vec<u32> = m.positions.iter().map(|p| {
+                let (j, d) = pose.iter().enumerate().map(|(j, q)| (j, (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max)))
+                    .min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+                assert!(d <= tol, "{name}: a vertex is {d} from the nearest generated one");
+                j as u32
+            }).collect();
+            let canon = |t: [u32; 3]| { let r = t.iter().position(|&v| v == *t.iter().min().unwrap()).unwrap(); [t[r], t[(r + 1) % 3], t[(r + 2) % 3]] };
+            let mut ours: Vec<[u32; 3]> = m.faces.iter().map(|f| canon(f.map(|v| to_obj[v as usize]))).collect();
+            let mut want: Vec<[u32; 3]> = g.population.faces.iter().map(|&f| canon(f)).collect();
+            ours.sort();
+            want.sort();
+            assert_eq!(ours, want, "{name}");
+        }
+    }
+
+    /// Blender's glTF of the poses as shape keys, animated one key per frame: the animation gives the six
+    /// poses (to float precision, Y-up), and the fit matches the OBJ population's.
+    fn blender_shape_key_glb_fits_like_the_obj_population() {
+        let g = blender_source();
+        let bytes = include_bytes!("fixtures/blender/quadruped-shapekeys.glb").to_vec();
+        let pop = Population::from_files(vec![("quadruped-shapekeys.glb".into(), bytes)]).unwrap();
+        assert!(pop.source.starts_with("6 frames of animation"), "{}", pop.source);
+        assert!(pop.source.contains("24 fps"), "{}", pop.source);
+        assert_eq!((pop.n_shapes(), pop.n_vertices()), (6, 1198));
+        assert_eq!(pop.faces.len(), g.population.faces.len());
+        for (i, shape) in pop.shapes.iter().enumerate() {
+            let ours: Vec<[f64; 3]> = shape.iter().map(|&p| pop.normalization.to_original(p)).collect();
+            let want: Vec<[f64; 3]> = g.population.shapes[i].iter().map(|&p| y_up(p)).collect();
+            assert!(max_diff(&ours, &want) < 1e-6, "pose {i}: {}", max_diff(&ours, &want));
+        }
+        let (parts_obj, rmse_obj, labels_obj) = fit_summary(&g.population);
+        let (parts, rmse, labels) = fit_summary(&pop);
+        assert!(parts.abs_diff(parts_obj) <= 3, "{parts} parts, OBJ {parts_obj}");
+        assert!((rmse - rmse_obj).abs() <= 0.1 * rmse_obj, "RMSE {rmse}, OBJ {rmse_obj}");
+        assert!(posemfa::metrics::adjusted_rand_index(&labels, &labels_obj) > 0.9);
+    }
+
+    /// A skinned glTF that Blender exported with every vertex split per face corner welds back to the
+    /// generator's 1198 vertices and fits.
+    fn blender_skinned_glb_with_seams_welds_back_and_fits() {
+        let bytes = include_bytes!("fixtures/blender/quadruped-skinned-seams.glb");
+        let gl = posemfa::mesh::gltf::read("quadruped-skinned-seams.glb", bytes, &[], &Default::default()).unwrap();
+        assert!(gl.vertices_in_file > 3 * 1198, "{} vertices in the file", gl.vertices_in_file);
+        assert_eq!(gl.vertices_welded, 1198);
+        assert!(gl.source.contains(&format!("{} vertices welded to 1198", gl.vertices_in_file)), "{}", gl.source);
+        let pop = Population::from_files(vec![("quadruped-skinned-seams.glb".into(), bytes.to_vec())]).unwrap();
+        assert_eq!(pop.n_vertices(), 1198);
+        let (parts, rmse, _) = fit_summary(&pop);
+        assert!((5..=30).contains(&parts) && rmse < 0.01, "{parts} parts, RMSE {rmse}");
+    }
+}
