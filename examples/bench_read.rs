@@ -1,6 +1,6 @@
 //! Reading speed: `cargo run --release --example bench_read -- DIR_OR_FILES... [--repeat N]`.
-//! Prints JSON: bytes, files, and per repeat the time to parse every file (no population assembly) and to
-//! build the population (parse + checks + unit box).
+//! Prints JSON: files, bytes, and per repeat the time to read every file into poses with the reader its
+//! extension calls for (`mesh::load`: OBJ, PLY, glTF, point caches; no population checks or unit box).
 use std::time::Instant;
 
 fn main() {
@@ -19,6 +19,7 @@ fn main() {
         if p.is_dir() {
             let mut entries: Vec<_> = std::fs::read_dir(p).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_file()).collect();
             entries.sort();
+            entries.retain(|e| e.extension().is_some_and(|x| x != "mtl"));
             for e in entries {
                 files.push((e.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(&e).unwrap()));
             }
@@ -29,11 +30,10 @@ fn main() {
     let bytes: usize = files.iter().map(|f| f.1.len()).sum();
     let mut parse_ms = Vec::new();
     for _ in 0..repeat {
+        let input = files.clone();
         let t = Instant::now();
-        for (name, b) in &files {
-            let m = posemfa::mesh::obj::parse_obj(name, b).unwrap();
-            std::hint::black_box(m);
-        }
+        let loaded = posemfa::mesh::load::load(input).unwrap_or_else(|e| panic!("{e:?}"));
+        std::hint::black_box(loaded);
         parse_ms.push(t.elapsed().as_secs_f64() * 1e3);
     }
     parse_ms.sort_by(|a, b| a.partial_cmp(b).unwrap());

@@ -328,6 +328,8 @@ fn names(cmds: &[Command]) -> String {
 struct FitArgs {
     inputs: Vec<String>,
     params: Params,
+    /// Choices for glTF inputs.
+    gltf: posemfa::mesh::gltf::Options,
 }
 
 trait HasFit {
@@ -380,6 +382,23 @@ fn fit_group<T: HasFit>() -> Group<T> {
                 |o: &mut T, v| num(v).map(|n| o.fit().params.refine_tol = n),
             ),
             flag("--no-refine", "stop after the coarse AECM", |o: &mut T| o.fit().params.refine = false),
+            val("--mesh", "NAME", "glTF input: the mesh (name or index; default the one with most vertices)", |o: &mut T, v| {
+                text(&mut o.fit().gltf.mesh, v)
+            }),
+            val("--animation", "NAME", "glTF input: the animation (name or index; default the one with most keyframes)", |o: &mut T, v| {
+                text(&mut o.fit().gltf.animation, v)
+            }),
+            val("--frames", "N", "glTF input: sample the animation at N evenly spaced times (default: its keyframes)", |o: &mut T, v| {
+                num(v).map(|n| o.fit().gltf.frames = Some(n))
+            }),
+            val("--poses-from", "WHAT", "glTF input: animation or morph-targets (default: the animation if one moves the mesh)", |o: &mut T, v| {
+                o.fit().gltf.source = match v {
+                    "animation" => posemfa::mesh::gltf::PoseSource::Animation,
+                    "morph-targets" => posemfa::mesh::gltf::PoseSource::MorphTargets,
+                    _ => return Err(format!("--poses-from takes animation or morph-targets, not '{v}'")),
+                };
+                Ok(())
+            }),
         ],
     }
 }
@@ -391,7 +410,7 @@ impl FitArgs {
             return Err("no input: give a folder of OBJ files, the files, or synth:PRESET".into());
         }
         self.params.validate().map_err(|e| e.to_string())?;
-        load_inputs(&self.inputs)
+        load_inputs(&self.inputs, &self.gltf)
     }
 }
 
@@ -586,6 +605,8 @@ fn cmd_fit(o: FitRun) -> Result<(), String> {
     );
     if let Some(g) = &truth {
         out!("  ground truth: {}", ground_truth_json(g, m));
+    } else {
+        out!("  poses: {}", pop.source);
     }
     for st in &result.stats {
         out!("  {:<7} {:>8.1} ms  {:>5} iterations in {:>3} AECM runs", st.name, st.ms, st.iterations, st.aecm_runs);
@@ -673,7 +694,10 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 /// A folder / files, or `synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]]` (a generated population with its truth).
-fn load_inputs(inputs: &[String]) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
+fn load_inputs(
+    inputs: &[String],
+    gltf: &posemfa::mesh::gltf::Options,
+) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
     if let [one] = inputs {
         if let Some(rest) = one.strip_prefix("synth:") {
             let mut it = rest.split(':');
@@ -704,7 +728,7 @@ fn load_inputs(inputs: &[String]) -> Result<(Population, Option<posemfa::synth::
             return Ok((g.population.clone(), Some(g)));
         }
     }
-    Ok((Population::from_paths(inputs).map_err(|e| e.to_string())?, None))
+    Ok((Population::from_paths_with(inputs, gltf).map_err(|e| e.to_string())?, None))
 }
 
 fn preset(name: &str) -> Result<posemfa::synth::Preset, String> {
@@ -730,6 +754,7 @@ fn ground_truth_json(g: &posemfa::synth::Generated, m: &posemfa::model::Model) -
 #[derive(Default)]
 struct GenerateArgs {
     spec: posemfa::synth::Spec,
+    format: Option<String>,
     preset_given: bool,
     out: Option<String>,
 }
@@ -740,9 +765,18 @@ impl Args for GenerateArgs {
             title: "generate options",
             shared: false,
             opts: vec![
-                val("--out", "DIR", "folder to write the OBJ files to (required)", |o: &mut Self, v| {
+                val("--out", "DIR", "folder to write the files to (required)", |o: &mut Self, v| {
                     text(&mut o.out, v)
                 }),
+                val(
+                    "--format",
+                    "F",
+                    "obj (default), ply (binary, float32), ply-ascii, pc2 (one point cache + rest.obj)",
+                    |o: &mut Self, v| match v {
+                        "obj" | "ply" | "ply-ascii" | "pc2" => text(&mut o.format, v),
+                        _ => Err(format!("--format takes obj, ply, ply-ascii or pc2, not '{v}'")),
+                    },
+                ),
                 val("--vertices", "N", "vertex count (default 10000)", |o: &mut Self, v| {
                     num(v).map(|n| o.spec.vertices = n)
                 }),
@@ -777,9 +811,28 @@ fn cmd_generate(a: GenerateArgs) -> Result<(), String> {
     let out_dir = a.out.ok_or("generate needs --out DIR")?;
     let g = posemfa::synth::generate(&a.spec).map_err(|e| e.to_string())?;
     std::fs::create_dir_all(&out_dir).map_err(|e| format!("cannot create {out_dir}: {e}"))?;
-    for (name, text) in posemfa::synth::obj_files(&g) {
+    let pop = &g.population;
+    let files: Vec<(String, Vec<u8>)> = match a.format.as_deref().unwrap_or("obj") {
+        "obj" => posemfa::synth::obj_files(&g).into_iter().map(|(n, t)| (n, t.into_bytes())).collect(),
+        "pc2" => {
+            let rest = posemfa::export::obj::write_obj(&pop.shapes[0], &pop.faces, "faces for poses.pc2 (pose 1)");
+            vec![("rest.obj".into(), rest.into_bytes()), ("poses.pc2".into(), posemfa::mesh::cache::write_pc2(&pop.shapes))]
+        }
+        f => {
+            let fmt = if f == "ply" { posemfa::export::ply::PlyFormat::Binary } else { posemfa::export::ply::PlyFormat::Ascii };
+            pop.names
+                .iter()
+                .zip(&pop.shapes)
+                .map(|(n, s)| {
+                    let comment = format!("posemfa synthetic population: preset {}, {n}", a.spec.preset.name());
+                    (n.replace(".obj", ".ply"), posemfa::export::ply::write_ply(s, &pop.faces, fmt, &comment))
+                })
+                .collect()
+        }
+    };
+    for (name, bytes) in files {
         let path = std::path::Path::new(&out_dir).join(&name);
-        std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        std::fs::write(&path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
     out!(
         "wrote {} poses of the {} ({} vertices, {} parts) to {out_dir}",

@@ -19,6 +19,8 @@ pub struct PartJson {
 #[derive(Serialize)]
 pub struct FitJson {
     pub shapes: Vec<String>,
+    /// Where the shapes came from ("11 OBJ files", "49 frames of animation 'Gallop' ... in horse.glb; ...").
+    pub source: String,
     pub n_vertices: usize,
     pub normalization: Normalization,
     pub labels: Vec<u32>,
@@ -52,6 +54,7 @@ impl FitJson {
         timings_ms.insert("total".into(), total);
         FitJson {
             shapes: pop.names.clone(),
+            source: pop.source.clone(),
             n_vertices: m.n_vertices,
             normalization: pop.normalization,
             labels: m.labels.clone(),

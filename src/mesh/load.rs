@@ -75,6 +75,11 @@ fn set_error(file: &str, message: String) -> Vec<Error> {
 /// Reads a set of files into poses. Errors: every file's error (per-pose files), or the one that stops the
 /// set (a cache without a base mesh, two glTF files, ...).
 pub fn load(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Loaded, Vec<Error>> {
+    load_with(files, &gltf::Options::default())
+}
+
+/// [`load`] with choices for glTF files (which mesh, which animation, how many frames, which poses).
+pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std::result::Result<Loaded, Vec<Error>> {
     let kinds: Vec<FileKind> = files.iter().map(|(n, _)| FileKind::of(n)).collect();
     let count = |k: &[FileKind]| kinds.iter().filter(|x| k.contains(x)).count();
     let n_cache = count(&[FileKind::Pc2, FileKind::Mdd]);
@@ -106,7 +111,7 @@ pub fn load(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Loaded, Vec<Er
         }
         .map_err(|e| vec![e])?;
         let (base_name, base) = if n_gltf == 1 {
-            let g = gltf::load_files(&files, &gltf::Options::default())?;
+            let g = gltf::load_files(&files, options)?;
             let base = g.poses.into_iter().next().map(|(_, m)| m).ok_or_else(Vec::new)?;
             (g.file, base)
         } else {
@@ -146,7 +151,7 @@ pub fn load(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Loaded, Vec<Er
                     .into(),
             ));
         }
-        let g = gltf::load_files(&files, &gltf::Options::default())?;
+        let g = gltf::load_files(&files, options)?;
         return Ok(Loaded { poses: g.poses, source: g.source });
     }
     let mut poses = Vec::with_capacity(n_mesh);

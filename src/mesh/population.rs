@@ -223,7 +223,15 @@ impl Population {
     }
 
     fn from_loaded(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
-        let loaded = super::load::load(files)?;
+        Population::from_files_with(files, &super::gltf::Options::default())
+    }
+
+    /// Reads the files as [`Population::from_files_all_errors`] does, with choices for glTF files.
+    pub fn from_files_with(
+        files: Vec<(String, Vec<u8>)>,
+        options: &super::gltf::Options,
+    ) -> std::result::Result<Population, Vec<Error>> {
+        let loaded = super::load::load_with(files, options)?;
         let mut population = Population::from_meshes(loaded.poses).map_err(|e| vec![e])?;
         population.source = loaded.source;
         Ok(population)
@@ -249,6 +257,11 @@ impl Population {
     /// case) or an explicit list of files.
     // (compiles on wasm32 too, where std::fs reports "unsupported" at run time)
     pub fn from_paths<P: AsRef<std::path::Path>>(paths: &[P]) -> Result<Population> {
+        Population::from_paths_with(paths, &super::gltf::Options::default())
+    }
+
+    /// [`Population::from_paths`] with choices for glTF files.
+    pub fn from_paths_with<P: AsRef<std::path::Path>>(paths: &[P], options: &super::gltf::Options) -> Result<Population> {
         let mut files = Vec::new();
         for p in paths {
             let p = p.as_ref();
@@ -279,7 +292,14 @@ impl Population {
             let name = f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
             loaded.push((name, bytes));
         }
-        Population::from_files(loaded)
+        loaded.sort_by(|a, b| natural_cmp(&a.0, &b.0));
+        Population::from_files_with(loaded, options).map_err(|mut e| {
+            if e.is_empty() {
+                Error::Io("no files were given".into())
+            } else {
+                e.swap_remove(0)
+            }
+        })
     }
 }
 
