@@ -3,6 +3,24 @@
 
 const fmt = (v) => (Math.abs(v) >= 1e5 || (Math.abs(v) < 1e-2 && v !== 0) ? v.toExponential(3) : v.toFixed(2));
 
+/** The canvas sized to its box at the device's pixel ratio, cleared, with the page's font and colour set:
+ *  { g, w, h, style } (w, h in CSS pixels), or null while it has no size. Shared by every 2D plot of the page and article. */
+export function clearedCanvas(c) {
+  const dpr = window.devicePixelRatio || 1;
+  const w = c.clientWidth;
+  const h = c.clientHeight;
+  if (!w || !h) return null;
+  c.width = Math.round(w * dpr);
+  c.height = Math.round(h * dpr);
+  const g = c.getContext('2d');
+  g.setTransform(dpr, 0, 0, dpr, 0, 0);
+  g.clearRect(0, 0, w, h);
+  const style = getComputedStyle(c);
+  g.font = `11px ${style.fontFamily}`;
+  g.fillStyle = style.color;
+  return { g, w, h, style };
+}
+
 export class Plot {
   constructor(canvas) {
     this.canvas = canvas;
@@ -21,19 +39,9 @@ export class Plot {
   }
 
   draw() {
-    const c = this.canvas;
-    const dpr = window.devicePixelRatio || 1;
-    const w = c.clientWidth;
-    const h = c.clientHeight;
-    if (!w || !h) return;
-    c.width = Math.round(w * dpr);
-    c.height = Math.round(h * dpr);
-    const g = c.getContext('2d');
-    g.setTransform(dpr, 0, 0, dpr, 0, 0);
-    g.clearRect(0, 0, w, h);
-    const style = getComputedStyle(c);
-    g.font = `11px ${style.fontFamily}`;
-    g.fillStyle = style.color;
+    const surface = clearedCanvas(this.canvas);
+    if (!surface) return;
+    const { g, w, h, style } = surface;
     g.fillText(this.title, 4, 12);
     const v = this.values;
     if (v.length === 0) {

@@ -1,6 +1,8 @@
 // A small line chart for the article's figures: several series on one 2D canvas with shared axes, optional
 // markers (e.g. the iterations where a log-likelihood fell). Draws only what it is given.
 
+import { clearedCanvas } from '../plot.js';
+
 const fmt = (v) => (Math.abs(v) >= 1e5 || (Math.abs(v) < 1e-2 && v !== 0) ? v.toExponential(2) : v.toFixed(2));
 
 export class Chart {
@@ -19,19 +21,9 @@ export class Chart {
   }
 
   draw() {
-    const c = this.canvas;
-    const dpr = window.devicePixelRatio || 1;
-    const w = c.clientWidth;
-    const h = c.clientHeight;
-    if (!w || !h) return;
-    c.width = Math.round(w * dpr);
-    c.height = Math.round(h * dpr);
-    const g = c.getContext('2d');
-    g.setTransform(dpr, 0, 0, dpr, 0, 0);
-    g.clearRect(0, 0, w, h);
-    const style = getComputedStyle(c);
-    g.font = `11px ${style.fontFamily}`;
-    g.fillStyle = style.color;
+    const surface = clearedCanvas(this.canvas);
+    if (!surface) return;
+    const { g, w, h, style } = surface;
     const pts = this.series.flatMap((s) => s.values.map((v, i) => [s.xs ? s.xs[i] : i + 1, v])).filter(([x, y]) => Number.isFinite(x) && Number.isFinite(y));
     const { xLabel = 'iteration', yLabel = 'log-likelihood' } = this.opts;
     g.fillText(yLabel, 4, 11);
