@@ -271,9 +271,16 @@ fn commands() -> Vec<Command> {
         command::<GltfArgs>(
             "export-gltf",
             "DIR_OR_FILES... --out model.glb [options]",
-            "fit, then write binary glTF 2.0: mesh bound in one pose's rigid reconstruction, skeleton, skin,\n    \
-             clips \"training poses\" (one pose per second) and \"interpolated\"",
+            "fit, then write binary glTF 2.0: mesh bound in one pose, skeleton, skin (rigid, smooth or fitted\n    \
+             weights), clips \"training poses\" (one pose per second) and \"interpolated\" (rigid/smooth, free joints)",
             cmd_export_gltf,
+        ),
+        command::<RigReportArgs>(
+            "rig-report",
+            "DIR_OR_FILES... [--glb FILE.glb] [options]",
+            "fit, build and write the rig, then play its .glb's \"training poses\" clip by linear blend skinning and\n    \
+             print E_RMS (Kavan et al. 2010), max error, per-pose errors and time per stage as JSON",
+            cmd_rig_report,
         ),
         command::<ReportArgs>(
             "articulate-report",
@@ -435,6 +442,32 @@ fn band_group<T: HasBand>() -> Group<T> {
 /// For an articulation subcommand's arguments (fields `fit` and `band`, options in `options()`): `HasFit`,
 /// `HasBand`, and `Args` with its own options, then the articulation and fit options; words are inputs.
 macro_rules! articulation_args {
+    ($t:ty, rig) => {
+        impl HasFit for $t {
+            fn fit(&mut self) -> &mut FitArgs {
+                &mut self.fit
+            }
+        }
+        impl HasBand for $t {
+            fn band(&mut self) -> &mut Option<f64> {
+                &mut self.band
+            }
+        }
+        impl HasRig for $t {
+            fn rig(&mut self) -> &mut RigArgs {
+                &mut self.rig
+            }
+        }
+        impl Args for $t {
+            fn groups() -> Vec<Group<Self>> {
+                vec![<$t>::options(), rig_group(), band_group(), fit_group()]
+            }
+            fn positional(&mut self, word: String) -> Result<(), String> {
+                self.fit.inputs.push(word);
+                Ok(())
+            }
+        }
+    };
     ($t:ty) => {
         impl HasFit for $t {
             fn fit(&mut self) -> &mut FitArgs {
@@ -975,16 +1008,118 @@ fn cmd_interpolate(a: InterpolateArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// The rig a .glb carries: export-gltf and rig-report.
+#[derive(Default)]
+struct RigArgs {
+    weights: Weights,
+    influences: Option<usize>,
+    joints: posemfa::export::gltf::Joints,
+    morphs: posemfa::export::gltf::Morphs,
+    bind: Option<usize>,
+}
+
+trait HasRig {
+    fn rig(&mut self) -> &mut RigArgs;
+}
+
+fn rig_group<T: HasRig>() -> Group<T> {
+    use posemfa::export::gltf::{Joints, Morphs};
+    Group {
+        title: "rig options",
+        shared: true,
+        opts: vec![
+            val(
+                "--weights",
+                "rigid|smooth|fitted",
+                "skin weights: rigid (default), smooth (a prior) or fitted (SSDR against every pose)",
+                |o: &mut T, v| {
+                    o.rig().weights = match v {
+                        "rigid" => Weights::Rigid,
+                        "smooth" => Weights::Smooth,
+                        "fitted" => Weights::Fitted,
+                        _ => return Err(format!("'{v}': use rigid, smooth or fitted")),
+                    };
+                    Ok(())
+                },
+            ),
+            val("--influences", "K", "most joints per vertex, 1 to 8 (default 4; JOINTS_1 past 4)", |o: &mut T, v| {
+                num(v).map(|n| o.rig().influences = Some(n))
+            }),
+            val(
+                "--joints",
+                "free|fixed",
+                "free (default: bones move freely) or fixed (rotation-only local animation, constant bone lengths)",
+                |o: &mut T, v| {
+                    o.rig().joints = match v {
+                        "free" => Joints::Free,
+                        "fixed" => Joints::Fixed,
+                        _ => return Err(format!("'{v}': use free or fixed")),
+                    };
+                    Ok(())
+                },
+            ),
+            val(
+                "--morphs",
+                "none|residual",
+                "none (default) or residual: one morph target per pose, so the clip reproduces every pose",
+                |o: &mut T, v| {
+                    o.rig().morphs = match v {
+                        "none" => Morphs::None,
+                        "residual" => Morphs::Residual,
+                        _ => return Err(format!("'{v}': use none or residual")),
+                    };
+                    Ok(())
+                },
+            ),
+            val(
+                "--bind",
+                "N",
+                "pose the mesh is bound in (default: the file named reference.obj if any, else 1)",
+                |o: &mut T, v| pose_number(v).map(|n| o.rig().bind = Some(n)),
+            ),
+        ],
+    }
+}
+
+impl RigArgs {
+    /// The export options for this population.
+    fn options(&self, pop: &Population) -> Result<posemfa::export::gltf::GltfOptions, String> {
+        let bind = match self.bind {
+            Some(_) => pose_index("--bind", self.bind, pop.n_shapes())?,
+            None => default_bind(pop),
+        };
+        let mut g = posemfa::export::gltf::GltfOptions {
+            weights: self.weights,
+            joints: self.joints,
+            morphs: self.morphs,
+            bind_pose: bind,
+            ..Default::default()
+        };
+        if let Some(k) = self.influences {
+            g.influences = k;
+        }
+        g.rig_options().validate(pop.n_shapes()).map_err(|e| e.to_string())?;
+        Ok(g)
+    }
+}
+
+/// The pose a rig is bound in by default: the file whose name (without extension) is `reference`, else the first.
+fn default_bind(pop: &Population) -> usize {
+    pop.names
+        .iter()
+        .position(|n| std::path::Path::new(n).file_stem().is_some_and(|s| s.eq_ignore_ascii_case("reference")))
+        .unwrap_or(0)
+}
+
 #[derive(Default)]
 struct GltfArgs {
     fit: FitArgs,
     band: Option<f64>,
+    rig: RigArgs,
     out: Option<String>,
-    weights: Weights,
-    bind: Option<usize>,
     samples: Option<usize>,
 }
-articulation_args!(GltfArgs);
+articulation_args!(GltfArgs, rig);
 
 impl GltfArgs {
     fn options() -> Group<Self> {
@@ -993,17 +1128,6 @@ impl GltfArgs {
             shared: false,
             opts: vec![
                 val("--out", "model.glb", "file to write (required)", |o: &mut Self, v| text(&mut o.out, v)),
-                val("--weights", "rigid|smooth", "skin weights: rigid (default) or smooth", |o: &mut Self, v| {
-                    o.weights = match v {
-                        "rigid" => Weights::Rigid,
-                        "smooth" => Weights::Smooth,
-                        _ => return Err(format!("'{v}': use rigid or smooth")),
-                    };
-                    Ok(())
-                }),
-                val("--bind", "N", "pose the mesh is bound in (default 1)", |o: &mut Self, v| {
-                    pose_number(v).map(|n| o.bind = Some(n))
-                }),
                 val(
                     "--samples",
                     "N",
@@ -1017,17 +1141,105 @@ impl GltfArgs {
 
 fn cmd_export_gltf(a: GltfArgs) -> Result<(), String> {
     let out = a.out.clone().ok_or("export-gltf: --out is required")?;
-    let mut g = posemfa::export::gltf::GltfOptions { weights: a.weights, ..Default::default() };
+    let (pop, art) = articulate_fit(&a.fit, a.band)?;
+    let mut g = a.rig.options(&pop)?;
     if let Some(s) = a.samples {
         g.samples_per_second = s;
-    }
-    let (pop, art) = articulate_fit(&a.fit, a.band)?;
-    if a.bind.is_some() {
-        g.bind_pose = pose_index("--bind", a.bind, pop.n_shapes())?;
     }
     let glb = posemfa::export::gltf::to_glb(&art, &g).map_err(|e| e.to_string())?;
     std::fs::write(&out, &glb).map_err(|e| format!("cannot write {out}: {e}"))?;
     out!("wrote {out} ({} bytes, {} parts, {} poses)", glb.len(), art.graph.used_parts().len(), pop.n_shapes());
+    Ok(())
+}
+
+#[derive(Default)]
+struct RigReportArgs {
+    fit: FitArgs,
+    band: Option<f64>,
+    rig: RigArgs,
+    glb: Option<String>,
+    out: Option<String>,
+}
+articulation_args!(RigReportArgs, rig);
+
+impl RigReportArgs {
+    fn options() -> Group<Self> {
+        Group {
+            title: "rig-report options",
+            shared: false,
+            opts: vec![
+                val(
+                    "--glb",
+                    "FILE.glb",
+                    "measure this .glb (written by export-gltf from the same files) instead of fitting one",
+                    |o: &mut Self, v| text(&mut o.glb, v),
+                ),
+                val("--out", "rig.glb", "also write the .glb that was measured", |o: &mut Self, v| text(&mut o.out, v)),
+            ],
+        }
+    }
+}
+
+fn cmd_rig_report(a: RigReportArgs) -> Result<(), String> {
+    use posemfa::export::gltf::{play_glb, to_glb};
+    use posemfa::export::rig_report::rig_error;
+    let ms = |t: std::time::Instant| t.elapsed().as_secs_f64() * 1e3;
+    let t_all = std::time::Instant::now();
+    let mut timings = serde_json::Map::new();
+    let t = std::time::Instant::now();
+    let (pop, _truth) = a.fit.load()?;
+    timings.insert("read".into(), ms(t).into());
+    let mut info = serde_json::Map::new();
+    let glb = match &a.glb {
+        Some(file) => {
+            let glb = std::fs::read(file).map_err(|e| format!("cannot read {file}: {e}"))?;
+            info.insert("glb".into(), file.clone().into());
+            glb
+        }
+        None => {
+            let t = std::time::Instant::now();
+            let result = run_fit(&a.fit.params, &pop, true)?;
+            timings.insert("fit".into(), ms(t).into());
+            let t = std::time::Instant::now();
+            let band = a.band.unwrap_or(posemfa::articulate::skin::DEFAULT_BAND);
+            let art = posemfa::articulate::Articulation::with_band(&result.model, &pop, band).map_err(|e| e.to_string())?;
+            timings.insert("articulate".into(), ms(t).into());
+            let g = a.rig.options(&pop)?;
+            let t = std::time::Instant::now();
+            let rig = posemfa::articulate::rig::build(&art, &g.rig_options()).map_err(|e| e.to_string())?;
+            timings.insert("rig".into(), ms(t).into());
+            let t = std::time::Instant::now();
+            let glb = posemfa::export::gltf::write_glb(&art, &rig, &g).map_err(|e| e.to_string())?;
+            timings.insert("write".into(), ms(t).into());
+            let _ = to_glb;
+            info.insert("options".into(), serde_json::to_value(g).unwrap_or_default());
+            info.insert("parts".into(), result.model.n_parts().into());
+            info.insert("islands".into(), posemfa::model::islands::island_count(&result.model.labels, &pop.faces).into());
+            info.insert("solver_trace".into(), rig.trace.clone().into());
+            glb
+        }
+    };
+    if let Some(out) = &a.out {
+        std::fs::write(out, &glb).map_err(|e| format!("cannot write {out}: {e}"))?;
+    }
+    let t = std::time::Instant::now();
+    let play = play_glb(&glb).map_err(|e| e.to_string())?;
+    let err = rig_error(&pop, &play).map_err(|e| e.to_string())?;
+    timings.insert("evaluate".into(), ms(t).into());
+    timings.insert("total".into(), ms(t_all).into());
+    let bind = match a.rig.bind {
+        Some(_) => pose_index("--bind", a.rig.bind, pop.n_shapes())?,
+        None => default_bind(&pop),
+    };
+    let mut json = serde_json::to_value(&err).map_err(|e| e.to_string())?;
+    if let Some(m) = json.as_object_mut() {
+        m.insert("bones".into(), play.joint_parent.len().into());
+        m.insert("rest".into(), pop.names[bind].clone().into());
+        m.insert("bytes".into(), glb.len().into());
+        m.insert("timings_ms".into(), timings.into());
+        m.extend(info);
+    }
+    out!("{json}");
     Ok(())
 }
 

@@ -21,8 +21,9 @@
 //! Positions are in the population's original units. [`check_glb`] reads a .glb back and evaluates its
 //! training clip at every keyframe from the stored numbers.
 
-use crate::articulate::graph::{Tree, TreeRule};
-use crate::articulate::{Articulation, Options, RigidMotion, Skin};
+use crate::articulate::graph::Tree;
+use crate::articulate::rig::{Rig, RigOptions};
+use crate::articulate::{Articulation, Options, RigidMotion};
 use crate::error::{Error, Result};
 use crate::geometry::rotation::to_quat;
 use crate::geometry::{mat_mul, mat_vec, sub, Mat3, Vec3};
@@ -30,15 +31,21 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use serde::Serialize;
 
-/// Which skinning weights the file carries.
+/// Which skinning weights the file carries (rigid, smooth, or fitted: [`crate::articulate::rig`]).
+pub use crate::articulate::rig::RigWeights as Weights;
+pub use crate::articulate::rig::Joints;
+
+/// Morph targets of the file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Weights {
-    /// Each vertex on its part (one joint, weight 1). Default.
+pub enum Morphs {
+    /// The pure rig. Default.
     #[default]
-    Rigid,
-    /// The articulation's smooth weights (up to 4 joints per vertex).
-    Smooth,
+    None,
+    /// One morph target per training pose, driven by the `training poses` clip's `weights` channel (1 at its
+    /// own keyframe, 0 elsewhere): what linear blend skinning leaves of that pose, so the clip reproduces
+    /// every training pose.
+    Residual,
 }
 
 /// Export options. Defaults in each field's doc.
@@ -47,6 +54,12 @@ pub enum Weights {
 pub struct GltfOptions {
     /// Default [`Weights::Rigid`].
     pub weights: Weights,
+    /// Most joints per vertex, 1..=8 (JOINTS_0/WEIGHTS_0, and JOINTS_1/WEIGHTS_1 past 4). Default 4.
+    pub influences: usize,
+    /// Default [`Joints::Free`].
+    pub joints: Joints,
+    /// Default [`Morphs::None`].
+    pub morphs: Morphs,
     /// Training shape the mesh is bound in (0-based). Default 0.
     pub bind_pose: usize,
     /// Samples per second (per pair of consecutive poses) of the `interpolated` clip, at least 1. Default 10.
@@ -57,7 +70,22 @@ pub struct GltfOptions {
 
 impl Default for GltfOptions {
     fn default() -> GltfOptions {
-        GltfOptions { weights: Weights::Rigid, bind_pose: 0, samples_per_second: 10, interpolation: Options::default() }
+        GltfOptions {
+            weights: Weights::Rigid,
+            influences: 4,
+            joints: Joints::Free,
+            morphs: Morphs::None,
+            bind_pose: 0,
+            samples_per_second: 10,
+            interpolation: Options::default(),
+        }
+    }
+}
+
+impl GltfOptions {
+    /// The rig these options ask for.
+    pub fn rig_options(&self) -> RigOptions {
+        RigOptions { weights: self.weights, influences: self.influences, joints: self.joints, bind_pose: self.bind_pose, ..RigOptions::default() }
     }
 }
 
@@ -148,20 +176,10 @@ impl Bin {
     }
 }
 
-/// Local transforms (translation, rotation quaternion xyzw) of every joint of `tree` for world part
-/// motions `motions` (latent -> unit box): the root relative to the `skeleton` node, every other joint
+/// Local transforms (translation, rotation quaternion xyzw) of every joint of `tree` from world joint
+/// motions `world` (joint frame -> unit box): the root relative to the `skeleton` node, every other joint
 /// relative to its parent joint.
-fn locals(art: &Articulation, tree: &Tree, motions: &[RigidMotion]) -> Vec<(Vec3, [f64; 4])> {
-    let world: Vec<RigidMotion> = (0..art.n_parts())
-        .map(|k| {
-            if tree.contains(k) {
-                let m = &motions[k];
-                RigidMotion { rotation: m.rotation, translation: m.apply(art.node_offset(tree, k)) }
-            } else {
-                RigidMotion::IDENTITY
-            }
-        })
-        .collect();
+fn locals(tree: &Tree, world: &[RigidMotion]) -> Vec<(Vec3, [f64; 4])> {
     tree.order
         .iter()
         .map(|&k| {
@@ -175,16 +193,28 @@ fn locals(art: &Articulation, tree: &Tree, motions: &[RigidMotion]) -> Vec<(Vec3
         .collect()
 }
 
-/// The .glb bytes (module doc).
+/// The .glb bytes (module doc): builds the rig ([`crate::articulate::rig::build`]) and writes it.
 pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
+    let rig = crate::articulate::rig::build(art, &opts.rig_options())?;
+    write_glb(art, &rig, opts)
+}
+
+/// Joint placement in the bind pose of every part: rotation of the part's MFA motion into the bind pose,
+/// origin at the rig's joint point.
+fn bind_placements(art: &Articulation, rig: &Rig, bind: usize) -> Vec<RigidMotion> {
+    (0..art.n_parts())
+        .map(|k| RigidMotion { rotation: art.training_motion(k, bind).rotation, translation: rig.joint_points[k] })
+        .collect()
+}
+
+/// Writes a rig built from `art` (its bind pose, weights and bones) as a .glb (module doc).
+pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Vec<u8>> {
     let ns = art.n_shapes();
-    if opts.bind_pose >= ns {
-        return Err(Error::Request(format!("bind pose {} (0-based): the population has {ns} poses", opts.bind_pose)));
-    }
+    opts.rig_options().validate(ns)?;
     if opts.samples_per_second == 0 {
         return Err(Error::Params("samples per second must be at least 1".into()));
     }
-    let tree = art.graph.tree(art.anchor, TreeRule::Strongest);
+    let tree = &rig.tree;
     let n_joints = tree.order.len();
     let mut joint_of_part = vec![u32::MAX; art.n_parts()];
     for (slot, &k) in tree.order.iter().enumerate() {
@@ -194,11 +224,7 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
     let mut bin = Bin { data: Vec::new(), views: Vec::new(), accessors: Vec::new() };
 
     // Mesh.
-    let bind_unit = match opts.weights {
-        Weights::Rigid => &art.rigid[opts.bind_pose],
-        Weights::Smooth => &art.shapes[opts.bind_pose],
-    };
-    let positions: Vec<f32> = art.to_original(bind_unit).iter().flat_map(|p| p.map(|c| c as f32)).collect();
+    let positions: Vec<f32> = art.to_original(&rig.rest).iter().flat_map(|p| p.map(|c| c as f32)).collect();
     let pos_acc = bin.floats(&positions, json::accessor::Type::Vec3, 3, true, Some(json::buffer::Target::ArrayBuffer), "POSITION");
     let indices: Vec<u8> = art.faces.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
     let idx_acc = bin.accessor(
@@ -210,47 +236,82 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
         None,
         "indices",
     );
-    let weights = art
-        .weights(match opts.weights {
-            Weights::Rigid => Skin::Rigid,
-            Weights::Smooth => Skin::Smooth,
-        })
-        .capped(crate::articulate::skin::GLTF_INFLUENCES);
-    let mut joint_idx: Vec<u16> = Vec::with_capacity(art.n_vertices() * 4);
-    let mut joint_w: Vec<f32> = Vec::with_capacity(art.n_vertices() * 4);
+    let weights = rig.weights.capped(opts.influences);
+    let sets = opts.influences.div_ceil(4);
+    let slots_per_vertex = 4 * sets;
+    let mut joint_idx: Vec<u16> = Vec::with_capacity(art.n_vertices() * slots_per_vertex);
+    let mut joint_w: Vec<f32> = Vec::with_capacity(art.n_vertices() * slots_per_vertex);
     for v in 0..art.n_vertices() {
+        if weights.influences(v).any(|(k, _)| joint_of_part[k] == u32::MAX) {
+            return Err(Error::Data(format!("vertex {v} is weighted to a part outside the skeleton")));
+        }
         let mut slots: Vec<(u16, f32)> = weights.influences(v).map(|(k, w)| (joint_of_part[k] as u16, w as f32)).collect();
         // normalise in f32: the heaviest takes the rounding
         let rest: f32 = slots[1..].iter().map(|s| s.1).sum();
         slots[0].1 = 1.0 - rest;
-        slots.resize(4, (0, 0.0));
+        slots.resize(slots_per_vertex, (0, 0.0));
         for (j, w) in slots {
             joint_idx.push(j);
             joint_w.push(w);
         }
     }
-    let (joints_bytes, joints_type) = if n_joints <= 256 {
-        (joint_idx.iter().map(|&j| j as u8).collect::<Vec<u8>>(), json::accessor::ComponentType::U8)
-    } else {
-        (joint_idx.iter().flat_map(|j| j.to_le_bytes()).collect(), json::accessor::ComponentType::U16)
-    };
-    let joints_acc = bin.accessor(
-        &joints_bytes,
-        Some(json::buffer::Target::ArrayBuffer),
-        art.n_vertices(),
-        joints_type,
-        json::accessor::Type::Vec4,
-        None,
-        "JOINTS_0",
-    );
-    let weights_acc = bin.floats(&joint_w, json::accessor::Type::Vec4, 4, false, Some(json::buffer::Target::ArrayBuffer), "WEIGHTS_0");
+    let mut skin_attrs = Vec::new();
+    for set in 0..sets {
+        let pick = |v: usize, s: usize| v * slots_per_vertex + 4 * set + s;
+        let idx: Vec<u16> = (0..art.n_vertices()).flat_map(|v| (0..4).map(move |s| (v, s))).map(|(v, s)| joint_idx[pick(v, s)]).collect();
+        let wts: Vec<f32> = (0..art.n_vertices()).flat_map(|v| (0..4).map(move |s| (v, s))).map(|(v, s)| joint_w[pick(v, s)]).collect();
+        let (joints_bytes, joints_type) = if n_joints <= 256 {
+            (idx.iter().map(|&j| j as u8).collect::<Vec<u8>>(), json::accessor::ComponentType::U8)
+        } else {
+            (idx.iter().flat_map(|j| j.to_le_bytes()).collect(), json::accessor::ComponentType::U16)
+        };
+        let joints_acc = bin.accessor(
+            &joints_bytes,
+            Some(json::buffer::Target::ArrayBuffer),
+            art.n_vertices(),
+            joints_type,
+            json::accessor::Type::Vec4,
+            None,
+            &format!("JOINTS_{set}"),
+        );
+        let weights_acc =
+            bin.floats(&wts, json::accessor::Type::Vec4, 4, false, Some(json::buffer::Target::ArrayBuffer), &format!("WEIGHTS_{set}"));
+        skin_attrs.push((set as u32, joints_acc, weights_acc));
+    }
 
-    // Inverse bind matrices: (G_k^bind)^-1 x (x -> (x - offset) * scale).
-    let bind_motions: Vec<RigidMotion> = (0..art.n_parts()).map(|k| art.training_motion(k, opts.bind_pose)).collect();
+    // Morph targets: per training pose the bind-space displacement that linear blend skinning carries onto
+    // the pose exactly: d = L⁻¹ (v - c) - u with L, c the vertex's blended linear part and translation.
+    let mut targets = Vec::new();
+    if opts.morphs == Morphs::Residual {
+        for i in 0..ns {
+            let mut d: Vec<f32> = Vec::with_capacity(3 * art.n_vertices());
+            for v in 0..art.n_vertices() {
+                let mut l = crate::geometry::Mat3::zeros();
+                let mut c = [0.0; 3];
+                for (k, w) in weights.influences(v) {
+                    let m = &rig.bones[i][k];
+                    l += m.rotation * w;
+                    for a in 0..3 {
+                        c[a] += w * m.translation[a];
+                    }
+                }
+                let want = sub(art.shapes[i][v], c);
+                let x = solve3(&l, want).ok_or_else(|| {
+                    Error::Data(format!("pose {i}, vertex {v}: the blended bone motion is singular, no morph target can fix it"))
+                })?;
+                let disp = sub(x, rig.rest[v]);
+                d.extend(disp.map(|c| (c / norm.scale) as f32));
+            }
+            let acc = bin.floats(&d, json::accessor::Type::Vec3, 3, true, Some(json::buffer::Target::ArrayBuffer), &format!("morph target: pose {i}"));
+            targets.push(json::mesh::MorphTarget { positions: Some(acc), normals: None, tangents: None });
+        }
+    }
+
+    // Inverse bind matrices: (B_k)^-1 x (x -> (x - offset) * scale).
+    let placements = bind_placements(art, rig, opts.bind_pose);
     let mut ibm: Vec<f32> = Vec::with_capacity(16 * n_joints);
     for &k in &tree.order {
-        let g = RigidMotion { rotation: bind_motions[k].rotation, translation: bind_motions[k].apply(art.node_offset(&tree, k)) };
-        let gi = g.inverse();
+        let gi = placements[k].inverse();
         let s = norm.scale;
         let a = gi.rotation.map(|x| x * s);
         let c = sub(gi.translation, mat_vec(&a, norm.offset));
@@ -258,31 +319,60 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
     }
     let ibm_acc = bin.floats(&ibm, json::accessor::Type::Mat4, 16, false, None, "inverse bind matrices");
 
-    // Animations.
+    // Animations: world joint motions W_k = M_k ∘ B_k per frame.
+    let world = |bones: &[RigidMotion]| -> Vec<RigidMotion> {
+        (0..art.n_parts()).map(|k| bones[k].then_after(&placements[k])).collect()
+    };
     let mut animations = Vec::new();
     let keys: Vec<usize> = (0..ns).collect();
     let mut clips: Vec<(&str, Vec<f64>, Vec<Vec<RigidMotion>>)> = Vec::new();
-    let training: Vec<Vec<RigidMotion>> =
-        (0..ns).map(|i| (0..art.n_parts()).map(|k| art.training_motion(k, i)).collect()).collect();
-    clips.push(("training poses", (0..ns).map(|i| i as f64).collect(), training));
-    let steps = (ns - 1) * opts.samples_per_second;
-    let mut times = Vec::with_capacity(steps + 1);
-    let mut frames = Vec::with_capacity(steps + 1);
-    for s in 0..=steps {
-        let time = s as f64 / opts.samples_per_second as f64;
-        times.push(time);
-        frames.push(art.keyframe_motions(&keys, time, &opts.interpolation)?);
+    clips.push(("training poses", (0..ns).map(|i| i as f64).collect(), rig.bones.iter().map(|b| world(b)).collect()));
+    let mfa_motions = opts.weights != Weights::Fitted && opts.joints == Joints::Free;
+    if mfa_motions {
+        let steps = (ns - 1) * opts.samples_per_second;
+        let mut times = Vec::with_capacity(steps + 1);
+        let mut frames = Vec::with_capacity(steps + 1);
+        for s in 0..=steps {
+            let time = s as f64 / opts.samples_per_second as f64;
+            times.push(time);
+            // the articulation's part motions T_k(t), as bind -> t motions T_k(t) (T_k^bind)^-1
+            let parts = art.keyframe_motions(&keys, time, &opts.interpolation)?;
+            let bones: Vec<RigidMotion> = (0..art.n_parts())
+                .map(|k| parts[k].then_after(&art.training_motion(k, opts.bind_pose).inverse()))
+                .collect();
+            frames.push(world(&bones));
+        }
+        clips.push(("interpolated", times, frames));
     }
-    clips.push(("interpolated", times, frames));
     for (name, times, frames) in clips {
         if times.len() < 2 {
             continue; // a single pose: nothing to animate
         }
         let t32: Vec<f32> = times.iter().map(|&t| t as f32).collect();
         let input = bin.floats(&t32, json::accessor::Type::Scalar, 1, true, None, &format!("{name}: time"));
-        let per_frame: Vec<Vec<(Vec3, [f64; 4])>> = frames.iter().map(|m| locals(art, &tree, m)).collect();
+        let per_frame: Vec<Vec<(Vec3, [f64; 4])>> = frames.iter().map(|w| locals(tree, w)).collect();
         let mut samplers = Vec::new();
         let mut channels = Vec::new();
+        let mut channel = |samplers: &mut Vec<json::animation::Sampler>, out, node: u32, path| {
+            samplers.push(json::animation::Sampler {
+                extensions: Default::default(),
+                extras: Default::default(),
+                input,
+                interpolation: Valid(json::animation::Interpolation::Linear),
+                output: out,
+            });
+            channels.push(json::animation::Channel {
+                sampler: json::Index::new(samplers.len() as u32 - 1),
+                target: json::animation::Target {
+                    extensions: Default::default(),
+                    extras: Default::default(),
+                    node: json::Index::new(node),
+                    path: Valid(path),
+                },
+                extensions: Default::default(),
+                extras: Default::default(),
+            });
+        };
         for (slot, &k) in tree.order.iter().enumerate() {
             let mut tr: Vec<f32> = Vec::with_capacity(3 * frames.len());
             let mut rot: Vec<f32> = Vec::with_capacity(4 * frames.len());
@@ -298,31 +388,21 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
                 tr.extend(t.map(|c| c as f32));
                 rot.extend(q.map(|c| c as f32));
             }
-            let node = json::Index::new(2 + slot as u32);
-            for (path, values, type_, per) in [
-                (json::animation::Property::Translation, tr, json::accessor::Type::Vec3, 3),
-                (json::animation::Property::Rotation, rot, json::accessor::Type::Vec4, 4),
-            ] {
-                let out = bin.floats(&values, type_, per, false, None, &format!("{name}: part {k} {path:?}"));
-                samplers.push(json::animation::Sampler {
-                    extensions: Default::default(),
-                    extras: Default::default(),
-                    input,
-                    interpolation: Valid(json::animation::Interpolation::Linear),
-                    output: out,
-                });
-                channels.push(json::animation::Channel {
-                    sampler: json::Index::new(samplers.len() as u32 - 1),
-                    target: json::animation::Target {
-                        extensions: Default::default(),
-                        extras: Default::default(),
-                        node,
-                        path: Valid(path),
-                    },
-                    extensions: Default::default(),
-                    extras: Default::default(),
-                });
+            // with fixed joints only the root's translation moves: the others keep their rest translation
+            if opts.joints == Joints::Free || tree.parent[k].is_none() {
+                let out = bin.floats(&tr, json::accessor::Type::Vec3, 3, false, None, &format!("{name}: part {k} translation"));
+                channel(&mut samplers, out, 2 + slot as u32, json::animation::Property::Translation);
             }
+            let out = bin.floats(&rot, json::accessor::Type::Vec4, 4, false, None, &format!("{name}: part {k} rotation"));
+            channel(&mut samplers, out, 2 + slot as u32, json::animation::Property::Rotation);
+        }
+        if name == "training poses" && !targets.is_empty() {
+            let mut w = vec![0f32; ns * ns];
+            for i in 0..ns {
+                w[i * ns + i] = 1.0;
+            }
+            let out = bin.floats(&w, json::accessor::Type::Scalar, 1, false, None, "training poses: morph weights");
+            channel(&mut samplers, out, 0, json::animation::Property::MorphTargetWeights);
         }
         animations.push(json::Animation {
             extensions: Default::default(),
@@ -334,7 +414,7 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
     }
 
     // Nodes: mesh, skeleton wrapper, joints (rest state = the bind pose).
-    let rest = locals(art, &tree, &bind_motions);
+    let rest = locals(tree, &placements);
     let mut nodes = vec![
         json::Node {
             mesh: Some(json::Index::new(0)),
@@ -372,11 +452,21 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
     }
     let mut attributes = std::collections::BTreeMap::new();
     attributes.insert(Valid(json::mesh::Semantic::Positions), pos_acc);
-    attributes.insert(Valid(json::mesh::Semantic::Joints(0)), joints_acc);
-    attributes.insert(Valid(json::mesh::Semantic::Weights(0)), weights_acc);
+    for (set, j, w) in skin_attrs {
+        attributes.insert(Valid(json::mesh::Semantic::Joints(set)), j);
+        attributes.insert(Valid(json::mesh::Semantic::Weights(set)), w);
+    }
+    let n_targets = targets.len();
     let root = json::Root {
         asset: json::Asset {
-            generator: Some(format!("posemfa {} (export::gltf, {:?} weights)", env!("CARGO_PKG_VERSION"), opts.weights)),
+            generator: Some(format!(
+                "posemfa {} (export::gltf, {:?} weights, {} influences, {:?} joints, {:?} morphs)",
+                env!("CARGO_PKG_VERSION"),
+                opts.weights,
+                opts.influences,
+                opts.joints,
+                opts.morphs
+            )),
             ..Default::default()
         },
         accessors: bin.accessors,
@@ -399,9 +489,9 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
                 indices: Some(idx_acc),
                 material: None,
                 mode: Valid(json::mesh::Mode::Triangles),
-                targets: None,
+                targets: if n_targets > 0 { Some(targets) } else { None },
             }],
-            weights: None,
+            weights: if n_targets > 0 { Some(vec![0.0; n_targets]) } else { None },
         }],
         skins: vec![json::Skin {
             extensions: Default::default(),
@@ -424,6 +514,16 @@ pub fn to_glb(art: &Articulation, opts: &GltfOptions) -> Result<Vec<u8>> {
     };
     let text = json::serialize::to_vec(&root).map_err(|e| Error::Data(format!("glTF JSON: {e}")))?;
     Ok(glb_container(text, bin.data))
+}
+
+/// Solves L x = b for a 3x3 L; None when (nearly) singular.
+fn solve3(l: &crate::geometry::Mat3, b: Vec3) -> Option<Vec3> {
+    let scale = l.iter().map(|x| x.abs()).fold(0.0, f64::max);
+    if !(l.determinant().abs() > 1e-12 * scale * scale * scale) {
+        return None;
+    }
+    let x = l.lu().solve(&nalgebra::Vector3::new(b[0], b[1], b[2]))?;
+    Some([x[0], x[1], x[2]])
 }
 
 /// GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
@@ -527,18 +627,49 @@ fn trs(t: Vec3, q: [f64; 4], s: Vec3) -> Affine {
     (Mat3::from_fn(|a, b| r[(a, b)] * s[b]), t)
 }
 
-/// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe, from the file's
-/// own numbers: node hierarchy, TRS, inverse bind matrices, JOINTS_0/WEIGHTS_0, positions (linear blend
-/// skinning as a glTF viewer does), and compares with the rigid reconstructions of `art`.
-pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
+/// The `training poses` clip of a .glb written by [`to_glb`], played at every keyframe from the file's own
+/// numbers, as a glTF viewer does: node hierarchy and TRS, the clip's channels (translation, rotation, morph
+/// weights), morph targets, inverse bind matrices, JOINTS_n / WEIGHTS_n and linear blend skinning.
+#[derive(Debug, Clone)]
+pub struct GlbPlayback {
+    /// Bind positions (the mesh's POSITION), original units.
+    pub rest: Vec<Vec3>,
+    /// Per keyframe: skinned positions, original units.
+    pub frames: Vec<Vec<Vec3>>,
+    /// Per keyframe: world position of every skin joint (in skin order), original units.
+    pub joint_positions: Vec<Vec<Vec3>>,
+    /// Parent of every skin joint (index in skin order), None for the skeleton's root.
+    pub joint_parent: Vec<Option<usize>>,
+    pub clips: Vec<String>,
+}
+
+/// Plays the `training poses` clip of a .glb (see [`GlbPlayback`]).
+pub fn play_glb(glb: &[u8]) -> Result<GlbPlayback> {
     let (root, bin) = parse_glb(glb)?;
-    let err = |m: &str| Error::Data(format!("glb check: {m}"));
+    let err = |m: &str| Error::Data(format!("glb playback: {m}"));
     let skin = root.skins.first().ok_or_else(|| err("no skin"))?;
-    let prim = root.meshes.first().and_then(|m| m.primitives.first()).ok_or_else(|| err("no mesh"))?;
-    let attr = |s: json::mesh::Semantic| prim.attributes.get(&Valid(s)).copied().ok_or_else(|| err("attribute missing"));
-    let pos = read_floats(&root, &bin, attr(json::mesh::Semantic::Positions)?)?;
-    let jts = read_floats(&root, &bin, attr(json::mesh::Semantic::Joints(0))?)?;
-    let wts = read_floats(&root, &bin, attr(json::mesh::Semantic::Weights(0))?)?;
+    let mesh = root.meshes.first().ok_or_else(|| err("no mesh"))?;
+    let prim = mesh.primitives.first().ok_or_else(|| err("no primitive"))?;
+    let attr = |s: json::mesh::Semantic| prim.attributes.get(&Valid(s)).copied();
+    let pos = read_floats(&root, &bin, attr(json::mesh::Semantic::Positions).ok_or_else(|| err("no POSITION"))?)?;
+    let nv = pos.len() / 3;
+    let mut sets = Vec::new();
+    for set in 0.. {
+        match (attr(json::mesh::Semantic::Joints(set)), attr(json::mesh::Semantic::Weights(set))) {
+            (Some(j), Some(w)) => sets.push((read_floats(&root, &bin, j)?, read_floats(&root, &bin, w)?)),
+            _ => break,
+        }
+    }
+    if sets.is_empty() {
+        return Err(err("no JOINTS_0 / WEIGHTS_0"));
+    }
+    let morphs: Vec<Vec<f64>> = prim
+        .targets
+        .iter()
+        .flatten()
+        .map(|t| read_floats(&root, &bin, t.positions.ok_or_else(|| err("morph target without POSITION"))?))
+        .collect::<Result<_>>()?;
+    let default_weights: Vec<f64> = mesh.weights.clone().unwrap_or_default().iter().map(|&w| w as f64).collect();
     let ibm = read_floats(&root, &bin, skin.inverse_bind_matrices.ok_or_else(|| err("no IBM"))?)?;
     let n_nodes = root.nodes.len();
     let mut parent = vec![None; n_nodes];
@@ -547,14 +678,32 @@ pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
             parent[c.value()] = Some(i);
         }
     }
+    let slot_of_node: std::collections::HashMap<usize, usize> = skin.joints.iter().enumerate().map(|(s, j)| (j.value(), s)).collect();
+    let joint_parent: Vec<Option<usize>> = skin
+        .joints
+        .iter()
+        .map(|j| parent[j.value()].and_then(|p| slot_of_node.get(&p).copied()))
+        .collect();
     let anim = root
         .animations
         .iter()
         .find(|a| a.name.as_deref() == Some("training poses"))
         .ok_or_else(|| err("no clip 'training poses'"))?;
-    let mut frame_error = Vec::new();
-    for i in 0..art.n_shapes() {
-        // local TRS of every node at keyframe i
+    let first_times = read_floats(&root, &bin, anim.samplers.first().ok_or_else(|| err("empty clip"))?.input)?;
+    let n_keys = first_times.len();
+    let mut channels = Vec::new();
+    for ch in &anim.channels {
+        let smp = &anim.samplers[ch.sampler.value()];
+        let times = read_floats(&root, &bin, smp.input)?;
+        if times.len() != n_keys {
+            return Err(err("channels with different keyframe counts"));
+        }
+        channels.push((ch.target.node.value(), ch.target.path, read_floats(&root, &bin, smp.output)?));
+    }
+    let rest: Vec<Vec3> = (0..nv).map(|v| [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]]).collect();
+    let mut frames = Vec::with_capacity(n_keys);
+    let mut joint_positions = Vec::with_capacity(n_keys);
+    for key in 0..n_keys {
         let mut local: Vec<(Vec3, [f64; 4], Vec3)> = root
             .nodes
             .iter()
@@ -565,16 +714,19 @@ pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
                 (t, q, s)
             })
             .collect();
-        for ch in &anim.channels {
-            let smp = &anim.samplers[ch.sampler.value()];
-            let times = read_floats(&root, &bin, smp.input)?;
-            let k = times.iter().position(|&t| (t - i as f64).abs() < 1e-6).ok_or_else(|| err("keyframe time missing"))?;
-            let out = read_floats(&root, &bin, smp.output)?;
-            let node = ch.target.node.value();
-            match ch.target.path {
-                Valid(json::animation::Property::Translation) => local[node].0 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]],
+        let mut morph_w = default_weights.clone();
+        morph_w.resize(morphs.len(), 0.0);
+        for (node, path, out) in &channels {
+            let k = key;
+            match path {
+                Valid(json::animation::Property::Translation) => local[*node].0 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]],
                 Valid(json::animation::Property::Rotation) => {
-                    local[node].1 = [out[4 * k], out[4 * k + 1], out[4 * k + 2], out[4 * k + 3]]
+                    local[*node].1 = [out[4 * k], out[4 * k + 1], out[4 * k + 2], out[4 * k + 3]]
+                }
+                Valid(json::animation::Property::Scale) => local[*node].2 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]],
+                Valid(json::animation::Property::MorphTargetWeights) => {
+                    let n = morphs.len();
+                    morph_w.copy_from_slice(&out[n * k..n * k + n]);
                 }
                 _ => return Err(err("unexpected channel")),
             }
@@ -592,42 +744,71 @@ pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
             world[n] = Some(w);
             w
         }
+        let mut jpos = Vec::with_capacity(skin.joints.len());
         let joint_mats: Vec<Affine> = skin
             .joints
             .iter()
             .enumerate()
             .map(|(s, j)| {
                 let w = world_of(j.value(), &parent, &local, &mut world);
+                jpos.push(w.1);
                 let m = &ibm[16 * s..16 * s + 16];
                 // glTF matrices are column-major, like nalgebra's storage
                 let b: Affine = (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]]);
                 affine_mul(&w, &b)
             })
             .collect();
-        let mut worst: f64 = 0.0;
-        for v in 0..art.n_vertices() {
-            let p = [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]];
-            let mut x = [0.0; 3];
-            for s in 0..4 {
-                let w = wts[4 * v + s];
-                if w == 0.0 {
-                    continue;
-                }
-                let m = &joint_mats[jts[4 * v + s] as usize];
-                let y = crate::geometry::add(mat_vec(&m.0, p), m.1);
-                for d in 0..3 {
-                    x[d] += w * y[d];
+        let mut out = Vec::with_capacity(nv);
+        for v in 0..nv {
+            let mut p = rest[v];
+            for (t, w) in morphs.iter().zip(&morph_w) {
+                if *w != 0.0 {
+                    for d in 0..3 {
+                        p[d] += w * t[3 * v + d];
+                    }
                 }
             }
-            let unit = art.normalization.to_unit(x);
-            worst = worst.max(crate::geometry::norm(sub(unit, art.rigid[i][v])));
+            let mut x = [0.0; 3];
+            for (jts, wts) in &sets {
+                for s in 0..4 {
+                    let w = wts[4 * v + s];
+                    if w == 0.0 {
+                        continue;
+                    }
+                    let m = joint_mats.get(jts[4 * v + s] as usize).ok_or_else(|| err("joint index out of range"))?;
+                    let y = crate::geometry::add(mat_vec(&m.0, p), m.1);
+                    for d in 0..3 {
+                        x[d] += w * y[d];
+                    }
+                }
+            }
+            out.push(x);
         }
-        frame_error.push(worst);
+        frames.push(out);
+        joint_positions.push(jpos);
     }
-    Ok(GlbCheck {
-        joints: skin.joints.len(),
-        clips: root.animations.iter().filter_map(|a| a.name.clone()).collect(),
-        max_frame_error: frame_error.iter().cloned().fold(0.0, f64::max),
-        frame_error,
-    })
+    Ok(GlbPlayback { rest, frames, joint_positions, joint_parent, clips: root.animations.iter().filter_map(|a| a.name.clone()).collect() })
+}
+
+/// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe ([`play_glb`]) and
+/// compares with the rigid reconstructions of `art`.
+pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
+    let play = play_glb(glb)?;
+    let (root, _) = parse_glb(glb)?;
+    let joints = root.skins.first().map_or(0, |s| s.joints.len());
+    if play.frames.len() != art.n_shapes() {
+        return Err(Error::Data(format!("glb check: {} keyframes for {} poses", play.frames.len(), art.n_shapes())));
+    }
+    let frame_error: Vec<f64> = play
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            f.iter()
+                .zip(&art.rigid[i])
+                .map(|(x, r)| crate::geometry::norm(sub(art.normalization.to_unit(*x), *r)))
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    Ok(GlbCheck { joints, clips: play.clips, max_frame_error: frame_error.iter().cloned().fold(0.0, f64::max), frame_error })
 }

@@ -5,3 +5,4 @@ pub mod gltf;
 pub mod json;
 pub mod obj;
 pub mod ply;
+pub mod rig_report;

@@ -1,5 +1,7 @@
-// The .glb written by `posemfa export-gltf`: the Khronos validator reports 0 errors (rigid and smooth
-// weights), three.js's GLTFLoader loads it, and playing the clip "training poses" reproduces every training
+// The .glb written by `posemfa export-gltf`: the Khronos validator reports 0 errors (rigid, smooth and fitted
+// weights, 8 influences, fixed joints with residual morph targets), three.js's GLTFLoader loads it, three.js
+// plays the fitted rig with the E_RMS that `posemfa rig-report` prints, fixed joints keep bone lengths, morphs
+// reproduce the poses, and playing the clip "training poses" reproduces every training
 // pose's rigid reconstruction (from `posemfa interpolate --from I --to I --t 0 --no-residual`) within 1e-4
 // of the unit box. Runs the CLI (debug build, built here if needed) on a generated quadruped.
 // Run: node --test tests/e2e/gltf.test.mjs
@@ -45,7 +47,8 @@ async function loadGlb(file) {
   return new Promise((resolve, reject) => new GLTFLoader().parse(ab, '', resolve, reject));
 }
 
-// Skinned vertex positions (world space) of the first SkinnedMesh at time `time` of clip `name`.
+// Skinned vertex positions (world space) of the first SkinnedMesh at time `time` of clip `name` (morph targets
+// applied), and the world positions of its bones.
 function skinnedAt(gltf, name, time) {
   const clip = gltf.animations.find((a) => a.name === name);
   assert.ok(clip, `clip ${name} in ${gltf.animations.map((a) => a.name)}`);
@@ -61,16 +64,28 @@ function skinnedAt(gltf, name, time) {
   gltf.scene.updateMatrixWorld(true);
   mesh.skeleton.update();
   const pos = mesh.geometry.getAttribute('position');
+  const morphs = mesh.geometry.morphAttributes.position ?? [];
+  const influences = mesh.morphTargetInfluences ?? [];
   const out = [];
   const v = new THREE.Vector3();
+  const d = new THREE.Vector3();
   for (let i = 0; i < pos.count; i++) {
     v.fromBufferAttribute(pos, i);
+    // glTF morph targets are relative displacements, applied before skinning (as three.js's shaders do)
+    for (let t = 0; t < morphs.length; t++) {
+      if (influences[t]) v.addScaledVector(d.fromBufferAttribute(morphs[t], i), influences[t]);
+    }
     mesh.applyBoneTransform(i, v);
     v.applyMatrix4(mesh.matrixWorld);
     out.push([v.x, v.y, v.z]);
   }
+  const bones = mesh.skeleton.bones.map((b) => {
+    const w = new THREE.Vector3();
+    b.getWorldPosition(w);
+    return { parent: mesh.skeleton.bones.indexOf(b.parent), at: [w.x, w.y, w.z] };
+  });
   mixer.stopAllAction();
-  return { out, clip };
+  return { out, clip, mesh, bones };
 }
 
 function maxDistance(a, b) {
@@ -87,14 +102,18 @@ before(() => {
   posemfa('generate', 'quadruped', '--vertices', '1500', '--poses', String(POSES), '--seed', '4', '--out', path.join(dir, 'pop'));
   posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'rigid.glb'));
   posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'smooth.glb'), '--weights', 'smooth');
+  posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'fitted.glb'), '--weights', 'fitted');
+  posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'fitted8.glb'), '--weights', 'fitted', '--influences', '8');
+  posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'fixed-morphs.glb'), '--weights', 'fitted',
+    '--joints', 'fixed', '--morphs', 'residual');
 });
 
 after(() => {
   if (dir) rmSync(dir, { recursive: true, force: true });
 });
 
-test('the Khronos validator reports 0 errors and 0 warnings (rigid and smooth weights)', async () => {
-  for (const f of ['rigid.glb', 'smooth.glb']) {
+test('the Khronos validator reports 0 errors and 0 warnings (rigid, smooth, fitted weights; 8 influences; fixed joints and residual morphs)', async () => {
+  for (const f of ['rigid.glb', 'smooth.glb', 'fitted.glb', 'fitted8.glb', 'fixed-morphs.glb']) {
     const r = await validateFile(path.join(dir, f));
     assert.equal(r.errors, 0, `${f}: ${JSON.stringify(r.messages)}`);
     assert.equal(r.warnings, 0, `${f}: ${JSON.stringify(r.messages)}`);
@@ -156,6 +175,63 @@ test('smooth weights: up to 4 joints per vertex, bound in the first training sha
   const first = readObj(path.join(dir, 'pop', objs[0]));
   const { out } = skinnedAt(gltf, 'training poses', 0);
   assert.ok(maxDistance(out, first) / extent([first]) <= 1e-4);
+});
+
+// E_RMS (Kavan et al. 2010) of a .glb's training clip as three.js plays it, against the population's OBJ files.
+async function threeErms(file) {
+  const gltf = await loadGlb(file);
+  const objs = readdirSync(path.join(dir, 'pop')).filter((f) => f.endsWith('.obj'))
+    .sort((a, b) => a.localeCompare(b, 'en', { numeric: true }));
+  let sq = 0;
+  let n = 0;
+  let worst = 0;
+  let rest;
+  const lengths = [];
+  for (let i = 0; i < objs.length; i++) {
+    const want = readObj(path.join(dir, 'pop', objs[i]));
+    const { out, mesh, bones } = skinnedAt(gltf, 'training poses', i);
+    if (!rest) {
+      const p = mesh.geometry.getAttribute('position');
+      rest = Array.from({ length: p.count }, (_, k) => [p.getX(k), p.getY(k), p.getZ(k)]);
+    }
+    for (let v = 0; v < out.length; v++) {
+      const e2 = (out[v][0] - want[v][0]) ** 2 + (out[v][1] - want[v][1]) ** 2 + (out[v][2] - want[v][2]) ** 2;
+      sq += e2;
+      worst = Math.max(worst, Math.sqrt(e2));
+    }
+    n += out.length;
+    lengths.push(bones.map((b) => (b.parent < 0 ? 0 : Math.hypot(...b.at.map((c, d) => c - bones[b.parent].at[d])))));
+  }
+  const lo = [0, 1, 2].map((d) => Math.min(...rest.map((p) => p[d])));
+  const hi = [0, 1, 2].map((d) => Math.max(...rest.map((p) => p[d])));
+  const diag = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  let lengthChange = 0;
+  for (let b = 0; b < lengths[0].length; b++) {
+    const ls = lengths.map((f) => f[b]);
+    lengthChange = Math.max(lengthChange, (Math.max(...ls) - Math.min(...ls)) / diag);
+  }
+  return { eRms: (1000 * Math.sqrt(sq / (3 * n))) / diag, maxOverDiag: worst / diag, lengthChange };
+}
+
+test('fitted weights: three.js plays the E_RMS that rig-report prints (within 1 %), below rigid weights', async () => {
+  const report = (f) => JSON.parse(posemfa('rig-report', path.join(dir, 'pop'), '--glb', path.join(dir, f)));
+  for (const f of ['rigid.glb', 'fitted.glb', 'fitted8.glb']) {
+    const three = await threeErms(path.join(dir, f));
+    const ours = report(f);
+    assert.ok(Math.abs(three.eRms - ours.e_rms) <= 0.01 * ours.e_rms, `${f}: three.js ${three.eRms}, rig-report ${ours.e_rms}`);
+  }
+  const rigid = report('rigid.glb').e_rms;
+  const fitted = report('fitted.glb').e_rms;
+  assert.ok(fitted < 0.8 * rigid, `fitted ${fitted} vs rigid ${rigid}`);
+});
+
+test('fixed joints and residual morphs: in three.js every bone keeps its length and every pose is reproduced within 1e-5 of the diagonal', async () => {
+  const fixed = await threeErms(path.join(dir, 'fixed-morphs.glb'));
+  assert.ok(fixed.lengthChange <= 1e-5, `bone length changes by ${fixed.lengthChange} of the diagonal`);
+  assert.ok(fixed.maxOverDiag <= 1e-5, `max error ${fixed.maxOverDiag} of the diagonal`);
+  const free = await threeErms(path.join(dir, 'fitted.glb'));
+  assert.ok(free.lengthChange > 1e-3, `free joints: lengths change by ${free.lengthChange} only`);
+  assert.ok(free.maxOverDiag > 1e-3, `without morphs: max error ${free.maxOverDiag}`);
 });
 
 // The same functions through the wasm build for Node (pkg-node/, written by scripts/build-wasm.sh, which

@@ -1,0 +1,85 @@
+//! How well an exported rig reproduces the training poses, in the skinning literature's own measure,
+//! measured on the .glb as written (its `training poses` clip played by linear blend skinning from the
+//! file's own numbers, [`super::gltf::play_glb`]), not on the fit.
+//!
+//! E_RMS (Kavan et al. 2010): 1000 · ||V - V'||_F / sqrt(3 n_v n_poses) / d, with V the training poses, V'
+//! the clip's keyframes and d the diagonal of the bounding box of the rest pose (the mesh as bound in the
+//! file). The same for one pose gives the per-pose figure; the overall E_RMS² is their mean square.
+
+use super::gltf::GlbPlayback;
+use crate::error::{Error, Result};
+use crate::geometry::{norm, sub, Vec3};
+use crate::mesh::Population;
+use serde::Serialize;
+
+/// Error of one training pose.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoseError {
+    pub name: String,
+    pub e_rms: f64,
+    /// Largest vertex distance, original units.
+    pub max_error: f64,
+}
+
+/// The rig's error over all training poses.
+#[derive(Debug, Clone, Serialize)]
+pub struct RigError {
+    pub e_rms: f64,
+    /// Largest vertex distance over all poses, original units.
+    pub max_error: f64,
+    /// `max_error` / `diagonal`.
+    pub max_error_over_diagonal: f64,
+    /// Diagonal of the rest pose's bounding box, original units.
+    pub diagonal: f64,
+    pub poses: Vec<PoseError>,
+}
+
+/// Diagonal of the bounding box of `points`.
+pub fn bbox_diagonal(points: &[Vec3]) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    norm(sub(hi, lo))
+}
+
+/// Compares the clip's keyframes with the population's poses (original units), keyframe i with pose i.
+pub fn rig_error(pop: &Population, play: &GlbPlayback) -> Result<RigError> {
+    if play.frames.len() != pop.n_shapes() {
+        return Err(Error::Data(format!("the clip has {} keyframes for {} training poses", play.frames.len(), pop.n_shapes())));
+    }
+    if play.rest.len() != pop.n_vertices() {
+        return Err(Error::Data(format!("the rig has {} vertices, the population {}", play.rest.len(), pop.n_vertices())));
+    }
+    let diagonal = bbox_diagonal(&play.rest);
+    if !(diagonal > 0.0) {
+        return Err(Error::Data("the rest pose has an empty bounding box".into()));
+    }
+    let nv = pop.n_vertices() as f64;
+    let mut poses = Vec::with_capacity(pop.n_shapes());
+    let mut total = 0.0;
+    let mut max_error: f64 = 0.0;
+    for (i, frame) in play.frames.iter().enumerate() {
+        let mut sq = 0.0;
+        let mut worst: f64 = 0.0;
+        for (x, u) in frame.iter().zip(&pop.shapes[i]) {
+            let d = norm(sub(*x, pop.normalization.to_original(*u)));
+            sq += d * d;
+            worst = worst.max(d);
+        }
+        total += sq;
+        max_error = max_error.max(worst);
+        poses.push(PoseError { name: pop.names[i].clone(), e_rms: 1000.0 * (sq / (3.0 * nv)).sqrt() / diagonal, max_error: worst });
+    }
+    Ok(RigError {
+        e_rms: 1000.0 * (total / (3.0 * nv * pop.n_shapes() as f64)).sqrt() / diagonal,
+        max_error,
+        max_error_over_diagonal: max_error / diagonal,
+        diagonal,
+        poses,
+    })
+}
