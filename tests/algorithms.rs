@@ -167,28 +167,42 @@ dual_test! {
         }
     }
 
-    fn neither_does_it_with_or_without_the_parameter_expanded_step_over_many_seeds() {
-        // PX-EM (Params::px_em) only re-parametrises after a proper CM step; over many starts, no iteration
-        // that removes no component may lower the log-likelihood, with the step on or off
-        for px_em in [true, false] {
+    fn neither_does_it_with_or_without_the_parameter_expanded_step_or_the_acceleration_over_many_seeds() {
+        // PX-EM (Params::px_em) only re-parametrises after a proper CM step, and SQUAREM (Params::accelerate)
+        // keeps an extrapolated state only when its log-likelihood is at least the plain step's; over many
+        // starts, no iteration that removes no component may lower the log-likelihood, with either on or off
+        for (px_em, accelerate) in [(true, true), (true, false), (false, true), (false, false)] {
+            let mut kept = 0;
             for seed in 0..20u64 {
                 for parts in [3usize, 6] {
                     let c = chain(parts, 5, 1e-3, seed);
-                    let params = Params { parts: parts + 2, seed, tol: 1e-12, px_em, ..Params::default() };
+                    let params = Params { parts: parts + 2, seed, tol: 1e-12, px_em, accelerate, ..Params::default() };
                     let mut fit = Fit::new(Data::from_population(&c.pop), &params).unwrap();
                     let mut prev = fit.initial_log_likelihood();
                     for _ in 0..40 {
                         let info = fit.step();
                         if info.dropped == 0 {
                             let ll = info.log_likelihood;
-                            assert!(ll >= prev - 1e-9 * prev.abs(), "px_em={px_em} seed={seed} parts={parts} it={}: {prev} -> {ll}", info.iteration);
+                            assert!(
+                                ll >= prev - 1e-9 * prev.abs(),
+                                "px_em={px_em} accelerate={accelerate} seed={seed} parts={parts} it={}: {prev} -> {ll}",
+                                info.iteration
+                            );
                         }
                         prev = info.log_likelihood;
                         if fit.is_finished() {
                             break;
                         }
                     }
+                    kept += fit.extrapolations_kept;
+                    if !accelerate {
+                        assert_eq!(fit.extrapolations_tried, 0);
+                    }
                 }
+            }
+            // the accelerated runs did take extrapolated steps (else this would only test the plain step again)
+            if accelerate {
+                assert!(kept >= 20, "px_em={px_em}: only {kept} extrapolations kept over 40 runs");
             }
         }
     }

@@ -373,6 +373,13 @@ fn fit_group<T: HasFit>() -> Group<T> {
                     o.fit().params.px_em = false;
                 },
             ),
+            flag(
+                "--no-accel",
+                "no SQUAREM acceleration of AECM (on by default; same optimum, still monotone)",
+                |o: &mut T| {
+                    o.fit().params.accelerate = false;
+                },
+            ),
             val(
                 "--refine-threshold",
                 "E",
@@ -389,6 +396,12 @@ fn fit_group<T: HasFit>() -> Group<T> {
                 |o: &mut T, v| num(v).map(|n| o.fit().params.refine_tol = n),
             ),
             flag("--no-refine", "stop after the coarse AECM", |o: &mut T| o.fit().params.refine = false),
+            val(
+                "--subset",
+                "N",
+                "coarse and refinement stages on about N well-spread vertices, final AECM on all (default 2000; 0 = all)",
+                |o: &mut T, v| num(v).map(|n| o.fit().params.subset_vertices = n),
+            ),
             val("--mesh", "NAME", "glTF input: the mesh (name or index; default the one with most vertices)", |o: &mut T, v| {
                 text(&mut o.fit().gltf.mesh, v)
             }),

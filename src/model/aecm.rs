@@ -2,8 +2,14 @@
 //!
 //! One iteration ([`Fit::step`]): CM cycle 1 (π, b) on the current responsibilities, E-step, CM cycle 2
 //! (Λ, R, Φ), E-step. The last E-step gives the log-likelihood of the new parameters (the trace) and the
-//! responsibilities of the next cycle 1. Convergence: |ΔL| / n_v < tol; the iteration cap is reported as
-//! not converged and the best state seen is still returned.
+//! responsibilities of the next cycle 1. Convergence: |ΔL| / n_v < tol over one plain iteration; the
+//! iteration cap is reported as not converged and the best state seen is still returned.
+//!
+//! With `Params::accelerate` (default), every second iteration ends with a SQUAREM extrapolation from the last
+//! three states ([`super::squarem`]): its E-step gives the log-likelihood of the extrapolated state, which is
+//! kept only when that is at least the plain iteration's; so the trace never decreases. Convergence is still
+//! judged on the plain iteration's own |ΔL| (a converged iteration is never extrapolated), so the final state
+//! is a plain AECM iterate at the same tolerance.
 
 use super::cm;
 use super::component::Component;
@@ -13,6 +19,7 @@ use super::init;
 use super::memory;
 use super::params::{LambdaRule, Params};
 use super::result::Model;
+use super::squarem;
 use crate::error::{Error, Result};
 use crate::geometry::Vec3;
 
@@ -25,6 +32,9 @@ pub struct StepInfo {
     pub dropped: usize,
     pub converged: bool,
 }
+
+/// SQUAREM's longest step |α| at the start of a run (grows by 4 when used in full and kept).
+const SQUAREM_FIRST_STEP_MAX: f64 = 4.0;
 
 #[derive(Debug, Clone)]
 pub struct Fit {
@@ -43,6 +53,15 @@ pub struct Fit {
     px: bool,
     min_mass: f64,
     best: Option<(f64, Vec<Component>)>,
+    /// SQUAREM state: on, the states before the last one and two plain iterations, the longest step allowed.
+    accelerate: bool,
+    sq_prev: Vec<Vec<Component>>,
+    sq_step_max: f64,
+    /// Scratch responsibilities for the extrapolated state's E-step.
+    sq_members: cm::Members,
+    /// Extrapolations tried and kept (for benchmarks).
+    pub extrapolations_tried: usize,
+    pub extrapolations_kept: usize,
     /// Floating-point operations and milliseconds spent in E-steps (for benchmarks).
     pub estep_flops: f64,
     /// The part of `estep_flops` done in f32 (the screen).
@@ -95,6 +114,12 @@ impl Fit {
             px: params.px_em,
             min_mass: params.min_part_vertices as f64,
             best: None,
+            accelerate: params.accelerate,
+            sq_prev: Vec::new(),
+            sq_step_max: SQUAREM_FIRST_STEP_MAX,
+            sq_members: Vec::new(),
+            extrapolations_tried: 0,
+            extrapolations_kept: 0,
             estep_flops: 0.0,
             estep_flops_f32: 0.0,
             estep_ms: 0.0,
@@ -117,6 +142,9 @@ impl Fit {
     pub fn step(&mut self) -> StepInfo {
         if self.is_finished() {
             return self.info(0);
+        }
+        if self.accelerate {
+            self.sq_prev.push(self.comps.clone());
         }
         cm::cycle1(&self.data, &self.members, &mut self.comps);
         self.run_e_step();
@@ -150,7 +178,49 @@ impl Fit {
         if ((ll - prev) / self.data.n_vertices as f64).abs() < self.tol && dropped == 0 {
             self.converged = true;
         }
+        if self.accelerate {
+            if dropped > 0 || self.converged {
+                self.sq_prev.clear();
+            } else if self.sq_prev.len() == 2 {
+                self.try_extrapolation(ll);
+                self.sq_prev.clear();
+            }
+        }
         self.info(dropped)
+    }
+
+    /// SQUAREM from θ0, θ1 (`sq_prev`) and θ2 (the current state, log-likelihood `ll2`): keeps the extrapolated
+    /// state when its log-likelihood is at least `ll2`, else stays at θ2.
+    fn try_extrapolation(&mut self, ll2: f64) {
+        let Some((theta, a)) = squarem::extrapolate(&self.sq_prev[0], &self.sq_prev[1], &self.comps, self.sq_step_max, self.floor)
+        else {
+            // α = -1 (θ2 itself): let the next cycle try a longer step
+            self.sq_step_max *= 4.0;
+            return;
+        };
+        self.extrapolations_tried += 1;
+        let t0 = crate::clock::now_ms();
+        let (ll, _) = self.estep.run(&self.data, &theta, &mut self.sq_members);
+        self.estep_ms += crate::clock::now_ms() - t0;
+        self.estep_flops += self.estep.flops_f64 + self.estep.flops_f32;
+        self.estep_flops_f32 += self.estep.flops_f32;
+        if ll.is_finite() && ll >= ll2 {
+            self.extrapolations_kept += 1;
+            self.comps = theta;
+            std::mem::swap(&mut self.members, &mut self.sq_members);
+            if let Some(last) = self.trace.last_mut() {
+                *last = ll;
+            }
+            if self.best.as_ref().is_none_or(|b| ll > b.0) {
+                self.best = Some((ll, self.comps.clone()));
+            }
+            if a >= self.sq_step_max {
+                self.sq_step_max *= 4.0;
+            }
+        } else {
+            // the E-step's owner hints now belong to θ'; they only order the work, the result is exact
+            self.sq_step_max = (self.sq_step_max / 4.0).max(1.0);
+        }
     }
 
     fn info(&self, dropped: usize) -> StepInfo {

@@ -10,6 +10,10 @@
 //!    piece of the mesh ([`super::islands`]).
 //!
 //! Every stage is kept (coarse labels, refined labels, final model).
+//!
+//! With `Params::subset_vertices` (multi-resolution, [`super::multires`]) stages 1 and 2 run on a well-spread
+//! subset of the vertices; the coarse and refined labels of all vertices come from the E-step of those stages'
+//! components on the whole population, and stage 3 runs on all vertices.
 
 use super::aecm::{Fit, StepInfo};
 use super::data::Data;
@@ -160,6 +164,8 @@ pub struct Pipeline {
     stats: Vec<StageStats>,
     stage_started_ms: f64,
     total_iterations: usize,
+    /// Vertices of the coarse and refinement stages (multi-resolution), None = all.
+    subset: Option<Vec<usize>>,
 }
 
 impl Pipeline {
@@ -167,8 +173,20 @@ impl Pipeline {
     pub fn new(pop: &Population, params: &Params) -> Result<Pipeline> {
         params.validate()?;
         let t0 = crate::clock::now_ms();
-        let coarse = if params.refine { Params { tol: params.refine_tol, ..params.clone() } } else { params.clone() };
-        let fit = Fit::new(Data::from_population(pop), &coarse)?;
+        // the coarse and refinement runs stop at a loose tolerance and only pass labels on: they run plain AECM
+        // (SQUAREM would move where they stop); the final run is accelerated
+        let coarse = if params.refine {
+            Params { tol: params.refine_tol, accelerate: false, ..params.clone() }
+        } else {
+            params.clone()
+        };
+        let subset = (params.refine && params.subset_vertices > 0 && pop.n_vertices() > params.subset_vertices)
+            .then(|| super::multires::spread_subset(pop, params.subset_vertices));
+        let data = match &subset {
+            Some(s) => Data::from_population_subset(pop, s),
+            None => Data::from_population(pop),
+        };
+        let fit = Fit::new(data, &coarse)?;
         Ok(Pipeline {
             pop: pop.clone(),
             params: params.clone(),
@@ -180,6 +198,7 @@ impl Pipeline {
             stats: vec![StageStats { name: "coarse".into(), ..Default::default() }],
             stage_started_ms: t0,
             total_iterations: 0,
+            subset,
         })
     }
 
@@ -217,6 +236,7 @@ impl Pipeline {
     pub fn current_vertices(&self) -> Option<&[usize]> {
         match &self.state {
             State::Refine(r) => Some(&r.members[r.part]),
+            State::Coarse(_) => self.subset.as_deref(),
             _ => None,
         }
     }
@@ -280,7 +300,7 @@ impl Pipeline {
         self.state = match state {
             State::Coarse(fit) => {
                 self.account(&fit);
-                let model = fit.model();
+                let model = self.coarse_model(&fit);
                 self.coarse_labels = model.labels.clone();
                 self.coarse = Some(model);
                 if self.params.refine {
@@ -314,15 +334,24 @@ impl Pipeline {
     }
 
     fn sub_params(&self) -> Params {
-        Params { max_iter: self.params.refine_max_iter, tol: self.params.refine_tol, ..self.params.clone() }
+        Params { max_iter: self.params.refine_max_iter, tol: self.params.refine_tol, accelerate: false, ..self.params.clone() }
+    }
+
+    /// The coarse stage's model of all vertices (with multi-resolution: its components' E-step on all of them).
+    fn coarse_model(&self, fit: &Fit) -> Model {
+        match &self.subset {
+            None => fit.model(),
+            Some(_) => super::multires::model_everywhere(&self.pop, &fit.model(), &self.params),
+        }
     }
 
     fn start_refinement(&mut self) -> Result<State> {
         let labels = &self.coarse_labels;
         let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
         let mut members = vec![Vec::new(); m];
-        for (j, &l) in labels.iter().enumerate() {
-            members[l as usize].push(j);
+        match &self.subset {
+            None => labels.iter().enumerate().for_each(|(j, &l)| members[l as usize].push(j)),
+            Some(s) => s.iter().for_each(|&j| members[labels[j] as usize].push(j)),
         }
         members.retain(|m| !m.is_empty());
         let fit = Fit::from_labels(
@@ -400,7 +429,11 @@ impl Pipeline {
             return Ok(State::Refine(r));
         }
         // all parts refined: final stage
-        self.refined_labels = merge_rigid_neighbours(&self.pop, &r.refined, &self.params);
+        let refined = match &self.subset {
+            None => std::mem::take(&mut r.refined),
+            Some(s) => super::multires::extend_labels(&self.pop, s, &r.refined, self.params.variance_floor),
+        };
+        self.refined_labels = merge_rigid_neighbours(&self.pop, &refined, &self.params);
         self.close_stage(Some("final"));
         let fit = Fit::from_labels(Data::from_population(&self.pop), &self.refined_labels, &self.params)?;
         Ok(State::Final(fit))
@@ -454,7 +487,7 @@ impl Pipeline {
         let model = match (&self.final_model, &self.state) {
             (Some(m), _) => m.clone(),
             (None, State::Final(f)) => f.model(),
-            (None, State::Coarse(f)) => f.model(),
+            (None, State::Coarse(f)) => self.coarse_model(f),
             (None, _) => self.coarse.clone().expect("coarse model exists after the coarse stage"),
         };
         let n_distinct = |l: &[u32]| {
@@ -481,7 +514,8 @@ impl Pipeline {
     /// the coarse model is shown).
     pub fn current_model(&self) -> Model {
         match &self.state {
-            State::Coarse(f) | State::Final(f) => f.model(),
+            State::Coarse(f) => self.coarse_model(f),
+            State::Final(f) => f.model(),
             _ => self.result().model,
         }
     }

@@ -9,7 +9,9 @@
 //! - [`cm`]: cycle 1 (π eq 13, b eq 14); cycle 2 (exact Λ, R by eq 19 + 31, Φ eq 16 isotropic).
 //! - [`init`]: k-means++ with restarts and the per-cluster Procrustes start.
 //! - [`aecm`]: a [`aecm::Fit`] in progress: `step()` (one AECM iteration), `run()`, trace, convergence.
+//! - [`squarem`]: SQUAREM extrapolation of the AECM iteration (fewer iterations, still monotone).
 //! - [`hierarchy`]: Algorithm 1 (coarse, refinement, final), every stage kept.
+//! - [`multires`]: the coarse and refinement stages on a well-spread vertex subset, labels carried to all.
 //! - [`islands`]: every part one connected piece of the mesh (islands moved to the best adjacent part).
 //! - [`result`]: the fitted [`Model`]: labels (eq 20), latent shape (eq 21), reconstruction (eq 22).
 //! - [`limit`]: the E-step's speed against the machine's limit (tight kernels, measured).
@@ -24,8 +26,10 @@ pub mod init;
 pub mod islands;
 pub mod limit;
 pub mod memory;
+pub mod multires;
 pub mod params;
 pub mod result;
+pub mod squarem;
 
 pub use params::{LambdaRule, Params};
 pub use component::Component;

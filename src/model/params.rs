@@ -34,10 +34,17 @@ pub struct Params {
     /// End cycle 2 with the parameter-expanded step ([`super::cm::px_fold`], METHOD_NOTES item 12): same
     /// optimum, fewer iterations. Default true.
     pub px_em: bool,
+    /// Accelerate every AECM run by SQUAREM ([`super::squarem`]) with a monotonicity safeguard: the same
+    /// fixed points, fewer iterations; the log-likelihood still never decreases. Default true.
+    pub accelerate: bool,
     /// k-means++ restarts (the best by k-means cost is kept). Default 4.
     pub restarts: usize,
     /// Run Algorithm 1's refinement and final stage; false stops after the coarse AECM. Default true.
     pub refine: bool,
+    /// Multi-resolution ([`super::multires`]): with more vertices than this, the coarse and refinement stages
+    /// run on about this many well-spread vertices and only the final AECM on all of them; 0 runs every stage
+    /// on all vertices (the full hierarchy). Only with `refine`. Default 4000.
+    pub subset_vertices: usize,
     /// Algorithm 1 step 5: stop splitting a part when its mean variance err falls below this. Default 1e-5.
     pub refine_threshold: f64,
     /// After the refinement, adjacent parts that one rigid component explains with a mean variance below
@@ -67,8 +74,10 @@ impl Default for Params {
             variance_floor: 1e-7,
             lambda_rule: LambdaRule::Exact,
             px_em: true,
+            accelerate: true,
             restarts: 4,
             refine: true,
+            subset_vertices: 2000,
             refine_threshold: 1e-5,
             merge_ratio: 0.25,
             max_subparts: 6,
@@ -116,6 +125,12 @@ impl Params {
         }
         if !(self.refine_tol > 0.0 && self.refine_tol.is_finite()) {
             return bad(format!("refine_tol = {} must be a positive number (try 1e-2)", self.refine_tol));
+        }
+        if self.subset_vertices > 0 && self.subset_vertices < 64 {
+            return bad(format!(
+                "subset_vertices = {} must be 0 (every stage on all vertices) or at least 64 (try 2000)",
+                self.subset_vertices
+            ));
         }
         if self.refine_max_iter == 0 {
             return bad("refine_max_iter must be at least 1".into());
