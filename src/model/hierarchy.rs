@@ -183,7 +183,12 @@ impl Pipeline {
         let subset = (params.refine && params.subset_vertices > 0 && pop.n_vertices() > params.subset_vertices)
             .then(|| super::multires::spread_subset(pop, params.subset_vertices));
         let data = match &subset {
-            Some(s) => Data::from_population_subset(pop, s),
+            Some(s) => {
+                // the final stage runs on every vertex: the budget is checked for all of them first
+                let most = super::memory::max_components(params.parts, params.refine, params.max_subparts, pop.n_vertices());
+                super::memory::check(pop.n_vertices(), pop.n_shapes(), most, super::memory::budget_bytes()?)?;
+                Data::from_population_subset(pop, s)
+            }
             None => Data::from_population(pop),
         };
         let fit = Fit::new(data, &coarse)?;
