@@ -87,6 +87,11 @@ const SCREEN_SHAPES: usize = 2;
 const SCREEN_REL: f32 = 1e-4;
 const SCREEN_ABS_S: f64 = 5e-8;
 
+/// Blocks per group of the group bound ([`EStep::run`]): 16 vertices close in the first shape.
+const GROUP_BLOCKS: usize = 4;
+/// Shapes the group bound looks at (the first ones of the farthest-first order).
+const GROUP_SHAPES: usize = 8;
+
 /// Vertices per block of the streaming layout: the E-step's kernel runs over one block at a time with the
 /// vertices in SIMD lanes (the reduction over shapes then needs no horizontal sums).
 pub const LANES: usize = 4;
@@ -109,6 +114,12 @@ pub struct Blocked {
     /// The first [`Blocked::screen`] shapes again in f32, `h32[(b * screen + t) * 3 + c][l]`.
     h32: Vec<[f32; LANES]>,
     screen: usize,
+    /// Groups of [`GROUP_BLOCKS`] consecutive blocks: per group, the centre of its vertices in each of the
+    /// first `group_shapes` shapes (in `order`), `centres[g * group_shapes + t]`, and the squared radius of the
+    /// group around it in that shape, `radii2[g * group_shapes + t]` (largest over the group's vertices).
+    centres: Vec<[f64; 3]>,
+    radii2: Vec<f64>,
+    group_shapes: usize,
 }
 
 impl Blocked {
@@ -142,7 +153,31 @@ impl Blocked {
                 h32.push(h[b * ns * 3 + t].map(|v| v as f32));
             }
         }
-        Blocked { n_shapes: ns, order: shapes, idx, valid, h, h32, screen }
+        let group_shapes = ns.min(GROUP_SHAPES);
+        let ng = nb.div_ceil(GROUP_BLOCKS);
+        let mut centres = vec![[0.0; 3]; ng * group_shapes];
+        let mut radii2 = vec![0.0; ng * group_shapes];
+        for g in 0..ng {
+            let blocks = g * GROUP_BLOCKS..((g + 1) * GROUP_BLOCKS).min(nb);
+            for t in 0..group_shapes {
+                let lanes = || blocks.clone().flat_map(|b| (0..LANES).map(move |l| (b, l)));
+                let mut c = [0.0; 3];
+                let n = (blocks.len() * LANES) as f64;
+                for (b, l) in lanes() {
+                    for d in 0..3 {
+                        c[d] += h[(b * ns + t) * 3 + d][l] / n;
+                    }
+                }
+                let mut r2 = 0.0f64;
+                for (b, l) in lanes() {
+                    let e: f64 = (0..3).map(|d| (h[(b * ns + t) * 3 + d][l] - c[d]).powi(2)).sum();
+                    r2 = r2.max(e);
+                }
+                centres[g * group_shapes + t] = c;
+                radii2[g * group_shapes + t] = r2;
+            }
+        }
+        Blocked { n_shapes: ns, order: shapes, idx, valid, h, h32, screen, centres, radii2, group_shapes }
     }
 
     pub fn n_blocks(&self) -> usize {
@@ -288,6 +323,8 @@ pub struct EStep {
     screen: Vec<Screen>,
     /// The screen's threshold per component for the current block.
     thr32: Vec<f32>,
+    /// Per component, an upper bound of its log-density over the current group of blocks.
+    group_bound: Vec<f64>,
     /// Floating-point operations of the last run: in f64 (shape evaluations, bounds and final densities) and
     /// in f32 (the screen and its checks).
     pub flops_f64: f64,
@@ -308,6 +345,7 @@ impl EStep {
             packed32: Vec::new(),
             screen: Vec::new(),
             thr32: Vec::new(),
+            group_bound: Vec::new(),
             flops_f64: 0.0,
             flops_f32: 0.0,
             owner: Vec::new(),
@@ -386,7 +424,21 @@ impl EStep {
         let mut screen_evals = 0usize;
         let mut bounds = 0usize; // lanes x log-density evaluations (checks and final values), f64
         let mut screens = 0usize; // lanes x screen checks, f32
+        let gs = self.blocked.group_shapes;
+        self.group_bound.clear();
+        self.group_bound.resize(m, f64::INFINITY);
         for b in 0..self.blocked.n_blocks() {
+            if b % GROUP_BLOCKS == 0 && gs > 0 {
+                // the group bound of every component for the next GROUP_BLOCKS blocks
+                let g = b / GROUP_BLOCKS;
+                let centre = &self.blocked.centres[g * gs..(g + 1) * gs];
+                let radii2 = &self.blocked.radii2[g * gs..(g + 1) * gs];
+                for (k, wb) in wbs.iter().enumerate() {
+                    self.group_bound[k] = group_upper_bound(wb, &shrinks[k][gs - 1], centre, radii2);
+                }
+                evals += gs * m;
+                bounds += m;
+            }
             let h = self.blocked.block(b);
             let h32 = self.blocked.block32(b);
             let ids = self.blocked.idx[b];
@@ -417,8 +469,13 @@ impl EStep {
             if ts > 0 {
                 thresholds(&self.screen, &best, &mut self.thr32);
             }
+            let best_min = best.iter().fold(f64::INFINITY, |a, &v| a.min(v));
             for k in 0..m {
                 if self.is_hint[k] {
+                    continue;
+                }
+                // the whole group is far from this component (NaN never prunes)
+                if self.group_bound[k] < best_min - PRUNE_MARGIN {
                     continue;
                 }
                 let wb = &wbs[k];
@@ -518,6 +575,27 @@ impl EStep {
         self.flops_f32 = (FLOPS_PER_SHAPE * screen_evals + FLOPS_PER_SCREEN_CHECK * screens) as f64;
         (ll, evals)
     }
+}
+
+/// An upper bound of a component's log-density over every vertex of a group (a ball of radius ρ_t around the
+/// centre c_t in each of the first T shapes), from one evaluation at the centre.
+///
+/// With x = h - b over the first T shapes, the prefix quadratic form q_T(h) = x^T P x, P = D - D A (I + A^T D A)^-1
+/// A^T D with D = diag(1/s_t) (the Woodbury form over T shapes, see [`EStep::run`]), is the square of a seminorm,
+/// and P <= D. So for every h of the group, by the triangle inequality,
+/// sqrt q_T(h) >= sqrt q_T(c) - |h - c|_P >= sqrt q_T(c) - R,  R² = Σ_t ρ_t² / s_t,
+/// and log π N(h) <= log_norm - q_T(h) / 2 <= log_norm - max(0, sqrt q_T(c) - R)² / 2. Rounding: q_T(c) is a
+/// difference of two sums of at most sq = Σ |x_t|²/s_t, each rounded at 1e-16 relative; 1e-12 sq is taken off
+/// it and R is taken 1e-12 larger.
+#[inline]
+fn group_upper_bound(wb: &Woodbury, shrink: &[f64; 3], centre: &[[f64; 3]], radii2: &[f64]) -> f64 {
+    let t = centre.len();
+    let (y, sq) = super::component::project_packed(&wb.packed[..t], centre);
+    let q = sq - (shrink[0] * y[0] * y[0] + shrink[1] * y[1] * y[1] + shrink[2] * y[2] * y[2]);
+    let q_low = (q - 1e-12 * sq).max(0.0);
+    let r2: f64 = wb.packed[..t].iter().zip(radii2).map(|(p, r2)| r2 * p[3]).sum();
+    let gap = (q_low.sqrt() - r2.sqrt() * (1.0 + 1e-12)).max(0.0);
+    wb.log_norm - 0.5 * gap * gap
 }
 
 /// Per component, what the f32 screen needs.
