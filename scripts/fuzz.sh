@@ -7,6 +7,10 @@
 #   TARGET      obj_parse (default): bytes -> posemfa::mesh::obj::parse_obj
 #               population: bytes split at NUL into files -> Population::from_files(_all_errors) -> bounded fit
 #               shapes: bytes as coordinates -> Population::from_unit_shapes -> bounded fit
+#               ply_parse: bytes -> posemfa::mesh::ply::parse_ply
+#               point_cache: byte 0 (.pc2/.mdd) + bytes -> parse_pc2/parse_mdd, then mesh::load over a base mesh
+#               gltf_read: byte 0 (options) + a .glb or .gltf -> posemfa::mesh::gltf::read
+#               formats: ply_parse, point_cache and gltf_read in turn
 #               all: each of them in turn, with the same limits
 #   --runs N    stop after N executions (default 10000000); --time S: stop after S seconds (default: none)
 #   --sanitizer address (default) or none (faster; still catches panics, overflow and debug assertions)
@@ -18,7 +22,9 @@
 #   Without a nightly (rustup's server unreachable), it runs the stable toolchain with RUSTC_BOOTSTRAP=1, which
 #   accepts the same flags (the stable toolchain ships the sanitizer runtimes for x86_64 Linux).
 # Seed corpus: generated at every run into fuzz/corpus/TARGET/ (not committed) by fuzz/examples/gen_corpus.rs
-#   from posemfa::synth meshes, hand-written OBJ files, small populations, and ../shared/objcorpus when present.
+#   from posemfa::synth meshes, hand-written OBJ files, small populations, and ../shared/objcorpus when present;
+#   for the format targets also files from posemfa's writers (PLY, pc2, mdd, morph-target glb), hand-written
+#   edge cases and the small Blender-written files committed in fuzz/seeds/.
 # A crash stops the run (exit 1); libFuzzer writes the input to fuzz/artifacts/TARGET/crash-*: reproduce it with
 #   (cd fuzz && cargo +nightly fuzz run TARGET artifacts/TARGET/crash-...), fix, and add it to
 #   tests/fuzz_regressions.rs.
@@ -37,13 +43,13 @@ jobs=1
 extra=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    obj_parse|population|shapes|all) target=$1 ;;
+    obj_parse|population|shapes|ply_parse|point_cache|gltf_read|formats|all) target=$1 ;;
     --runs) runs=${2:?--runs needs a number}; shift ;;
     --time) time_limit=${2:?--time needs seconds}; shift ;;
     --sanitizer) sanitizer=${2:?--sanitizer needs address or none}; shift ;;
     --jobs) jobs=${2:?--jobs needs a number}; shift ;;
     --) shift; extra=("$@"); break ;;
-    *) echo "fuzz.sh: unknown argument '$1' (targets: obj_parse population shapes all; options: --runs N --time S --sanitizer address|none --jobs N)" >&2; exit 2 ;;
+    *) echo "fuzz.sh: unknown argument '$1' (targets: obj_parse population shapes ply_parse point_cache gltf_read formats all; options: --runs N --time S --sanitizer address|none --jobs N)" >&2; exit 2 ;;
   esac
   shift
 done
@@ -94,6 +100,9 @@ max_len_of() {
     obj_parse) echo 8192 ;;
     population) echo 16384 ;;
     shapes) echo 4096 ;;
+    ply_parse) echo 16384 ;;
+    point_cache) echo 8192 ;;
+    gltf_read) echo 65536 ;;
   esac
 }
 run_one() {
@@ -118,7 +127,9 @@ run_one() {
 }
 
 if [ "$target" = all ]; then
-  for t in obj_parse population shapes; do run_one "$t"; done
+  for t in obj_parse population shapes ply_parse point_cache gltf_read; do run_one "$t"; done
+elif [ "$target" = formats ]; then
+  for t in ply_parse point_cache gltf_read; do run_one "$t"; done
 else
   run_one "$target"
 fi

@@ -59,6 +59,25 @@ dual_test! {
         assert!(worst < 1e-6, "{worst}");
     }
 
+    /// A population written as one .glb with a morph target per pose (`posemfa generate --format glb`)
+    /// reads back through the animation (one key per pose) to float32 precision, in the original units.
+    fn morph_target_glb_gives_the_population() {
+        let pop = small();
+        let glb = posemfa::export::morph_glb::write_morph_glb("arm", &pop.names, &pop.shapes, &pop.faces).unwrap();
+        let back = Population::from_files(vec![("arm.glb".into(), glb)]).unwrap();
+        assert!(back.source.starts_with("4 frames of animation 'Poses' (sampled at its keyframes, 24 fps) of mesh 'arm' in arm.glb"), "{}", back.source);
+        assert_eq!((back.n_shapes(), back.n_vertices()), (4, pop.n_vertices()));
+        assert_eq!(back.faces, pop.faces);
+        let worst = back.shapes.iter().zip(&pop.shapes).flat_map(|(a, b)| a.iter().zip(b))
+            .map(|(p, q)| {
+                let p = back.normalization.to_original(*p);
+                let q = pop.normalization.to_original(*q);
+                (0..3).map(|d| (p[d] - q[d]).abs()).fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{worst}");
+    }
+
     /// A point cache over one base mesh: frames are the poses; a vertex-count mismatch names both files.
     fn point_caches_over_a_base_mesh() {
         let pop = small();

@@ -193,4 +193,130 @@ fn main() {
     write(pop_dir, "synth-snake", &bytes);
     n_pop += 1;
     println!("gen_corpus: {n_obj} obj_parse, {n_pop} population, {n_shapes} shapes seeds in {}", root.display());
+    format_seeds(root);
+}
+
+/// Every file of `dir` whose name ends with one of `exts` (case-insensitive), as (name, bytes).
+fn files_in(dir: &Path, exts: &[&str]) -> Vec<(String, Vec<u8>)> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
+    let mut out: Vec<(String, Vec<u8>)> = entries
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let lower = name.to_ascii_lowercase();
+            (exts.iter().any(|x| lower.ends_with(x)) && e.path().is_file())
+                .then(|| std::fs::read(e.path()).ok().map(|b| (name, b)))
+                .flatten()
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// Seeds of the ply_parse, point_cache and gltf_read targets: files written by posemfa's writers from the
+/// small geometries and generated meshes, hand-written edge cases, and the small files written by Blender in
+/// fuzz/seeds/ (scripts/fixtures/make-fuzz-seeds.sh).
+fn format_seeds(root: &Path) {
+    use posemfa::export::morph_glb::write_morph_glb;
+    use posemfa::export::ply::{write_ply, PlyFormat};
+    use posemfa::mesh::cache::{write_mdd, write_pc2};
+    let dir = |t: &str| {
+        let d = root.join(t);
+        std::fs::create_dir_all(&d).unwrap_or_else(|e| panic!("cannot create {}: {e}", d.display()));
+        d
+    };
+    let (ply_dir, cache_dir, gltf_dir) = (dir("ply_parse"), dir("point_cache"), dir("gltf_read"));
+    let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("seeds");
+    let (mut n_ply, mut n_cache, mut n_gltf) = (0, 0, 0);
+    let mut populations: Vec<(String, Vec<String>, Vec<Vec<Vec3>>, Vec<[u32; 3]>)> = geometries()
+        .into_iter()
+        .map(|(name, shapes, faces)| {
+            let names = (1..=shapes.len()).map(|k| format!("{name}-{k}")).collect();
+            (name.to_string(), names, shapes, faces)
+        })
+        .collect();
+    for preset in [Preset::Arm, Preset::Snake] {
+        let spec = Spec { preset, vertices: 100, poses: 3, seed: 2, ..Spec::default() };
+        let g = generate(&spec).expect("generate a small population").population;
+        populations.push((format!("synth-{}", preset.name()), g.names, g.shapes, g.faces));
+    }
+    for (name, names, shapes, faces) in &populations {
+        // ply: ASCII and binary little endian from posemfa's writer; big endian by hand below
+        write(&ply_dir, &format!("{name}-ascii.ply"), &write_ply(&shapes[0], faces, PlyFormat::Ascii, name));
+        write(&ply_dir, &format!("{name}-binary.ply"), &write_ply(&shapes[0], faces, PlyFormat::Binary, name));
+        n_ply += 2;
+        // point caches: byte 0 even = pc2, odd = mdd
+        let mut pc2 = vec![0u8];
+        pc2.extend(write_pc2(shapes));
+        let mut mdd = vec![1u8];
+        mdd.extend(write_mdd(shapes, 24.0));
+        write(&cache_dir, &format!("{name}.pc2"), &pc2);
+        write(&cache_dir, &format!("{name}.mdd"), &mdd);
+        n_cache += 2;
+        // glb with one morph target per pose, under a few option bytes
+        if let Ok(glb) = write_morph_glb(name, names, shapes, faces) {
+            for cfg in [0x00u8, 0x02, 0x0d, 0x61] {
+                let mut b = vec![cfg];
+                b.extend_from_slice(&glb);
+                write(&gltf_dir, &format!("{name}-morph-{cfg:02x}.glb"), &b);
+                n_gltf += 1;
+            }
+        }
+    }
+    // 3-point caches, which load over the target's one-triangle base mesh
+    let tri: Vec<Vec<Vec3>> = (0..3).map(|k| vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.1 * k as f64]]).collect();
+    for (cfg, bytes) in [(0u8, write_pc2(&tri)), (1u8, write_mdd(&tri, 30.0))] {
+        let mut b = vec![cfg];
+        b.extend(bytes);
+        write(&cache_dir, &format!("triangle-{cfg}"), &b);
+        n_cache += 1;
+    }
+    let plies: [&[u8]; 6] = [
+        b"ply\nformat ascii 1.0\ncomment \xe9t\xe9\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 255\n1 0 0 0\n0 1 0 7\n3 0 1 2\n",
+        b"ply\r\nformat ascii 1.0\r\nelement face 2\r\nproperty uchar flags\r\nproperty list uint8 uint32 vertex_index\r\nelement vertex 4\r\nproperty double z\r\nproperty double y\r\nproperty double x\r\nelement edge 1\r\nproperty int a\r\nproperty int b\r\nend_header\r\n1 3 0 1 2\r\n0 4 0 1 2 3\r\n0 0 0\r\n1e-3 0 1\r\n-2.5E2 1 0\r\n0 1 1\r\n0 1\r\n",
+        b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x3f\x80\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x3f\x80\x00\x00\x00\x00\x00\x00\x03\x00\x00\x00\x00\x00\x00\x00\x01\x00\x00\x00\x02",
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty short x\nproperty char y\nproperty ushort z\nproperty list ushort float normals\nelement face 1\nproperty list int ushort vertex_indices\nend_header\n\x00\x00\x00\x00\x00\x00\x00\x00\x01\x00\x00\x00\x00\x00\x00\x01\x00\x00\x00\x80\x3f\x00\x00\x01\x00\x00\x00\x00\x00\x03\x00\x00\x00\x00\x00\x01\x00\x02\x00",
+        b"ply\nformat ascii 1.0\nobj_info generated\nelement vertex 4294967296\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n",
+        b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 nan\n5 0 1 2 3 0\n",
+    ];
+    for (i, b) in plies.iter().enumerate() {
+        write(&ply_dir, &format!("snippet-{i}.ply"), b);
+        n_ply += 1;
+    }
+    // small .gltf documents with data-URI buffers: a quad with a skin and a weights animation
+    let gltf_docs: [&str; 1] = [concat!(
+        r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":92,"uri":"data:application/octet-stream;base64,"#,
+        r#"AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAACAPwAAgD8AAAAAAAAAAAAAgD8AAAAAAAABAAIAAAACAAMAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAAAAAACAPwAAAAA="}],"#,
+        r#""bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12},"#,
+        r#"{"buffer":0,"byteOffset":60,"byteLength":8},{"buffer":0,"byteOffset":68,"byteLength":24}],"#,
+        r#""accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},"#,
+        r#"{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"},{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR"},"#,
+        r#"{"bufferView":3,"componentType":5126,"count":6,"type":"SCALAR"}],"#,
+        r#""meshes":[{"name":"quad","primitives":[{"attributes":{"POSITION":0},"indices":1,"targets":[{"POSITION":0}]}],"weights":[0]}],"#,
+        r#""nodes":[{"name":"body","mesh":0,"children":[1]},{"name":"child","translation":[0,1,0]}],"scenes":[{"nodes":[0]}],"#,
+        r#""animations":[{"name":"Go","samplers":[{"input":2,"output":3,"interpolation":"CUBICSPLINE"},{"input":2,"output":3,"interpolation":"LINEAR"}],"#,
+        r#""channels":[{"sampler":0,"target":{"node":0,"path":"weights"}}]}]}"#
+    )];
+    for (i, d) in gltf_docs.iter().enumerate() {
+        for cfg in [0u8, 0x09] {
+            let mut b = vec![cfg];
+            b.extend_from_slice(d.as_bytes());
+            write(&gltf_dir, &format!("snippet-{i}-{cfg:02x}.gltf"), &b);
+            n_gltf += 1;
+        }
+    }
+    // small files written by Blender (fuzz/seeds/, made by scripts/fixtures/make-fuzz-seeds.sh)
+    for (name, bytes) in files_in(&seeds, &[".ply"]) {
+        write(&ply_dir, &format!("blender-{name}"), &bytes);
+        n_ply += 1;
+    }
+    for (name, bytes) in files_in(&seeds, &[".glb", ".gltf"]) {
+        for cfg in [0u8, 0x02, 0x05] {
+            let mut b = vec![cfg];
+            b.extend_from_slice(&bytes);
+            write(&gltf_dir, &format!("blender-{cfg:02x}-{name}"), &b);
+            n_gltf += 1;
+        }
+    }
+    println!("gen_corpus: {n_ply} ply_parse, {n_cache} point_cache, {n_gltf} gltf_read seeds in {}", root.display());
 }

@@ -817,10 +817,11 @@ impl Args for GenerateArgs {
                 val(
                     "--format",
                     "F",
-                    "obj (default), ply (binary, float32), ply-ascii, pc2 (one point cache + rest.obj)",
+                    "obj (default), ply (binary, float32), ply-ascii, pc2 (one point cache + rest.obj), glb (one \
+                     .glb: morph target per pose, animated one per frame)",
                     |o: &mut Self, v| match v {
-                        "obj" | "ply" | "ply-ascii" | "pc2" => text(&mut o.format, v),
-                        _ => Err(format!("--format takes obj, ply, ply-ascii or pc2, not '{v}'")),
+                        "obj" | "ply" | "ply-ascii" | "pc2" | "glb" => text(&mut o.format, v),
+                        _ => Err(format!("--format takes obj, ply, ply-ascii, pc2 or glb, not '{v}'")),
                     },
                 ),
                 val("--vertices", "N", "vertex count (default 10000)", |o: &mut Self, v| {
@@ -863,6 +864,12 @@ fn cmd_generate(a: GenerateArgs) -> Result<(), String> {
         "pc2" => {
             let rest = posemfa::export::obj::write_obj(&pop.shapes[0], &pop.faces, "faces for poses.pc2 (pose 1)");
             vec![("rest.obj".into(), rest.into_bytes()), ("poses.pc2".into(), posemfa::mesh::cache::write_pc2(&pop.shapes))]
+        }
+        "glb" => {
+            let name = a.spec.preset.name();
+            let glb = posemfa::export::morph_glb::write_morph_glb(name, &pop.names, &pop.shapes, &pop.faces)
+                .map_err(|e| e.to_string())?;
+            vec![(format!("{name}.glb"), glb)]
         }
         f => {
             let fmt = if f == "ply" { posemfa::export::ply::PlyFormat::Binary } else { posemfa::export::ply::PlyFormat::Ascii };

@@ -146,6 +146,7 @@ pub fn parse_pc2(file: &str, bytes: &[u8]) -> Result<PointCache> {
     let (frames, points) = (samples as usize, points as usize);
     let data = bytes.get(32..).unwrap_or(&[]);
     let rate = if rate.is_finite() && rate > 0.0 { f64::from(rate) } else { 1.0 };
+    let start = if start.is_finite() { start } else { 0.0 };
     let times = (0..frames).map(|f| f64::from(start) + f as f64 * rate).collect();
     Ok(PointCache { points, frames: frames_from(file, data, frames, points, false)?, times, kind: "pc2" })
 }

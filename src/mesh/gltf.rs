@@ -153,6 +153,38 @@ fn split_glb(file: &str, bytes: &[u8]) -> Result<(Vec<u8>, Option<Vec<u8>>)> {
     Ok((json, bin))
 }
 
+/// Refuses byte counts and element counts that do not fit this build's `usize` (the `gltf` crate converts
+/// them with `as usize`, which would silently wrap in wasm32 where `usize` is 32 bits).
+fn check_sizes(file: &str, doc: &gltf::Document) -> Result<()> {
+    let json = doc.as_json();
+    let too_big = |what: String, v: u64| {
+        err(file, format!("{what} is {v}, more than this build can address ({}); the file is damaged", usize::MAX))
+    };
+    let fits = |v: u64| usize::try_from(v).is_ok();
+    for (i, a) in json.accessors.iter().enumerate() {
+        if !fits(a.count.0) {
+            return Err(too_big(format!("the count of accessor {i}"), a.count.0));
+        }
+        if let Some(o) = a.byte_offset.filter(|o| !fits(o.0)) {
+            return Err(too_big(format!("the byte offset of accessor {i}"), o.0));
+        }
+    }
+    for (i, v) in json.buffer_views.iter().enumerate() {
+        if !fits(v.byte_length.0) {
+            return Err(too_big(format!("the length of buffer view {i}"), v.byte_length.0));
+        }
+        if let Some(o) = v.byte_offset.filter(|o| !fits(o.0)) {
+            return Err(too_big(format!("the byte offset of buffer view {i}"), o.0));
+        }
+    }
+    for (i, b) in json.buffers.iter().enumerate() {
+        if !fits(b.byte_length.0) {
+            return Err(too_big(format!("the length of buffer {i}"), b.byte_length.0));
+        }
+    }
+    Ok(())
+}
+
 /// The bytes of every buffer: GLB's BIN chunk, data URIs, or files given alongside.
 fn buffers(file: &str, doc: &gltf::Document, blob: Option<Vec<u8>>, resources: &[(&str, &[u8])]) -> Result<Vec<Vec<u8>>> {
     use base64::Engine as _;
@@ -240,60 +272,9 @@ impl Data<'_> {
     /// [0, 1] / [-1, 1]. `what` says what the accessor is for, in messages.
     fn read(&self, a: &gltf::Accessor, what: &str) -> Result<Vec<f64>> {
         use gltf::accessor::DataType;
+        let (bytes, stride) = self.locate(a, what)?;
+        let (dims, comp, count, idx) = (a.dimensions().multiplicity(), a.data_type().size(), a.count(), a.index());
         let file = self.file;
-        let idx = a.index();
-        if a.sparse().is_some() {
-            return Err(err(
-                file,
-                format!(
-                    "accessor {idx} ({what}) is sparse, which posemfa does not read; export without sparse accessors \
-                     (in Blender: uncheck 'Use Sparse Accessor')"
-                ),
-            ));
-        }
-        let dims = a.dimensions().multiplicity();
-        let comp = a.data_type().size();
-        let count = a.count();
-        let Some(view) = a.view() else {
-            // No buffer view and no sparse storage: every value is zero (glTF 2.0, 3.6.2.3). Bounded: the
-            // allocation must not come from an unchecked count.
-            return Err(err(
-                file,
-                format!("accessor {idx} ({what}) has no buffer view (all zeros by the spec); export the file again"),
-            ));
-        };
-        let elem = (dims * comp) as u64;
-        let stride = view.stride().map_or(elem, |s| s as u64);
-        let data = self.buffers.get(view.buffer().index()).map(Vec::as_slice).unwrap_or(&[]);
-        let view_end = view.offset() as u64 + view.length() as u64;
-        if view_end > data.len() as u64 {
-            return Err(err(
-                file,
-                format!(
-                    "buffer view {} (bytes {}..{view_end}) runs past the end of buffer {} ({} bytes); the file is \
-                     damaged: export it again",
-                    view.index(),
-                    view.offset(),
-                    view.buffer().index(),
-                    data.len()
-                ),
-            ));
-        }
-        let need = if count == 0 { 0 } else { a.offset() as u64 + stride * (count as u64 - 1) + elem };
-        if need > view.length() as u64 || stride < elem {
-            return Err(err(
-                file,
-                format!(
-                    "accessor {idx} ({what}: {count} elements of {elem} bytes, stride {stride}, from byte {}) reads \
-                     past the end of its buffer view {} ({} bytes); the file is damaged or cut: export it again",
-                    a.offset(),
-                    view.index(),
-                    view.length()
-                ),
-            ));
-        }
-        let start = view.offset() + a.offset();
-        let bytes = data.get(start..view_end as usize).unwrap_or(&[]);
         let norm = a.normalized();
         let mut out = Vec::with_capacity(count * dims);
         for i in 0..count {
@@ -334,6 +315,70 @@ impl Data<'_> {
         Ok(out)
     }
 
+    /// The bytes of an accessor (from its first element to the end of its buffer view) and its stride, after
+    /// checking that every element lies inside its buffer view and the view inside its buffer.
+    fn locate(&self, a: &gltf::Accessor, what: &str) -> Result<(&[u8], usize)> {
+        let file = self.file;
+        let idx = a.index();
+        if a.sparse().is_some() {
+            return Err(err(
+                file,
+                format!(
+                    "accessor {idx} ({what}) is sparse, which posemfa does not read; export without sparse accessors \
+                     (in Blender: uncheck 'Use Sparse Accessor')"
+                ),
+            ));
+        }
+        let dims = a.dimensions().multiplicity();
+        let comp = a.data_type().size();
+        let count = a.count();
+        let Some(view) = a.view() else {
+            // No buffer view and no sparse storage: every value is zero (glTF 2.0, 3.6.2.3). Bounded: the
+            // allocation must not come from an unchecked count.
+            return Err(err(
+                file,
+                format!("accessor {idx} ({what}) has no buffer view (all zeros by the spec); export the file again"),
+            ));
+        };
+        let elem = (dims * comp) as u64;
+        let stride = view.stride().map_or(elem, |s| s as u64);
+        let data = self.buffers.get(view.buffer().index()).map(Vec::as_slice).unwrap_or(&[]);
+        // 64-bit sums of the document's numbers, saturating: a huge offset is refused, never wrapped.
+        let view_end = (view.offset() as u64).saturating_add(view.length() as u64);
+        if view_end > data.len() as u64 {
+            return Err(err(
+                file,
+                format!(
+                    "buffer view {} (bytes {}..{view_end}) runs past the end of buffer {} ({} bytes); the file is \
+                     damaged: export it again",
+                    view.index(),
+                    view.offset(),
+                    view.buffer().index(),
+                    data.len()
+                ),
+            ));
+        }
+        let need = if count == 0 {
+            0
+        } else {
+            (a.offset() as u64).saturating_add(stride.saturating_mul(count as u64 - 1)).saturating_add(elem)
+        };
+        if need > view.length() as u64 || stride < elem {
+            return Err(err(
+                file,
+                format!(
+                    "accessor {idx} ({what}: {count} elements of {elem} bytes, stride {stride}, from byte {}) reads \
+                     past the end of its buffer view {} ({} bytes); the file is damaged or cut: export it again",
+                    a.offset(),
+                    view.index(),
+                    view.length()
+                ),
+            ));
+        }
+        let start = view.offset() + a.offset();
+        Ok((data.get(start..view_end as usize).unwrap_or(&[]), stride as usize))
+    }
+
     fn read_vec3(&self, a: &gltf::Accessor, what: &str) -> Result<Vec<DVec3>> {
         self.expect(a, what, 3)?;
         Ok(self.read(a, what)?.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect())
@@ -365,7 +410,9 @@ struct MeshData {
 }
 
 fn mesh_vertex_count(mesh: &gltf::Mesh) -> u64 {
-    mesh.primitives().filter_map(|p| p.get(&gltf::Semantic::Positions)).map(|a| a.count() as u64).sum()
+    mesh.primitives()
+        .filter_map(|p| p.get(&gltf::Semantic::Positions))
+        .fold(0u64, |n, a| n.saturating_add(a.count() as u64))
 }
 
 fn name_of(name: Option<&str>, kind: &str, index: usize) -> String {
@@ -378,6 +425,55 @@ fn name_of(name: Option<&str>, kind: &str, index: usize) -> String {
 fn pick<'a, T>(items: Vec<T>, wanted: &str, name: impl Fn(&T) -> Option<&'a str>, index: impl Fn(&T) -> usize) -> Option<T> {
     let by_index = wanted.parse::<usize>().ok();
     items.into_iter().find(|t| name(t) == Some(wanted) || Some(index(t)) == by_index)
+}
+
+/// Refuses, before anything is read, a mesh whose vertices (with its morph targets and skin weights) and
+/// indices would take more memory than the budget. The counts come from the document (a primitive may reuse
+/// another's accessor, so small files can name huge meshes); each accessor was checked against its bytes
+/// only when it is read.
+fn check_read_size(data: &Data, mesh: &gltf::Mesh, mname: &str, budget: u64) -> Result<()> {
+    let file = data.file;
+    // Each accessor against its bytes first (the more precise message).
+    for (pi, p) in mesh.primitives().enumerate() {
+        let what = |w: &str| format!("{w} of primitive {pi} of {mname}");
+        if let Some(a) = p.get(&gltf::Semantic::Positions) {
+            data.locate(&a, &what("POSITION"))?;
+        }
+        if let Some(a) = p.indices() {
+            data.locate(&a, &what("indices"))?;
+        }
+        for (k, t) in p.morph_targets().enumerate() {
+            if let Some(a) = t.positions() {
+                data.locate(&a, &what(&format!("morph target {k}")))?;
+            }
+        }
+    }
+    let vertices = mesh_vertex_count(mesh);
+    let targets = mesh.primitives().map(|p| p.morph_targets().len() as u64).max().unwrap_or(0);
+    let indices = mesh.primitives().fold(0u64, |n, p| {
+        let count = p.indices().map(|a| a.count() as u64);
+        n.saturating_add(count.or_else(|| p.get(&gltf::Semantic::Positions).map(|a| a.count() as u64)).unwrap_or(0))
+    });
+    // Per vertex: position and one delta per target (24 bytes each), skin influences as read (two sets of
+    // 4 joints and 4 weights as f64) and kept (up to 8 pairs of 16 bytes plus the list): 24 + 128 + 152.
+    // Per index: the f64 read, the u64 kept and a third of a triangle (4 bytes).
+    let per_vertex = 24u64.saturating_mul(targets.saturating_add(1)).saturating_add(304);
+    let need = vertices.saturating_mul(per_vertex).saturating_add(indices.saturating_mul(20));
+    if need > budget {
+        let show = crate::model::memory::show_bytes;
+        return Err(err(
+            file,
+            format!(
+                "{mname} has {vertices} vertices{} and {indices} indices in its primitives, which take about {} to \
+                 read, more than the memory budget of {}; the file is damaged or far larger than a pose population \
+                 needs (decimate the mesh before exporting it)",
+                if targets > 0 { format!(" with {targets} morph targets") } else { String::new() },
+                show(need),
+                show(budget)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn read_mesh(data: &Data, mesh: &gltf::Mesh) -> Result<MeshData> {
@@ -507,37 +603,56 @@ fn rest_transforms(doc: &gltf::Document) -> Vec<(DVec3, DQuat, DVec3)> {
         .collect()
 }
 
-/// Global transforms from local ones over the node hierarchy (roots have no parent).
+/// Global transforms from local ones over the node hierarchy (roots have no parent). Linear in the number
+/// of nodes however deep the hierarchy; a cycle (which a valid file cannot have) is cut where it closes.
 fn globals(parents: &[Option<usize>], local: &[(DVec3, DQuat, DVec3)]) -> Vec<DMat4> {
     let n = local.len();
     let mut out: Vec<Option<DMat4>> = vec![None; n];
+    let mut on_path = vec![false; n];
+    let mut chain = Vec::new();
     for start in 0..n {
-        // Walk up to a computed ancestor (bounded: the document is validated to be a forest; the walk stops
-        // after n steps anyway).
-        let mut chain = vec![start];
-        let mut cur = start;
-        for _ in 0..n {
-            match parents.get(cur).copied().flatten() {
-                Some(p) if out.get(p).is_some_and(Option::is_none) && !chain.contains(&p) => {
-                    chain.push(p);
-                    cur = p;
-                }
-                _ => break,
+        // Walk up to a computed ancestor (or a root, or a node already on this walk).
+        chain.clear();
+        let mut cur = Some(start);
+        while let Some(c) = cur {
+            if out.get(c).is_none_or(Option::is_some) || on_path.get(c).copied().unwrap_or(true) {
+                break;
             }
+            if let Some(flag) = on_path.get_mut(c) {
+                *flag = true;
+            }
+            chain.push(c);
+            cur = parents.get(c).copied().flatten();
         }
         for &i in chain.iter().rev() {
-            if out.get(i).is_some_and(Option::is_some) {
-                continue;
-            }
             let (t, r, s) = local.get(i).copied().unwrap_or((DVec3::zeros(), DQuat::identity(), DVec3::repeat(1.0)));
             let m = trs(t, r, s);
             let parent = parents.get(i).copied().flatten().and_then(|p| out.get(p).copied().flatten());
             if let Some(slot) = out.get_mut(i) {
                 *slot = Some(parent.map_or(m, |pm| pm * m));
             }
+            if let Some(flag) = on_path.get_mut(i) {
+                *flag = false;
+            }
         }
     }
     out.into_iter().map(|m| m.unwrap_or_else(DMat4::identity)).collect()
+}
+
+/// Marks every node that is a joint of `joints` or an ancestor of one (each node visited once).
+fn joint_ancestors(parents: &[Option<usize>], joints: &[usize]) -> Vec<bool> {
+    let mut marked = vec![false; parents.len()];
+    for &j in joints {
+        let mut cur = Some(j);
+        while let Some(c) = cur {
+            match marked.get_mut(c) {
+                Some(m) if !*m => *m = true,
+                _ => break,
+            }
+            cur = parents.get(c).copied().flatten();
+        }
+    }
+    marked
 }
 
 /// One animation channel, read.
@@ -654,6 +769,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     let g = gltf::Gltf::from_slice(&json)
         .map_err(|e| err(file, format!("not a valid glTF 2.0 document: {e}; export the file again as glTF 2.0")))?;
     let doc = g.document;
+    check_sizes(file, &doc)?;
     let buffers = buffers(file, &doc, blob, resources)?;
     let data = Data { file, buffers };
 
@@ -672,6 +788,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     let mname = name_of(mesh.name(), "mesh", mesh.index());
     let others = meshes.len() - 1;
     let node = doc.nodes().find(|n| n.mesh().is_some_and(|m| m.index() == mesh.index()));
+    check_read_size(&data, &mesh, &mname, crate::model::memory::budget_bytes()?)?;
     let md = read_mesh(&data, &mesh)?;
     let n_file = md.positions.len();
 
@@ -721,29 +838,13 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     };
 
     // Which animation moves this mesh: one with morph weights on its node, or one moving a joint of its skin.
+    let moves_joint = skinning.as_ref().map_or_else(Vec::new, |(joints, _)| joint_ancestors(&parents, joints));
     let moves_mesh = |a: &gltf::Animation| {
         a.channels().any(|c| {
             let t = c.target();
             let n = t.node().index();
             (t.property() == gltf::animation::Property::MorphTargetWeights && node.as_ref().is_some_and(|x| x.index() == n))
-                || skinning.as_ref().is_some_and(|(joints, _)| {
-                    // a joint or any ancestor of a joint
-                    joints.iter().any(|&j| {
-                        let mut cur = Some(j);
-                        let mut steps = 0;
-                        while let Some(c) = cur {
-                            if c == n {
-                                return true;
-                            }
-                            steps += 1;
-                            if steps > parents.len() {
-                                break;
-                            }
-                            cur = parents.get(c).copied().flatten();
-                        }
-                        false
-                    })
-                })
+                || moves_joint.get(n).copied().unwrap_or(false)
         })
     };
     let animations: Vec<gltf::Animation> = doc.animations().filter(|a| moves_mesh(a)).collect();
@@ -783,14 +884,18 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
         keys.sort_by(f64::total_cmp);
         keys.dedup_by(|a, b| (*a - *b).abs() <= 1e-6);
         let (lo, hi) = (keys.first().copied().unwrap_or(0.0), keys.last().copied().unwrap_or(0.0));
+        let n_times = match options.frames {
+            Some(0) => return Err(err(file, "--frames must be at least 1".into())),
+            Some(f) => f,
+            None => keys.len(),
+        };
+        // The poses must fit in the memory budget: refuse before computing them.
+        crate::model::memory::check(n_file, n_times, 1, crate::model::memory::budget_bytes()?)
+            .map_err(|e| err(file, format!("{aname} sampled at {n_times} times: {e}; sample it at fewer times (--frames N)")))?;
         let times: Vec<f64> = match options.frames {
-            Some(0) => return Err(err(file, "--frames must be at least 2".into())),
             Some(f) => (0..f).map(|i| if f == 1 { lo } else { lo + (hi - lo) * i as f64 / (f - 1) as f64 }).collect(),
             None => keys.clone(),
         };
-        // The poses must fit in the memory budget: refuse before computing them.
-        crate::model::memory::check(n_file, times.len(), 1, crate::model::memory::budget_bytes()?)
-            .map_err(|e| err(file, format!("{aname} sampled at {} times: {e}; sample it at fewer times (--frames N)", times.len())))?;
         let how = match options.frames {
             Some(f) => format!("sampled at {f} evenly spaced times"),
             None => {
@@ -864,6 +969,9 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             .and_then(|v| v.get("targetNames").and_then(|t| t.as_array().cloned()))
             .map(|a| a.iter().map(|v| v.as_str().unwrap_or("").to_string()).collect())
             .unwrap_or_default();
+        crate::model::memory::check(n_file, md.targets.len() + 1, 1, crate::model::memory::budget_bytes()?).map_err(
+            |e| err(file, format!("{} morph targets of {mname}, each one pose: {e}", md.targets.len())),
+        )?;
         description = format!("{} morph targets of {mname}, plus the base (the first pose)", md.targets.len());
         let w = md.targets.len().to_string().len();
         poses_raw.push((format!("target {:0w$} base", 0), md.positions.clone()));
@@ -1106,5 +1214,64 @@ mod tests {
         for n in 0..20 {
             let _ = read("t.glb", &glb[..n], &[], &Options::default());
         }
+    }
+
+    /// A primitive may reuse another's accessors: 1000 primitives over the quad's 5 vertices name 5000
+    /// vertices (with 2 morph targets each). The size is checked from the document before anything is read.
+    #[test]
+    fn reused_accessors_are_counted_before_reading() {
+        let bytes = quad(|v| {
+            let p = v["meshes"][0]["primitives"][0].clone();
+            v["meshes"][0]["primitives"] = json!(vec![p; 1000]);
+        });
+        let doc = gltf::Gltf::from_slice(&bytes).unwrap().document;
+        let data = Data { file: "t.gltf", buffers: buffers("t.gltf", &doc, None, &[]).unwrap() };
+        let mesh = doc.meshes().next().unwrap();
+        // 5000 vertices x (24 x 3 + 304) + 6000 indices x 20 = 1_880_000 + 120_000 bytes.
+        assert!(check_read_size(&data, &mesh, "mesh 'quad'", 2_000_000).is_ok());
+        let e = check_read_size(&data, &mesh, "mesh 'quad'", 1_999_999).unwrap_err().to_string();
+        assert!(e.contains("mesh 'quad' has 5000 vertices with 2 morph targets and 6000 indices"), "{e}");
+        assert!(e.contains("more than the memory budget of 1.9 MiB"), "{e}");
+        // Each accessor's own bounds come first.
+        let bytes = quad(|v| {
+            v["accessors"][1]["count"] = json!(1_000_000);
+        });
+        let doc = gltf::Gltf::from_slice(&bytes).unwrap().document;
+        let data = Data { file: "t.gltf", buffers: buffers("t.gltf", &doc, None, &[]).unwrap() };
+        let e = check_read_size(&data, &doc.meshes().next().unwrap(), "mesh 'quad'", 1).unwrap_err().to_string();
+        assert!(e.contains("accessor 1 (morph target 0 of primitive 0 of mesh 'quad'") && e.contains("past the end"), "{e}");
+    }
+
+    /// Offsets and lengths near 2^64 are refused, not wrapped (the sums saturate).
+    #[test]
+    fn huge_offsets_are_refused() {
+        let e = error(&quad(|v| {
+            v["bufferViews"][0]["byteOffset"] = json!(u64::MAX - 10);
+        }));
+        assert!(e.contains("buffer view 0") && e.contains("past the end of buffer 0"), "{e}");
+        let e = error(&quad(|v| {
+            v["accessors"][0]["byteOffset"] = json!(u64::MAX - 2);
+        }));
+        assert!(e.contains("accessor 0") && e.contains("past the end of its buffer view 0"), "{e}");
+    }
+
+    /// Global transforms over a deep chain equal the product of the locals; a cycle (invalid, but possible in
+    /// a damaged file) ends.
+    #[test]
+    fn globals_of_chains_and_cycles() {
+        let n = 5000;
+        let parents: Vec<Option<usize>> = (0..n).map(|i| if i == 0 { None } else { Some(i - 1) }).collect();
+        let step = (DVec3::new(1.0, 0.0, 0.0), DQuat::identity(), DVec3::repeat(1.0));
+        let g = globals(&parents, &vec![step; n]);
+        assert_eq!(g[n - 1].column(3)[0], (n - 1 + 1) as f64);
+        // Reverse order of computation (leaf first) gives the same.
+        let rev: Vec<Option<usize>> = (0..n).map(|i| if i == n - 1 { None } else { Some(i + 1) }).collect();
+        let g = globals(&rev, &vec![step; n]);
+        assert_eq!(g[0].column(3)[0], n as f64);
+        let cycle = vec![Some(2), Some(0), Some(1)];
+        let g = globals(&cycle, &vec![step; 3]);
+        assert!(g.iter().all(|m| m.iter().all(|x| x.is_finite())));
+        assert_eq!(joint_ancestors(&cycle, &[0]), vec![true, true, true]);
+        assert_eq!(joint_ancestors(&parents[..4], &[2]), vec![true, true, true, false]);
     }
 }
