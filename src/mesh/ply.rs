@@ -331,13 +331,13 @@ fn parse(bytes: &[u8]) -> Res<Mesh> {
         Format::Ascii => {
             let mut r = Ascii { data, pos: 0, line: h.data_line };
             for (e, role) in h.elements.iter().zip(&roles) {
-                read_ascii_element(&mut r, e, role, &mut mesh, &mut face_of_triangle)?;
+                read_element(&mut r, e, role, &mut mesh, &mut face_of_triangle)?;
             }
         }
         Format::Little | Format::Big => {
             let mut r = Binary { data, pos: 0, big: h.format == Format::Big, offset: h.data_start };
             for (e, role) in h.elements.iter().zip(&roles) {
-                read_binary_element(&mut r, e, role, &mut mesh, &mut face_of_triangle)?;
+                read_element(&mut r, e, role, &mut mesh, &mut face_of_triangle)?;
             }
         }
     }
@@ -398,7 +398,35 @@ fn too_few_corners(face: u64, n: u64) -> String {
     )
 }
 
-// ---------------------------------------------------------------------------------------------- binary
+// ---------------------------------------------------------------------------------------------- values
+
+/// Why a value could not be read.
+enum Bad {
+    /// The data ended.
+    End,
+    /// An ASCII token that is not a number (shown in messages).
+    Text(String),
+}
+
+/// Where element values come from: ASCII tokens or binary numbers. One element reader
+/// ([`read_element`]) serves both; only reading, skipping and saying where differ.
+trait Values {
+    /// Rows of fixed size can be skipped at once (binary).
+    const FIXED: bool;
+    /// Bytes of data not read yet.
+    fn left(&self) -> usize;
+    /// The fewest bytes a value of `ty` takes.
+    fn value_bytes(ty: Scalar) -> u64;
+    /// The fewest bytes an element takes (0: it has no properties).
+    fn element_bytes(e: &Element) -> u64;
+    /// A cheap mark of the current place, turned into (line, text for messages) by [`Values::place`].
+    fn mark(&self) -> usize;
+    fn place(&self, mark: usize) -> (usize, String);
+    /// The next value of type `ty`.
+    fn number(&mut self, ty: Scalar) -> std::result::Result<f64, Bad>;
+    /// Skips `n` values of type `ty`; false when the data end first.
+    fn skip(&mut self, ty: Scalar, n: u64) -> bool;
+}
 
 struct Binary<'a> {
     data: &'a [u8],
@@ -409,36 +437,52 @@ struct Binary<'a> {
 }
 
 impl Binary<'_> {
-    fn left(&self) -> usize {
-        self.data.len().saturating_sub(self.pos)
-    }
-
     fn take<const N: usize>(&mut self) -> Option<[u8; N]> {
         let s = self.data.get(self.pos..self.pos.checked_add(N)?)?;
         let a: [u8; N] = s.try_into().ok()?;
         self.pos += N;
         Some(a)
     }
+}
 
-    fn skip(&mut self, n: u64) -> Option<()> {
-        let n = usize::try_from(n).ok()?;
-        let end = self.pos.checked_add(n)?;
-        if end > self.data.len() {
-            return None;
-        }
-        self.pos = end;
-        Some(())
+impl Values for Binary<'_> {
+    const FIXED: bool = true;
+
+    fn left(&self) -> usize {
+        self.data.len().saturating_sub(self.pos)
     }
 
-    fn float(&mut self, ty: Scalar) -> Option<f64> {
+    fn value_bytes(ty: Scalar) -> u64 {
+        ty.size() as u64
+    }
+
+    fn element_bytes(e: &Element) -> u64 {
+        e.properties
+            .iter()
+            .map(|p| match p {
+                Property::Scalar { ty, .. } => ty.size() as u64,
+                Property::List { count, .. } => count.size() as u64,
+            })
+            .sum()
+    }
+
+    fn mark(&self) -> usize {
+        self.pos
+    }
+
+    fn place(&self, mark: usize) -> (usize, String) {
+        (0, format!(" (at byte {})", self.offset + mark))
+    }
+
+    fn number(&mut self, ty: Scalar) -> std::result::Result<f64, Bad> {
         let big = self.big;
         macro_rules! num {
             ($t:ty, $n:literal) => {{
-                let b = self.take::<$n>()?;
+                let b = self.take::<$n>().ok_or(Bad::End)?;
                 (if big { <$t>::from_be_bytes(b) } else { <$t>::from_le_bytes(b) }) as f64
             }};
         }
-        Some(match ty {
+        Ok(match ty {
             Scalar::I8 => num!(i8, 1),
             Scalar::U8 => num!(u8, 1),
             Scalar::I16 => num!(i16, 2),
@@ -450,143 +494,17 @@ impl Binary<'_> {
         })
     }
 
-    /// An integer property; `Err(value)` when a float type holds a value that is not a whole number.
-    fn int(&mut self, ty: Scalar) -> Option<std::result::Result<i64, f64>> {
-        let x = self.float(ty)?;
-        if ty.is_float() && (x.fract() != 0.0 || !x.is_finite() || x.abs() > 9.0e15) {
-            return Some(Err(x));
+    fn skip(&mut self, ty: Scalar, n: u64) -> bool {
+        let end = usize::try_from(n.saturating_mul(ty.size() as u64)).ok().and_then(|b| self.pos.checked_add(b));
+        match end {
+            Some(end) if end <= self.data.len() => {
+                self.pos = end;
+                true
+            }
+            _ => false,
         }
-        Some(Ok(x as i64))
     }
 }
-
-fn read_binary_element(
-    r: &mut Binary,
-    e: &Element,
-    role: &Role,
-    mesh: &mut Mesh,
-    face_of_triangle: &mut Vec<u64>,
-) -> Res<()> {
-    let min: u64 = e
-        .properties
-        .iter()
-        .map(|p| match p {
-            Property::Scalar { ty, .. } => ty.size() as u64,
-            Property::List { count, .. } => count.size() as u64,
-        })
-        .sum();
-    check_count(e, min, r.left(), 0)?;
-    if min == 0 {
-        return Ok(()); // no properties: nothing to read
-    }
-    let name = text(&e.name);
-    let cut = |r: &Binary, i: u64| Fail {
-        line: 0,
-        message: format!(
-            "`{name}` element {i} (at byte {}) is cut: the file ends inside it; the file is cut or its header is \
-             wrong: export it again",
-            r.offset + r.pos
-        ),
-    };
-    let mut corners: Vec<u32> = Vec::new();
-    match role {
-        Role::Vertex(_) => {
-            // count * min <= bytes left (checked above), so this reservation is bounded by the file's size.
-            mesh.positions.reserve(usize::try_from(e.count).unwrap_or(0));
-        }
-        Role::Face(_) => mesh.faces.reserve(usize::try_from(e.count).unwrap_or(0)),
-        Role::Skip => {}
-    }
-    let all_scalar = e.properties.iter().all(|p| matches!(p, Property::Scalar { .. }));
-    if let (Role::Skip, true) = (role, all_scalar) {
-        // Fixed-size rows: skip them at once (the count was checked against the bytes left).
-        return r.skip(e.count.saturating_mul(min)).ok_or_else(|| cut(r, 0));
-    }
-    for i in 0..e.count {
-        let mut xyz = [0.0f64; 3];
-        for (k, p) in e.properties.iter().enumerate() {
-            match p {
-                Property::Scalar { ty, .. } => match role {
-                    Role::Vertex(axes) if axes.contains(&k) => {
-                        let x = r.float(*ty).ok_or_else(|| cut(r, i))?;
-                        for (slot, &axis) in xyz.iter_mut().zip(axes) {
-                            if axis == k {
-                                *slot = x;
-                            }
-                        }
-                    }
-                    _ => r.skip(ty.size() as u64).ok_or_else(|| cut(r, i))?,
-                },
-                Property::List { count, item, name: pname } => {
-                    let at = r.offset + r.pos;
-                    let n = match r.int(*count).ok_or_else(|| cut(r, i))? {
-                        Ok(n) if n >= 0 => n as u64,
-                        Ok(n) => {
-                            return fail(
-                                0,
-                                format!(
-                                    "`{name}` element {i} (at byte {at}): list `{}` has a negative length {n}; the \
-                                     file is damaged: export it again",
-                                    text(pname)
-                                ),
-                            )
-                        }
-                        Err(x) => return fail(0, format!("`{name}` element {i}: list length {x} is not a whole number")),
-                    };
-                    if matches!(role, Role::Face(l) if *l == k) {
-                        if n.saturating_mul(item.size() as u64) > r.left() as u64 {
-                            return Err(cut(r, i));
-                        }
-                        corners.clear();
-                        for _ in 0..n {
-                            let at = r.offset + r.pos;
-                            let v = match r.int(*item).ok_or_else(|| cut(r, i))? {
-                                Ok(v) => v,
-                                Err(x) => {
-                                    return fail(
-                                        0,
-                                        format!("face {i} (at byte {at}): vertex index {x} is not a whole number"),
-                                    )
-                                }
-                            };
-                            let v = u32::try_from(v).map_err(|_| Fail {
-                                line: 0,
-                                message: format!(
-                                    "face {i} (at byte {at}) refers to vertex {v}, which is {}; the file is \
-                                     damaged: export it again",
-                                    if v < 0 { "negative" } else { "beyond 4294967295" }
-                                ),
-                            })?;
-                            corners.push(v);
-                        }
-                        if n < 3 {
-                            return fail(0, too_few_corners(i, n));
-                        }
-                        push_fan(mesh, face_of_triangle, &corners, i);
-                    } else {
-                        r.skip(n.saturating_mul(item.size() as u64)).ok_or_else(|| cut(r, i))?;
-                    }
-                }
-            }
-        }
-        if let Role::Vertex(_) = role {
-            if let Some(bad) = xyz.iter().position(|c| !c.is_finite()) {
-                return fail(
-                    0,
-                    format!(
-                        "vertex {i}: its {} coordinate is not a finite number; the exporting tool wrote an invalid \
-                         vertex: fix it there and export again",
-                        ["x", "y", "z"].get(bad).copied().unwrap_or("")
-                    ),
-                );
-            }
-            mesh.positions.push(xyz);
-        }
-    }
-    Ok(())
-}
-
-// ---------------------------------------------------------------------------------------------- ASCII
 
 struct Ascii<'a> {
     data: &'a [u8],
@@ -595,8 +513,8 @@ struct Ascii<'a> {
 }
 
 impl<'a> Ascii<'a> {
-    /// The next whitespace-separated token and its line.
-    fn token(&mut self) -> Option<(&'a [u8], usize)> {
+    /// The next whitespace-separated token (counting the lines it passes).
+    fn token(&mut self) -> Option<&'a [u8]> {
         let data = self.data;
         while let Some(&b) = data.get(self.pos) {
             match b {
@@ -611,125 +529,195 @@ impl<'a> Ascii<'a> {
             }
             self.pos += 1;
         }
-        let start = self.pos;
-        let rest = data.get(start..)?;
-        if rest.is_empty() {
-            return None;
-        }
+        let rest = data.get(self.pos..).filter(|r| !r.is_empty())?;
         let len = rest.iter().position(|b| b.is_ascii_whitespace()).unwrap_or(rest.len());
-        self.pos = start + len;
-        Some((rest.get(..len)?, self.line))
+        self.pos += len;
+        rest.get(..len)
     }
 }
 
-fn read_ascii_element(
-    r: &mut Ascii,
+impl Values for Ascii<'_> {
+    const FIXED: bool = false;
+
+    /// One more than the bytes left: the last value needs no separator after it.
+    fn left(&self) -> usize {
+        self.data.len().saturating_sub(self.pos) + 1
+    }
+
+    /// A character and a separator.
+    fn value_bytes(_: Scalar) -> u64 {
+        2
+    }
+
+    fn element_bytes(e: &Element) -> u64 {
+        2 * e.properties.len() as u64
+    }
+
+    /// The line of the next value (the line the last token ended on, or the data's first line).
+    fn mark(&self) -> usize {
+        self.line
+    }
+
+    fn place(&self, mark: usize) -> (usize, String) {
+        (mark, String::new())
+    }
+
+    fn number(&mut self, _: Scalar) -> std::result::Result<f64, Bad> {
+        let tok = self.token().ok_or(Bad::End)?;
+        fast_float2::parse::<f64, _>(tok).map_err(|_| Bad::Text(text(tok)))
+    }
+
+    fn skip(&mut self, _: Scalar, n: u64) -> bool {
+        (0..n).all(|_| self.token().is_some())
+    }
+}
+
+/// A whole number (a list length or a vertex index) from a value of any type: floats must have no fraction.
+fn whole(x: f64) -> Option<i64> {
+    (x.is_finite() && x.fract() == 0.0 && x.abs() <= 9.0e15).then_some(x as i64)
+}
+
+/// Reads the `count` rows of one element: vertex positions, face corners (fan-triangulated), or nothing.
+fn read_element<V: Values>(
+    r: &mut V,
     e: &Element,
     role: &Role,
     mesh: &mut Mesh,
     face_of_triangle: &mut Vec<u64>,
 ) -> Res<()> {
-    if e.properties.is_empty() {
-        return Ok(());
+    let min = V::element_bytes(e);
+    if min == 0 {
+        return Ok(()); // no properties: nothing to read
     }
-    // Every property takes at least one character and one separator.
-    check_count(e, 2 * e.properties.len() as u64 - 1, r.data.len().saturating_sub(r.pos) + 1, r.line)?;
+    check_count(e, min, r.left(), r.place(r.mark()).0)?;
     let name = text(&e.name);
-    let ended = |line: usize, i: u64| Fail {
-        line,
-        message: format!(
-            "the file ends inside `{name}` element {i}: the header (line {}) says there are {}; the file is cut or its \
-             header is wrong: export it again",
-            e.line, e.count
-        ),
+    let ended = |r: &V, mark: usize, i: u64| {
+        let (line, at) = r.place(mark);
+        Fail {
+            line,
+            message: format!(
+                "the file ends inside `{name}` element {i}{at}: the header (line {}) says there are {}; the file is \
+                 cut or its header is wrong: export it again",
+                e.line, e.count
+            ),
+        }
     };
+    // count * min <= bytes left (checked above), so these reservations are bounded by the file's size.
     match role {
         Role::Vertex(_) => mesh.positions.reserve(usize::try_from(e.count).unwrap_or(0)),
         Role::Face(_) => mesh.faces.reserve(usize::try_from(e.count).unwrap_or(0)),
         Role::Skip => {}
     }
+    let all_scalar = e.properties.iter().all(|p| matches!(p, Property::Scalar { .. }));
+    if V::FIXED && all_scalar && matches!(role, Role::Skip) {
+        // Rows of fixed size: skip them at once (the count was checked against the bytes left).
+        let start = r.mark();
+        return if r.skip(Scalar::U8, e.count.saturating_mul(min)) { Ok(()) } else { Err(ended(r, start, 0)) };
+    }
     let mut corners: Vec<u32> = Vec::new();
     for i in 0..e.count {
         let mut xyz = [0.0f64; 3];
         for (k, p) in e.properties.iter().enumerate() {
+            let mark = r.mark();
             match p {
-                Property::Scalar { ty, name: pname } => {
-                    let line = r.line;
-                    let (tok, line) = r.token().ok_or_else(|| ended(line, i))?;
-                    if let Role::Vertex(axes) = role {
-                        if axes.contains(&k) {
-                            let x = ascii_number(tok, *ty).ok_or_else(|| Fail {
+                Property::Scalar { ty, name: pname } => match role {
+                    Role::Vertex(axes) if axes.contains(&k) => {
+                        let x = match r.number(*ty) {
+                            Ok(x) => x,
+                            Err(Bad::End) => return Err(ended(r, mark, i)),
+                            Err(Bad::Text(t)) => {
+                                return fail(
+                                    r.place(r.mark()).0,
+                                    format!(
+                                        "`{t}` is not a valid `{}` value for property `{}` of vertex {i}; write \
+                                         decimal numbers such as `1.5` or `-2e-3`",
+                                        ty_name(*ty),
+                                        text(pname)
+                                    ),
+                                )
+                            }
+                        };
+                        if !x.is_finite() {
+                            let (line, at) = r.place(r.mark());
+                            return fail(
                                 line,
-                                message: format!(
-                                    "`{}` is not a valid `{}` value for property `{}` of vertex {i}; write decimal \
-                                     numbers such as `1.5` or `-2e-3`",
-                                    text(tok),
-                                    ty_name(*ty),
+                                format!(
+                                    "vertex {i}{at}: its `{}` is {x}, not a finite number; the exporting tool wrote an \
+                                     invalid vertex: fix it there and export again",
                                     text(pname)
                                 ),
-                            })?;
-                            if !x.is_finite() {
-                                return fail(
-                                    line,
-                                    format!(
-                                        "vertex {i}: `{}` is not a finite number; the exporting tool wrote an \
-                                         invalid vertex: fix it there and export again",
-                                        text(tok)
-                                    ),
-                                );
-                            }
-                            for (slot, &axis) in xyz.iter_mut().zip(axes) {
-                                if axis == k {
-                                    *slot = x;
-                                }
+                            );
+                        }
+                        for (slot, &axis) in xyz.iter_mut().zip(axes) {
+                            if axis == k {
+                                *slot = x;
                             }
                         }
                     }
-                }
-                Property::List { name: pname, .. } => {
-                    let line = r.line;
-                    let (tok, line) = r.token().ok_or_else(|| ended(line, i))?;
-                    let n = ascii_int(tok).filter(|n| *n >= 0).ok_or_else(|| Fail {
-                        line,
-                        message: format!(
-                            "`{}` is not a valid length for list `{}` of `{name}` element {i}; it must be a whole \
-                             number >= 0",
-                            text(tok),
-                            text(pname)
-                        ),
-                    })? as u64;
-                    let is_face = matches!(role, Role::Face(l) if *l == k);
-                    if is_face {
-                        corners.clear();
+                    _ => {
+                        if !r.skip(*ty, 1) {
+                            return Err(ended(r, mark, i));
+                        }
                     }
+                },
+                Property::List { count, item, name: pname } => {
+                    let n = match r.number(*count) {
+                        Ok(x) => whole(x).filter(|n| *n >= 0).ok_or_else(|| x.to_string()),
+                        Err(Bad::End) => return Err(ended(r, mark, i)),
+                        Err(Bad::Text(t)) => Err(t),
+                    };
+                    let n = match n {
+                        Ok(n) => n as u64,
+                        Err(shown) => {
+                            let (line, at) = r.place(r.mark());
+                            return fail(
+                                line,
+                                format!(
+                                    "`{shown}` is not a valid length for list `{}` of `{name}` element {i}{at}; it \
+                                     must be a whole number >= 0: the file is damaged, export it again",
+                                    text(pname)
+                                ),
+                            );
+                        }
+                    };
+                    if n.saturating_mul(V::value_bytes(*item)) > r.left() as u64 {
+                        return Err(ended(r, mark, i));
+                    }
+                    if !matches!(role, Role::Face(l) if *l == k) {
+                        if !r.skip(*item, n) {
+                            return Err(ended(r, mark, i));
+                        }
+                        continue;
+                    }
+                    corners.clear();
                     for _ in 0..n {
-                        let before = r.line;
-                        let (tok, line) = r.token().ok_or_else(|| ended(before, i))?;
-                        if is_face {
-                            let v = ascii_int(tok).ok_or_else(|| Fail {
-                                line,
-                                message: format!(
-                                    "`{}` is not a valid vertex index in face {i}; indices are whole numbers \
-                                     counted from 0",
-                                    text(tok)
-                                ),
-                            })?;
-                            let v = u32::try_from(v).map_err(|_| Fail {
-                                line,
-                                message: format!(
-                                    "face {i} refers to vertex {v}, which is {}; the file is damaged: export it again",
-                                    if v < 0 { "negative" } else { "beyond 4294967295" }
-                                ),
-                            })?;
-                            corners.push(v);
-                        }
+                        let at_index = r.mark();
+                        let v = match r.number(*item) {
+                            Ok(x) => whole(x).ok_or_else(|| x.to_string()),
+                            Err(Bad::End) => return Err(ended(r, at_index, i)),
+                            Err(Bad::Text(t)) => Err(t),
+                        };
+                        let (line, at) = r.place(r.mark());
+                        let v = v.map_err(|shown| Fail {
+                            line,
+                            message: format!(
+                                "`{shown}` is not a valid vertex index in face {i}{at}; indices are whole numbers \
+                                 counted from 0"
+                            ),
+                        })?;
+                        let v = u32::try_from(v).map_err(|_| Fail {
+                            line,
+                            message: format!(
+                                "face {i}{at} refers to vertex {v}, which is {}; the file is damaged: export it again",
+                                if v < 0 { "negative" } else { "beyond 4294967295" }
+                            ),
+                        })?;
+                        corners.push(v);
                     }
-                    if is_face {
-                        if n < 3 {
-                            return fail(line, too_few_corners(i, n));
-                        }
-                        push_fan(mesh, face_of_triangle, &corners, i);
+                    if n < 3 {
+                        return fail(r.place(r.mark()).0, too_few_corners(i, n));
                     }
+                    push_fan(mesh, face_of_triangle, &corners, i);
                 }
             }
         }
@@ -751,19 +739,6 @@ fn ty_name(t: Scalar) -> &'static str {
         Scalar::F32 => "float",
         Scalar::F64 => "double",
     }
-}
-
-fn ascii_number(tok: &[u8], _ty: Scalar) -> Option<f64> {
-    fast_float2::parse::<f64, _>(tok).ok()
-}
-
-/// A whole number written as digits (optionally signed), or as a float with no fraction (`3.0`).
-fn ascii_int(tok: &[u8]) -> Option<i64> {
-    if let Some(v) = std::str::from_utf8(tok).ok().and_then(|t| t.parse::<i64>().ok()) {
-        return Some(v);
-    }
-    let x = fast_float2::parse::<f64, _>(tok).ok()?;
-    (x.is_finite() && x.fract() == 0.0 && x.abs() <= 9.0e15).then_some(x as i64)
 }
 
 #[cfg(test)]
@@ -916,5 +891,19 @@ mod tests {
             }
         }
         assert!(loaded > 100 && rejected > 100, "{loaded} loaded, {rejected} rejected");
+    }
+
+    /// ASCII lengths and indices may be written as floats with no fraction or with a sign; anything else is
+    /// refused with the token shown.
+    #[test]
+    fn ascii_whole_numbers() {
+        let m = ok(ASCII.replace("3 0 1 4 1", "3.0 +0 1e0 4.000 1").as_bytes());
+        assert_eq!(m.faces.last(), Some(&[0, 1, 4]));
+        let m = err(ASCII.replace("3 0 1 4 1", "3 0 1.5 4 1").as_bytes());
+        assert!(m.contains("line 19") && m.contains("`1.5` is not a valid vertex index in face 1"), "{m}");
+        let m = err(ASCII.replace("3 0 1 4 1", "0x3 0 1 4 1").as_bytes());
+        assert!(m.contains("`0x3` is not a valid length for list `vertex_indices` of `face` element 1"), "{m}");
+        let m = err(ASCII.replace("3 0 1 4 1", "-3 0 1 4 1").as_bytes());
+        assert!(m.contains("`-3` is not a valid length"), "{m}");
     }
 }
