@@ -50,7 +50,7 @@ pub fn check_model(model: &Model, pop: &Population) {
         assert!(c.variances.iter().all(|s| s.is_finite() && *s > 0.0), "part {k}: variances {:?}", c.variances);
         assert!(c.translations.iter().flatten().all(|t| t.is_finite()), "part {k}: translations");
         for r in &c.rotations {
-            assert!(r.iter().flatten().all(|x| x.is_finite()), "part {k}: rotation {r:?}");
+            assert!(r.iter().all(|x| x.is_finite()), "part {k}: rotation {r:?}");
             let d = posemfa::geometry::det(r);
             assert!((d - 1.0).abs() < 1e-6, "part {k}: det {d} of {r:?}");
             assert!(posemfa::geometry::orthonormality_error(r) < 1e-6, "part {k}: not orthonormal {r:?}");
