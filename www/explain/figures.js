@@ -3,7 +3,6 @@
 // shows comes from the core (fits, queries, single AECM steps). Live parts (runs, animations) go only while the
 // figure is in view (explain.js calls setVisible).
 import { mount } from '../mount.js';
-import { Plot } from '../plot.js';
 import { Chart } from './chart.js';
 import { PALETTE, hexToRgb, colourParts, labelColours, errorColours, rampColour } from '../colors.js';
 
@@ -642,17 +641,25 @@ class Responsibilities extends Stepping {
 class Aecm extends Stepping {
   constructor(ctx) {
     super(ctx);
-    const params = { ...SYNTH, parts: 6, refine: false };
-    this.setup(this.view(this.$('.fig-view'), SNAKE, params), params, 420);
-    this.plot = new Plot(this.$('[data-out=plot]'));
+    // The quadruped's thin leg pieces with 10 parts to start: several rotation steps need eq 31.
+    const params = { ...SYNTH, parts: 10, refine: false };
+    this.setup(this.view(this.$('.fig-view'), QUAD, params), params, 420);
+    this.chart = new Chart(this.$('[data-out=plot]'));
     this.cycleTimers = [];
+    this.flips = [];
   }
 
   showStep(m) {
     const s = this.stepper;
-    this.plot.set(s.values, 'log-likelihood (eq 10) after every iteration');
+    if (m.kind === 'reset') this.flips = [];
+    if (m.kind === 'step') this.flips.push(m.flips ?? 0);
+    const marked = this.flips.flatMap((f, i) => (f > 0 ? [i] : []));
+    this.chart.set([{ values: s.values, colour: EXACT, markers: marked, markerColour: '#e9a23b' }]);
     this.out('iteration', String(s.iteration));
     this.out('ll', s.values.length ? s.values[s.values.length - 1].toFixed(2) : '–');
+    const total = this.flips.reduce((a, b) => a + b, 0);
+    const last = this.flips.length ? this.flips[this.flips.length - 1] : 0;
+    this.out('flips', `${last} in the last iteration, ${total} in ${this.flips.length} iteration${this.flips.length === 1 ? '' : 's'}`);
     if (m.labels && this.v.pop) this.v.handle.viewer.show([{ positions: this.v.pop.positions[0], colours: labelColours(m.labels, this.v.pop.faces).vertexColours }]);
     if (m.kind === 'step') this.flashCycles();
   }
@@ -672,6 +679,10 @@ class Aecm extends Stepping {
     if (!s.started) return 'Fitted; the live run starts in view.';
     const d = drops(s.values).length;
     return `${s.iteration} iterations${s.done ? ', converged' : ''}; the log-likelihood fell ${d} times.`;
+  }
+
+  detail() {
+    return { ...super.detail(), flips: this.flips.slice() };
   }
 }
 
@@ -894,10 +905,18 @@ class Ends extends Figure {
 
 // ------------------------------------------------------------------ 6. the hierarchy (Algorithm 1, Fig 2)
 
-class Hierarchy extends Figure {
+const STAGE_TEXT = {
+  coarse: () => 'coarse AECM on all vertices',
+  refine: (st) => `refining coarse part ${st.part + 1} of ${st.of} with m_k = ${st.subParts ?? st.sub_parts} (the rest grey)`,
+  final: () => 'final AECM on all vertices, from the refined labels',
+  done: () => 'done',
+};
+
+class Hierarchy extends Stepping {
   constructor(ctx) {
     super(ctx);
-    this.v = this.view(this.$('.fig-view'), QUAD, { ...SYNTH, parts: 5 });
+    const params = { ...SYNTH, parts: 5 };
+    this.setup(this.view(this.$('.fig-view'), QUAD, params), params, 70);
     this.stage = 'coarse';
     this.auto = true;
     this.ticker = new Ticker(1800, () => {
@@ -906,6 +925,7 @@ class Hierarchy extends Figure {
     });
   }
 
+  // The stages of the fitted model (Fig 2): coarse, refined, final labels.
   show(stage, frame = false) {
     const { model, pop } = this.v;
     if (!model) return;
@@ -915,6 +935,38 @@ class Hierarchy extends Figure {
     this.v.handle.viewer.show([{ positions: pop.positions[0], colours: labelColours(labels, pop.faces).vertexColours }], { frame });
     this.out('stage', `${stage}, ${parts} parts`);
     for (const b of this.el.querySelectorAll('[data-act]')) b.setAttribute('aria-pressed', String(b.dataset.act === stage));
+  }
+
+  // A step of the replay: the run in progress; during the refinement, the coarse part being split in the
+  // colours of its sub-parts (argmax of γ), the rest grey.
+  showStep(m) {
+    const { pop } = this.v;
+    if (!pop || !m.stage) return;
+    const kind = m.stage.kind;
+    this.out('stage', `replaying: ${STAGE_TEXT[kind](m.stage)}, iteration ${this.stepper.iteration}`);
+    for (const b of this.el.querySelectorAll('[data-act]')) b.setAttribute('aria-pressed', 'false');
+    let colours;
+    if (kind === 'refine' && m.vertices && m.gamma && m.parts) {
+      colours = new Float32Array(pop.nVertices * 3);
+      for (let v = 0; v < pop.nVertices; v++) colours.set(GREY, 3 * v);
+      const K = m.parts;
+      m.vertices.forEach((v, j) => {
+        let best = 0;
+        for (let k = 1; k < K; k++) if (m.gamma[j * K + k] > m.gamma[j * K + best]) best = k;
+        colours.set(PALETTE_RGB[best % PALETTE.length], 3 * v);
+      });
+    } else if (m.labels) {
+      colours = labelColours(m.labels, pop.faces).vertexColours;
+    }
+    if (colours) this.v.handle.viewer.show([{ positions: pop.positions[0], colours }]);
+  }
+
+  message(v, m) {
+    super.message(v, m);
+    if (m.type === 'fitted' && m.id === this.stepper.id) {
+      this.show('final');
+      if (this.visible && this.auto) this.ticker.start();
+    }
   }
 
   onFitted() {
@@ -927,10 +979,13 @@ class Hierarchy extends Figure {
   }
 
   resume() {
-    if (this.v.model && this.auto) this.ticker.start();
+    super.resume();
+    if (this.v.model && this.auto && !this.stepper.running) this.ticker.start();
+    else this.ticker.stop();
   }
 
   pause() {
+    super.pause();
     this.ticker.stop();
   }
 
@@ -938,12 +993,21 @@ class Hierarchy extends Figure {
     if (['coarse', 'refined', 'final'].includes(a)) {
       this.auto = false;
       this.ticker.stop();
+      this.stepper.pause();
+      this.resumeOnShow = false;
+      this.refreshState();
       this.show(a);
+    } else if (a === 'replay') {
+      this.ticker.stop();
+      super.act('reset');
     } else if (a === 'reset') {
       this.auto = true;
-      this.regenerate();
+      this.ticker.stop();
+      super.act('reset');
     }
   }
+
+  buttons() {}
 }
 
 // ------------------------------------------------------------------ 7. reconstruction and latent shape

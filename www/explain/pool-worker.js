@@ -7,6 +7,8 @@
 //
 //   page -> worker   { session, msg: { type: 'close' } }   frees the session
 //   worker -> page   { type: 'pool-ready', defaults, examples }  once, when the wasm instance is up
+//                    'teach' messages also carry `flips`: how many rotation steps of that iteration needed the
+//                    handedness fix of eq 31 (wasm handednessFlips(), read around the step)
 //                    { type: 'pool-fatal', message }            the wasm module failed to load
 //
 // Fits of different sessions run in slices (SLICE_MS) and yield to the event loop between slices, so sessions on
@@ -42,6 +44,13 @@ class Session {
   }
 
   post(msg, transfer = []) {
+    if (msg.type === 'teach') {
+      // Rotation steps that needed the handedness fix (eq 31) during this one iteration: the counter of the
+      // instance read around it (steps run one at a time, so the difference is this step's alone).
+      const now = wasm.handednessFlips();
+      msg.flips = msg.kind === 'step' ? now - (this.flipsMark ?? now) : 0;
+      this.flipsMark = now;
+    }
     self.postMessage({ session: this.id, msg }, transfer);
   }
 
@@ -165,6 +174,7 @@ class Session {
   }
 
   async teach(data) {
+    this.flipsMark = wasm.handednessFlips(); // nothing before this message counts (other sessions' work)
     try {
       if (data.type === 'teach-reset') await this.teacher.reset(this.population, data);
       else if (data.type === 'teach-step') await this.teacher.step(this.population, data);
