@@ -135,6 +135,10 @@ test('a figure starts when scrolled into view, pauses when scrolled away, resume
     await page.waitForFunction(() => window.explain.detail('aecm').steps <= 2, null, { timeout: 5000, polling: 50 });
     const ll = (await figures(page)).find((f) => f.name === 'aecm').logLikelihood;
     assert.deepEqual(drops(ll), []);
+    // The hierarchy figure replays Algorithm 1 in view: the coarse run, then the refinement of each coarse part.
+    await page.locator('[data-figure=hierarchy]').scrollIntoViewIfNeeded();
+    await page.waitForFunction(() => /refining coarse part \d+ of \d+ with m_k = \d+/.test(document.querySelector('[data-figure=hierarchy] [data-out=stage]').textContent), null, { timeout: 15000, polling: 50 });
+    assert.equal(await page.getAttribute('[data-figure=hierarchy]', 'data-state'), 'stepping');
     assert.deepEqual(log.errors, []);
   } finally {
     await context.close();

@@ -16,7 +16,18 @@ async function typeset() {
     const el = all[i];
     const tex = el.textContent;
     try {
-      katex.render(tex, el, { displayMode: el.classList.contains('tex-block'), throwOnError: true, output: 'htmlAndMathml' });
+      if (el.classList.contains('tex-block')) {
+        // The paper's equation number beside the equation, not inside it: a long equation then scrolls
+        // sideways on a phone while its number stays in view.
+        const tag = /\\tag\{([^}]*)\}\s*$/.exec(tex);
+        const body = document.createElement('div');
+        body.className = 'eq';
+        katex.render(tag ? tex.slice(0, tag.index) : tex, body, { displayMode: true, throwOnError: true, output: 'htmlAndMathml' });
+        el.replaceChildren(body);
+        if (tag) el.append(Object.assign(document.createElement('span'), { className: 'eqno', textContent: `(${tag[1]})` }));
+      } else {
+        katex.render(tex, el, { throwOnError: true, output: 'htmlAndMathml' });
+      }
     } catch (e) {
       el.textContent = tex;
       console.error(`KaTeX could not typeset "${tex}": ${e.message}`);

@@ -365,7 +365,10 @@ class Model extends Figure {
     this.touched = false;
     this.partSel = this.$('[data-ctl=part]');
     this.poseIn = this.$('[data-ctl=pose]');
-    this.partSel.addEventListener('change', () => this.choosePart(Number(this.partSel.value)));
+    this.partSel.addEventListener('change', () => {
+      this.partPicked = true;
+      this.choosePart(Number(this.partSel.value));
+    });
     this.poseIn.addEventListener('input', () => {
       this.touched = true;
       this.ticker.stop();
@@ -379,14 +382,25 @@ class Model extends Figure {
     });
   }
 
-  onFitted() {
+  async onFitted() {
     const { model, pop } = this.v;
     const { partColour } = labelColours(model.labels, pop.faces);
     this.partColour = partColour;
     this.partSel.replaceChildren(...partColour.map((c, k) => Object.assign(document.createElement('option'), { value: String(k), textContent: `part ${k + 1}` })));
     this.poseIn.max = String(pop.nShapes - 1);
-    // start on the part that turns the most
     this.choosePart(this.part < partColour.length ? this.part : 0, true);
+    if (this.partPicked) return;
+    // start on the part that turns the most (its largest rotation angle over the poses, from the core)
+    let best = 0;
+    let bestAngle = -1;
+    for (let k = 0; k < partColour.length; k++) {
+      const a = Math.max(...(await this.v.handle.query('rotationAngles', k, 0).catch(() => [0])));
+      if (a > bestAngle) {
+        bestAngle = a;
+        best = k;
+      }
+    }
+    if (!this.partPicked && this.v.model === model) this.choosePart(best);
   }
 
   async choosePart(k, frame = false) {
@@ -407,7 +421,7 @@ class Model extends Figure {
     if (!model) return;
     const colour = hexToRgb(this.partColour[this.part]);
     const c = highlight(model.labels, this.part, colour);
-    this.v.handle.viewer.show([{ positions: model.latent, colours: c }, { positions: pop.positions[this.pose], colours: c }], { frame });
+    this.v.handle.viewer.show([{ positions: pop.positions[0], colours: c }, { positions: pop.positions[this.pose], colours: c }], { frame });
     this.out('pose', String(this.pose + 1));
     this.drawBars();
   }
@@ -431,7 +445,10 @@ class Model extends Figure {
 
   click(v, e) {
     const hit = v.handle.viewer.pick(e.clientX, e.clientY);
-    if (hit && v.model) this.choosePart(v.model.labels[hit.vertex]);
+    if (hit && v.model) {
+      this.partPicked = true;
+      this.choosePart(v.model.labels[hit.vertex]);
+    }
   }
 
   resume() {
@@ -469,6 +486,7 @@ class Stepping extends Figure {
   message(v, m) {
     super.message(v, m);
     if (m.type === 'fitted' && m.id === this.stepper.id) {
+      v.handle.caption.textContent = `${m.model.summary.parts} parts after ${this.stepper.iteration} iterations, one step at a time`;
       this.stepper.running = false;
       this.stepper.done = true;
       this.refreshState();
@@ -738,6 +756,7 @@ class Eq18 extends Figure {
     super.message(v, m);
     const st = this.sides[v.side].stepper;
     if (m.type === 'fitted' && m.id === st.id) {
+      v.handle.caption.textContent = `${m.model.summary.parts} parts after ${st.iteration} iterations, one step at a time`;
       st.running = false;
       st.done = true;
       this.refreshState();
@@ -1033,6 +1052,7 @@ class Reconstruction extends Figure {
   }
 
   async onFitted() {
+    this.b1 = null;
     this.poseIn.max = String(this.v.pop.nShapes - 1);
     this.out('rmse', this.v.model.summary.rmse.toExponential(2));
     await this.draw(true);
@@ -1047,6 +1067,9 @@ class Reconstruction extends Figure {
     let err;
     try {
       [rec, err] = await Promise.all([this.v.handle.query('reconstruct', i), this.v.handle.query('vertexErrors', i)]);
+      // The latent shape drawn with every part moved to its place in pose 1 (its b^1) but not turned: the
+      // parts of eq 21 are all centred on the origin, on top of each other.
+      this.b1 ??= await this.v.handle.query('translations', 0);
     } catch (e) {
       this.setState('error', e.message);
       return;
@@ -1057,10 +1080,22 @@ class Reconstruction extends Figure {
     this.v.handle.viewer.show([
       { positions: pop.positions[i], colours: parts },
       { positions: rec, colours: errorColours(err, max) },
-      { positions: model.latent, colours: parts },
+      { positions: this.placedLatent(), colours: parts },
     ], { frame });
     this.out('pose', String(i + 1));
     this.out('max', max.toExponential(1));
+  }
+
+  placedLatent() {
+    const { model } = this.v;
+    if (this.placed?.model === model) return this.placed.positions;
+    const out = Float32Array.from(model.latent);
+    model.labels.forEach((k, v) => {
+      const b = this.b1[k];
+      for (let a = 0; a < 3; a++) out[3 * v + a] += b[a];
+    });
+    this.placed = { model, positions: out };
+    return out;
   }
 
   fittedNote() {
@@ -1207,16 +1242,33 @@ class Limit extends Figure {
 
   onFitted() {
     const { model, pop } = this.v;
+    // the blob: its most bent pose, plain and in the fit's parts; the tied legs: true parts and fitted ones
+    const pose = this.name === 'blob' ? pop.nShapes - 1 : 0;
     const left = this.name === 'blob'
-      ? { positions: pop.positions[pop.nShapes - 1], colours: new Float32Array(pop.nVertices * 3).fill(0.75) }
-      : { positions: pop.positions[0], colours: labelColours(pop.truth.partOfVertex, pop.faces).vertexColours };
-    this.v.handle.viewer.show([left, { positions: pop.positions[0], colours: labelColours(model.labels, pop.faces).vertexColours }], { frame: true });
+      ? new Float32Array(pop.nVertices * 3).fill(0.75)
+      : labelColours(pop.truth.partOfVertex, pop.faces).vertexColours;
+    this.v.handle.viewer.show([
+      { positions: pop.positions[pose], colours: left },
+      { positions: pop.positions[pose], colours: labelColours(model.labels, pop.faces).vertexColours },
+    ], { frame: true });
   }
 
   fittedNote() {
     const s = this.v.model.summary;
     if (this.name === 'blob') return `${s.parts} parts, RMSE ${s.rmse.toExponential(2)} (unit box): the "parts" are slabs, and the error stays large.`;
-    return `${s.groundTruth.trueParts ?? this.v.pop.truth.partNames.length} true parts, ${s.parts} fitted; adjusted Rand index ${s.groundTruth.ari.toFixed(3)}. The front legs share their motion.`;
+    // For each piece of the front legs: the fitted part holding most of the left one's and of the right one's
+    // vertices; the same part means the fit made the two legs one body.
+    const { partNames, partOfVertex } = this.v.pop.truth;
+    const labels = this.v.model.labels;
+    const major = (name) => {
+      const p = partNames.indexOf(name);
+      const count = new Map();
+      partOfVertex.forEach((t, v) => t === p && count.set(labels[v], (count.get(labels[v]) ?? 0) + 1));
+      return [...count].sort((a, b) => b[1] - a[1])[0]?.[0];
+    };
+    const pieces = ['upper', 'lower', 'foot'].filter((seg) => partNames.includes(`front_left_${seg}`));
+    const shared = pieces.filter((seg) => major(`front_left_${seg}`) === major(`front_right_${seg}`));
+    return `${partNames.length} true parts, ${s.parts} fitted (adjusted Rand index ${s.groundTruth.ari.toFixed(3)}); of the front legs' ${pieces.length} pieces, ${shared.length} are one part shared by the left and the right leg.`;
   }
 }
 
@@ -1231,7 +1283,7 @@ export const FIGURES = {
   reconstruction: (ctx) => new Reconstruction(ctx),
   interpolation: (ctx) => new Interpolation(ctx),
   // the app's "two limbs that never move apart" example (its tied front legs), on a smaller mesh
-  tied: (ctx) => new Limit(ctx, ({ examples }) => ({ ...examples.find((e) => e.id === 'too-few-poses').spec, vertices: QUAD.vertices }), { ...SYNTH, parts: 8 }),
+  tied: (ctx) => new Limit(ctx, ({ examples }) => ({ ...examples.find((e) => e.id === 'too-few-poses').spec, vertices: QUAD.vertices }), { ...SYNTH }),
   blob: (ctx) => new Limit(ctx, BLOB, { ...SYNTH, parts: 4 }),
 };
 
