@@ -670,14 +670,16 @@ class Aecm extends Stepping {
   showStep(m) {
     const s = this.stepper;
     if (m.kind === 'reset') this.flips = [];
-    if (m.kind === 'step') this.flips.push(m.flips ?? 0);
+    if (m.kind === 'step' && m.flips != null) this.flips.push(m.flips);
     const marked = this.flips.flatMap((f, i) => (f > 0 ? [i] : []));
     this.chart.set([{ values: s.values, colour: EXACT, markers: marked, markerColour: '#e9a23b' }]);
     this.out('iteration', String(s.iteration));
     this.out('ll', s.values.length ? s.values[s.values.length - 1].toFixed(2) : '–');
-    const total = this.flips.reduce((a, b) => a + b, 0);
-    const last = this.flips.length ? this.flips[this.flips.length - 1] : 0;
-    this.out('flips', `${last} in the last iteration, ${total} in ${this.flips.length} iteration${this.flips.length === 1 ? '' : 's'}`);
+    if (this.flips.length) {
+      const total = this.flips.reduce((a, b) => a + b, 0);
+      const last = this.flips[this.flips.length - 1];
+      this.out('flips', `Rotation steps that needed the handedness fix: ${last} in the last iteration, ${total} in ${this.flips.length} iteration${this.flips.length === 1 ? '' : 's'}.`);
+    }
     if (m.labels && this.v.pop) this.v.handle.viewer.show([{ positions: this.v.pop.positions[0], colours: labelColours(m.labels, this.v.pop.faces).vertexColours }]);
     if (m.kind === 'step') this.flashCycles();
   }

@@ -8,7 +8,8 @@
 //   page -> worker   { session, msg: { type: 'close' } }   frees the session
 //   worker -> page   { type: 'pool-ready', defaults, examples }  once, when the wasm instance is up
 //                    'teach' messages also carry `flips`: how many rotation steps of that iteration needed the
-//                    handedness fix of eq 31 (wasm handednessFlips(), read around the step)
+//                    handedness fix of eq 31 (wasm handednessFlips(), read around the step; null when the
+//                    build has no such counter)
 //                    { type: 'pool-fatal', message }            the wasm module failed to load
 //
 // Fits of different sessions run in slices (SLICE_MS) and yield to the event loop between slices, so sessions on
@@ -18,6 +19,11 @@ import wasmUrl from '../pkg/posemfa_bg.wasm?url';
 import { Teacher } from '../teach-worker.js';
 
 const SLICE_MS = 25;
+
+// The core's count of rotation steps that needed eq 31, where the build has it (wasm handednessFlips()).
+// Looked up by name, so that this file builds with or without the binding.
+const binding = (name) => wasm[name];
+const flipsSoFar = () => (typeof binding('handednessFlips') === 'function' ? binding('handednessFlips')() : null);
 
 const channel = new MessageChannel();
 const waiting = [];
@@ -47,8 +53,9 @@ class Session {
     if (msg.type === 'teach') {
       // Rotation steps that needed the handedness fix (eq 31) during this one iteration: the counter of the
       // instance read around it (steps run one at a time, so the difference is this step's alone).
-      const now = wasm.handednessFlips();
-      msg.flips = msg.kind === 'step' ? now - (this.flipsMark ?? now) : 0;
+      // (null when this build of the core does not count them)
+      const now = flipsSoFar();
+      msg.flips = now === null ? null : msg.kind === 'step' ? now - (this.flipsMark ?? now) : 0;
       this.flipsMark = now;
     }
     self.postMessage({ session: this.id, msg }, transfer);
@@ -176,7 +183,7 @@ class Session {
   }
 
   async teach(data) {
-    this.flipsMark = wasm.handednessFlips(); // nothing before this message counts (other sessions' work)
+    this.flipsMark = flipsSoFar(); // nothing before this message counts (other sessions' work)
     try {
       if (data.type === 'teach-reset') await this.teacher.reset(this.population, data);
       else if (data.type === 'teach-step') await this.teacher.step(this.population, data);
