@@ -1,5 +1,6 @@
 //! One error type for the whole crate. Every message says what is wrong, where, and what to try.
 
+use serde::Serialize;
 use std::fmt;
 
 /// Everything that can go wrong in posemfa. Messages are meant to be shown to a person as they are.
@@ -36,3 +37,52 @@ impl fmt::Display for Error {
 impl std::error::Error for Error {}
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// One problem as plain data, for the wasm boundary and JSON: `kind` names the variant ("obj", "population",
+/// "params", "data", "request", "io"); `file` and `line` (1-based) when the problem has them; `message`
+/// without the file and line (the whole text is the error's Display).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Problem {
+    pub kind: &'static str,
+    pub file: Option<String>,
+    pub line: Option<usize>,
+    pub message: String,
+}
+
+impl Error {
+    /// The error as a [`Problem`].
+    pub fn problem(&self) -> Problem {
+        let (kind, file, line, message) = match self {
+            Error::Obj { file, line, message } => ("obj", Some(file.clone()), (*line > 0).then_some(*line), message.clone()),
+            Error::Population { file, message } => ("population", Some(file.clone()), None, message.clone()),
+            Error::Params(_) => ("params", None, None, self.to_string()),
+            Error::Data(_) => ("data", None, None, self.to_string()),
+            Error::Request(_) => ("request", None, None, self.to_string()),
+            Error::Io(_) => ("io", None, None, self.to_string()),
+        };
+        Problem { kind, file, line, message }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn problems_keep_file_line_and_message_apart() {
+        let e = Error::Obj { file: "a.obj".into(), line: 12, message: "face index 9 out of range".into() };
+        assert_eq!(e.to_string(), "file a.obj, line 12: face index 9 out of range");
+        assert_eq!(
+            e.problem(),
+            Problem { kind: "obj", file: Some("a.obj".into()), line: Some(12), message: "face index 9 out of range".into() }
+        );
+        let whole = Error::Obj { file: "b.obj".into(), line: 0, message: "empty file".into() };
+        assert_eq!(whole.problem().line, None);
+        let p = Error::Params("parts must be at least 1".into()).problem();
+        assert_eq!((p.kind, p.file, p.line), ("params", None, None));
+        assert_eq!(p.message, "invalid parameter: parts must be at least 1");
+        let json = serde_json::to_string(&Error::Population { file: "c.obj".into(), message: "8 vertices, not 9".into() }.problem()).unwrap();
+        assert_eq!(json, r#"{"kind":"population","file":"c.obj","line":null,"message":"8 vertices, not 9"}"#);
+    }
+}

@@ -4,6 +4,7 @@
 use crate::error::{Error, Result};
 use crate::geometry::rotation::angle_between;
 use crate::geometry::{mat_mul, transpose, Mat3};
+use serde::Serialize;
 use std::collections::HashMap;
 
 /// Maps arbitrary label values to 0..k in order of first appearance.
@@ -206,6 +207,43 @@ pub fn median(values: &[f64]) -> f64 {
         n if n % 2 == 1 => v[n / 2],
         n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
     }
+}
+
+/// A fit's accuracy against a generated population's ground truth: the one payload that both the CLI (`fit` of
+/// a `synth:` population) and the page (`Synthetic.groundTruth`) print.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct GroundTruthAccuracy {
+    /// Adjusted Rand index of the fitted labels against the true parts.
+    pub ari: f64,
+    /// Median over the true parts of their mean rotation error (degrees, relative to pose 1).
+    pub rotation_error_deg: f64,
+    /// The worst true part's mean rotation error (degrees).
+    pub rotation_error_deg_max: f64,
+    /// Every true part's mean rotation error (degrees), in part order ([`rotation_errors_deg`]).
+    pub rotation_errors_deg: Vec<f64>,
+    /// Number of true parts.
+    pub true_parts: usize,
+}
+
+/// [`GroundTruthAccuracy`] of a model fitted to a generated population.
+pub fn ground_truth_accuracy(model: &crate::model::Model, truth: &crate::synth::Generated) -> Result<GroundTruthAccuracy> {
+    if model.labels.len() != truth.part_of_vertex.len() {
+        return Err(Error::Request(format!(
+            "the model has {} vertices, the ground truth {}",
+            model.labels.len(),
+            truth.part_of_vertex.len()
+        )));
+    }
+    let fitted: Vec<Vec<Mat3>> = model.parts.iter().map(|p| p.rotations.clone()).collect();
+    let errs = rotation_errors_deg(&fitted, &model.labels, &truth.rotations, &truth.part_of_vertex)?;
+    Ok(GroundTruthAccuracy {
+        ari: adjusted_rand_index(&model.labels, &truth.part_of_vertex),
+        rotation_error_deg: median(&errs),
+        rotation_error_deg_max: errs.iter().cloned().fold(0.0, f64::max),
+        rotation_errors_deg: errs,
+        true_parts: truth.n_parts(),
+    })
 }
 
 #[cfg(test)]

@@ -1,6 +1,12 @@
 //! The wasm-bindgen surface: thin wrappers that convert typed arrays, plain objects and errors, nothing
-//! else. camelCase at the JS boundary. Every Rust `Error` becomes a JS `Error` with the same message.
+//! else. camelCase at the JS boundary. Every error is thrown as a JS `Error` whose message is the Rust
+//! error's text and which carries the same as data: `kind`, `file`, `line` (or null) and `problems`
+//! ([{kind, file, line, message}], one per problem: a population refused lists every file's).
+//! Objects passed in (fit parameters, generator specs, interpolation options, shown-mesh descriptors) refuse
+//! unknown fields, with an error naming the field.
 
+use crate::error::{Error, Problem};
+use crate::export::shown::{obj_in_original_units, Shown};
 use crate::mesh::Population;
 use crate::model::hierarchy::{FitResult, Pipeline};
 use crate::model::{Model, Params};
@@ -8,8 +14,54 @@ use js_sys::{Array, Float32Array, Float64Array, Uint32Array, Uint8Array};
 use std::rc::Rc;
 use wasm_bindgen::prelude::*;
 
-fn js_err(e: impl std::fmt::Display) -> JsError {
-    JsError::new(&e.to_string())
+/// A JS Error carrying the problems as data (see the module doc).
+fn thrown(problems: &[Problem]) -> JsValue {
+    let text: Vec<String> = problems
+        .iter()
+        .map(|p| match (&p.file, p.line) {
+            (Some(f), Some(l)) => format!("file {f}, line {l}: {}", p.message),
+            (Some(f), None) => format!("file {f}: {}", p.message),
+            _ => p.message.clone(),
+        })
+        .collect();
+    let err = js_sys::Error::new(&text.join("\n"));
+    let first = problems.first();
+    let set = |k: &str, v: JsValue| {
+        let _ = js_sys::Reflect::set(&err, &JsValue::from_str(k), &v);
+    };
+    set("kind", first.map_or(JsValue::NULL, |p| JsValue::from_str(p.kind)));
+    set("file", first.and_then(|p| p.file.as_deref()).map_or(JsValue::NULL, JsValue::from_str));
+    set("line", first.and_then(|p| p.line).map_or(JsValue::NULL, |l| JsValue::from(l as u32)));
+    set("problems", to_js(&problems).unwrap_or(JsValue::NULL));
+    err.into()
+}
+
+impl From<Error> for JsValue {
+    fn from(e: Error) -> JsValue {
+        thrown(&[e.problem()])
+    }
+}
+
+/// An invalid request that the core did not see (wrong index, unknown option value...).
+fn js_err(e: impl std::fmt::Display) -> JsValue {
+    thrown(&[Problem { kind: "request", file: None, line: None, message: e.to_string() }])
+}
+
+/// A plain JS object as `T` (missing fields take defaults; unknown fields are refused, naming the field). It
+/// goes through JSON text: serde-wasm-bindgen reads only the fields a struct declares, so it cannot see a
+/// misspelled one.
+fn from_js<T: serde::de::DeserializeOwned + Default>(v: JsValue, what: &str) -> Result<T, JsValue> {
+    if v.is_undefined() || v.is_null() {
+        return Ok(T::default());
+    }
+    descriptor(v, what)
+}
+
+/// A plain JS object as `T`, through JSON text (see [`from_js`]); every field required unless `T` says not.
+fn descriptor<T: serde::de::DeserializeOwned>(v: JsValue, what: &str) -> Result<T, JsValue> {
+    let invalid = |m: String| thrown(&[Problem { kind: "params", file: None, line: None, message: format!("invalid {what}: {m}") }]);
+    let text: String = js_sys::JSON::stringify(&v).map_err(|_| invalid("not a plain object".into()))?.into();
+    serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))
 }
 
 fn flat_f32(points: &[[f64; 3]]) -> Float32Array {
@@ -17,7 +69,7 @@ fn flat_f32(points: &[[f64; 3]]) -> Float32Array {
     Float32Array::from(v.as_slice())
 }
 
-fn to_js<T: serde::Serialize>(v: &T) -> Result<JsValue, JsError> {
+fn to_js<T: serde::Serialize + ?Sized>(v: &T) -> Result<JsValue, JsValue> {
     v.serialize(&serde_wasm_bindgen::Serializer::json_compatible()).map_err(js_err)
 }
 
@@ -29,17 +81,17 @@ pub struct WasmPopulation {
 
 #[wasm_bindgen(js_class = Population)]
 impl WasmPopulation {
-    /// Parses and validates OBJ files. Throws an Error whose message has one line per problem
-    /// ("file X, line N: ..."), every file's problem listed.
+    /// Parses and validates OBJ files. Throws an Error with one problem per file that has one (`problems`,
+    /// each {kind, file, line, message}; the message has one line per problem).
     #[wasm_bindgen(constructor)]
-    pub fn new(names: Vec<String>, files: Vec<Uint8Array>) -> Result<WasmPopulation, JsError> {
+    pub fn new(names: Vec<String>, files: Vec<Uint8Array>) -> Result<WasmPopulation, JsValue> {
         if names.len() != files.len() {
-            return Err(JsError::new("names and files differ in length"));
+            return Err(js_err("names and files differ in length"));
         }
         let pairs = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
         match Population::from_files_all_errors(pairs) {
             Ok(p) => Ok(WasmPopulation { inner: Rc::new(p) }),
-            Err(errors) => Err(JsError::new(&errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))),
+            Err(errors) => Err(thrown(&errors.iter().map(Error::problem).collect::<Vec<_>>())),
         }
     }
 
@@ -63,7 +115,7 @@ impl WasmPopulation {
     }
 
     /// Shape i's vertices, unit box, flat xyz.
-    pub fn positions(&self, shape: usize) -> Result<Float32Array, JsError> {
+    pub fn positions(&self, shape: usize) -> Result<Float32Array, JsValue> {
         let s = self.inner.shapes.get(shape).ok_or_else(|| js_err(format!("no shape {shape}")))?;
         Ok(flat_f32(s))
     }
@@ -72,6 +124,37 @@ impl WasmPopulation {
     pub fn normalization(&self) -> Float64Array {
         let n = self.inner.normalization;
         Float64Array::from(&[n.offset[0], n.offset[1], n.offset[2], n.scale][..])
+    }
+
+    /// Unit-box lengths in the population's original units.
+    #[wasm_bindgen(js_name = originalLengths)]
+    pub fn original_lengths(&self, unit: Vec<f64>) -> Float64Array {
+        let v: Vec<f64> = unit.iter().map(|&x| self.inner.normalization.length_to_original(x)).collect();
+        Float64Array::from(v.as_slice())
+    }
+
+    /// Plain linear vertex blending of poses i and j (0-based) at t, unit box, flat xyz.
+    #[wasm_bindgen(js_name = linearInterpolate)]
+    pub fn linear_interpolate(&self, i: usize, j: usize, t: f64) -> Result<Float32Array, JsValue> {
+        Ok(flat_f32(&Shown::Linear { from: i, to: j, t }.positions(&self.inner, None, None)?))
+    }
+
+    /// OBJ text, in the original units, of a mesh that needs no model: `what` is {kind: "pose", pose} or
+    /// {kind: "linear", from, to, t} (`posemfa::export::shown::Shown`); `header` becomes its comment lines.
+    #[wasm_bindgen(js_name = objText)]
+    pub fn obj_text(&self, what: JsValue, header: &str) -> Result<String, JsValue> {
+        let what: Shown = descriptor(what, "mesh descriptor")?;
+        Ok(obj_in_original_units(&self.inner, &what.positions(&self.inner, None, None)?, header))
+    }
+
+    /// A palette index (< `n_colours`) for every part of `labels` (one per vertex): parts that share a mesh
+    /// edge differ while the palette allows (`posemfa::articulate::graph::colour_parts`).
+    #[wasm_bindgen(js_name = partColours)]
+    pub fn part_colours(&self, labels: Vec<u32>, n_colours: usize) -> Result<Uint32Array, JsValue> {
+        if labels.len() != self.inner.n_vertices() {
+            return Err(js_err(format!("{} labels for {} vertices", labels.len(), self.inner.n_vertices())));
+        }
+        Ok(Uint32Array::from(crate::articulate::graph::colour_parts(&labels, &self.inner.faces, n_colours).as_slice()))
     }
 }
 
@@ -87,30 +170,26 @@ impl Fitter {
     /// `params`: a plain object with any of the fields of `Params` in camelCase (parts, seed, tol, maxIter,
     /// varianceFloor, lambdaRule: "exact" | "paper-eq18", restarts, refine, ...); missing fields take defaults.
     #[wasm_bindgen(constructor)]
-    pub fn new(population: &WasmPopulation, params: JsValue) -> Result<Fitter, JsError> {
-        let params: Params = if params.is_undefined() || params.is_null() {
-            Params::default()
-        } else {
-            serde_wasm_bindgen::from_value(params).map_err(|e| js_err(format!("invalid parameters: {e}")))?
-        };
-        let pipe = Pipeline::new(&population.inner, &params).map_err(js_err)?;
+    pub fn new(population: &WasmPopulation, params: JsValue) -> Result<Fitter, JsValue> {
+        let params: Params = from_js(params, "parameters")?;
+        let pipe = Pipeline::new(&population.inner, &params)?;
         Ok(Fitter { pipe, pop: population.inner.clone() })
     }
 
     /// One AECM iteration; returns the progress object {stage, iteration, totalIterations, logLikelihood,
     /// parts, runFinished}.
-    pub fn step(&mut self) -> Result<JsValue, JsError> {
-        let p = self.pipe.step().map_err(js_err)?;
+    pub fn step(&mut self) -> Result<JsValue, JsValue> {
+        let p = self.pipe.step()?;
         to_js(&p)
     }
 
     /// Steps until `budget_ms` has passed or the fit is done; returns the progress objects of every
     /// iteration made.
-    pub fn run(&mut self, budget_ms: f64) -> Result<Array, JsError> {
+    pub fn run(&mut self, budget_ms: f64) -> Result<Array, JsValue> {
         let t0 = crate::clock::now_ms();
         let out = Array::new();
         while !self.pipe.is_done() {
-            let p = self.pipe.step().map_err(js_err)?;
+            let p = self.pipe.step()?;
             out.push(&to_js(&p)?);
             if crate::clock::now_ms() - t0 >= budget_ms {
                 break;
@@ -124,7 +203,7 @@ impl Fitter {
         self.pipe.is_done()
     }
 
-    pub fn stage(&self) -> Result<JsValue, JsError> {
+    pub fn stage(&self) -> Result<JsValue, JsValue> {
         to_js(&self.pipe.stage())
     }
 
@@ -141,7 +220,7 @@ impl Fitter {
     /// Responsibilities of the run in progress, `[j * parts + k]` for the run's vertices (see
     /// `currentVertices`), and the number of parts: {parts, gamma: Float32Array, vertices: Uint32Array|null}.
     #[wasm_bindgen(js_name = currentResponsibilities)]
-    pub fn current_responsibilities(&self) -> Result<JsValue, JsError> {
+    pub fn current_responsibilities(&self) -> Result<JsValue, JsValue> {
         let obj = js_sys::Object::new();
         if let Some(f) = self.pipe.current_fit() {
             let g: Vec<f32> = f.responsibilities().iter().map(|&v| v as f32).collect();
@@ -154,6 +233,26 @@ impl Fitter {
             js_sys::Reflect::set(&obj, &"vertices".into(), &verts).map_err(|_| js_err("reflect"))?;
         }
         Ok(obj.into())
+    }
+
+    /// A palette index (< `n_colours`) for every component of the AECM run in progress, such that
+    /// components whose vertices share a mesh edge differ (the vertices outside the run, during the
+    /// refinement, count as one more part); empty before the first run.
+    #[wasm_bindgen(js_name = currentColours)]
+    pub fn current_colours(&self, n_colours: usize) -> Uint32Array {
+        let Some(f) = self.pipe.current_fit() else { return Uint32Array::new_with_length(0) };
+        let k = f.n_parts();
+        let mut labels = f.labels();
+        if let Some(vertices) = self.pipe.current_vertices() {
+            let mut all = vec![k as u32; self.pop.n_vertices()];
+            for (&v, &l) in vertices.iter().zip(&labels) {
+                all[v] = l;
+            }
+            labels = all;
+        }
+        let c = crate::articulate::graph::colour_parts(&labels, &self.pop.faces, n_colours);
+        let per_component: Vec<u32> = (0..k).map(|p| c.get(p).copied().unwrap_or((p % n_colours.max(1)) as u32)).collect();
+        Uint32Array::from(per_component.as_slice())
     }
 
     /// Log-likelihood trace of the AECM run in progress (after every iteration).
@@ -181,7 +280,7 @@ impl FitModel {
         &self.result.model
     }
 
-    fn shape(&self, i: usize) -> Result<(), JsError> {
+    fn shape(&self, i: usize) -> Result<(), JsValue> {
         if i < self.model().n_shapes {
             Ok(())
         } else {
@@ -217,21 +316,21 @@ impl FitModel {
     }
 
     /// Shape i rebuilt from the latent shape (eq 22), unit box, flat xyz.
-    pub fn reconstruct(&self, shape: usize) -> Result<Float32Array, JsError> {
+    pub fn reconstruct(&self, shape: usize) -> Result<Float32Array, JsValue> {
         self.shape(shape)?;
         Ok(flat_f32(&self.model().reconstruct(shape)))
     }
 
     /// |original - reconstruction| per vertex of shape i (unit box).
     #[wasm_bindgen(js_name = vertexErrors)]
-    pub fn vertex_errors(&self, shape: usize) -> Result<Float32Array, JsError> {
+    pub fn vertex_errors(&self, shape: usize) -> Result<Float32Array, JsValue> {
         self.shape(shape)?;
         let e: Vec<f32> = self.model().vertex_errors(&self.pop, shape).iter().map(|&v| v as f32).collect();
         Ok(Float32Array::from(e.as_slice()))
     }
 
     /// P(k | h_j) for every part (eq 12).
-    pub fn responsibilities(&self, vertex: usize) -> Result<Float64Array, JsError> {
+    pub fn responsibilities(&self, vertex: usize) -> Result<Float64Array, JsValue> {
         if vertex >= self.model().n_vertices {
             return Err(js_err(format!("no vertex {vertex}")));
         }
@@ -240,7 +339,7 @@ impl FitModel {
 
     /// Rotation angle (degrees) of part k in every pose, relative to pose `reference`.
     #[wasm_bindgen(js_name = rotationAngles)]
-    pub fn rotation_angles(&self, part: usize, reference: usize) -> Result<Float64Array, JsError> {
+    pub fn rotation_angles(&self, part: usize, reference: usize) -> Result<Float64Array, JsValue> {
         let c = self.model().parts.get(part).ok_or_else(|| js_err(format!("no part {part}")))?;
         self.shape(reference)?;
         let a: Vec<f64> = c
@@ -251,15 +350,18 @@ impl FitModel {
         Ok(Float64Array::from(a.as_slice()))
     }
 
-    /// {shapes, vertices, parts, coarseParts, refinedParts, rmse, iterations, converged, complete,
+    /// {shapes, vertices, parts, coarseParts, refinedParts, rmse, rmseOriginal (in the original units),
+    /// iterations, converged, complete,
     /// logLikelihood: [...], stageStats: [...]}
-    pub fn summary(&self) -> Result<JsValue, JsError> {
+    pub fn summary(&self) -> Result<JsValue, JsValue> {
         let m = self.model();
         let s = &self.result.stages;
+        let rmse = m.rmse(&self.pop);
         let v = serde_json::json!({
             "shapes": m.n_shapes, "vertices": m.n_vertices, "parts": m.n_parts(),
             "coarseParts": s.coarse_parts, "refinedParts": s.refined_parts,
-            "rmse": m.rmse(&self.pop), "iterations": m.iterations, "converged": m.converged,
+            "rmse": rmse, "rmseOriginal": self.pop.normalization.length_to_original(rmse),
+            "iterations": m.iterations, "converged": m.converged,
             "complete": self.result.complete, "logLikelihood": m.log_likelihood,
             "stageStats": self.result.stats,
         });
@@ -271,7 +373,7 @@ impl FitModel {
     /// ([`crate::model::limit::limit_report`]): {f64: {gflop, ms, gflopsPerS}, f32: {...}, stageFractions,
     /// fraction}.
     #[wasm_bindgen(js_name = kernelLimit)]
-    pub fn kernel_limit(&self, min_ms: f64) -> Result<JsValue, JsError> {
+    pub fn kernel_limit(&self, min_ms: f64) -> Result<JsValue, JsValue> {
         let data = crate::model::data::Data::from_population(&self.pop);
         to_js(&crate::model::limit::limit_report(&data, &self.model().parts, &self.result.stats, min_ms))
     }
@@ -291,7 +393,7 @@ pub fn memory_bytes() -> f64 {
 
 /// The default fit parameters as a plain object (camelCase fields of `Params`), for the page's form.
 #[wasm_bindgen(js_name = defaultParams)]
-pub fn default_params() -> Result<JsValue, JsError> {
+pub fn default_params() -> Result<JsValue, JsValue> {
     to_js(&Params::default())
 }
 
@@ -307,13 +409,9 @@ impl Synthetic {
     /// "arm" | "snake" | "blob", vertices, poses, seed, jointBand, noise, maxAngleDeg, rootMotion, tied);
     /// missing fields take defaults. Throws an Error naming the invalid field.
     #[wasm_bindgen(constructor)]
-    pub fn new(spec: JsValue) -> Result<Synthetic, JsError> {
-        let spec: crate::synth::Spec = if spec.is_undefined() || spec.is_null() {
-            crate::synth::Spec::default()
-        } else {
-            serde_wasm_bindgen::from_value(spec).map_err(|e| js_err(format!("invalid generator spec: {e}")))?
-        };
-        Ok(Synthetic { inner: crate::synth::generate(&spec).map_err(js_err)? })
+    pub fn new(spec: JsValue) -> Result<Synthetic, JsValue> {
+        let spec: crate::synth::Spec = from_js(spec, "generator spec")?;
+        Ok(Synthetic { inner: crate::synth::generate(&spec)? })
     }
 
     /// The generated shapes as a population (unit box; its normalisation is the identity).
@@ -346,7 +444,7 @@ impl Synthetic {
 /// The built-in examples (`posemfa::synth::presets`): [{id, title, note, failsOnPurpose, spec, params}], the
 /// default (the quadruped) first. `spec` goes to `new Synthetic(spec)`, `params` to `new Fitter(pop, params)`.
 #[wasm_bindgen]
-pub fn examples() -> Result<JsValue, JsError> {
+pub fn examples() -> Result<JsValue, JsValue> {
     to_js(&crate::synth::presets::examples())
 }
 
@@ -358,22 +456,19 @@ thread_local! {
         const { std::cell::RefCell::new(None) };
 }
 
-fn articulate_options(opts: JsValue) -> Result<crate::articulate::Options, JsError> {
-    if opts.is_undefined() || opts.is_null() {
-        return Ok(crate::articulate::Options::default());
-    }
-    serde_wasm_bindgen::from_value(opts).map_err(|e| js_err(format!("invalid interpolation options: {e}")))
+fn articulate_options(opts: JsValue) -> Result<crate::articulate::Options, JsValue> {
+    from_js(opts, "interpolation options")
 }
 
 impl FitModel {
-    fn articulation(&self) -> Result<Rc<crate::articulate::Articulation>, JsError> {
+    fn articulation(&self) -> Result<Rc<crate::articulate::Articulation>, JsValue> {
         ARTICULATION.with(|cache| {
             if let Some((weak, art)) = &*cache.borrow() {
                 if weak.upgrade().is_some_and(|r| Rc::ptr_eq(&r, &self.result)) {
                     return Ok(art.clone());
                 }
             }
-            let art = Rc::new(crate::articulate::Articulation::new(&self.result.model, &self.pop).map_err(js_err)?);
+            let art = Rc::new(crate::articulate::Articulation::new(&self.result.model, &self.pop)?);
             *cache.borrow_mut() = Some((Rc::downgrade(&self.result), art.clone()));
             Ok(art)
         })
@@ -385,27 +480,27 @@ impl FitModel {
     /// The shape at t in [0, 1] between poses i and j (0-based), unit box, flat xyz. `opts`: {residual: bool,
     /// skin: "rigid" | "smooth", exactEnds: bool, root: "anchor" | "paper", tree: "strongest" |
     /// "breadth-first", blend: "dual-quaternion" | "linear", edgeBlend: bool}; missing fields take defaults.
-    pub fn interpolate(&self, i: usize, j: usize, t: f64, opts: JsValue) -> Result<Float32Array, JsError> {
+    pub fn interpolate(&self, i: usize, j: usize, t: f64, opts: JsValue) -> Result<Float32Array, JsValue> {
         let o = articulate_options(opts)?;
-        Ok(flat_f32(&self.articulation()?.interpolate(i, j, t, &o).map_err(js_err)?))
+        Ok(flat_f32(&self.articulation()?.interpolate(i, j, t, &o)?))
     }
 
     /// The shape at time s in [0, keys.length - 1] along the poses `keys` (0-based), unit box, flat xyz.
-    pub fn keyframes(&self, keys: Vec<u32>, s: f64, opts: JsValue) -> Result<Float32Array, JsError> {
+    pub fn keyframes(&self, keys: Vec<u32>, s: f64, opts: JsValue) -> Result<Float32Array, JsValue> {
         let o = articulate_options(opts)?;
         let keys: Vec<usize> = keys.iter().map(|&k| k as usize).collect();
-        Ok(flat_f32(&self.articulation()?.keyframes(&keys, s, &o).map_err(js_err)?))
+        Ok(flat_f32(&self.articulation()?.keyframes(&keys, s, &o)?))
     }
 
     /// Plain linear vertex interpolation of poses i and j (the baseline), unit box, flat xyz.
     #[wasm_bindgen(js_name = linearInterpolate)]
-    pub fn linear_interpolate(&self, i: usize, j: usize, t: f64) -> Result<Float32Array, JsError> {
-        Ok(flat_f32(&self.articulation()?.linear(i, j, t).map_err(js_err)?))
+    pub fn linear_interpolate(&self, i: usize, j: usize, t: f64) -> Result<Float32Array, JsValue> {
+        Ok(flat_f32(&self.articulation()?.linear(i, j, t)?))
     }
 
     /// Skinning weights, dense: `[vertex * nParts + part]`. `skin`: "smooth" (default) or "rigid".
     #[wasm_bindgen(js_name = skinWeights)]
-    pub fn skin_weights(&self, skin: Option<String>) -> Result<Float32Array, JsError> {
+    pub fn skin_weights(&self, skin: Option<String>) -> Result<Float32Array, JsValue> {
         let s = match skin.as_deref() {
             None | Some("smooth") => crate::articulate::Skin::Smooth,
             Some("rigid") => crate::articulate::Skin::Rigid,
@@ -418,8 +513,8 @@ impl FitModel {
 
     /// The skeleton in pose `shape`: {root, parents: [part or -1 per part], positions: Float32Array (xyz per
     /// part, NaN for parts without vertices)}.
-    pub fn skeleton(&self, shape: usize) -> Result<JsValue, JsError> {
-        let sk = self.articulation()?.skeleton(shape).map_err(js_err)?;
+    pub fn skeleton(&self, shape: usize) -> Result<JsValue, JsValue> {
+        let sk = self.articulation()?.skeleton(shape)?;
         let parents: Vec<i32> = sk.tree.parent.iter().map(|p| p.map_or(-1, |p| p as i32)).collect();
         let pos: Vec<[f64; 3]> = sk.positions.iter().map(|p| p.unwrap_or([f64::NAN; 3])).collect();
         let obj = js_sys::Object::new();
@@ -432,21 +527,21 @@ impl FitModel {
 
     /// Binary glTF 2.0 (.glb) of the articulated model; `weights`: "rigid" (default) or "smooth".
     #[wasm_bindgen(js_name = toGlb)]
-    pub fn to_glb(&self, weights: Option<String>) -> Result<Uint8Array, JsError> {
+    pub fn to_glb(&self, weights: Option<String>) -> Result<Uint8Array, JsValue> {
         let w = match weights.as_deref() {
             None | Some("rigid") => crate::export::gltf::Weights::Rigid,
             Some("smooth") => crate::export::gltf::Weights::Smooth,
             Some(o) => return Err(js_err(format!("weights '{o}': use rigid or smooth"))),
         };
         let opts = crate::export::gltf::GltfOptions { weights: w, ..Default::default() };
-        let glb = crate::export::gltf::to_glb(&*self.articulation()?, &opts).map_err(js_err)?;
+        let glb = crate::export::gltf::to_glb(&*self.articulation()?, &opts)?;
         Ok(Uint8Array::from(glb.as_slice()))
     }
 
     /// Endpoint errors, volume and edge stretch at t of every interpolation method, poses i -> j (0-based).
     #[wasm_bindgen(js_name = articulationReport)]
-    pub fn articulation_report(&self, i: usize, j: usize, t: f64) -> Result<JsValue, JsError> {
-        to_js(&crate::articulate::report::report(&*self.articulation()?, i, j, t).map_err(js_err)?)
+    pub fn articulation_report(&self, i: usize, j: usize, t: f64) -> Result<JsValue, JsValue> {
+        to_js(&crate::articulate::report::report(&*self.articulation()?, i, j, t)?)
     }
 }
 
@@ -459,19 +554,31 @@ impl Synthetic {
     /// mean rotation error (degrees, relative to pose 1), rotationErrorDegMax, rotationErrorsDeg: [per true
     /// part], trueParts}.
     #[wasm_bindgen(js_name = groundTruth)]
-    pub fn ground_truth(&self, model: &FitModel) -> Result<JsValue, JsError> {
-        let (g, m) = (&self.inner, model.model());
-        if m.labels.len() != g.part_of_vertex.len() {
-            return Err(js_err(format!("the model has {} vertices, the ground truth {}", m.labels.len(), g.part_of_vertex.len())));
-        }
-        let fitted: Vec<Vec<crate::geometry::Mat3>> = m.parts.iter().map(|p| p.rotations.clone()).collect();
-        let errs = crate::metrics::rotation_errors_deg(&fitted, &m.labels, &g.rotations, &g.part_of_vertex).map_err(js_err)?;
-        to_js(&serde_json::json!({
-            "ari": crate::metrics::adjusted_rand_index(&m.labels, &g.part_of_vertex),
-            "rotationErrorDeg": crate::metrics::median(&errs),
-            "rotationErrorDegMax": errs.iter().cloned().fold(0.0, f64::max),
-            "rotationErrorsDeg": errs,
-            "trueParts": g.n_parts(),
-        }))
+    pub fn ground_truth(&self, model: &FitModel) -> Result<JsValue, JsValue> {
+        to_js(&crate::metrics::ground_truth_accuracy(model.model(), &self.inner)?)
+    }
+}
+
+#[wasm_bindgen]
+impl FitModel {
+    /// OBJ text, in the original units, of a mesh of this model or its population: `what` is {kind: "pose" |
+    /// "reconstruction", pose} | {kind: "latent"} | {kind: "interpolation", from, to, t, options} | {kind:
+    /// "linear", from, to, t} (`posemfa::export::shown::Shown`); `header` becomes its comment lines.
+    #[wasm_bindgen(js_name = objText)]
+    pub fn obj_text(&self, what: JsValue, header: &str) -> Result<String, JsValue> {
+        let what: Shown = descriptor(what, "mesh descriptor")?;
+        let art = if matches!(what, Shown::Interpolation { .. }) { Some(self.articulation()?) } else { None };
+        Ok(obj_in_original_units(&self.pop, &what.positions(&self.pop, Some(self.model()), art.as_deref())?, header))
+    }
+}
+
+/// Test-only fault injection for the page's fault tests (reached only when the page is opened with
+/// `?faultInjection=1`): `"panic"` panics, which aborts (the release profile's panic = "abort"): the wasm
+/// instance traps with `unreachable`, as on any bug that panics.
+#[wasm_bindgen(js_name = faultInjection)]
+pub fn fault_injection(kind: &str) -> Result<(), JsValue> {
+    match kind {
+        "panic" => panic!("fault injection: a deliberate panic (page test)"),
+        other => Err(js_err(format!("fault injection '{other}': the only kind is panic"))),
     }
 }

@@ -311,9 +311,103 @@ fn largest_patch(tris: &[usize], faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<
     tris.iter().enumerate().filter(|&(i, _)| dsu.find(i) == best).map(|(_, &t)| t).collect()
 }
 
+/// Neighbour lists of the parts (sorted): two parts are neighbours when a mesh edge joins a vertex of one to
+/// a vertex of the other. Labels must be < `n_parts`.
+pub fn part_neighbours(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> Vec<Vec<usize>> {
+    let mut adj = vec![std::collections::BTreeSet::new(); n_parts];
+    for [a, b] in mesh_edges(faces) {
+        let (la, lb) = (labels[a as usize] as usize, labels[b as usize] as usize);
+        if la != lb {
+            adj[la].insert(lb);
+            adj[lb].insert(la);
+        }
+    }
+    adj.into_iter().map(|s| s.into_iter().collect()).collect()
+}
+
+/// A colour (index below `n_colours`) for every part, such that neighbouring parts (see
+/// [`part_neighbours`]) differ whenever `n_colours` allows it; among the colours a part may take, the one used
+/// least so far, so that every part has a colour of its own while there are enough. Greedy colouring in
+/// Welsh-Powell order: most neighbours first, then the larger part, then the lower index. Parts are
+/// 0..=max(label); a part with more neighbours than colours takes the least used colour.
+pub fn colour_parts(labels: &[u32], faces: &[[u32; 3]], n_colours: usize) -> Vec<u32> {
+    let n_parts = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+    if n_colours == 0 {
+        return vec![0; n_parts];
+    }
+    let adj = part_neighbours(labels, faces, n_parts);
+    let mut size = vec![0usize; n_parts];
+    for &l in labels {
+        size[l as usize] += 1;
+    }
+    let mut order: Vec<usize> = (0..n_parts).collect();
+    order.sort_by(|&a, &b| adj[b].len().cmp(&adj[a].len()).then(size[b].cmp(&size[a])).then(a.cmp(&b)));
+    let mut colour: Vec<Option<usize>> = vec![None; n_parts];
+    let mut used = vec![0usize; n_colours];
+    for p in order {
+        let taken: Vec<usize> = adj[p].iter().filter_map(|&q| colour[q]).collect();
+        let least = |ok: &dyn Fn(usize) -> bool| (0..n_colours).filter(|&c| ok(c)).min_by_key(|&c| (used[c], c));
+        let c = least(&|c| !taken.contains(&c)).or_else(|| least(&|_| true)).unwrap_or(0);
+        colour[p] = Some(c);
+        used[c] += 1;
+    }
+    colour.into_iter().map(|c| c.unwrap_or(0) as u32).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    // A strip of quads (two triangles each) along x, `n` columns; labels by column.
+    fn quad_strip(columns: usize) -> (Vec<[u32; 3]>, usize) {
+        let mut faces = Vec::new();
+        for c in 0..columns as u32 {
+            let (a, b, d, e) = (2 * c, 2 * c + 1, 2 * c + 2, 2 * c + 3);
+            faces.push([a, d, b]);
+            faces.push([b, d, e]);
+        }
+        (faces, 2 * columns + 2)
+    }
+
+    #[test]
+    fn neighbouring_parts_get_different_colours() {
+        // 30 parts in a row (each touches the next): with 12 colours, neighbours differ and the first 12
+        // parts in Welsh-Powell order get 12 different colours.
+        let (faces, n) = quad_strip(60);
+        let labels: Vec<u32> = (0..n as u32).map(|v| (v / 2 / 2).min(29)).collect();
+        let colours = colour_parts(&labels, &faces, 12);
+        assert_eq!(colours.len(), 30);
+        let adj = part_neighbours(&labels, &faces, 30);
+        let mut pairs = 0;
+        for (p, ns) in adj.iter().enumerate() {
+            for &q in ns {
+                assert_ne!(colours[p], colours[q], "parts {p} and {q} touch");
+                pairs += 1;
+            }
+        }
+        assert_eq!(pairs, 2 * 29, "a chain of 30 parts has 29 contacts");
+        assert!(colours.iter().all(|&c| c < 12));
+        let distinct: std::collections::BTreeSet<u32> = colours.iter().copied().collect();
+        assert_eq!(distinct.len(), 12, "every colour is used before any repeats: {colours:?}");
+        // A part that touches every other one (a hub) differs from all of them.
+        let mut hub = labels.clone();
+        for v in (0..n).step_by(2) {
+            hub[v] = 30; // the bottom row of the strip is one part touching every column
+        }
+        let c = colour_parts(&hub, &faces, 12);
+        for q in part_neighbours(&hub, &faces, 31)[30].iter() {
+            assert_ne!(c[30], c[*q]);
+        }
+    }
+
+    #[test]
+    fn colouring_needs_no_more_colours_than_given() {
+        let (faces, n) = quad_strip(4);
+        let labels: Vec<u32> = (0..n as u32).map(|v| v % 3).collect();
+        assert_eq!(colour_parts(&labels, &faces, 1), vec![0, 0, 0]);
+        assert_eq!(colour_parts(&labels, &faces, 0), vec![0, 0, 0]);
+        assert_eq!(colour_parts(&[], &[], 12), Vec::<u32>::new());
+    }
 
     /// A strip of quads along x: vertices (i, y) for i = 0..=n, y = 0..rows (vertex i * rows + y); labels
     /// by column; two triangles per quad.

@@ -22,6 +22,16 @@ use crate::error::{Error, Result};
 use crate::geometry::rotation::slerp;
 use crate::geometry::{add, mat_t_vec, mat_vec, norm, sub, Vec3};
 
+/// Plain linear vertex blending of two shapes at t in [0, 1]: the baseline the part-wise interpolation is
+/// compared with (Fig 5, 6).
+pub fn linear_blend(a: &[Vec3], b: &[Vec3], t: f64) -> Result<Vec<Vec3>> {
+    check_t(t)?;
+    if a.len() != b.len() {
+        return Err(Error::Request(format!("the shapes have {} and {} vertices", a.len(), b.len())));
+    }
+    Ok(a.iter().zip(b).map(|(&a, &b)| lerp(a, b, t)).collect())
+}
+
 fn check_t(t: f64) -> Result<()> {
     if (0.0..=1.0).contains(&t) {
         Ok(())
@@ -145,7 +155,7 @@ impl Articulation {
         self.check_shape(i)?;
         self.check_shape(j)?;
         check_t(t)?;
-        Ok(self.shapes[i].iter().zip(&self.shapes[j]).map(|(&a, &b)| lerp(a, b, t)).collect())
+        linear_blend(&self.shapes[i], &self.shapes[j], t)
     }
 
     /// Which segment of a key sequence s falls in, and where in it: s in [0, keys.len() - 1].

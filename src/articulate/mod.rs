@@ -88,7 +88,7 @@ pub enum Blend {
 
 /// Interpolation options. Defaults in each field's doc.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default, rename_all = "camelCase")]
+#[serde(default, rename_all = "camelCase", deny_unknown_fields)]
 pub struct Options {
     /// Root rule. Default [`RootRule::Anchor`].
     pub root: RootRule,

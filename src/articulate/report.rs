@@ -59,6 +59,7 @@ pub fn percentile(values: &[f64], q: f64) -> f64 {
 
 /// Edge stretch figures of one output shape.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
 pub struct Stretch {
     /// p99 over edges crossing a part boundary.
     pub boundary_p99: f64,
@@ -98,6 +99,7 @@ pub fn edge_stretch(art: &Articulation, positions: &[Vec3], i: usize, j: usize, 
 
 /// One interpolation method's figures.
 #[derive(Debug, Clone, Serialize)]
+#[serde(rename_all = "camelCase")]
 pub struct MethodFigures {
     pub name: String,
     pub options: Option<Options>,
@@ -110,6 +112,7 @@ pub struct MethodFigures {
 
 /// Everything [`report`] measures.
 #[derive(Debug, Clone, Serialize)]
+#[serde(rename_all = "camelCase")]
 pub struct Report {
     pub shapes: usize,
     pub vertices: usize,

@@ -782,17 +782,12 @@ fn preset(name: &str) -> Result<posemfa::synth::Preset, String> {
         .map_err(|_| format!("unknown preset '{name}': use quadruped, arm, snake or blob"))
 }
 
-/// Adjusted Rand index of the labels and rotation errors (degrees) against a generated population's truth.
+/// Adjusted Rand index of the labels and rotation errors (degrees) against a generated population's truth
+/// (`posemfa::metrics::GroundTruthAccuracy`: the same payload as the page's).
 fn ground_truth_json(g: &posemfa::synth::Generated, m: &posemfa::model::Model) -> serde_json::Value {
-    let ari = posemfa::metrics::adjusted_rand_index(&m.labels, &g.part_of_vertex);
-    let fitted: Vec<Vec<posemfa::geometry::Mat3>> = m.parts.iter().map(|p| p.rotations.clone()).collect();
-    let errs =
-        posemfa::metrics::rotation_errors_deg(&fitted, &m.labels, &g.rotations, &g.part_of_vertex).unwrap_or_default();
-    let max = errs.iter().cloned().fold(0.0, f64::max);
-    serde_json::json!({
-        "ari": ari, "true_parts": g.n_parts(),
-        "rotation_error_deg_median": posemfa::metrics::median(&errs), "rotation_error_deg_max": max,
-    })
+    posemfa::metrics::ground_truth_accuracy(m, g)
+        .and_then(|a| serde_json::to_value(a).map_err(|e| posemfa::Error::Io(e.to_string())))
+        .unwrap_or_else(|e| serde_json::json!({ "error": e.to_string() }))
 }
 
 // ---------------------------------------------------------------- generate

@@ -1,6 +1,7 @@
-//! Writing results out: the fit as JSON (`json`), a mesh as OBJ with round-trip floats (`obj`), the
-//! articulated model as binary glTF 2.0 with skeleton, skin and animations (`gltf`), a population as a .glb
-//! with one morph target per pose (`morph_glb`).
+//! Writing results out: the fit as JSON (`json`), a mesh as OBJ with round-trip floats (`obj`) or PLY (`ply`),
+//! the mesh a viewer shows in the population's original units (`shown`), the articulated model as binary glTF
+//! 2.0 with skeleton, skin and animations (`gltf`), a population as a .glb with one morph target per pose
+//! (`morph_glb`), the rig's reconstruction error as exported (`rig_report`).
 
 pub mod gltf;
 pub mod json;
@@ -8,3 +9,4 @@ pub mod morph_glb;
 pub mod obj;
 pub mod ply;
 pub mod rig_report;
+pub mod shown;

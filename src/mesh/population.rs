@@ -21,6 +21,11 @@ impl Normalization {
     pub fn to_original(&self, p: [f64; 3]) -> [f64; 3] {
         [p[0] / self.scale + self.offset[0], p[1] / self.scale + self.offset[1], p[2] / self.scale + self.offset[2]]
     }
+
+    /// A unit-box length (a distance, an error) in the original units.
+    pub fn length_to_original(&self, x: f64) -> f64 {
+        x / self.scale
+    }
 }
 
 /// Registered shapes in unit-box coordinates.

@@ -17,7 +17,7 @@ pub enum LambdaRule {
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, rename_all = "camelCase")]
+#[serde(default, rename_all = "camelCase", deny_unknown_fields)]
 pub struct Params {
     /// Number of coarse parts m of the first AECM (Algorithm 1's input). Default 11.
     pub parts: usize,

@@ -59,7 +59,7 @@ impl Preset {
 
 /// Generator parameters. Each field's default is in its doc comment; [`Spec::validate`] checks them.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, rename_all = "camelCase")]
+#[serde(default, rename_all = "camelCase", deny_unknown_fields)]
 pub struct Spec {
     /// The creature. Default [`Preset::Quadruped`].
     pub preset: Preset,
