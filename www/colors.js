@@ -1,16 +1,27 @@
-// Colours of parts and errors. Parts that touch (share a mesh edge) always get different colours: the part
-// adjacency is read off the faces and coloured greedily, preferring colours used least so far, so every part
-// has its own colour while the palette lasts.
+// Colours of parts and errors. Which palette colour each part gets comes from the core with the labels (parts
+// that share a mesh edge differ; posemfa::articulate::graph::colour_parts): paletteColours looks them up.
+// (colourParts / labelColours below still colour in JS for the article's figures, www/explain/, until its pool
+// worker sends the core's colouring as www/worker.js does.)
 
 // Well separated hues (after Kelly and Trubetskoy); no grey, white or black, which the background and the
 // shading use.
-export const PALETTE = [
+export const PALETTE = [ // 12 colours: PALETTE_SIZE in worker.js
   '#e6194b', '#3cb44b', '#ffe119', '#4363d8', '#f58231', '#911eb4',
   '#42d4f4', '#f032e6', '#bfef45', '#fabed4', '#469990', '#9a6324',
 ];
 
 export const hexToRgb = (hex) => [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16) / 255);
 const PALETTE_RGB = PALETTE.map(hexToRgb);
+
+/**
+ * Per-vertex RGB (Float32Array, 3 per vertex) of part labels, given the palette index of every part (from the
+ * core), and the CSS colour of every part.
+ */
+export function paletteColours(labels, partPalette) {
+  const out = new Float32Array(labels.length * 3);
+  labels.forEach((l, v) => out.set(PALETTE_RGB[partPalette[l] % PALETTE.length], 3 * v));
+  return { vertexColours: out, partColour: Array.from(partPalette, (c) => PALETTE[c % PALETTE.length]) };
+}
 
 /** Sets of neighbouring parts, from every triangle edge whose two vertices lie in different parts. */
 export function partAdjacency(labels, faces, nParts) {

@@ -9,7 +9,7 @@
 import './worker-client.js'; // first: the wasm module loads while three.js evaluates
 import { installUrlState } from './urlstate.js'; // second: an embedded page hides its controls at once
 import { state, update, subscribe } from './state.js';
-import { client, onReady, generate, runExample, loadFiles, startFit, cancelFit } from './session.js';
+import { faultInjection, injectFault, onReady, generate, runExample, loadFiles, startFit, cancelFit } from './session.js';
 import { viewer } from './views/viewer-instance.js';
 import { installViews, renderView } from './views/render.js';
 import { installInspect } from './views/inspect.js';
@@ -21,7 +21,7 @@ import { installToolbar } from './controls/toolbar.js';
 import { installExports } from './controls/exports.js';
 import { installDrop } from './drop.js';
 import { installPresets } from './presets.js';
-import { installTeaching } from './teach.js';
+import { installTeaching, teach } from './teach.js';
 import { note } from './problems.js';
 import { PALETTE } from './colors.js';
 
@@ -45,9 +45,11 @@ window.posemfa = {
   mode: () => state.mode,
   /** Workers replaced after a crash since the page opened. */
   restartCount: () => state.restartCount,
-  /** Fault injection for the page tests: the worker reports a wasm trap as if the core had crashed. */
-  crashWorkerForTest: () => client.post({ type: 'test-crash' }),
 };
+if (faultInjection) {
+  /** Page tests only (?faultInjection=1): the next `times` fits make the wasm instance trap (a Rust panic). */
+  window.posemfa.injectFault = injectFault;
+}
 
 // body[data-state] (test contract), the marks scripts/bench-page.mjs reads, and the Cancel button.
 subscribe((s, changed) => {
@@ -58,7 +60,9 @@ subscribe((s, changed) => {
   $('cancel').disabled = s.phase !== 'fitting';
 });
 
-const urlState = installUrlState({ viewer, readParams, renderView, runExample, generate, note });
+const urlState = installUrlState({
+  viewer, readParams, renderView, runExample, generate, note, teach: (count) => teach('teach-step', { count }),
+});
 installPoses(); // before the views: a new population's pose lists are filled before its first picture
 installViews();
 installResult();

@@ -18,7 +18,7 @@
 // www/viewer.js Viewer), population() and model() (as the worker sent them), post(msg, transfer) to the
 // worker, query(method, ...args) (a promise of the worker's reply) and on(f) (f(msg) for every message).
 import { Viewer } from './viewer.js';
-import { labelColours } from './colors.js';
+import { paletteColours } from './colors.js';
 
 export function mount(element, options = {}) {
   const box = document.createElement('div');
@@ -69,7 +69,6 @@ export function mount(element, options = {}) {
   const handle = (m) => {
     if (m.type === 'ready') {
       const ex = options.spec ? null : (m.examples.find((e) => e.id === options.example) ?? m.examples[0]);
-      if (!ex && !options.spec) return fail('this build has no built-in examples');
       if (options.example && ex && ex.id !== options.example) return fail(`no example "${options.example}"`);
       const params = { ...m.defaults, ...(ex?.params ?? {}), ...(options.params ?? {}) };
       worker.postMessage({ type: 'generate', id: 1, spec: options.spec ?? ex.spec, fit: { id: 2, params } });
@@ -85,8 +84,8 @@ export function mount(element, options = {}) {
       fittedModel = m.model;
       const pose = Math.min(Math.max(Number(options.pose) || 0, 0), pop.nShapes - 1);
       const truth = options.view === 'truth' && pop.truth;
-      const labels = truth ? pop.truth.partOfVertex : m.model.labels;
-      viewer.show([{ positions: pop.positions[pose], colours: labelColours(labels, pop.faces).vertexColours }], { frame: first });
+      const colours = truth ? paletteColours(pop.truth.partOfVertex, pop.truth.colours) : paletteColours(m.model.labels, m.model.colours.final);
+      viewer.show([{ positions: pop.positions[pose], colours: colours.vertexColours }], { frame: first });
       const acc = summary.groundTruth ? `, adjusted Rand ${summary.groundTruth.ari.toFixed(3)}` : '';
       caption.textContent = title + (truth
         ? ` — ground truth, ${pop.truth.partNames.length} parts`

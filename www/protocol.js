@@ -15,7 +15,8 @@
 
 export const MAX_RESTARTS = 2;
 
-/** An error answered by the worker: kind ('load' | 'fit' | 'query' | 'crashed' | ...), message, problems. */
+/** An error answered by the worker: kind ('load' | 'fit' | 'query' | 'crashed'), message, and problems
+ *  [{ kind, file, line, message }] as the core threw them (src/wasm.rs). */
 export class WorkerError extends Error {
   constructor(kind, message, problems = null) {
     super(message);
@@ -98,8 +99,8 @@ export class WorkerClient {
     }
     this.waiting.delete(m.id);
     if (m.type === 'load-error') w.reject(new WorkerError('load', problemsText(m.problems), m.problems));
-    else if (m.type === 'fit-error') w.reject(new WorkerError('fit', m.message));
-    else if (m.type === 'reply' && m.error !== undefined) w.reject(new WorkerError('query', m.error));
+    else if (m.type === 'fit-error') w.reject(new WorkerError('fit', m.message, m.problems));
+    else if (m.type === 'reply' && m.error !== undefined) w.reject(new WorkerError('query', m.error, m.problems));
     else w.resolve(m);
   }
 

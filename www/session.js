@@ -4,7 +4,7 @@
 import { startWorker, worker as firstWorker } from './worker-client.js';
 import { WorkerClient, MAX_RESTARTS } from './protocol.js';
 import { state, update, subscribe } from './state.js';
-import { labelColours } from './colors.js';
+import { paletteColours } from './colors.js';
 import { readParams, fillParams } from './controls/form.js';
 import { showProblems, note } from './problems.js';
 
@@ -27,25 +27,42 @@ export const client = new WorkerClient({
   onGiveUp: ({ message, restarts }) => giveUp(message, restarts),
 });
 
+// Test-only fault injection (the page tests open the page with ?faultInjection=1, which adds
+// window.posemfa.injectFault): while armed, every fit asks the worker to make the wasm instance trap first.
+const fault = { kind: null, times: 0 };
+export const faultInjection = new URLSearchParams(location.search).get('faultInjection') === '1';
+/** Arms (kind 'panic', for `times` fits; Infinity: every one) or disarms (null) the fault. */
+export function injectFault(kind, times = Infinity) {
+  Object.assign(fault, { kind, times: kind ? times : 0 });
+}
+function takeFault() {
+  if (!faultInjection || !fault.kind || fault.times <= 0) return null;
+  fault.times--;
+  return fault.kind;
+}
+
 // A key naming the work in hand (population and fit parameters): the restart cap counts per key.
 export const jobKey = (source, params) => JSON.stringify([source?.label, source?.spec ?? source?.names, params]);
 
 /** The state to return to when a load fails: whatever was there before. */
 export const restingState = () => (state.fitId ? 'fitting' : state.model ? 'fitted' : state.pop ? 'idle' : 'error');
 
-/** A generated population (an example's, or any generator spec), fitted at once with the form's parameters. */
-export function generate(spec, example = null, params = null) {
+/**
+ * A generated population (an example's, or any generator spec), fitted at once with the form's parameters
+ * (opts.fit false: not fitted, e.g. for a teaching link).
+ */
+export function generate(spec, example = null, params = null, { fit = true } = {}) {
   if (params) fillParams({ ...state.baseParams, ...params });
   const label = example ? `example “${example.title}”` : `generated ${spec.preset}, seed ${spec.seed ?? 0}`;
-  startLoad({ label, example, spec }, []);
+  startLoad({ label, example, spec }, [], { fit });
 }
 
 /** An example: its population generated and fitted with its own parameters (shown in the form). */
-export function runExample(ex, params = {}) {
+export function runExample(ex, params = {}, opts = {}) {
   document.getElementById('example').value = ex.id;
   update({ baseParams: { ...state.defaults, ...ex.params } });
   fillParams({ ...state.baseParams, ...params });
-  generate(ex.spec, ex);
+  generate(ex.spec, ex, null, opts);
 }
 
 /** Files from the picker or a drop ({ files, ignored, problems }, see drop.js), fitted at once. */
@@ -65,9 +82,9 @@ export async function loadFiles(got) {
 }
 
 // Loading and fitting go in one message: the worker starts the fit as soon as the population is in.
-function startLoad(source, notes) {
-  const fit = { id: client.id(), params: readParams() };
-  const job = jobKey(source, fit.params);
+function startLoad(source, notes, { fit: fitting = true } = {}) {
+  const fit = fitting ? { id: client.id(), params: readParams(), fault: takeFault() } : undefined;
+  const job = jobKey(source, fit?.params);
   let req;
   if (source.spec) {
     req = client.request({ type: 'generate', spec: source.spec, fit }, { job });
@@ -76,16 +93,16 @@ function startLoad(source, notes) {
     req = client.request({ type: 'load', names: source.names, files, fit }, { transfer: files, job });
   }
   update({ loading: { id: req.id, source, fit, notes }, phase: 'loading' });
-  const fitDone = client.expect(fit.id, { onEvent: onProgress });
-  fitDone.catch(() => {}); // settled below once the population is in
+  const fitDone = fit ? client.expect(fit.id, { onEvent: onProgress }) : null;
+  fitDone?.catch(() => {}); // settled below once the population is in
   req.done.then(
     (m) => {
       if (state.loading?.id !== req.id) return;
-      onLoaded(m.population, fit.id);
-      watchFit(fit.id, fitDone);
+      onLoaded(m.population, fit?.id ?? null);
+      if (fit) watchFit(fit.id, fitDone);
     },
     (e) => {
-      client.forget(fit.id);
+      if (fit) client.forget(fit.id);
       if (state.loading?.id !== req.id || e.kind === 'crashed') return;
       update({ loading: null, loadErrorCount: state.loadErrorCount + 1 });
       showProblems(e.problems);
@@ -97,13 +114,13 @@ function startLoad(source, notes) {
 function onLoaded(pop, fitId) {
   const { source, notes } = state.loading;
   const colours = { grey: new Float32Array(pop.nVertices * 3).fill(GREY) };
-  if (pop.truth) colours.truth = labelColours(pop.truth.partOfVertex, pop.faces).vertexColours;
+  if (pop.truth) colours.truth = paletteColours(pop.truth.partOfVertex, pop.truth.colours).vertexColours;
   pop.source = source.label;
   showProblems(notes);
   update({
     loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null,
     hoverPart: null, lastStep: null, mode: !pop.truth && state.mode === 'truth' ? 'parts' : state.mode,
-    phase: 'fitting',
+    phase: fitId === null ? 'idle' : 'fitting',
   });
   liveLabels = null;
 }
@@ -113,7 +130,7 @@ export function startFit() {
   if (!state.pop) return;
   showProblems([]);
   const params = readParams();
-  const { id, done } = client.request({ type: 'fit', params }, { onEvent: onProgress, job: jobKey(state.source, params) });
+  const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });
   update({ fitId: id, lastStep: null, phase: 'fitting' });
   liveLabels = null;
   watchFit(id, done);
@@ -128,7 +145,7 @@ export function watchFit(id, done) {
     (e) => {
       if (state.fitId !== id || e.kind === 'crashed') return;
       update({ fitId: null, fitCount: state.fitCount + 1 });
-      showProblems([{ file: null, line: null, message: e.message }], state.model ? 'The fit failed; the previous model is kept' : 'The fit failed');
+      showProblems(e.problems, state.model ? 'The fit failed; the previous model is kept' : 'The fit failed');
       update({ phase: state.model ? 'fitted' : 'error' });
     },
   );
@@ -156,19 +173,19 @@ function showProgress() {
   if (now - liveShown >= LIVE_MS && !sameLabels(m.labels, liveLabels)) {
     liveShown = now;
     liveLabels = m.labels;
-    update({ colours: { ...state.colours, live: labelColours(m.labels, state.pop.faces).vertexColours } });
+    update({ colours: { ...state.colours, live: paletteColours(m.labels, m.colours).vertexColours } });
   }
 }
 const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
 
 function onFitted({ model }) {
-  const faces = state.pop.faces;
   const colours = {
     ...state.colours,
-    final: labelColours(model.labels, faces),
-    coarse: labelColours(model.coarseLabels, faces),
-    refined: labelColours(model.refinedLabels, faces),
+    final: paletteColours(model.labels, model.colours.final),
+    coarse: paletteColours(model.coarseLabels, model.colours.coarse),
+    refined: paletteColours(model.refinedLabels, model.colours.refined),
   };
+  kept = null;
   update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, phase: 'fitted' });
 }
 
@@ -190,9 +207,13 @@ export function query(method, ...args) {
 subscribe((s, changed) => changed.has('gen') && cache.clear());
 
 // ------------------------------------------------------------------ faults
+// What the page showed before the first of a run of restarts: shown again if the worker keeps crashing.
+let kept = null;
+
 // A fresh worker gets the population the page had (its files or its generator spec), fitted again with the
-// parameters in the form. Unanswered questions were refused; the page keeps showing what it had.
+// parameters in the form. Unanswered questions were refused.
 function restartWork(message) {
+  if (!kept && state.pop) kept = { pop: state.pop, source: state.source, model: state.model, colours: state.colours };
   update({ restartCount: client.restartCount });
   const source = state.loading?.source ?? state.source;
   const wasFitting = state.fitId !== null || state.loading !== null;
@@ -206,11 +227,14 @@ function restartWork(message) {
   showProblems([{ file: null, line: null, message: `the worker stopped (${message}); a new one is starting and gets the population again` }], 'The worker was restarted');
 }
 
-// The same work crashed the worker again after MAX_RESTARTS restarts: the page keeps what it shows and
-// waits for the next request (a new worker starts with it).
+// The same work crashed the worker again after MAX_RESTARTS restarts: the page shows again what it had
+// before the first restart (its model's summary, colours and views stay; questions to the worker need a new
+// population or fit) and waits for the next request (a new worker starts with it).
 function giveUp(message, restarts) {
   const wasFitting = state.fitId !== null || state.loading !== null;
   update({ fitId: null, loading: null, teach: null, fitCount: state.fitCount + (wasFitting ? 1 : 0) });
+  if (kept) update({ ...kept, gen: state.gen + 1, pick: null, hoverPart: null, pose: Math.min(state.pose, kept.pop.nShapes - 1) });
+  kept = null;
   showProblems([{ file: null, line: null, message: `the worker stopped again (${message}) after ${restarts} restart${restarts === 1 ? '' : 's'} with this population and these parameters (at most ${MAX_RESTARTS}): it was not restarted. ${state.model ? 'The last model is still shown; its' : 'Its'} questions (reconstruction, interpolation, exports) need a new fit: change the parameters, open other files or choose an example.` }], 'The worker keeps crashing');
   update({ phase: restingState() });
 }

@@ -7,7 +7,7 @@
 //   defaults     the fit parameters' defaults (from the core); baseParams: the parameters the form does not
 //                show come from here (the defaults, or an example's parameters over them)
 //   examples     the core's built-in examples [{ id, title, note, failsOnPurpose, spec, params }]
-//   pop          the population shown: { names, nShapes, nVertices, faces, positions[], normalization, truth }
+//   pop          the population shown: { names, nShapes, nVertices, faces, positions[], truth, source }
 //   source       what `pop` came from: { label, example, spec } or { label, names, bytes } (kept for a
 //                restarted worker)
 //   loading      the load in flight: { id, source, fit: { id, params }, notes } or null

@@ -12,12 +12,12 @@
 //                                          message after each, until paused or done
 //     { type: 'teach-pause' }              stops a run after the iteration in progress
 //   worker -> page
-//     { type: 'teach', id, kind, steps, step, stage, running, trace, labels, gamma, parts, vertices }
+//     { type: 'teach', id, kind, steps, step, stage, running, trace, labels, gamma, parts, vertices, colours }
 //        kind: 'reset' | 'step' | 'paused'; steps: the progress objects of the iterations just made (empty
 //        unless kind is 'step'), step: the last of them (or null); stage: where the
 //        pipeline is now; trace: the current AECM run's log-likelihoods; labels: per vertex (all vertices);
 //        gamma: responsibilities [j * parts + k] of the run's vertices (`vertices`: their ids during the
-//        refinement, else null)
+//        refinement, else null); colours: a palette index per component of the run (neighbours differ)
 //     then, once the pipeline is done, the usual { type: 'fitted', id, ... } (worker.js)
 
 // Run paces itself to at most one iteration per RUN_MS, so that the plot, the counter and the colours can be
@@ -30,8 +30,8 @@ export class Teacher {
    * wasm: the bindings; post(msg, transfer); claim(): async, stops any other fit and resolves to true
    * when this one may start; finish(fitter, id, t0): posts the model of a finished fitter.
    */
-  constructor({ wasm, post, claim, finish, yieldToEvents }) {
-    Object.assign(this, { wasm, post, claim, finish, yieldToEvents });
+  constructor({ wasm, post, claim, finish, yieldToEvents, paletteSize }) {
+    Object.assign(this, { wasm, post, claim, finish, yieldToEvents, paletteSize });
     this.fitter = null;
     this.id = null;
     this.running = false;
@@ -62,8 +62,9 @@ export class Teacher {
     const trace = f.currentTrace();
     const labels = f.currentLabels();
     const r = f.currentResponsibilities();
-    const msg = { type: 'teach', id: this.id, kind, steps, step: steps[steps.length - 1] ?? null, stage: f.stage(), running: this.running, trace, labels, parts: r.parts ?? 0, gamma: r.gamma ?? null, vertices: r.vertices ?? null };
-    const transfer = [trace.buffer, labels.buffer];
+    const colours = f.currentColours(this.paletteSize);
+    const msg = { type: 'teach', id: this.id, kind, steps, step: steps[steps.length - 1] ?? null, stage: f.stage(), running: this.running, trace, labels, parts: r.parts ?? 0, gamma: r.gamma ?? null, vertices: r.vertices ?? null, colours };
+    const transfer = [trace.buffer, labels.buffer, colours.buffer];
     if (msg.gamma) transfer.push(msg.gamma.buffer);
     if (msg.vertices) transfer.push(msg.vertices.buffer);
     this.post(msg, transfer);

@@ -4,7 +4,7 @@
 // (part colours blended by γ), the Algorithm 1 stage in progress, and beside the controls the equations the
 // iteration computes. Nothing is computed here but colours. The teaching fit lives in the page state as
 // state.teach = { id, running, iteration, stage, values, runs, soft } (null when there is none).
-import { PALETTE, hexToRgb, colourParts } from './colors.js';
+import { PALETTE, hexToRgb } from './colors.js';
 import { state, update, subscribe } from './state.js';
 import { client, watchFit, jobKey } from './session.js';
 import { readParams } from './controls/form.js';
@@ -60,20 +60,14 @@ function showLambdaRule() {
   $('teach-eq-lambda-paper').hidden = !literal;
 }
 
-// Palette index of every component of the run: neighbours differ (colors.js); fixed for the whole run so
+// Palette index of every component of the run (from the core: neighbours differ), kept for the whole run so
 // that the colours do not jump between steps.
 const assigned = { key: null, colourOf: [] };
-function assignColours(m, labels) {
+function assignColours(m) {
   const key = `${JSON.stringify(m.stage)}:${m.parts}`;
   if (key === assigned.key) return;
   assigned.key = key;
-  let full = labels;
-  if (m.vertices) {
-    full = new Uint32Array(state.pop.nVertices).fill(m.parts); // one extra label for the rest of the mesh
-    m.vertices.forEach((v, j) => { full[v] = labels[j]; });
-  }
-  const c = colourParts(full, state.pop.faces);
-  assigned.colourOf = Array.from({ length: m.parts }, (_, k) => (c[k] >= 0 ? c[k] : k % PALETTE.length));
+  assigned.colourOf = Array.from(m.colours);
 }
 
 // Soft colours: every vertex of the run gets its parts' colours blended by its responsibilities. Returns the
@@ -93,7 +87,7 @@ function softColours(m) {
     for (let k = 1; k < K; k++) if (m.gamma[j * K + k] > m.gamma[j * K + best]) best = k;
     argmax[j] = best;
   }
-  assignColours(m, argmax);
+  assignColours(m);
   if (m.vertices) for (let v = 0; v < n; v++) out.set(OUTSIDE, 3 * v);
   const soft = { vertices: 0, blended: 0 };
   for (let j = 0; j < rows; j++) {

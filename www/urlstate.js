@@ -5,6 +5,8 @@
 //   gen=PRESET,VERTICES,POSES,SEED   a generated population, or
 //   src=files                  opened or dropped files (not in the link: the default example is shown)
 //   parts, seed, tol, floor, lambda=exact|paper-eq18, refine=0|1     fit parameters (the form's)
+//   teach=N, stage=coarse|refine|final   a teaching fit N steps in (and the Algorithm 1 stage it was in): the
+//                              link opens on the same step (the steps are deterministic)
 //   view=parts|stages|recon|latent|interp|truth   flat=0|1   pose=I (0-based)
 //   a=I, b=J, t=0..1, side=0|1, skin=rigid|smooth, residual=0|1     interpolation
 //   cam=PX,PY,PZ,TX,TY,TZ      camera position and target (exact numbers)
@@ -17,7 +19,8 @@ import { state, subscribe } from './state.js';
 export const CONTROLS = ['header', 'panel', 'toolbar', 'modes', 'caption', 'poses', 'interp', 'info', 'presets', 'teach'];
 const EMBED_HIDES = ['header', 'panel', 'toolbar', 'poses', 'interp'];
 const MODES = ['parts', 'stages', 'recon', 'latent', 'interp', 'truth'];
-const ORDER = ['ex', 'gen', 'src', 'parts', 'seed', 'tol', 'floor', 'lambda', 'refine', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];
+const STAGES = ['coarse', 'refine', 'final', 'done'];
+const ORDER = ['ex', 'gen', 'src', 'parts', 'seed', 'tol', 'floor', 'lambda', 'refine', 'teach', 'stage', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];
 
 const num = (v) => (v === null || v === undefined || v === '' || !Number.isFinite(Number(v)) ? undefined : Number(v));
 const bool = (v) => (v === '1' ? true : v === '0' ? false : undefined);
@@ -41,6 +44,10 @@ export function parseHash(hash) {
   if (['exact', 'paper-eq18'].includes(q.get('lambda'))) params.lambdaRule = q.get('lambda');
   if (bool(q.get('refine')) !== undefined) params.refine = bool(q.get('refine'));
   if (Object.keys(params).length) s.params = params;
+  const steps = num(q.get('teach'));
+  if (steps !== undefined && Number.isInteger(steps) && steps >= 1) {
+    s.teach = { steps, stage: STAGES.includes(q.get('stage')) ? q.get('stage') : undefined };
+  }
   const view = {};
   if (MODES.includes(q.get('view'))) view.mode = q.get('view');
   if (bool(q.get('flat')) !== undefined) view.flat = bool(q.get('flat'));
@@ -70,6 +77,10 @@ export function formatHash(s) {
   if (p.varianceFloor !== undefined) q.floor = p.varianceFloor;
   if (p.lambdaRule !== undefined) q.lambda = p.lambdaRule;
   if (p.refine !== undefined) q.refine = p.refine ? 1 : 0;
+  if (s.teach) {
+    q.teach = s.teach.steps;
+    if (s.teach.stage) q.stage = s.teach.stage;
+  }
   const v = s.view ?? {};
   if (v.mode) q.view = v.mode;
   if (v.flat !== undefined) q.flat = v.flat ? 1 : 0;
@@ -97,7 +108,7 @@ export function applyEmbedFlags(s, body = document.body) {
 applyEmbedFlags(parseHash(location.hash));
 
 /**
- * ctx (from main.js): { viewer, readParams, renderView, runExample, generate, note }.
+ * ctx (from main.js): { viewer, readParams, renderView, runExample, generate, note, teach(count) }.
  * Returns { start(): true when the hash chose what to load (and loaded it) }.
  */
 export function installUrlState(ctx) {
@@ -118,6 +129,8 @@ export function installUrlState(ctx) {
       const { parts, seed, tol, varianceFloor, lambdaRule, refine } = fitParams;
       s.params = { parts, seed, tol, varianceFloor, lambdaRule, refine };
     }
+    const t = state.teach;
+    if (t && state.fitId === t.id && t.iteration > 0 && !s.src) s.teach = { steps: t.iteration, stage: t.stage?.kind ?? 'coarse' };
     if (state.pop && !s.src) {
       s.view = {
         mode: state.mode,
@@ -192,16 +205,18 @@ export function installUrlState(ctx) {
   // Loads what a state names; its view waits for the fit. False when the state names no population.
   function load(s) {
     const examples = state.examples;
+    // A teaching link: the population is loaded without a fit, then the teaching fit makes its steps.
+    const opts = { fit: !s.teach };
     if (s.ex) {
       const ex = examples.find((e) => e.id === s.ex);
       if (!ex) return false;
-      restoring = s.view ?? {};
-      ctx.runExample(ex, s.params);
+      restoring = { ...s.view, teach: s.teach };
+      ctx.runExample(ex, s.params, opts);
       return true;
     }
     if (s.gen) {
-      restoring = s.view ?? {};
-      ctx.generate(s.gen, null, s.params);
+      restoring = { ...s.view, teach: s.teach };
+      ctx.generate(s.gen, null, s.params, opts);
       return true;
     }
     return false;
@@ -223,7 +238,30 @@ export function installUrlState(ctx) {
   window.posemfa.urlState = () => current();
   window.posemfa.restoring = () => !!restoring;
 
+  // A teaching link's view applies once its steps are made.
+  function restored() {
+    const v = restoring;
+    queueMicrotask(async () => { // after the views have shown the model or the step
+      try {
+        await applyView(v);
+        const stage = state.teach?.stage?.kind ?? 'coarse';
+        if (v.teach?.stage && state.model === null && stage !== v.teach.stage) {
+          ctx.note(`This link was made in the stage “${v.teach.stage}”; ${v.teach.steps} steps lead to “${stage}” here.`);
+        }
+      } finally {
+        restoring = null;
+        schedule();
+      }
+    });
+  }
+
   subscribe((st, changed) => {
+    if (changed.has('pop') && restoring?.teach) queueMicrotask(() => ctx.teach(restoring.teach.steps));
+    if (changed.has('teach') && restoring?.teach && st.teach && st.teach.iteration >= restoring.teach.steps) {
+      restored();
+      return;
+    }
+    if (changed.has('teach') && !restoring) schedule(); // a Run makes steps without a click
     if (changed.has('pop')) {
       const src = st.source;
       source = src?.example ? { ex: src.example.id } : src?.spec ? { gen: src.spec } : { src: 'files' };
@@ -239,15 +277,7 @@ export function installUrlState(ctx) {
     if ((changed.has('model') && st.model) || newTeachingFit) {
       fitParams = ctx.readParams();
       if (changed.has('model') && restoring) {
-        const v = restoring;
-        queueMicrotask(async () => { // after the views have shown the model
-          try {
-            await applyView(v);
-          } finally {
-            restoring = null;
-            schedule();
-          }
-        });
+        restored();
       } else {
         schedule();
       }

@@ -147,15 +147,6 @@ export class Viewer {
     this.requestRender();
   }
 
-  /** Only new colours for slot k (labels changed while fitting). */
-  setColours(k, colours) {
-    const col = this.slots[k]?.mesh.geometry.getAttribute('color');
-    if (!col || col.array.length !== colours.length) return;
-    col.array.set(colours);
-    col.needsUpdate = true;
-    this.requestRender();
-  }
-
   // Direction from the target to the camera when framing: across the view axis, a little from above.
   frameDirection() {
     const { view, up } = this.axes;

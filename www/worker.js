@@ -5,11 +5,12 @@
 //   page -> worker
 //     { type: 'load', id, names: string[], files: ArrayBuffer[], fit? }  OBJ files (parsed and validated in Rust)
 //     { type: 'generate', id, spec, fit? }                          a synthetic population (posemfa::synth)
-//                                                                   fit: { id, params }: start fitting it at once
-//                                                                   (as a 'fit' message would; no round trip)
-//     { type: 'fit', id, params }                                   start fitting the current population
+//                                                                   fit: { id, params, fault? }: start fitting it
+//                                                                   at once (as a 'fit' message would)
+//     { type: 'fit', id, params, fault? }                           start fitting the current population (fault:
+//                                                                   test-only, see fit() below)
 //     { type: 'cancel' }                                            stop the fit, keep its best state so far
-//     { type: 'query', id, method, args }                           a question about the model (see QUERIES)
+//     { type: 'query', id, method, args }                           a question (see QUERIES, POPULATION_QUERIES)
 //   worker -> page
 //     { type: 'ready', defaults, examples }                         wasm loaded; defaults: the fit parameters'
 //                                                                   defaults; examples: the core's built-in
@@ -17,15 +18,22 @@
 //                                                                   spec, params})
 //     { type: 'loaded', id, population }                            population: names, nShapes, nVertices, faces,
 //                                                                   positions (one Float32Array per pose, unit
-//                                                                   box), normalization [ox, oy, oz, scale], truth
-//     { type: 'load-error', id, problems: [{ file, line, message }] } the previous population is kept
-//     { type: 'progress', id, steps, trace, labels, elapsedMs }     after every slice: the AECM iterations made
-//                                                                   (one progress object each), the current run's
-//                                                                   log-likelihood trace and labels
+//                                                                   box), truth ({partNames, partOfVertex,
+//                                                                   colours} of a generated one, else null)
+//     { type: 'load-error', id, problems }                          the previous population is kept
+//     { type: 'progress', id, steps, trace, labels, colours, elapsedMs }   after every slice: the AECM
+//                                                                   iterations made (one progress object each),
+//                                                                   the current run's log-likelihood trace,
+//                                                                   labels and their colours
 //     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
-//                                                                   coarseLabels, refinedLabels, latent
-//     { type: 'fit-error', id, message }
-//     { type: 'reply', id, result } | { type: 'reply', id, error }  answer to a query
+//                                                                   coarseLabels, refinedLabels, colours {final,
+//                                                                   coarse, refined}, latent
+//     { type: 'fit-error', id, message, problems }
+//     { type: 'reply', id, result } | { type: 'reply', id, error, problems }   answer to a query
+//     { type: 'crashed', message }                                  the wasm instance trapped: this worker stops
+//     { type: 'fatal', message }                                    the wasm module could not be loaded
+//   problems: [{ kind, file, line, message }] as the core throws them (src/wasm.rs); colours: a palette index
+//   per part (Rust's part graph: neighbouring parts differ).
 //   teaching mode (one AECM iteration per Step): 'teach-reset', 'teach-step', 'teach-run', 'teach-pause' and
 //   the replies 'teach', see teach-worker.js
 import init, * as wasm from './pkg/posemfa.js';
@@ -33,6 +41,7 @@ import wasmUrl from './pkg/posemfa_bg.wasm?url';
 import { Teacher } from './teach-worker.js';
 
 const SLICE_MS = 40; // one fitter.run(budget) call; the worker reads its messages between slices
+const PALETTE_SIZE = 12; // colors.js PALETTE.length
 
 let population = null; // wasm Population
 let fitter = null; // wasm Fitter of the fit in progress
@@ -62,16 +71,13 @@ const pending = [];
 channel.port1.onmessage = () => pending.shift()?.();
 const yieldToEvents = () => new Promise((resolve) => { pending.push(resolve); channel.port2.postMessage(0); });
 
-// "file X, line N: message" / "file X: message" / anything else, one problem per line.
-function problemsOf(message) {
-  return String(message).split('\n').filter((l) => l.trim()).map((text) => {
-    let m = /^file (.*), line (\d+): (.*)$/.exec(text);
-    if (m) return { file: m[1], line: Number(m[2]), message: m[3] };
-    m = /^file (.*?): (.*)$/.exec(text);
-    if (m) return { file: m[1], line: null, message: m[2] };
-    return { file: null, line: null, message: text };
-  });
-}
+// The problems of an error thrown by the core: it carries them as data ({kind, file, line, message}; see
+// src/wasm.rs). Anything else (a JS error of this file) is one problem of its own.
+const problemsOf = (e) => e?.problems ?? [{ kind: 'internal', file: null, line: null, message: String(e?.message ?? e) }];
+
+// Palette index of every part of `labels` (one per vertex): neighbouring parts differ (Rust's part graph). A
+// fit cancelled early has no coarse or refined labels yet (empty): no colours either.
+const coloursOf = (labels) => (labels.length ? population.partColours(labels, PALETTE_SIZE) : new Uint32Array(0));
 
 function describe(pop, truth = null) {
   const positions = [];
@@ -82,7 +88,6 @@ function describe(pop, truth = null) {
     nVertices: pop.nVertices,
     faces: pop.faces(),
     positions,
-    normalization: Array.from(pop.normalization()),
     truth,
   };
 }
@@ -100,6 +105,7 @@ function replacePopulation(pop, synth = null) {
 }
 
 function sendPopulation(id, truth) {
+  if (truth) truth.colours = coloursOf(truth.partOfVertex);
   const p = describe(population, truth);
   post({ type: 'loaded', id, population: p }, [p.faces.buffer, ...p.positions.map((a) => a.buffer)]);
 }
@@ -111,7 +117,7 @@ function load(data) {
     pop = new wasm.Population(names, files.map((b) => new Uint8Array(b)));
   } catch (e) {
     if (isCrash(e)) return crashed(e);
-    post({ type: 'load-error', id, problems: problemsOf(e.message ?? e) });
+    post({ type: 'load-error', id, problems: problemsOf(e) });
     return;
   }
   replacePopulation(pop);
@@ -126,7 +132,7 @@ function generate(data) {
     synth = new wasm.Synthetic(spec);
   } catch (e) {
     if (isCrash(e)) return crashed(e);
-    post({ type: 'load-error', id, problems: problemsOf(e.message ?? e) });
+    post({ type: 'load-error', id, problems: problemsOf(e) });
     return;
   }
   const groundTruth = { partNames: synth.partNames(), partOfVertex: synth.partOfVertex() };
@@ -141,19 +147,27 @@ function stopFit() {
 
 function modelMessage(m) {
   const summary = m.summary();
-  if (truth) summary.groundTruth = truth.groundTruth(m); // {ari, rotationErrorDeg, ...}
+  if (truth) summary.groundTruth = truth.groundTruth(m); // posemfa::metrics::GroundTruthAccuracy
+  const labels = m.labels();
+  const coarseLabels = m.coarseLabels();
+  const refinedLabels = m.refinedLabels();
   return {
     summary,
-    labels: m.labels(),
-    coarseLabels: m.coarseLabels(),
-    refinedLabels: m.refinedLabels(),
+    labels,
+    coarseLabels,
+    refinedLabels,
+    colours: { final: coloursOf(labels), coarse: coloursOf(coarseLabels), refined: coloursOf(refinedLabels) },
     latent: m.latent(),
   };
 }
 
-async function fit({ id, params }) {
+const fitError = (id, e) => post({ type: 'fit-error', id, message: String(e?.message ?? e), problems: problemsOf(e) });
+
+// fault: test-only fault injection (the page sends it only when opened with ?faultInjection=1): the core is
+// asked to trap before the fit starts (wasm.faultInjection, src/wasm.rs).
+async function fit({ id, params, fault = null }) {
   if (!population) {
-    post({ type: 'fit-error', id, message: 'no population loaded' });
+    fitError(id, new Error('no population loaded'));
     return;
   }
   teacher.drop();
@@ -161,10 +175,11 @@ async function fit({ id, params }) {
   const t0 = performance.now();
   let f;
   try {
+    if (fault) wasm.faultInjection(fault);
     f = new wasm.Fitter(population, params);
   } catch (e) {
     if (isCrash(e)) return crashed(e);
-    post({ type: 'fit-error', id, message: String(e.message ?? e) });
+    fitError(id, e);
     return;
   }
   fitter = f;
@@ -175,14 +190,15 @@ async function fit({ id, params }) {
       const steps = f.run(SLICE_MS);
       const trace = f.currentTrace();
       const labels = f.currentLabels();
-      post({ type: 'progress', id, steps, trace, labels, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer]);
+      const colours = coloursOf(labels);
+      post({ type: 'progress', id, steps, trace, labels, colours, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer, colours.buffer]);
       await yieldToEvents();
     }
     if (token !== fitToken) return; // a new fit or population superseded this one: it keeps nothing
     finishFit(f, id, t0);
   } catch (e) {
     if (isCrash(e)) return crashed(e);
-    post({ type: 'fit-error', id, message: String(e.message ?? e) });
+    fitError(id, e);
   } finally {
     if (!dead) f.free();
     if (fitter === f) fitter = null;
@@ -213,7 +229,7 @@ function finishFit(f, id, t0) {
   post({ type: 'fitted', id, cancelled, fitMs, model: msg });
 }
 
-const teacher = new Teacher({ wasm, post, claim: claimFit, finish: finishFit, yieldToEvents });
+const teacher = new Teacher({ wasm, post, claim: claimFit, finish: finishFit, yieldToEvents, paletteSize: PALETTE_SIZE });
 let teachQueue = Promise.resolve();
 
 // Teaching messages: errors end the teaching fit and are reported like a fit's.
@@ -225,11 +241,17 @@ async function teach(data) {
   } catch (e) {
     if (isCrash(e)) return crashed(e);
     teacher.drop();
-    post({ type: 'fit-error', id: data.id, message: String(e.message ?? e) });
+    fitError(data.id, e);
   }
 }
 
-// Questions about the model or the population; each returns plain data or typed arrays.
+// Questions about the model or the population; each returns plain data or typed arrays. `shown`: a mesh
+// descriptor ({kind: 'pose' | 'linear' | ..., see Shown in src/export/shown.rs}).
+const POPULATION_QUERIES = {
+  linearInterpolate: (i, j, t) => (model ?? population).linearInterpolate(i, j, t),
+  objText: (shown, header) => (model ?? population).objText(shown, header),
+  originalLengths: (values) => population.originalLengths(Float64Array.from(values)),
+};
 const QUERIES = {
   reconstruct: (i) => model.reconstruct(i),
   vertexErrors: (i) => model.vertexErrors(i),
@@ -243,13 +265,15 @@ const QUERIES = {
 
 function query({ id, method, args }) {
   try {
-    if (!QUERIES[method]) throw new Error(`unknown query ${method}`);
-    if (!model) throw new Error('no fitted model yet');
-    const result = QUERIES[method](...(args ?? []));
+    const q = POPULATION_QUERIES[method] ?? QUERIES[method];
+    if (!q) throw new Error(`unknown query ${method}`);
+    if (!population) throw new Error('no population loaded');
+    if (!model && !POPULATION_QUERIES[method]) throw new Error('no fitted model yet');
+    const result = q(...(args ?? []));
     post({ type: 'reply', id, result }, ArrayBuffer.isView(result) ? [result.buffer] : []);
   } catch (e) {
     if (isCrash(e)) return crashed(e);
-    post({ type: 'reply', id, error: String(e.message ?? e) });
+    post({ type: 'reply', id, error: String(e?.message ?? e), problems: problemsOf(e) });
   }
 }
 
@@ -264,11 +288,6 @@ const ready = init({ module_or_path: wasmUrl }).then(
 
 self.onmessage = async ({ data }) => {
   if (dead) return;
-  if (data.type === 'test-crash') {
-    // fault injection for the page tests: the same report as a real trap of the instance
-    crashed(new WebAssembly.RuntimeError('unreachable (a crash simulated by the page test)'));
-    return;
-  }
   if (data.type === 'cancel') {
     cancelRequested = true;
     return;

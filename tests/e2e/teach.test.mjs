@@ -255,6 +255,31 @@ test('the state in the URL round-trips: a shared link restores the same view', a
   await b.context.close();
 });
 
+test('a shared teaching link opens on the same step and stage', async () => {
+  const a = await fitted('#ex=arm');
+  for (let k = 0; k < 7; k++) await step(a.page);
+  await a.page.waitForFunction(() => /[#&]teach=7&stage=\w+/.test(location.hash), null, { timeout: 10000 });
+  const ta = await teaching(a.page);
+  const href = await a.page.evaluate(() => location.href);
+  assert.match(href, new RegExp(`teach=7&stage=${ta.stage?.kind ?? 'coarse'}`));
+
+  const { page, context, log } = await session.open(new URL(href).hash);
+  await page.waitForFunction(() => window.posemfa.teaching().iteration === 7 && !window.posemfa.restoring(), null, { timeout: 60000, polling: 20 });
+  const tb = await teaching(page);
+  assert.equal(tb.active, true);
+  assert.deepEqual(tb.stage, ta.stage);
+  assert.deepEqual(tb.logLikelihood, ta.logLikelihood, 'the same seven iterations');
+  assert.equal(await page.locator('[data-testid=teach-iteration]').innerText(), '7');
+  assert.equal(await page.evaluate(() => document.body.dataset.teaching), '1');
+  assert.equal(await page.evaluate(() => window.posemfa.fitCount()), 0, 'the link fitted nothing besides its steps');
+  // and it goes on from there: one more Step is the core's 8th iteration
+  await step(page);
+  assert.deepEqual((await teaching(page)).logLikelihood, coreSteps('arm', 8).map((p) => p.logLikelihood));
+  assert.deepEqual(log.errors, []);
+  await a.context.close();
+  await context.close();
+});
+
 test('embed=1 and the hide/show flags give a minimal view', async () => {
   const { page, context } = await fitted('#ex=arm&embed=1', { width: 640, height: 400 });
   for (const sel of ['header', '#panel', '.toolbar', '.poses', '#interp']) assert.equal(await page.locator(sel).isVisible(), false, `${sel} hidden`);

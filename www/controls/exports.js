@@ -1,5 +1,5 @@
 // The export buttons: the model as JSON, the shown mesh as OBJ in the population's original units, and the
-// rigged model as binary glTF. Each file comes from the worker (the Rust exporters).
+// rigged model as binary glTF. Each file comes from the worker (the Rust exporters: src/export/).
 import { state, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { poseName } from '../views/render.js';
@@ -15,18 +15,6 @@ function download(name, data, type) {
   a.click();
   a.remove();
   setTimeout(() => URL.revokeObjectURL(url), 10000);
-}
-
-// OBJ text of a unit-box mesh, written back in the population's original units: original = unit / scale + offset.
-function objText(positions, faces, normalization, comment) {
-  const [ox, oy, oz, s] = normalization;
-  const lines = [`# ${comment}`, `# posemfa, ${positions.length / 3} vertices, ${faces.length / 3} triangles`];
-  const num = (x) => String(Number(x.toPrecision(9)));
-  for (let k = 0; k < positions.length; k += 3) {
-    lines.push(`v ${num(positions[k] / s + ox)} ${num(positions[k + 1] / s + oy)} ${num(positions[k + 2] / s + oz)}`);
-  }
-  for (let k = 0; k < faces.length; k += 3) lines.push(`f ${faces[k] + 1} ${faces[k + 1] + 1} ${faces[k + 2] + 1}`);
-  return lines.join('\n') + '\n';
 }
 
 const safeName = (s) => s.replace(/\.obj$/i, '').replace(/[^A-Za-z0-9._-]+/g, '_');
@@ -48,13 +36,15 @@ const orReport = (f) => async () => {
 
 export function installExports() {
   $('export-json').addEventListener('click', orReport(async () => download('posemfa-model.json', await query('toJson'), 'application/json')));
-  $('export-obj').addEventListener('click', () => {
+  // The core writes the shown mesh (the left one) in the population's original units, exact floats.
+  $('export-obj').addEventListener('click', orReport(async () => {
     const slot = state.shown[0];
     if (!slot) return;
     const what = state.mode === 'interp' ? `${slot.name} interpolation t=${interpValues().t}` : `${slot.name}`;
     const name = `posemfa-${safeName(poseName(state.pose))}-${safeName(what)}.obj`;
-    download(name, objText(slot.positions, state.pop.faces, state.pop.normalization, what), 'model/obj');
-  });
+    const header = `${what}\nposemfa, ${state.pop.nVertices} vertices, ${state.pop.faces.length / 3} triangles`;
+    download(name, await query('objText', slot.what, header), 'model/obj');
+  }));
   $('export-gltf').addEventListener('click', orReport(async () => {
     const skin = $('interp-skin').value; // the skinning chosen for the interpolation
     download(`posemfa-model-${skin}.glb`, await query('toGlb', skin), 'model/gltf-binary');

@@ -51,8 +51,8 @@ async function measure() {
   table.append(head);
   for (const m of r.methods) {
     const tr = document.createElement('tr');
-    for (const c of [m.name, pct(m.volume_change), pct(m.stretch.boundary_p99), pct(m.stretch.all_max),
-      m.endpoint_error.map((e) => e.toExponential(1)).join(' / ')]) {
+    for (const c of [m.name, pct(m.volumeChange), pct(m.stretch.boundaryP99), pct(m.stretch.allMax),
+      m.endpointError.map((e) => e.toExponential(1)).join(' / ')]) {
       tr.append(Object.assign(document.createElement('td'), { textContent: c }));
     }
     table.append(tr);

@@ -870,8 +870,8 @@ class Ends extends Figure {
       const r = await this.v.handle.query('articulationReport', this.i, this.j, 0.5);
       const printed = r.methods.find((m) => m.name.startsWith('Algorithm 2 as printed'));
       const ours = r.methods[0];
-      this.errors = { printed: printed.endpoint_error, ours: ours.endpoint_error };
-      this.out('errors', `as printed ${fmtE(printed.endpoint_error[0])} / ${fmtE(printed.endpoint_error[1])}, corrected ${fmtE(ours.endpoint_error[0])} / ${fmtE(ours.endpoint_error[1])} (largest vertex distance at t = 0 / t = 1, unit box)`);
+      this.errors = { printed: printed.endpointError, ours: ours.endpointError };
+      this.out('errors', `as printed ${fmtE(printed.endpointError[0])} / ${fmtE(printed.endpointError[1])}, corrected ${fmtE(ours.endpointError[0])} / ${fmtE(ours.endpointError[1])} (largest vertex distance at t = 0 / t = 1, unit box)`);
     } catch (e) {
       this.setState('error', e.message);
       return;
@@ -1172,8 +1172,8 @@ class Interpolation extends Figure {
       const ts = Array.from({ length: 11 }, (_, k) => k / 10);
       const reports = [];
       for (const t of ts) reports.push(await this.v.handle.query('articulationReport', this.i, this.j, t));
-      const ours = reports.map((r) => 100 * r.methods[0].volume_change);
-      const linear = reports.map((r) => 100 * r.methods.find((m) => m.name.startsWith('linear')).volume_change);
+      const ours = reports.map((r) => 100 * r.methods[0].volumeChange);
+      const linear = reports.map((r) => 100 * r.methods.find((m) => m.name.startsWith('linear')).volumeChange);
       this.volume = { ts, ours, linear };
       this.chart.set([
         { values: ours, xs: ts, colour: EXACT },

@@ -19,6 +19,9 @@ import wasmUrl from '../pkg/posemfa_bg.wasm?url';
 import { Teacher } from '../teach-worker.js';
 
 const SLICE_MS = 25;
+const PALETTE_SIZE = 12; // colors.js PALETTE.length
+// The problems of an error thrown by the core (src/wasm.rs: {kind, file, line, message}).
+const problemsOf = (e) => e?.problems ?? [{ kind: 'internal', file: null, line: null, message: String(e?.message ?? e) }];
 
 // The core's count of rotation steps that needed eq 31, where the build has it (wasm handednessFlips()).
 // Looked up by name, so that this file builds with or without the binding.
@@ -45,6 +48,7 @@ class Session {
       claim: () => this.claim(),
       finish: (f, id, t0) => this.finish(f, id, t0),
       yieldToEvents,
+      paletteSize: PALETTE_SIZE,
     });
     this.queue = Promise.resolve();
   }
@@ -76,7 +80,7 @@ class Session {
     try {
       synth = new wasm.Synthetic(spec);
     } catch (e) {
-      this.post({ type: 'load-error', id, problems: [{ file: null, line: null, message: String(e.message ?? e) }] });
+      this.post({ type: 'load-error', id, problems: problemsOf(e) });
       return;
     }
     this.free();
@@ -91,9 +95,9 @@ class Session {
       nVertices: pop.nVertices,
       faces: pop.faces(),
       positions,
-      normalization: Array.from(pop.normalization()),
       truth: { partNames: synth.partNames(), partOfVertex: synth.partOfVertex() },
     };
+    population.truth.colours = pop.partColours(population.truth.partOfVertex, PALETTE_SIZE);
     this.post({ type: 'loaded', id, population }, [population.faces.buffer, ...positions.map((a) => a.buffer)]);
     if (fit) this.queue = this.queue.then(() => this.fit(fit));
   }
@@ -131,7 +135,8 @@ class Session {
         const steps = f.run(SLICE_MS);
         const trace = f.currentTrace();
         const labels = f.currentLabels();
-        this.post({ type: 'progress', id, steps, trace, labels, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer]);
+        const colours = this.population.partColours(labels, PALETTE_SIZE);
+        this.post({ type: 'progress', id, steps, trace, labels, colours, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer, colours.buffer]);
         await yieldToEvents();
       }
       if (token === this.token && !this.cancel) this.finish(f, id, t0);
@@ -157,6 +162,8 @@ class Session {
       refinedLabels: m.refinedLabels(),
       latent: m.latent(),
     };
+    const colours = (labels) => this.population.partColours(labels, PALETTE_SIZE);
+    model.colours = { final: colours(model.labels), coarse: colours(model.coarseLabels), refined: colours(model.refinedLabels) };
     this.post({ type: 'fitted', id, cancelled: false, fitMs: summary.fitMs, model });
   }
 

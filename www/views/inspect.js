@@ -43,18 +43,19 @@ async function showPick() {
   const { gen, pose } = state;
   let resp;
   let errors;
+  let original;
   try {
     [resp, errors] = await Promise.all([query('responsibilities', v), query('vertexErrors', pose)]);
+    [original] = await query('originalLengths', [errors[v]]);
   } catch (e) {
     infoPick.textContent = e.message;
     return;
   }
   if (gen !== state.gen || state.pick !== hit) return;
-  const s = state.pop.normalization[3];
   const head = document.createElement('div');
   head.append(`Vertex ${v} (${state.shown[hit.slot]?.name ?? ''}): part ${part} `, swatch(part));
   const err = document.createElement('div');
-  err.textContent = `error in pose “${poseName(pose)}”: ${errors[v].toExponential(2)} unit box = ${(errors[v] / s).toExponential(2)} original`;
+  err.textContent = `error in pose “${poseName(pose)}”: ${errors[v].toExponential(2)} unit box = ${original.toExponential(2)} original`;
   const order = [...resp.keys()].sort((a, b) => resp[b] - resp[a]).slice(0, 5);
   const table = document.createElement('table');
   table.append(row('P(part | vertex)', '', ''));

@@ -1,6 +1,7 @@
 // The views: what the viewer shows in each mode (parts, stages, reconstruction, truth, latent, interpolation),
 // with its caption and legend. Positions come from the population or from the worker (www/worker.js asks the
-// Rust core); colours from colors.js. Nothing here computes a position.
+// Rust core); colours from colors.js. Nothing here computes a position. Every slot names its mesh (`what`,
+// a Shown descriptor of src/export/shown.rs), so the OBJ export can ask the core for the same mesh.
 import { state, update, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { errorColours, RAMP_CSS } from '../colors.js';
@@ -17,62 +18,61 @@ export function partColours() {
 
 export const poseName = (i) => state.pop.names[i];
 
-const single = (positions, name) => [{ positions, colours: partColours(), name }];
+const single = (positions, name, what) => [{ positions, colours: partColours(), name, what }];
+const pose = (p) => ({ kind: 'pose', pose: p });
 
 // One builder per mode: (pose positions, pose) -> { slots, caption, legend? } (async when it asks the worker).
 const VIEWS = {
   parts(P, pose) {
     const { model } = state;
     const by = model ? `part (${model.summary.parts} parts)` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
-    return { slots: single(P, `pose ${poseName(pose)}`), caption: `Pose “${poseName(pose)}”, coloured by ${by}` };
+    return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, coloured by ${by}` };
   },
-  stages(P, pose) {
+  stages(P, p) {
     const s = state.model.summary;
     const c = state.colours;
     return {
       slots: [
-        { positions: P, colours: c.coarse.vertexColours, name: 'coarse' },
-        { positions: P, colours: c.refined.vertexColours, name: 'refined' },
-        { positions: P, colours: c.final.vertexColours, name: 'final' },
+        { positions: P, colours: c.coarse.vertexColours, name: 'coarse', what: pose(p) },
+        { positions: P, colours: c.refined.vertexColours, name: 'refined', what: pose(p) },
+        { positions: P, colours: c.final.vertexColours, name: 'final', what: pose(p) },
       ],
-      caption: `Algorithm 1 on pose “${poseName(pose)}”: coarse (${s.coarseParts} parts) | refined (${s.refinedParts}) | final (${s.parts})`,
+      caption: `Algorithm 1 on pose “${poseName(p)}”: coarse (${s.coarseParts} parts) | refined (${s.refinedParts}) | final (${s.parts})`,
     };
   },
-  async recon(P, pose) {
-    const [recon, errors] = await Promise.all([query('reconstruct', pose), query('vertexErrors', pose)]);
+  async recon(P, p) {
+    const [recon, errors] = await Promise.all([query('reconstruct', p), query('vertexErrors', p)]);
     let max = 0;
     for (const e of errors) max = Math.max(max, e);
+    const [maxOriginal] = await query('originalLengths', [max]);
     return {
       slots: [
-        { positions: P, colours: partColours(), name: 'original' },
-        { positions: recon, colours: errorColours(errors, max), name: 'reconstruction' },
+        { positions: P, colours: partColours(), name: 'original', what: pose(p) },
+        { positions: recon, colours: errorColours(errors, max), name: 'reconstruction', what: { kind: 'reconstruction', pose: p } },
       ],
-      caption: `Pose “${poseName(pose)}”: original (parts) | reconstruction from the latent shape, coloured by per-vertex error`,
-      legend: max,
+      caption: `Pose “${poseName(p)}”: original (parts) | reconstruction from the latent shape, coloured by per-vertex error`,
+      legend: `${max.toExponential(2)} unit box (${maxOriginal.toExponential(2)} original)`,
     };
   },
-  truth(P, pose) {
+  truth(P, p) {
     return {
       slots: [
-        { positions: P, colours: state.colours.truth, name: 'ground truth' },
-        { positions: P, colours: state.colours.final.vertexColours, name: 'final' },
+        { positions: P, colours: state.colours.truth, name: 'ground truth', what: pose(p) },
+        { positions: P, colours: state.colours.final.vertexColours, name: 'final', what: pose(p) },
       ],
-      caption: `Pose “${poseName(pose)}”: ground truth of the generator (${state.pop.truth.partNames.length} parts) | fitted (${state.model.summary.parts} parts)`,
+      caption: `Pose “${poseName(p)}”: ground truth of the generator (${state.pop.truth.partNames.length} parts) | fitted (${state.model.summary.parts} parts)`,
     };
   },
   latent() {
-    return { slots: single(state.model.latent, 'latent'), caption: 'The latent reference shape (eq 21): every part in its own latent frame' };
+    return { slots: single(state.model.latent, 'latent', { kind: 'latent' }), caption: 'The latent reference shape (eq 21): every part in its own latent frame' };
   },
   async interp() {
     const { a, b, t, side, opts } = interpValues();
-    const A = state.pop.positions[a];
-    const B = state.pop.positions[b];
-    const linear = new Float32Array(A.length);
-    for (let k = 0; k < A.length; k++) linear[k] = A[k] + (B[k] - A[k]) * t;
+    const linear = { kind: 'linear', from: a, to: b, t };
     const head = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}`;
-    if (!state.model) return { slots: single(linear, 'linear'), caption: `${head}: linear vertex blending` };
-    const slots = single(await query('interpolate', a, b, t, opts), 'part-wise');
-    if (side) slots.push({ positions: linear, colours: partColours(), name: 'linear' });
+    if (!state.model) return { slots: single(await query('linearInterpolate', a, b, t), 'linear', linear), caption: `${head}: linear vertex blending` };
+    const slots = single(await query('interpolate', a, b, t, opts), 'part-wise', { kind: 'interpolation', from: a, to: b, t, options: opts });
+    if (side) slots.push({ positions: await query('linearInterpolate', a, b, t), colours: partColours(), name: 'linear', what: linear });
     return { slots, caption: `${head}: part-wise (${opts.skin === 'smooth' ? 'smooth joints' : 'rigid parts'})${side ? ' | linear vertex blending' : ''}` };
   },
 };
@@ -98,11 +98,8 @@ export async function renderView({ frame = false } = {}) {
   update({ shown: view.slots });
   viewer.show(view.slots, { frame: reframe });
   $('caption').textContent = view.caption;
-  const legend = view.legend ?? null;
-  $('legend').hidden = legend === null;
-  if (legend !== null) {
-    $('legend-hi').textContent = `${legend.toExponential(2)} unit box (${(legend / pop.normalization[3]).toExponential(2)} original)`;
-  }
+  $('legend').hidden = !view.legend;
+  if (view.legend) $('legend-hi').textContent = view.legend;
   if (state.pick && state.pick.slot < view.slots.length) viewer.mark(state.pick.slot, state.pick.vertex);
 }
 

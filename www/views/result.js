@@ -30,7 +30,7 @@ function showResult() {
   const s = state.model?.summary;
   $('parts-count').textContent = s ? s.parts : '–';
   $('stage-parts').textContent = s ? `(coarse ${s.coarseParts}, refined ${s.refinedParts}${s.cancelled ? ', cancelled' : ''})` : '';
-  $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${(s.rmse / state.pop.normalization[3]).toExponential(3)} original units` : '–';
+  $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${s.rmseOriginal.toExponential(3)} original units` : '–';
   $('iterations').textContent = s ? `${s.iterations} in the final stage${s.converged ? ', converged' : ''}` : '–';
   $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
   $('truth-acc').textContent = accuracyText(s?.groundTruth);

@@ -1,0 +1,145 @@
+// The wasm boundary, through the Node build of the bindings (pkg-node/, built with the page): errors cross as
+// data ({kind, file, line, message} and `problems`), objects passed in refuse unknown fields naming them,
+// everything that comes out is camelCase, and the OBJ of a shown mesh comes back in the original units.
+// Run: npm run build && node --test tests/e2e/boundary.test.mjs
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { createRequire } from 'node:module';
+import { join } from 'node:path';
+import { ROOT, tubePopulation } from './helpers.mjs';
+
+const w = createRequire(import.meta.url)(join(ROOT, 'pkg-node', 'posemfa.js'));
+const bytes = (text) => new TextEncoder().encode(text);
+const thrown = (f) => {
+  try {
+    f();
+  } catch (e) {
+    return e;
+  }
+  throw new Error('no error was thrown');
+};
+
+// Every key of a plain value (recursively), to check the casing.
+function keys(v, out = new Set()) {
+  if (Array.isArray(v)) v.forEach((x) => keys(x, out));
+  else if (v && typeof v === 'object' && !ArrayBuffer.isView(v)) {
+    for (const [k, x] of Object.entries(v)) {
+      out.add(k);
+      keys(x, out);
+    }
+  }
+  return out;
+}
+const notCamel = (v) => [...keys(v)].filter((k) => /_/.test(k));
+
+function fitted() {
+  const tube = tubePopulation({ segments: 3, poses: 5, seed: 4 });
+  // moved and scaled away from the unit box, so that the original units matter
+  const files = tube.files.map((f) => ({ name: f.name, text: f.text.replace(/^v (\S+) (\S+) (\S+)$/gm, (_, x, y, z) => `v ${+x * 30 + 5} ${+y * 30 - 2} ${+z * 30 + 0.5}`) }));
+  const pop = new w.Population(files.map((f) => f.name), files.map((f) => bytes(f.text)));
+  const fitter = new w.Fitter(pop, { ...w.defaultParams(), parts: 3 });
+  while (!fitter.isDone()) fitter.run(1000);
+  return { files, pop, model: fitter.result() };
+}
+
+test('OBJ problems cross as data: every file, its line, kind and message', () => {
+  const e = thrown(() => new w.Population(['a.obj', 'b.obj', 'c.obj'], [
+    bytes('v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n'),
+    bytes('v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n'),
+    bytes('v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n'),
+  ]));
+  assert.ok(e instanceof Error);
+  assert.equal(e.problems.length, 2, JSON.stringify(e.problems));
+  const [b, c] = e.problems;
+  assert.deepEqual([b.kind, b.file, b.line], ['obj', 'b.obj', 2]);
+  assert.deepEqual([c.kind, c.file, c.line], ['obj', 'c.obj', 4]);
+  assert.ok(!b.message.includes('b.obj') && b.message.length > 5, b.message);
+  assert.deepEqual([e.kind, e.file, e.line], ['obj', 'b.obj', 2]);
+  assert.equal(e.message.split('\n').length, 2);
+  assert.match(e.message, /^file b\.obj, line 2: /);
+});
+
+test('misspelled fields of parameters, generator specs, options and mesh descriptors are errors naming the field', () => {
+  const { pop, model } = fitted();
+  const cases = [
+    [() => new w.Fitter(pop, { partz: 3 }), 'partz'],
+    [() => new w.Synthetic({ preset: 'arm', vertexes: 500 }), 'vertexes'],
+    [() => model.interpolate(0, 1, 0.5, { skinn: 'smooth' }), 'skinn'],
+    [() => model.objText({ kind: 'pose', pose: 1, poze: 2 }, ''), 'poze'],
+  ];
+  for (const [f, field] of cases) {
+    const e = thrown(f);
+    assert.ok(e.message.includes(field), `${field}: ${e.message}`);
+    assert.ok(['params', 'request'].includes(e.kind), `${field}: kind ${e.kind}`);
+    assert.equal(e.problems[0].message, e.message);
+  }
+  assert.equal(thrown(() => new w.Fitter(pop, { ...w.defaultParams(), tol: -1 })).kind, 'params');
+  assert.equal(thrown(() => model.reconstruct(99)).kind, 'request');
+});
+
+test('what comes out is camelCase: summary, examples, articulation report, ground truth', () => {
+  const { files, pop, model } = fitted();
+  const s = model.summary();
+  assert.deepEqual(notCamel(s), []);
+  // one unit-box length in the original units: the ratio of a distance in the file to the same in the unit box
+  const unit = pop.positions(0);
+  const orig = [...files[0].text.matchAll(/^v (\S+) (\S+) (\S+)$/gm)].map((m) => m.slice(1, 4).map(Number));
+  const last = orig.length - 1;
+  const ratio = Math.hypot(...orig[last].map((c, k) => c - orig[0][k])) / Math.hypot(...[0, 1, 2].map((k) => unit[3 * last + k] - unit[k]));
+  const [perUnit] = pop.originalLengths([1]);
+  assert.ok(Math.abs(perUnit / ratio - 1) < 1e-5, `one unit: ${perUnit} original, from the vertices ${ratio}`);
+  assert.ok(Math.abs(s.rmseOriginal / (s.rmse * perUnit) - 1) < 1e-12, `rmse ${s.rmse}, original ${s.rmseOriginal}`);
+  const r = model.articulationReport(0, 3, 0.5);
+  assert.deepEqual(notCamel(r), []);
+  assert.equal(typeof r.methods[0].volumeChange, 'number');
+  assert.equal(typeof r.methods[0].stretch.boundaryP99, 'number');
+  assert.deepEqual(notCamel(w.examples()), []);
+  assert.deepEqual(notCamel(w.defaultParams()), []);
+  const synth = new w.Synthetic({ preset: 'arm', vertices: 800, poses: 5 });
+  const sp = synth.population();
+  const f = new w.Fitter(sp, { ...w.defaultParams(), parts: 3 });
+  while (!f.isDone()) f.run(1000);
+  const g = synth.groundTruth(f.result());
+  assert.deepEqual(Object.keys(g).sort(), ['ari', 'rotationErrorDeg', 'rotationErrorDegMax', 'rotationErrorsDeg', 'trueParts']);
+  assert.equal(g.trueParts, 3);
+});
+
+test('the OBJ of a shown mesh is in the original units; neighbouring parts get different colours', () => {
+  const { files, pop, model } = fitted();
+  const verts = (t) => [...t.matchAll(/^v (\S+) (\S+) (\S+)$/gm)].map((m) => m.slice(1, 4).map(Number));
+  const want = verts(files[2].text);
+  for (const text of [pop.objText({ kind: 'pose', pose: 2 }, 'pose 3'), model.objText({ kind: 'pose', pose: 2 }, 'pose 3')]) {
+    const got = verts(text);
+    assert.equal(got.length, want.length);
+    let worst = 0;
+    got.forEach((v, i) => v.forEach((c, k) => { worst = Math.max(worst, Math.abs(c - want[i][k])); }));
+    assert.ok(worst < 1e-12, `largest difference ${worst}`);
+    assert.ok(text.startsWith('# pose 3\n'));
+  }
+  // t = 0 of the linear blend and of the part-wise interpolation is the pose itself, in original units.
+  const lin = verts(pop.objText({ kind: 'linear', from: 2, to: 4, t: 0 }, ''));
+  assert.deepEqual(lin, verts(pop.objText({ kind: 'pose', pose: 2 }, '')));
+  const rigid = verts(model.objText({ kind: 'interpolation', from: 2, to: 4, t: 0, options: { skin: 'rigid', residual: true } }, ''));
+  rigid.forEach((v, i) => v.forEach((c, k) => assert.ok(Math.abs(c - want[i][k]) < 1e-6)));
+  assert.equal(verts(model.objText({ kind: 'latent' }, '')).length, want.length);
+  assert.match(thrown(() => pop.objText({ kind: 'latent' }, '')).message, /fitted model/);
+  // The linear blend the page shows comes from the core too.
+  assert.deepEqual(Array.from(pop.linearInterpolate(0, 1, 0.25)), Array.from(model.linearInterpolate(0, 1, 0.25)));
+
+  const labels = model.labels();
+  const colours = pop.partColours(labels, 12);
+  const faces = pop.faces();
+  let touching = 0;
+  for (let f = 0; f < faces.length; f += 3) {
+    for (let e = 0; e < 3; e++) {
+      const a = labels[faces[f + e]];
+      const b = labels[faces[f + ((e + 1) % 3)]];
+      if (a !== b) {
+        touching++;
+        assert.notEqual(colours[a], colours[b], `parts ${a} and ${b} touch`);
+      }
+    }
+  }
+  assert.ok(touching > 0);
+  assert.ok(Array.from(colours).every((c) => c < 12));
+});
