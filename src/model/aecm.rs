@@ -95,10 +95,17 @@ impl Fit {
             return Err(Error::Request(format!("{} labels for {} vertices", labels.len(), data.n_vertices)));
         }
         let comps = init::components_from_labels(&data, labels, params.variance_floor);
-        Ok(Fit::from_components(data, comps, params))
+        // the labels' components are evaluated first in the first E-step (they are its best guess)
+        let owners = (comps.len() == labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0)).then_some(labels);
+        Ok(Fit::from_components_owned(data, comps, params, owners))
     }
 
     pub fn from_components(data: Data, comps: Vec<Component>, params: &Params) -> Fit {
+        Fit::from_components_owned(data, comps, params, None)
+    }
+
+    /// [`Fit::from_components`] with each vertex's likeliest component, if known, for the first E-step's order.
+    fn from_components_owned(data: Data, comps: Vec<Component>, params: &Params, owners: Option<&[u32]>) -> Fit {
         let mut fit = Fit {
             estep: EStep::new(&data),
             data,
@@ -124,6 +131,9 @@ impl Fit {
             estep_flops_f32: 0.0,
             estep_ms: 0.0,
         };
+        if let Some(labels) = owners {
+            fit.estep.set_owner_labels(labels, fit.comps.len());
+        }
         fit.initial_ll = fit.run_e_step();
         fit
     }
@@ -177,6 +187,15 @@ impl Fit {
         }
         if ((ll - prev) / self.data.n_vertices as f64).abs() < self.tol && dropped == 0 {
             self.converged = true;
+        }
+        if self.is_finished() && self.accelerate && std::env::var_os("POSEMFA_DEBUG").is_some() {
+            eprintln!(
+                "AECM finished after {} iterations; SQUAREM kept {} of {} extrapolations (step_max {})",
+                self.trace.len(),
+                self.extrapolations_kept,
+                self.extrapolations_tried,
+                self.sq_step_max
+            );
         }
         if self.accelerate {
             if dropped > 0 || self.converged {

@@ -557,6 +557,15 @@ pub fn fit(pop: &Population, params: &Params, observer: &mut dyn FnMut(&Progress
 pub fn merge_rigid_neighbours(pop: &Population, labels: &[u32], params: &Params) -> Vec<u32> {
     let mut labels = compact(labels);
     let err_of = |members: &[usize]| -> f64 {
+        // with multi-resolution, estimated on at most subset_vertices evenly spaced members
+        let thinned: Vec<usize>;
+        let members = if params.subset_vertices > 0 && members.len() > params.subset_vertices {
+            let stride = members.len().div_ceil(params.subset_vertices);
+            thinned = members.iter().copied().step_by(stride).collect();
+            &thinned[..]
+        } else {
+            members
+        };
         let data = Data::from_population_subset(pop, members);
         let all: Vec<usize> = (0..members.len()).collect();
         let c = super::init::component_from_points(&data, &all, members.len(), params.variance_floor);

@@ -31,10 +31,19 @@ use super::component::Component;
 use crate::geometry::{Mat3, Vec3};
 use nalgebra::{Rotation3, Vector3};
 
-/// log of a rotation matrix as axis x angle (the rotation's own angle in [0, π]).
+/// log of a rotation matrix as axis x angle (the rotation's own angle in [0, π]), through its unit quaternion
+/// (w, v): ω = 2 atan2(|v|, w) v / |v| with w >= 0, finite and accurate at every angle (the matrix's own
+/// acos of the trace is NaN when rounding puts the trace of a near-identity above 3).
 fn log_rotation(r: &Mat3) -> Vec3 {
-    let v = Rotation3::from_matrix_unchecked(*r).scaled_axis();
-    [v[0], v[1], v[2]]
+    let q = crate::geometry::rotation::to_quat(r);
+    let (mut w, mut v) = (q.w, [q.i, q.j, q.k]);
+    if w < 0.0 {
+        w = -w;
+        v = v.map(|x| -x);
+    }
+    let n = crate::geometry::norm(v);
+    let f = if n > 1e-300 { 2.0 * n.atan2(w) / n } else { 2.0 / w.max(1e-300) };
+    v.map(|x| x * f)
 }
 
 fn exp_rotation(w: Vec3) -> Mat3 {
@@ -246,6 +255,24 @@ mod tests {
             assert!(ext[0].variances[i] > 0.0);
         }
         assert!((ext[0].weight - 0.5).abs() < 1e-12);
+    }
+
+    /// The log is finite and inverts exp at every angle, also when rounding puts a near-identity's trace above 3.
+    #[test]
+    fn log_rotation_is_finite_and_inverts_exp() {
+        let mut nearly = Mat3::identity();
+        nearly[(0, 0)] = 1.0 + 2e-16;
+        nearly[(1, 1)] = 1.0 + 2e-16;
+        assert!(log_rotation(&nearly).iter().all(|v| v.is_finite() && v.abs() < 1e-15));
+        for angle in [1e-12, 1e-6, 0.3, 2.0, 3.14] {
+            let w = [0.3 * angle, -0.5 * angle, 0.81 * angle];
+            let n = crate::geometry::norm(w);
+            let w = w.map(|x| x * angle / n);
+            let back = log_rotation(&exp_rotation(w));
+            for d in 0..3 {
+                assert!((back[d] - w[d]).abs() < 1e-12, "{angle}: {back:?} vs {w:?}");
+            }
+        }
     }
 
     /// Any of the 24 frames of the same component is mapped back to the reference's frame, with the same Λ.
