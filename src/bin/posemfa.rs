@@ -399,7 +399,7 @@ fn fit_group<T: HasFit>() -> Group<T> {
             val(
                 "--subset",
                 "N",
-                "coarse and refinement stages on about N well-spread vertices, final AECM on all (default 2000; 0 = all)",
+                "with at least 3N vertices: coarse and refinement stages on about N well-spread vertices, final AECM on all (default 2000; 0 = all)",
                 |o: &mut T, v| num(v).map(|n| o.fit().params.subset_vertices = n),
             ),
             val("--mesh", "NAME", "glTF input: the mesh (name or index; default the one with most vertices)", |o: &mut T, v| {

@@ -153,6 +153,11 @@ enum State {
     Done,
 }
 
+/// Multi-resolution runs only on populations with at least this many times `subset_vertices` vertices: a
+/// subset of more than a third of the mesh saves little, and on the 3 000-vertex quadruped example a 2 000-vertex
+/// subset lost a tail piece on some seeds (`examples/speed_accuracy.rs`).
+pub const SUBSET_FACTOR: usize = 3;
+
 pub struct Pipeline {
     pop: Population,
     params: Params,
@@ -180,7 +185,7 @@ impl Pipeline {
         } else {
             params.clone()
         };
-        let subset = (params.refine && params.subset_vertices > 0 && pop.n_vertices() > params.subset_vertices)
+        let subset = (params.refine && params.subset_vertices > 0 && pop.n_vertices() >= SUBSET_FACTOR * params.subset_vertices)
             .then(|| super::multires::spread_subset(pop, params.subset_vertices));
         let data = match &subset {
             Some(s) => {

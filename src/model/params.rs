@@ -41,9 +41,10 @@ pub struct Params {
     pub restarts: usize,
     /// Run Algorithm 1's refinement and final stage; false stops after the coarse AECM. Default true.
     pub refine: bool,
-    /// Multi-resolution ([`super::multires`]): with more vertices than this, the coarse and refinement stages
-    /// run on about this many well-spread vertices and only the final AECM on all of them; 0 runs every stage
-    /// on all vertices (the full hierarchy). Only with `refine`. Default 4000.
+    /// Multi-resolution ([`super::multires`]): with at least 3 times this many vertices
+    /// ([`super::hierarchy::SUBSET_FACTOR`]), the coarse and refinement stages run on about this many
+    /// well-spread vertices and only the final AECM on all of them; 0 runs every stage on all vertices (the full
+    /// hierarchy). Only with `refine`. Default 2000.
     pub subset_vertices: usize,
     /// Algorithm 1 step 5: stop splitting a part when its mean variance err falls below this. Default 1e-5.
     pub refine_threshold: f64,
