@@ -110,6 +110,9 @@ fn a_missing_or_bad_value_is_named() {
         (&["generate", "arm", "--vertices", "500"][..], "generate needs --out DIR"),
         (&["generate", "horse", "--out", "/nonexistent/x"][..], "unknown preset 'horse'"),
         (&["fit", "synth:arm", "--parts", "0"][..], "parts"),
+        (&["fit", "synth:arm:600:6:1", "--bones", "0"][..], "target_parts = 0"),
+        (&["fit", "synth:arm:600:6:1", "--bones", "some"][..], "--bones: 'some' is not a valid number"),
+        (&["export-gltf", "synth:arm:600:6:1", "--out", "x.glb", "--bones", "100000"][..], "ask for at most"),
     ] {
         let r = posemfa(args);
         assert_eq!(r.status.code(), Some(1), "{args:?}");
@@ -142,4 +145,17 @@ fn a_small_fit_on_the_arm_writes_its_json() {
     let truth: serde_json::Value = serde_json::from_str(line.trim().trim_start_matches("ground truth: ")).unwrap();
     let ari = truth["ari"].as_f64().expect("ari");
     assert!(ari > 0.8, "adjusted Rand index {ari}: {line}");
+}
+
+#[test]
+fn bones_n_gives_exactly_n_parts() {
+    let json = std::env::temp_dir().join(format!("posemfa-cli-bones-{}.json", std::process::id()));
+    let json_arg = json.to_str().expect("utf-8 temp path");
+    let r = posemfa(&["fit", "synth:arm:600:6:1", "--bones", "5", "--quiet", "--json", json_arg]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("the JSON was written")).unwrap();
+    let _ = std::fs::remove_file(&json);
+    assert_eq!(v["parts"].as_array().map(Vec::len), Some(5), "{}", text(&r.stdout));
+    assert_eq!(v["islands"].as_u64(), Some(0));
 }

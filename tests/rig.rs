@@ -29,7 +29,7 @@ fn quadruped() -> (Population, Articulation) {
 fn exported(pop: &Population, art: &Articulation, opts: &GltfOptions) -> (RigError, posemfa::export::gltf::GlbPlayback) {
     let glb = to_glb(art, opts).unwrap();
     let play = play_glb(&glb).unwrap();
-    (rig_error(pop, &play).unwrap(), play)
+    (rig_error(pop, &play, opts.rig_options().bind_pose).unwrap(), play)
 }
 
 /// Largest change of any bone's length (joint to parent joint) over the clip, relative to the diagonal.
@@ -70,7 +70,7 @@ dual_test! {
             assert!(has(gltf_json::mesh::Semantic::Joints(0)));
             assert_eq!(has(gltf_json::mesh::Semantic::Joints(1)), k > 4, "K = {k}");
             let play = play_glb(&glb).unwrap();
-            let err = rig_error(&pop, &play).unwrap();
+            let err = rig_error(&pop, &play, 0).unwrap();
             // the file plays what the solver fitted (f32 storage only)
             let mut sq = 0.0;
             for i in 0..pop.n_shapes() {
@@ -79,7 +79,7 @@ dual_test! {
                     sq += d * d;
                 }
             }
-            let unit_diag = posemfa::export::rig_report::bbox_diagonal(&rig.rest);
+            let unit_diag = posemfa::export::rig_report::bbox_diagonal(&pop.shapes[0]);
             let e_fit = 1000.0 * (sq / (3 * pop.n_vertices() * pop.n_shapes()) as f64).sqrt() / unit_diag;
             assert!((err.e_rms - e_fit).abs() <= 1e-3 * e_fit + 1e-4, "K = {k}: glb {} vs fit {e_fit}", err.e_rms);
             assert!(err.e_rms <= last * 1.02, "K = {k}: {} after {last}", err.e_rms);

@@ -402,6 +402,10 @@ fn fit_group<T: HasFit>() -> Group<T> {
                 "with at least 3N vertices: coarse and refinement stages on about N well-spread vertices, final AECM on all (default 2000; 0 = all)",
                 |o: &mut T, v| num(v).map(|n| o.fit().params.subset_vertices = n),
             ),
+            val("--bones", "N", "exact part count: auto (default, Algorithm 1's own) or N (split / merge until N)", |o: &mut T, v| {
+                o.fit().params.target_parts = if v == "auto" { None } else { Some(num(v)?) };
+                Ok(())
+            }),
             val("--mesh", "NAME", "glTF input: the mesh (name or index; default the one with most vertices)", |o: &mut T, v| {
                 text(&mut o.fit().gltf.mesh, v)
             }),
@@ -1239,13 +1243,13 @@ fn cmd_rig_report(a: RigReportArgs) -> Result<(), String> {
     }
     let t = std::time::Instant::now();
     let play = play_glb(&glb).map_err(|e| e.to_string())?;
-    let err = rig_error(&pop, &play).map_err(|e| e.to_string())?;
-    timings.insert("evaluate".into(), ms(t).into());
-    timings.insert("total".into(), ms(t_all).into());
     let bind = match a.rig.bind {
         Some(_) => pose_index("--bind", a.rig.bind, pop.n_shapes())?,
         None => default_bind(&pop),
     };
+    let err = rig_error(&pop, &play, bind).map_err(|e| e.to_string())?;
+    timings.insert("evaluate".into(), ms(t).into());
+    timings.insert("total".into(), ms(t_all).into());
     let mut json = serde_json::to_value(&err).map_err(|e| e.to_string())?;
     if let Some(m) = json.as_object_mut() {
         m.insert("bones".into(), play.joint_parent.len().into());

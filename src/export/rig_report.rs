@@ -3,8 +3,9 @@
 //! file's own numbers, [`super::gltf::play_glb`]), not on the fit.
 //!
 //! E_RMS (Kavan et al. 2010): 1000 · ||V - V'||_F / sqrt(3 n_v n_poses) / d, with V the training poses, V'
-//! the clip's keyframes and d the diagonal of the bounding box of the rest pose (the mesh as bound in the
-//! file). The same for one pose gives the per-pose figure; the overall E_RMS² is their mean square.
+//! the clip's keyframes and d the diagonal of the bounding box of the rest pose (the training pose the rig
+//! is bound in, as given: the same d as for any other tool's rig of the same data, whatever bind positions
+//! the rig chose). The same for one pose gives the per-pose figure; the overall E_RMS² is their mean square.
 
 use super::gltf::GlbPlayback;
 use crate::error::{Error, Result};
@@ -47,15 +48,20 @@ pub fn bbox_diagonal(points: &[Vec3]) -> f64 {
     norm(sub(hi, lo))
 }
 
-/// Compares the clip's keyframes with the population's poses (original units), keyframe i with pose i.
-pub fn rig_error(pop: &Population, play: &GlbPlayback) -> Result<RigError> {
+/// Compares the clip's keyframes with the population's poses (original units), keyframe i with pose i;
+/// `rest` is the training pose the rig is bound in (its bounding box gives d).
+pub fn rig_error(pop: &Population, play: &GlbPlayback, rest: usize) -> Result<RigError> {
     if play.frames.len() != pop.n_shapes() {
         return Err(Error::Data(format!("the clip has {} keyframes for {} training poses", play.frames.len(), pop.n_shapes())));
     }
     if play.rest.len() != pop.n_vertices() {
         return Err(Error::Data(format!("the rig has {} vertices, the population {}", play.rest.len(), pop.n_vertices())));
     }
-    let diagonal = bbox_diagonal(&play.rest);
+    if rest >= pop.n_shapes() {
+        return Err(Error::Request(format!("rest pose {rest} (0-based): the population has {} poses", pop.n_shapes())));
+    }
+    let rest_pose: Vec<Vec3> = pop.shapes[rest].iter().map(|&u| pop.normalization.to_original(u)).collect();
+    let diagonal = bbox_diagonal(&rest_pose);
     if !(diagonal > 0.0) {
         return Err(Error::Data("the rest pose has an empty bounding box".into()));
     }

@@ -8,6 +8,8 @@
 //!    fraction `refine_min_gain`, when a component died, or at `max_subparts`; keep the best m_k.
 //! 3. Final: AECM on all vertices started from the refined labels; then every part is made one connected
 //!    piece of the mesh ([`super::islands`]).
+//! 4. Only with `target_parts` = N: parts are split or merged until there are exactly N ([`super::part_count`]),
+//!    then the final AECM runs again from those labels.
 //!
 //! Every stage is kept (coarse labels, refined labels, final model).
 //!
@@ -171,12 +173,20 @@ pub struct Pipeline {
     total_iterations: usize,
     /// Vertices of the coarse and refinement stages (multi-resolution), None = all.
     subset: Option<Vec<usize>>,
+    /// Times the part count was made exact (`target_parts`).
+    count_rounds: usize,
 }
+
+/// Most times [`Pipeline`] makes the part count exact and refits.
+const COUNT_ROUNDS: usize = 3;
 
 impl Pipeline {
     /// Validates the parameters and the data and runs the coarse initialisation (k-means++).
     pub fn new(pop: &Population, params: &Params) -> Result<Pipeline> {
         params.validate()?;
+        if let Some(n) = params.target_parts {
+            super::part_count::check_target(n, pop.n_vertices(), params.min_part_vertices)?;
+        }
         let t0 = crate::clock::now_ms();
         // the coarse and refinement runs stop at a loose tolerance and only pass labels on: they run plain AECM
         // (SQUAREM would move where they stop); the final run is accelerated
@@ -209,6 +219,7 @@ impl Pipeline {
             stage_started_ms: t0,
             total_iterations: 0,
             subset,
+            count_rounds: 0,
         })
     }
 
@@ -319,10 +330,8 @@ impl Pipeline {
                 } else {
                     self.close_stage(None);
                     self.refined_labels = self.coarse_labels.clone();
-                    let mut model = self.coarse.clone().expect("just set");
-                    super::islands::connect_parts(&mut model, &self.pop, true, self.params.min_part_vertices);
-                    self.final_model = Some(model);
-                    State::Done
+                    let model = self.coarse.clone().expect("just set");
+                    self.finish(model)?
                 }
             }
             State::Refine(mut r) => {
@@ -333,14 +342,40 @@ impl Pipeline {
             State::Final(fit) => {
                 self.account(&fit);
                 self.close_stage(None);
-                let mut model = fit.model();
-                super::islands::connect_parts(&mut model, &self.pop, true, self.params.min_part_vertices);
-                self.final_model = Some(model);
-                State::Done
+                let model = fit.model();
+                self.finish(model)?
             }
             State::Done => State::Done,
         };
         Ok(())
+    }
+
+    /// Algorithm 1's model made of connected parts ([`super::islands`]); with `target_parts`, the part count is
+    /// then made exact ([`super::part_count`]) and the final AECM runs again from those labels (at most
+    /// [`COUNT_ROUNDS`] times, in case the AECM drops a part).
+    fn finish(&mut self, mut model: Model) -> Result<State> {
+        let rounds = self.count_rounds;
+        super::islands::connect_parts(&mut model, &self.pop, rounds == 0, self.params.min_part_vertices);
+        let Some(n) = self.params.target_parts else {
+            self.final_model = Some(model);
+            return Ok(State::Done);
+        };
+        if model.n_parts() == n && compact(&model.labels).iter().max().map_or(0, |&l| l as usize + 1) == n {
+            self.final_model = Some(model);
+            return Ok(State::Done);
+        }
+        if rounds == COUNT_ROUNDS {
+            return Err(crate::error::Error::Data(format!(
+                "cannot keep exactly {n} parts: the final AECM dropped parts {rounds} times (each needs a responsibility \
+                 mass of min_part_vertices = {}); ask for fewer parts or lower min_part_vertices",
+                self.params.min_part_vertices
+            )));
+        }
+        self.count_rounds += 1;
+        let (labels, _) = super::part_count::labels_with_count(&self.pop, &model.labels, n, &self.params)?;
+        self.stats.push(StageStats { name: "parts".into(), ..Default::default() });
+        self.stage_started_ms = crate::clock::now_ms();
+        Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &labels, &self.params)?))
     }
 
     fn sub_params(&self) -> Params {

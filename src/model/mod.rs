@@ -28,6 +28,7 @@ pub mod limit;
 pub mod memory;
 pub mod multires;
 pub mod params;
+pub mod part_count;
 pub mod result;
 pub mod squarem;
 

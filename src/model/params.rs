@@ -63,6 +63,9 @@ pub struct Params {
     /// Convergence tolerance of the coarse AECM and of the small AECM runs of the refinement (they only
     /// decide the labels that start the next stage; the final stage uses `tol`). Default 1e-2.
     pub refine_tol: f64,
+    /// Exact part count: after Algorithm 1, parts are split or merged until there are exactly this many, then
+    /// the final AECM runs again ([`super::part_count`]). None (default) keeps Algorithm 1's own count.
+    pub target_parts: Option<usize>,
 }
 
 impl Default for Params {
@@ -86,6 +89,7 @@ impl Default for Params {
             min_part_vertices: 4,
             refine_max_iter: 60,
             refine_tol: 1e-2,
+            target_parts: None,
         }
     }
 }
@@ -133,6 +137,9 @@ impl Params {
                 self.subset_vertices
             ));
         }
+        if self.target_parts == Some(0) {
+            return bad("target_parts = 0 must be at least 1 (or none: Algorithm 1's own count)".into());
+        }
         if self.refine_max_iter == 0 {
             return bad("refine_max_iter must be at least 1".into());
         }
@@ -154,6 +161,7 @@ mod tests {
             (Params { variance_floor: 0.0, ..Default::default() }, "variance_floor"),
             (Params { restarts: 0, ..Default::default() }, "restarts"),
             (Params { max_iter: 0, ..Default::default() }, "max_iter"),
+            (Params { target_parts: Some(0), ..Default::default() }, "target_parts"),
         ];
         for (p, field) in cases {
             match p.validate() {
