@@ -29,6 +29,17 @@ fn assert_fits(pop: &Population, cfg: u8) {
 }
 
 dual_test! {
+    /// gltf_read target (byte 0: the options, then a .glb): posemfa's rigged export with one animation
+    /// channel's path mutated to "tranSlation". The `gltf` crate leaves channel targets unvalidated and
+    /// panicked in `Channel::target().property()`; now the file is refused, naming the channel.
+    fn gltf_invalid_channel_path_is_refused() {
+        let data = include_bytes!("fuzz_regressions/gltf-channel-path-tranSlation.bin");
+        let (cfg, file) = data.split_first().expect("not empty");
+        assert_eq!(*cfg, 0);
+        let e = posemfa::mesh::gltf::read("fuzz.glb", file, &[], &Default::default()).unwrap_err().to_string();
+        assert!(e.contains("file fuzz.glb") && e.contains("channel 0 of animation 0 has an invalid target"), "{e}");
+    }
+
     /// shapes target, before the fix: a face naming vertex 130 of a 4-vertex mesh was accepted by
     /// `Population::from_unit_shapes` (from_meshes checked faces only against the other shapes' faces), so
     /// anything indexing vertices by face (part graph, export) would have panicked later.

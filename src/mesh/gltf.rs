@@ -153,8 +153,9 @@ fn split_glb(file: &str, bytes: &[u8]) -> Result<(Vec<u8>, Option<Vec<u8>>)> {
     Ok((json, bin))
 }
 
-/// Refuses byte counts and element counts that do not fit this build's `usize` (the `gltf` crate converts
-/// them with `as usize`, which would silently wrap in wasm32 where `usize` is 32 bits).
+/// Checks what the `gltf` crate leaves unchecked: byte counts and element counts must fit this build's
+/// `usize` (the crate converts them with `as usize`, which would silently wrap in wasm32 where `usize` is
+/// 32 bits), and animation channel targets must be valid (the crate does not validate them).
 fn check_sizes(file: &str, doc: &gltf::Document) -> Result<()> {
     let json = doc.as_json();
     let too_big = |what: String, v: u64| {
@@ -180,6 +181,26 @@ fn check_sizes(file: &str, doc: &gltf::Document) -> Result<()> {
     for (i, b) in json.buffers.iter().enumerate() {
         if !fits(b.byte_length.0) {
             return Err(too_big(format!("the length of buffer {i}"), b.byte_length.0));
+        }
+    }
+    // The `gltf` crate (1.4) does not validate animation channel targets, and unwraps them when asked:
+    // a target naming a missing node, or an unknown path (such as KHR_animation_pointer's "pointer"), would
+    // panic there. Checked here with the crate's own validation of a target.
+    use gltf::json::validation::Validate;
+    for (a, anim) in json.animations.iter().enumerate() {
+        for (c, channel) in anim.channels.iter().enumerate() {
+            let mut problems = Vec::new();
+            channel.target.validate(json, gltf::json::Path::new, &mut |path, e| problems.push(format!("{} ({e})", path())));
+            if !problems.is_empty() {
+                return Err(err(
+                    file,
+                    format!(
+                        "channel {c} of animation {a} has an invalid target: {}; the node must exist and the path be \
+                         translation, rotation, scale or weights: export the animation again",
+                        problems.join(", ")
+                    ),
+                ));
+            }
         }
     }
     Ok(())
@@ -1273,5 +1294,17 @@ mod tests {
         assert!(g.iter().all(|m| m.iter().all(|x| x.is_finite())));
         assert_eq!(joint_ancestors(&cycle, &[0]), vec![true, true, true]);
         assert_eq!(joint_ancestors(&parents[..4], &[2]), vec![true, true, true, false]);
+    }
+
+    /// The `gltf` crate does not validate animation channel targets (and panics on reading an invalid one):
+    /// an unknown path or a missing node is an error naming the channel.
+    #[test]
+    fn invalid_channel_targets_are_refused() {
+        for (path, node) in [("pointer", 0), ("tranSlation", 0), ("weights", 9)] {
+            let e = error(&quad(|v| {
+                v["animations"][0]["channels"][0]["target"] = json!({"node": node, "path": path});
+            }));
+            assert!(e.contains("channel 0 of animation 0 has an invalid target"), "{e}");
+        }
     }
 }
