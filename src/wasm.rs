@@ -81,7 +81,8 @@ pub struct WasmPopulation {
 
 #[wasm_bindgen(js_class = Population)]
 impl WasmPopulation {
-    /// Parses and validates OBJ files. Throws an Error with one problem per file that has one (`problems`,
+    /// Reads and validates the files of one population, each by its extension (`mesh::load`: OBJ or PLY per
+    /// pose, one .glb / .gltf with its .bin files, a .pc2 / .mdd point cache with its base mesh). Throws an Error with one problem per file that has one (`problems`,
     /// each {kind, file, line, message}; the message has one line per problem).
     #[wasm_bindgen(constructor)]
     pub fn new(names: Vec<String>, files: Vec<Uint8Array>) -> Result<WasmPopulation, JsValue> {
@@ -93,6 +94,13 @@ impl WasmPopulation {
             Ok(p) => Ok(WasmPopulation { inner: Rc::new(p) }),
             Err(errors) => Err(thrown(&errors.iter().map(Error::problem).collect::<Vec<_>>())),
         }
+    }
+
+    /// Where the poses came from, for people: "11 OBJ files", "6 frames of animation 'Walk' (...) of mesh
+    /// 'horse' in horse.glb; ...", "48 frames of the point cache gallop.pc2 (...), faces from rest.obj".
+    #[wasm_bindgen(getter)]
+    pub fn source(&self) -> String {
+        self.inner.source.clone()
     }
 
     #[wasm_bindgen(getter, js_name = nShapes)]

@@ -1,27 +1,29 @@
 // Opening files: the file and folder pickers and drops anywhere on the page. Turns what a person drops or
-// picks (OBJ files, folders, .zip archives) into [{ name, bytes }] for the worker. Nothing is parsed here:
-// the Rust importer reads and validates the OBJ text.
+// picks (mesh files, folders, .zip archives) into [{ name, bytes }] for the worker. Nothing is parsed here:
+// the Rust readers pick themselves by extension (mesh::load: OBJ and PLY per pose, a .glb / .gltf with its
+// .bin buffers, a .pc2 / .mdd point cache with its base mesh) and validate the files.
 import { unzipSync } from 'fflate';
 
 const collator = new Intl.Collator(undefined, { numeric: true, sensitivity: 'base' });
 export const naturalSort = (items) => items.sort((a, b) => collator.compare(a.name, b.name));
 
-const isObj = (name) => /\.obj$/i.test(name);
+// Files the core reads (src/mesh/load.rs, FileKind::is_known_extension); images and .mtl files are not read.
+export const isMeshFile = (name) => /\.(obj|ply|glb|gltf|vrm|bin|pc2|mdd)$/i.test(name);
 const isZip = (name) => /\.zip$/i.test(name);
 const skip = (name) => /(^|\/)(__MACOSX\/|\.)/.test(name); // resource forks and hidden files
 
-// One File -> entries: an OBJ as is, a zip opened, anything else reported as ignored.
+// One File -> entries: a mesh file as is, a zip opened, anything else reported as ignored.
 async function fromFile(file, name, out) {
   if (isZip(name)) {
     let entries;
     try {
-      entries = unzipSync(new Uint8Array(await file.arrayBuffer()), { filter: (f) => isObj(f.name) && !skip(f.name) });
+      entries = unzipSync(new Uint8Array(await file.arrayBuffer()), { filter: (f) => isMeshFile(f.name) && !skip(f.name) });
     } catch (e) {
       out.problems.push({ file: name, line: null, message: `cannot open the zip archive (${e.message || e})` });
       return;
     }
     for (const [inner, bytes] of Object.entries(entries)) out.files.push({ name: `${name}/${inner}`, bytes });
-  } else if (isObj(name)) {
+  } else if (isMeshFile(name)) {
     out.files.push({ name, bytes: new Uint8Array(await file.arrayBuffer()) });
   } else if (!skip(name)) {
     out.ignored.push(name);

@@ -68,9 +68,9 @@ export function runExample(ex, params = {}, opts = {}) {
 /** Files from the picker or a drop ({ files, ignored, problems }, see drop.js), fitted at once. */
 export async function loadFiles(got) {
   const { files, ignored, problems } = await got;
-  const notes = ignored.length ? [{ file: null, line: null, message: `ignored (not .obj or .zip): ${ignored.join(', ')}` }] : [];
+  const notes = ignored.length ? [{ file: null, line: null, message: `ignored (not a mesh, point cache, glTF buffer or .zip): ${ignored.join(', ')}` }] : [];
   if (problems.length || files.length === 0) {
-    if (!files.length) problems.push({ file: null, line: null, message: 'no .obj file in what was dropped or picked' });
+    if (!files.length) problems.push({ file: null, line: null, message: 'no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh) in what was dropped or picked' });
     showProblems([...problems, ...notes]);
     update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
     return;

@@ -3,7 +3,9 @@
 // sender's number for the request and comes back in its replies):
 //
 //   page -> worker
-//     { type: 'load', id, names: string[], files: ArrayBuffer[], fit? }  OBJ files (parsed and validated in Rust)
+//     { type: 'load', id, names: string[], files: ArrayBuffer[], fit? }  mesh files (OBJ, PLY, glTF + .bin,
+//                                                                   point cache + base mesh): read by extension
+//                                                                   and validated in Rust
 //     { type: 'generate', id, spec, fit? }                          a synthetic population (posemfa::synth)
 //                                                                   fit: { id, params, fault? }: start fitting it
 //                                                                   at once (as a 'fit' message would)
@@ -16,7 +18,8 @@
 //                                                                   defaults; examples: the core's built-in
 //                                                                   examples ({id, title, note, failsOnPurpose,
 //                                                                   spec, params})
-//     { type: 'loaded', id, population }                            population: names, nShapes, nVertices, faces,
+//     { type: 'loaded', id, population }                            population: names, nShapes, nVertices,
+//                                                                   provenance (where the poses came from), faces,
 //                                                                   positions (one Float32Array per pose, unit
 //                                                                   box), truth ({partNames, partOfVertex,
 //                                                                   colours} of a generated one, else null)
@@ -86,6 +89,7 @@ function describe(pop, truth = null) {
     names: pop.names(),
     nShapes: pop.nShapes,
     nVertices: pop.nVertices,
+    provenance: pop.source,
     faces: pop.faces(),
     positions,
     truth,

@@ -19,6 +19,10 @@ function showPopulation(pop, source) {
   const tris = pop.faces.length / 3;
   $('pop-info').textContent = `${pop.nShapes} poses × ${pop.nVertices} vertices, ${tris} triangles (${pop.source})`;
   if (pop.truth) $('pop-info').textContent += `. Ground truth: ${pop.truth.partNames.length} parts.`;
+  // where the poses came from, as the core says it (mesh::load); generated populations have none
+  const provenance = pop.truth ? '' : pop.provenance;
+  $('pop-source').hidden = !provenance;
+  $('pop-source').textContent = provenance ? `Poses: ${provenance}` : '';
   const ex = source?.example;
   $('example-note').hidden = !ex;
   $('example-note').classList.toggle('fails', !!ex?.failsOnPurpose);
