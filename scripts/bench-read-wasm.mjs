@@ -1,17 +1,17 @@
 // Reading speed in wasm beside native, measured in one run:
 //   node scripts/bench-read-wasm.mjs INPUT... [--repeat N] [--rounds R]
-// INPUT: a folder of pose files (OBJ, PLY, a .glb, a point cache with its base mesh) or single files, as for
-// `cargo run --release --example bench_read`. The same example (examples/bench_read.rs: mesh::load, the reader
-// each extension calls for) is built for wasm32-wasip1 and run in Node's WASI (V8, the engine of the page's
-// Chromium), alternating R rounds with the native build so both see the same machine load. Prints one JSON
-// line per round and target, then the medians: {input, bytes, nativeMs, wasmMs, nativeMBs, wasmMBs, ratio}.
-// Needs the wasm32-wasip1 target (`rustup target add wasm32-wasip1`; the script adds it when missing).
+// INPUT: a folder of pose files (OBJ, PLY, a .glb, a point cache with its base mesh) or single files.
+// Times what the page runs on a drop, `new Population(names, files)` of the wasm module (pkg-node: the same
+// Rust readers, checks and unit box, in Node's V8, the engine of the page's Chromium), against the native
+// `Population::from_files` (`cargo run --release --example bench_read -- INPUT --population`), alternating R
+// rounds so both see the same machine load. Each round prints one JSON line (medians of N reads); the last
+// line per input gives the medians over rounds: {input, bytes, nativeMs, wasmMs, nativeMBs, wasmMBs, ratio}.
+// Needs `npm run build:wasm` (pkg-node/).
 import { execFileSync } from 'node:child_process';
-import { readFileSync, statSync, mkdtempSync, rmSync, openSync, closeSync } from 'node:fs';
-import { tmpdir } from 'node:os';
-import { resolve, dirname, basename } from 'node:path';
+import { readFileSync, readdirSync, statSync, existsSync } from 'node:fs';
+import { resolve, join, basename } from 'node:path';
+import { createRequire } from 'node:module';
 import { fileURLToPath } from 'node:url';
-import { WASI } from 'node:wasi';
 
 const ROOT = resolve(fileURLToPath(new URL('..', import.meta.url)));
 const args = process.argv.slice(2);
@@ -25,51 +25,58 @@ if (!args.length || args.some((a) => a.startsWith('--'))) {
   console.error('usage: node scripts/bench-read-wasm.mjs INPUT... [--repeat N] [--rounds R]');
   process.exit(2);
 }
-const inputs = args.map((a) => resolve(a));
-
-const run = (cmd, argv) => execFileSync(cmd, argv, { cwd: ROOT, stdio: ['ignore', 'inherit', 'inherit'] });
-const installed = execFileSync('rustup', ['target', 'list', '--installed'], { encoding: 'utf8' });
-if (!installed.split('\n').includes('wasm32-wasip1')) run('rustup', ['target', 'add', 'wasm32-wasip1']);
-run('cargo', ['build', '--quiet', '--release', '--example', 'bench_read']);
-run('cargo', ['build', '--quiet', '--release', '--target', 'wasm32-wasip1', '--example', 'bench_read']);
-const nativeBin = resolve(ROOT, 'target/release/examples/bench_read');
-const wasmModule = await WebAssembly.compile(readFileSync(resolve(ROOT, 'target/wasm32-wasip1/release/examples/bench_read.wasm')));
-
-// The example prints one JSON line; WASI's stdout goes to a pipe read back here.
-function native(input) {
-  return JSON.parse(execFileSync(nativeBin, [input, '--repeat', String(repeat)], { encoding: 'utf8' }));
+const pkg = join(ROOT, 'pkg-node/posemfa.js');
+if (!existsSync(pkg)) {
+  console.error('bench-read-wasm: pkg-node/ is missing; run `npm run build:wasm` first');
+  process.exit(1);
 }
-async function wasm(input) {
-  const isDir = statSync(input).isDirectory();
-  const dir = isDir ? input : dirname(input);
-  const arg = isDir ? '/in' : `/in/${basename(input)}`;
-  const out = mkdtempSync(resolve(tmpdir(), 'bench-read-wasm-'));
-  const fd = openSync(resolve(out, 'stdout'), 'w');
-  const wasi = new WASI({ version: 'preview1', args: ['bench_read', arg, '--repeat', String(repeat)], preopens: { '/in': dir }, stdout: fd, returnOnExit: true });
-  const instance = await WebAssembly.instantiate(wasmModule, wasi.getImportObject());
-  const code = wasi.start(instance);
-  closeSync(fd);
-  const text = readFileSync(resolve(out, 'stdout'), 'utf8');
-  rmSync(out, { recursive: true });
-  if (code !== 0) throw new Error(`bench_read in wasm exited with ${code}: ${text}`);
-  return JSON.parse(text);
+const wasm = createRequire(import.meta.url)(pkg);
+execFileSync('cargo', ['build', '--quiet', '--release', '--example', 'bench_read'], { cwd: ROOT, stdio: 'inherit' });
+const nativeBin = join(ROOT, 'target/release/examples/bench_read');
+
+// The files bench_read reads: a folder's files (sorted, .mtl left out) or the file itself.
+function filesOf(input) {
+  if (!statSync(input).isDirectory()) return [{ name: basename(input), bytes: readFileSync(input) }];
+  return readdirSync(input).sort().filter((n) => !/\.mtl$/i.test(n) && statSync(join(input, n)).isFile())
+    .map((name) => ({ name, bytes: readFileSync(join(input, name)) }));
 }
 
 const median = (xs) => [...xs].sort((a, b) => a - b)[Math.floor(xs.length / 2)];
-for (const input of inputs) {
+
+function inWasm(files) {
+  const names = files.map((f) => f.name);
+  const times = [];
+  for (let r = 0; r < repeat; r++) {
+    const arrays = files.map((f) => new Uint8Array(f.bytes)); // as the worker gets them
+    const t0 = performance.now();
+    const pop = new wasm.Population(names, arrays);
+    times.push(performance.now() - t0);
+    pop.free();
+  }
+  return median(times);
+}
+
+function natively(input) {
+  const out = execFileSync(nativeBin, [input, '--repeat', String(repeat), '--population'], { encoding: 'utf8' });
+  return JSON.parse(out).median_ms;
+}
+
+for (const arg of args) {
+  const input = resolve(arg);
+  const files = filesOf(input);
+  const bytes = files.reduce((n, f) => n + f.bytes.length, 0);
   const n = [];
   const w = [];
-  let bytes = 0;
   for (let r = 0; r < rounds; r++) {
-    const a = native(input);
-    const b = await wasm(input);
-    bytes = a.bytes;
-    n.push(a.median_ms);
-    w.push(b.median_ms);
-    console.log(JSON.stringify({ round: r + 1, input, native: a.median_ms, wasm: b.median_ms }));
+    n.push(natively(input));
+    w.push(inWasm(files));
+    console.log(JSON.stringify({ round: r + 1, input: arg, nativeMs: +n[r].toFixed(1), wasmMs: +w[r].toFixed(1) }));
   }
   const nativeMs = median(n);
   const wasmMs = median(w);
   const mbs = (ms) => Math.round(bytes / 1e6 / (ms / 1e3));
-  console.log(JSON.stringify({ input, bytes, repeat, rounds, nativeMs, wasmMs, nativeMBs: mbs(nativeMs), wasmMBs: mbs(wasmMs), ratio: +(wasmMs / nativeMs).toFixed(2) }));
+  console.log(JSON.stringify({
+    input: arg, files: files.length, bytes, repeat, rounds, nativeMs: +nativeMs.toFixed(1), wasmMs: +wasmMs.toFixed(1),
+    nativeMBs: mbs(nativeMs), wasmMBs: mbs(wasmMs), ratio: +(wasmMs / nativeMs).toFixed(2),
+  }));
 }

@@ -40,6 +40,16 @@ dual_test! {
         assert!(e.contains("file fuzz.glb") && e.contains("channel 0 of animation 0 has an invalid target"), "{e}");
     }
 
+    /// gltf_read target (byte 0: the options, then a .glb): the morph-target .glb of the generated snake with
+    /// its "accessors" key mutated away, so POSITION names accessor 0 of none. The `gltf` crate's own
+    /// validation indexed the accessors with it unchecked and panicked; now the file is refused first.
+    fn gltf_position_accessor_out_of_range_is_refused() {
+        let data = include_bytes!("fuzz_regressions/gltf-position-accessor-missing.bin");
+        let (_, file) = data.split_first().expect("not empty");
+        let e = posemfa::mesh::gltf::read("fuzz.glb", file, &[], &Default::default()).unwrap_err().to_string();
+        assert!(e.contains("file fuzz.glb") && e.contains("names accessor 0, but the file has 0"), "{e}");
+    }
+
     /// shapes target, before the fix: a face naming vertex 130 of a 4-vertex mesh was accepted by
     /// `Population::from_unit_shapes` (from_meshes checked faces only against the other shapes' faces), so
     /// anything indexing vertices by face (part graph, export) would have panicked later.

@@ -787,9 +787,28 @@ fn read_channels(data: &Data, anim: &gltf::Animation, aname: &str) -> Result<Vec
 /// Reads the poses of one glTF file.
 pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Options) -> Result<Gltf> {
     let (json, blob) = if bytes.starts_with(b"glTF") { split_glb(file, bytes)? } else { (bytes.to_vec(), None) };
-    let g = gltf::Gltf::from_slice(&json)
-        .map_err(|e| err(file, format!("not a valid glTF 2.0 document: {e}; export the file again as glTF 2.0")))?;
-    let doc = g.document;
+    let invalid = |e: gltf::Error| err(file, format!("not a valid glTF 2.0 document: {e}; export the file again as glTF 2.0"));
+    let root = gltf::Gltf::from_slice_without_validation(&json).map_err(invalid)?.document.into_json();
+    // The crate's validation indexes `accessors` with a primitive's POSITION index unchecked (gltf-json 1.4,
+    // mesh.rs): an index out of range would panic inside it, so those are checked first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &primitive.attributes {
+                if index.value() >= root.accessors.len() {
+                    return Err(err(
+                        file,
+                        format!(
+                            "attribute {semantic:?} of primitive {p} of mesh {m} names accessor {}, but the file has {}; \
+                             the file is damaged: export it again",
+                            index.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    let doc = gltf::Document::from_json(root).map_err(invalid)?;
     check_sizes(file, &doc)?;
     let buffers = buffers(file, &doc, blob, resources)?;
     let data = Data { file, buffers };
@@ -1306,5 +1325,13 @@ mod tests {
             }));
             assert!(e.contains("channel 0 of animation 0 has an invalid target"), "{e}");
         }
+    }
+
+    /// The `gltf` crate's validation indexes the accessors with a POSITION index unchecked; such a file is
+    /// refused before it gets there (found by the gltf_read fuzz target).
+    #[test]
+    fn attribute_accessor_out_of_range_is_refused() {
+        let e = error(&quad(|v| v["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(99)));
+        assert!(e.contains("names accessor 99, but the file has 10"), "{e}");
     }
 }
