@@ -101,6 +101,7 @@ for n in sorted({r["bones_asked"] for r in rows}, key=lambda x: (not x.isdigit()
     print(f"| {n} ({p[0]['bones']} / {d[0]['bones']}) | {pe:.3f} | {de:.3f} | {pe / de:.2f} "
           f"| {med(p, 'max_error_over_diagonal'):.4f} | {med(d, 'max_error_over_diagonal'):.4f} "
           f"| {pt:.2f} | {dt:.2f} | {pt / dt:.3f} |")
-print(f"\n{len(rows) // 2} runs per tool, {sys.argv[2]} influences, E_RMS over {rows[0]['frames']} frames; "
+n_counts = len({r["bones_asked"] for r in rows})
+print(f"\n{len(rows) // 2 // n_counts} runs per tool and count (medians), {sys.argv[2]} influences, E_RMS over {rows[0]['frames']} frames; "
       "bones: asked (posemfa / Dem Bones found)")
 PY

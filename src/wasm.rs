@@ -546,6 +546,31 @@ impl FitModel {
         Ok(Uint8Array::from(glb.as_slice()))
     }
 
+    /// The rig as a .glb and its error measured on the file, as `posemfa export-gltf` writes it and
+    /// `posemfa rig-report` measures it (`export::rig_report::export_rig`). `opts`: {weights: "rigid" | "smooth" |
+    /// "fitted", influences: 1..8, joints: "free" | "fixed", morphs: "none" | "residual", bindPose}; missing fields
+    /// take defaults (bindPose: the pose named reference, else the first). Returns {glb: Uint8Array, bones, eRms,
+    /// maxError, maxErrorOverDiagonal, diagonal, poseErms: Float64Array, rigMs, writeMs, evaluateMs}.
+    pub fn rig(&self, opts: JsValue) -> Result<JsValue, JsValue> {
+        let req: crate::export::rig_report::RigRequest = from_js(opts, "rig options")?;
+        let g = req.options(&self.pop)?;
+        let r = crate::export::rig_report::export_rig(&*self.articulation()?, &self.pop, &g)?;
+        let obj = js_sys::Object::new();
+        let set = |k: &str, v: &JsValue| js_sys::Reflect::set(&obj, &k.into(), v).map(|_| ()).map_err(|_| js_err("reflect"));
+        let per_pose: Vec<f64> = r.error.poses.iter().map(|p| p.e_rms).collect();
+        set("glb", &Uint8Array::from(r.glb.as_slice()).into())?;
+        set("bones", &JsValue::from(r.bones as u32))?;
+        set("eRms", &JsValue::from(r.error.e_rms))?;
+        set("maxError", &JsValue::from(r.error.max_error))?;
+        set("maxErrorOverDiagonal", &JsValue::from(r.error.max_error_over_diagonal))?;
+        set("diagonal", &JsValue::from(r.error.diagonal))?;
+        set("poseErms", &Float64Array::from(per_pose.as_slice()).into())?;
+        set("rigMs", &JsValue::from(r.rig_ms))?;
+        set("writeMs", &JsValue::from(r.write_ms))?;
+        set("evaluateMs", &JsValue::from(r.evaluate_ms))?;
+        Ok(obj.into())
+    }
+
     /// Endpoint errors, volume and edge stretch at t of every interpolation method, poses i -> j (0-based).
     #[wasm_bindgen(js_name = articulationReport)]
     pub fn articulation_report(&self, i: usize, j: usize, t: f64) -> Result<JsValue, JsValue> {

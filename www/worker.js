@@ -264,6 +264,7 @@ const QUERIES = {
   toJson: () => model.toJson(),
   interpolate: (i, j, t, opts) => model.interpolate(i, j, t, opts ?? {}),
   toGlb: (weights) => model.toGlb(weights),
+  rig: (opts) => model.rig(opts ?? {}),
   articulationReport: (i, j, t) => model.articulationReport(i, j, t),
 };
 

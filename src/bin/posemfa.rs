@@ -1124,10 +1124,7 @@ impl RigArgs {
 
 /// The pose a rig is bound in by default: the file whose name (without extension) is `reference`, else the first.
 fn default_bind(pop: &Population) -> usize {
-    pop.names
-        .iter()
-        .position(|n| std::path::Path::new(n).file_stem().is_some_and(|s| s.eq_ignore_ascii_case("reference")))
-        .unwrap_or(0)
+    posemfa::export::rig_report::default_bind_pose(pop)
 }
 
 #[derive(Default)]

@@ -7,7 +7,8 @@
 //! is bound in, as given: the same d as for any other tool's rig of the same data, whatever bind positions
 //! the rig chose). The same for one pose gives the per-pose figure; the overall E_RMS² is their mean square.
 
-use super::gltf::GlbPlayback;
+use super::gltf::{GlbPlayback, GltfOptions, Joints, Morphs, Weights};
+use crate::articulate::Articulation;
 use crate::error::{Error, Result};
 use crate::geometry::{norm, sub, Vec3};
 use crate::mesh::Population;
@@ -88,4 +89,71 @@ pub fn rig_error(pop: &Population, play: &GlbPlayback, rest: usize) -> Result<Ri
         diagonal,
         poses,
     })
+}
+
+/// The pose a rig is bound in by default: the file whose name (without extension) is `reference`, else the
+/// first (the CLI and the page alike).
+pub fn default_bind_pose(pop: &Population) -> usize {
+    pop.names
+        .iter()
+        .position(|n| std::path::Path::new(n).file_stem().is_some_and(|s| s.eq_ignore_ascii_case("reference")))
+        .unwrap_or(0)
+}
+
+/// A rig as asked for by the page (camelCase, unknown fields refused); missing fields take
+/// [`GltfOptions`]' defaults, except the bind pose: [`default_bind_pose`].
+#[derive(Debug, Clone, Default, PartialEq, serde::Deserialize)]
+#[serde(default, rename_all = "camelCase", deny_unknown_fields)]
+pub struct RigRequest {
+    pub weights: Weights,
+    /// 1..=8, default 4.
+    pub influences: Option<usize>,
+    pub joints: Joints,
+    pub morphs: Morphs,
+    /// 0-based; default [`default_bind_pose`].
+    pub bind_pose: Option<usize>,
+}
+
+impl RigRequest {
+    /// The export options for `pop`, validated.
+    pub fn options(&self, pop: &Population) -> Result<GltfOptions> {
+        let d = GltfOptions::default();
+        let g = GltfOptions {
+            weights: self.weights,
+            influences: self.influences.unwrap_or(d.influences),
+            joints: self.joints,
+            morphs: self.morphs,
+            bind_pose: self.bind_pose.unwrap_or_else(|| default_bind_pose(pop)),
+            ..d
+        };
+        g.rig_options().validate(pop.n_shapes())?;
+        Ok(g)
+    }
+}
+
+/// A written rig and its error measured on the file.
+#[derive(Debug, Clone)]
+pub struct RigExport {
+    pub glb: Vec<u8>,
+    pub error: RigError,
+    /// Joints of the file's skin.
+    pub bones: usize,
+    /// Milliseconds: building the rig (weights, bones), writing the .glb, playing and measuring it.
+    pub rig_ms: f64,
+    pub write_ms: f64,
+    pub evaluate_ms: f64,
+}
+
+/// Builds the rig of `art` ([`crate::articulate::rig::build`]), writes it ([`super::gltf::write_glb`]) and
+/// measures the file ([`rig_error`] of [`super::gltf::play_glb`]), bound in `opts.bind_pose`.
+pub fn export_rig(art: &Articulation, pop: &Population, opts: &GltfOptions) -> Result<RigExport> {
+    let t = crate::clock::now_ms();
+    let rig = crate::articulate::rig::build(art, &opts.rig_options())?;
+    let t1 = crate::clock::now_ms();
+    let glb = super::gltf::write_glb(art, &rig, opts)?;
+    let t2 = crate::clock::now_ms();
+    let play = super::gltf::play_glb(&glb)?;
+    let error = rig_error(pop, &play, opts.bind_pose)?;
+    let t3 = crate::clock::now_ms();
+    Ok(RigExport { glb, error, bones: play.joint_parent.len(), rig_ms: t1 - t, write_ms: t2 - t1, evaluate_ms: t3 - t2 })
 }

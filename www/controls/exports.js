@@ -25,6 +25,20 @@ function showButtons() {
   $('export-gltf').disabled = !state.model;
 }
 
+/** The rig options of the export panel ({weights, influences, joints, morphs}: src/export/rig_report.rs). */
+export function rigOptions() {
+  const f = $('rig').elements;
+  return { weights: f.weights.value, influences: Number(f.influences.value), joints: f.joints.value, morphs: f.morphs.value };
+}
+
+function showRig(r, opts) {
+  const out = $('rig-erms');
+  out.textContent = `${r.eRms.toFixed(3)} (${r.bones} bones, ${opts.influences} influences; max error ${(100 * r.maxErrorOverDiagonal).toFixed(2)} % of the diagonal)`;
+  out.dataset.erms = String(r.eRms);
+  out.dataset.bones = String(r.bones);
+  out.dataset.ms = String(r.rigMs + r.writeMs + r.evaluateMs);
+}
+
 // A failed export (the worker could not answer) is listed as a problem; what is shown stays.
 const orReport = (f) => async () => {
   try {
@@ -45,11 +59,24 @@ export function installExports() {
     const header = `${what}\nposemfa, ${state.pop.nVertices} vertices, ${state.pop.faces.length / 3} triangles`;
     download(name, await query('objText', slot.what, header), 'model/obj');
   }));
+  // The rig as chosen in the panel, built, written and measured by the core (the same as `posemfa export-gltf` and
+  // `posemfa rig-report`); its E_RMS is shown with the file.
   $('export-gltf').addEventListener('click', orReport(async () => {
-    const skin = $('interp-skin').value; // the skinning chosen for the interpolation
-    download(`posemfa-model-${skin}.glb`, await query('toGlb', skin), 'model/gltf-binary');
+    const opts = rigOptions();
+    $('rig-erms').textContent = '…';
+    const r = await query('rig', opts);
+    showRig(r, opts);
+    download(`posemfa-rig-${opts.weights}-${r.bones}bones.glb`, r.glb, 'model/gltf-binary');
   }));
+  $('rig').addEventListener('change', () => {
+    $('rig-erms').textContent = '–';
+    delete $('rig-erms').dataset.erms;
+  });
   subscribe((s, changed) => {
     if (changed.has('pop') || changed.has('model') || changed.has('phase')) showButtons();
+    if (changed.has('model')) {
+      $('rig-erms').textContent = '–';
+      delete $('rig-erms').dataset.erms;
+    }
   });
 }

@@ -9,6 +9,7 @@ const form = () => $('params').elements;
 export function fillParams(p) {
   const f = form();
   f.parts.value = p.parts;
+  f.targetParts.value = p.targetParts ?? '';
   f.seed.value = p.seed;
   f.tol.value = p.tol;
   f.varianceFloor.value = p.varianceFloor;
@@ -16,12 +17,21 @@ export function fillParams(p) {
   f.refine.checked = p.refine;
 }
 
+// "Parts in the end": empty or auto = Algorithm 1's own count (null); a whole number as a number; anything else
+// goes as typed, and the core refuses it with a message naming targetParts.
+const bones = (v) => {
+  const t = v.trim();
+  if (t === '' || t.toLowerCase() === 'auto') return null;
+  return /^\d+$/.test(t) ? Number(t) : t;
+};
+
 /** The fit parameters: the form's over the hidden ones (state.baseParams). */
 export function readParams() {
   const f = form();
   return {
     ...state.baseParams,
     parts: Number(f.parts.value),
+    targetParts: bones(f.targetParts.value),
     seed: Number(f.seed.value),
     tol: Number(f.tol.value),
     varianceFloor: Number(f.varianceFloor.value),

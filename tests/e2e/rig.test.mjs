@@ -1,0 +1,65 @@
+// The rig from the page is the CLI's rig (issue 11): a generated quadruped dropped on the built page and fitted
+// with "Parts in the end" = 9, exported from the export panel (fitted weights, 4 influences); the E_RMS the page
+// shows equals what `posemfa rig-report --bones 9 --weights fitted` computes natively for the same files (the
+// same fit and rig, in wasm and natively), and the downloaded .glb, measured by `posemfa rig-report --glb`, gives
+// the page's figure. Runs the CLI (debug build, built here if needed).
+// Run: npm run build && node --test tests/e2e/rig.test.mjs
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, readdirSync, rmSync, copyFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import path from 'node:path';
+import { pageSession, waitState, asPayload, ROOT } from './helpers.mjs';
+
+const session = pageSession();
+let dir;
+let bin;
+
+const posemfa = (...args) => execFileSync(bin, args, { cwd: ROOT, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+
+before(() => {
+  execFileSync('cargo', ['build', '--quiet', '--bin', 'posemfa'], { cwd: ROOT, stdio: 'inherit' });
+  bin = path.join(ROOT, 'target', 'debug', 'posemfa');
+  dir = mkdtempSync(path.join(tmpdir(), 'posemfa-rig-'));
+  posemfa('generate', 'quadruped', '--vertices', '1500', '--poses', '6', '--seed', '4', '--out', path.join(dir, 'pop'));
+});
+
+after(() => {
+  if (dir) rmSync(dir, { recursive: true, force: true });
+});
+
+test('the export panel writes the rig the CLI writes: same part count, same E_RMS, and the file measures what the page shows', async () => {
+  const pop = path.join(dir, 'pop');
+  const names = readdirSync(pop).filter((f) => f.endsWith('.obj')).sort((a, b) => a.localeCompare(b, 'en', { numeric: true }));
+  const files = names.map((name) => ({ name, text: readFileSync(path.join(pop, name), 'utf8') }));
+  const { page, context, log } = await session.open();
+  await waitState(page, ['fitted', 'idle', 'error'], 60000);
+  await page.fill('#params input[name=targetParts]', '9');
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.setInputFiles('[data-testid=file-input]', asPayload(files));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000, polling: 20 });
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted', await page.locator('[data-testid=errors]').innerText());
+  assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, 9);
+
+  await page.selectOption('#rig select[name=weights]', 'fitted');
+  await page.fill('#rig input[name=influences]', '4');
+  const [download] = await Promise.all([page.waitForEvent('download', { timeout: 120000 }), page.click('#export-gltf')]);
+  const glb = path.join(dir, 'page.glb');
+  copyFileSync(await download.path(), glb);
+  const shown = await page.evaluate(() => ({ ...document.querySelector('[data-testid=rig-erms]').dataset }));
+  const pageErms = Number(shown.erms);
+  assert.equal(Number(shown.bones), 9);
+  assert.ok(pageErms > 0, JSON.stringify(shown));
+
+  const cli = JSON.parse(posemfa('rig-report', pop, '--bones', '9', '--weights', 'fitted', '--influences', '4'));
+  assert.equal(cli.bones, 9);
+  assert.ok(Math.abs(pageErms - cli.e_rms) <= 1e-3 * cli.e_rms, `page ${pageErms}, CLI ${cli.e_rms}`);
+  const file = JSON.parse(posemfa('rig-report', pop, '--glb', glb));
+  assert.ok(Math.abs(file.e_rms - pageErms) <= 1e-9 * pageErms, `file ${file.e_rms}, page ${pageErms}`);
+  // options change: the figure shown is cleared until the next export
+  await page.selectOption('#rig select[name=joints]', 'fixed');
+  assert.equal(await page.locator('[data-testid=rig-erms]').innerText(), '–');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
