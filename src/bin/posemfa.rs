@@ -81,6 +81,19 @@ fn num<N: std::str::FromStr>(v: &str) -> Result<N, String> {
     v.parse().map_err(|_| format!("'{v}' is not a valid number"))
 }
 
+/// The value named `v` among `choices`; otherwise an error listing them ("'x': use a, b or c").
+fn one_of<V: Copy>(v: &str, choices: &[(&str, V)]) -> Result<V, String> {
+    if let Some(&(_, value)) = choices.iter().find(|(name, _)| *name == v) {
+        return Ok(value);
+    }
+    let names: Vec<&str> = choices.iter().map(|(name, _)| *name).collect();
+    let list = match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => names.join(""),
+    };
+    Err(format!("'{v}': use {list}"))
+}
+
 /// Parses `words` (the arguments after the subcommand) into `T`; `Ok(None)` when `--help` / `-h` was asked for.
 fn parse<T: Args>(cmd: &str, words: Vec<OsString>) -> Result<Option<T>, String> {
     use lexopt::prelude::*;
@@ -416,12 +429,14 @@ fn fit_group<T: HasFit>() -> Group<T> {
                 num(v).map(|n| o.fit().gltf.frames = Some(n))
             }),
             val("--poses-from", "WHAT", "glTF input: animation or morph-targets (default: the animation if one moves the mesh)", |o: &mut T, v| {
-                o.fit().gltf.source = match v {
-                    "animation" => posemfa::mesh::gltf::PoseSource::Animation,
-                    "morph-targets" => posemfa::mesh::gltf::PoseSource::MorphTargets,
-                    _ => return Err(format!("--poses-from takes animation or morph-targets, not '{v}'")),
-                };
-                Ok(())
+                one_of(
+                    v,
+                    &[
+                        ("animation", posemfa::mesh::gltf::PoseSource::Animation),
+                        ("morph-targets", posemfa::mesh::gltf::PoseSource::MorphTargets),
+                    ],
+                )
+                .map(|x| o.fit().gltf.source = x)
             }),
         ],
     }
@@ -941,12 +956,7 @@ impl InterpolateArgs {
                     "rigid|smooth",
                     "rigid (default: every vertex on its part) or smooth (weights across part boundaries)",
                     |o: &mut Self, v| {
-                        o.skin = match v {
-                            "rigid" => Skin::Rigid,
-                            "smooth" => Skin::Smooth,
-                            _ => return Err(format!("'{v}': use rigid or smooth")),
-                        };
-                        Ok(())
+                        one_of(v, &[("rigid", Skin::Rigid), ("smooth", Skin::Smooth)]).map(|x| o.skin = x)
                     },
                 ),
                 val(
@@ -954,12 +964,7 @@ impl InterpolateArgs {
                     "dq|lbs",
                     "smooth skin blending: dq (dual quaternion, default) or lbs (linear blend)",
                     |o: &mut Self, v| {
-                        o.blend = match v {
-                            "dq" => Blend::DualQuaternion,
-                            "lbs" => Blend::Linear,
-                            _ => return Err(format!("'{v}': use dq or lbs")),
-                        };
-                        Ok(())
+                        one_of(v, &[("dq", Blend::DualQuaternion), ("lbs", Blend::Linear)]).map(|x| o.blend = x)
                     },
                 ),
                 flag("--no-residual", "leave out eq 24's residual (ends = rigid reconstructions)", |o: &mut Self| {
@@ -1052,13 +1057,15 @@ fn rig_group<T: HasRig>() -> Group<T> {
                 "rigid|smooth|fitted",
                 "skin weights: rigid (default), smooth (a prior) or fitted (SSDR against every pose)",
                 |o: &mut T, v| {
-                    o.rig().weights = match v {
-                        "rigid" => Weights::Rigid,
-                        "smooth" => Weights::Smooth,
-                        "fitted" => Weights::Fitted,
-                        _ => return Err(format!("'{v}': use rigid, smooth or fitted")),
-                    };
-                    Ok(())
+                    one_of(
+                        v,
+                        &[
+                            ("rigid", Weights::Rigid),
+                            ("smooth", Weights::Smooth),
+                            ("fitted", Weights::Fitted),
+                        ],
+                    )
+                    .map(|x| o.rig().weights = x)
                 },
             ),
             val("--influences", "K", "most joints per vertex, 1 to 8 (default 4; JOINTS_1 past 4)", |o: &mut T, v| {
@@ -1069,12 +1076,7 @@ fn rig_group<T: HasRig>() -> Group<T> {
                 "free|fixed",
                 "free (default: bones move freely) or fixed (rotation-only local animation, constant bone lengths)",
                 |o: &mut T, v| {
-                    o.rig().joints = match v {
-                        "free" => Joints::Free,
-                        "fixed" => Joints::Fixed,
-                        _ => return Err(format!("'{v}': use free or fixed")),
-                    };
-                    Ok(())
+                    one_of(v, &[("free", Joints::Free), ("fixed", Joints::Fixed)]).map(|x| o.rig().joints = x)
                 },
             ),
             val(
@@ -1082,12 +1084,7 @@ fn rig_group<T: HasRig>() -> Group<T> {
                 "none|residual",
                 "none (default) or residual: one morph target per pose, so the clip reproduces every pose",
                 |o: &mut T, v| {
-                    o.rig().morphs = match v {
-                        "none" => Morphs::None,
-                        "residual" => Morphs::Residual,
-                        _ => return Err(format!("'{v}': use none or residual")),
-                    };
-                    Ok(())
+                    one_of(v, &[("none", Morphs::None), ("residual", Morphs::Residual)]).map(|x| o.rig().morphs = x)
                 },
             ),
             val(
