@@ -94,6 +94,40 @@ pub fn mesh_edges(faces: &[[u32; 3]]) -> Vec<[u32; 2]> {
     e
 }
 
+/// Each vertex's neighbours in the mesh's edge graph (compressed rows): `of(v)` lists (neighbour, index of
+/// the edge in the `edges` it was built from).
+pub struct VertexNeighbours {
+    start: Vec<usize>,
+    list: Vec<(u32, usize)>,
+}
+
+impl VertexNeighbours {
+    /// From `edges` (e.g. [`mesh_edges`]) over `n_vertices` vertices.
+    pub fn new(edges: &[[u32; 2]], n_vertices: usize) -> VertexNeighbours {
+        let mut start = vec![0usize; n_vertices + 1];
+        for e in edges {
+            start[e[0] as usize + 1] += 1;
+            start[e[1] as usize + 1] += 1;
+        }
+        for v in 0..n_vertices {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut list = vec![(0u32, 0usize); start[n_vertices]];
+        for (i, e) in edges.iter().enumerate() {
+            for (a, b) in [(e[0], e[1]), (e[1], e[0])] {
+                list[fill[a as usize]] = (b, i);
+                fill[a as usize] += 1;
+            }
+        }
+        VertexNeighbours { start, list }
+    }
+
+    pub fn of(&self, v: usize) -> &[(u32, usize)] {
+        &self.list[self.start[v]..self.start[v + 1]]
+    }
+}
+
 fn key(a: usize, b: usize) -> (usize, usize) {
     if a < b {
         (a, b)

@@ -50,7 +50,7 @@
 //!
 //! All in unit-box coordinates; the .glb writer ([`crate::export::gltf`]) converts.
 
-use super::graph::{mesh_edges, Tree, TreeRule};
+use super::graph::{mesh_edges, Tree, TreeRule, VertexNeighbours};
 use super::skin::SkinWeights;
 use super::{Articulation, RigidMotion};
 use crate::error::{Error, Result};
@@ -352,8 +352,7 @@ struct Solver<'a> {
     /// Candidate parts per vertex (own part first).
     candidates: Vec<Vec<u32>>,
     /// CSR mesh neighbours.
-    nbr_start: Vec<usize>,
-    nbr: Vec<u32>,
+    neighbours: VertexNeighbours,
     influences: usize,
     smoothness: f64,
     /// Mean squared edge length of the bind shape.
@@ -389,22 +388,7 @@ impl<'a> Solver<'a> {
             .collect();
         let candidates = art.model.labels.iter().map(|&l| near[l as usize].clone()).collect();
         let edges = mesh_edges(&art.faces);
-        let mut nbr_start = vec![0usize; nv + 1];
-        for e in &edges {
-            nbr_start[e[0] as usize + 1] += 1;
-            nbr_start[e[1] as usize + 1] += 1;
-        }
-        for v in 0..nv {
-            nbr_start[v + 1] += nbr_start[v];
-        }
-        let mut fill = nbr_start.clone();
-        let mut nbr = vec![0u32; nbr_start[nv]];
-        for e in &edges {
-            nbr[fill[e[0] as usize]] = e[1];
-            fill[e[0] as usize] += 1;
-            nbr[fill[e[1] as usize]] = e[0];
-            fill[e[1] as usize] += 1;
-        }
+        let neighbours = VertexNeighbours::new(&edges, nv);
         let bind = &art.shapes[opts.bind_pose];
         let edge2 = edges
             .iter()
@@ -414,7 +398,7 @@ impl<'a> Solver<'a> {
             })
             .sum::<f64>()
             / edges.len().max(1) as f64;
-        Solver { targets: &art.shapes, bind: opts.bind_pose, candidates, nbr_start, nbr, influences: opts.influences, smoothness: opts.smoothness, edge2 }
+        Solver { targets: &art.shapes, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
     }
 
     fn sse(&self, rig: &Rig) -> f64 {
@@ -472,8 +456,8 @@ impl<'a> Solver<'a> {
             // neighbours' mean weights on the candidates
             dense_nbr.clear();
             dense_nbr.resize(c, 0.0);
-            let nb = &self.nbr[self.nbr_start[v]..self.nbr_start[v + 1]];
-            for &q in nb {
+            let nb = self.neighbours.of(v);
+            for &(q, _) in nb {
                 for (k, w) in old.influences(q as usize) {
                     if let Some(a) = cand.iter().position(|&x| x as usize == k) {
                         dense_nbr[a] += w / nb.len() as f64;

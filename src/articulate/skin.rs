@@ -17,7 +17,7 @@
 //! Blending: dual-quaternion skinning (Kavan et al. 2007: the weighted sum of unit dual quaternions, signs
 //! aligned with the heaviest, normalised) or linear blend skinning (the weighted sum of the matrices).
 
-use super::graph::{mesh_edges, PartGraph};
+use super::graph::{mesh_edges, PartGraph, VertexNeighbours};
 use super::{Blend, RigidMotion};
 use crate::geometry::rotation::{from_quat, to_quat};
 use crate::geometry::{norm, scale, sub, Mat3, Vec3};
@@ -137,24 +137,11 @@ pub fn smooth_weights(
         .collect();
     // CSR adjacency with mean edge lengths.
     let edges = mesh_edges(faces);
-    let mut deg = vec![0usize; nv + 1];
-    for e in &edges {
-        deg[e[0] as usize + 1] += 1;
-        deg[e[1] as usize + 1] += 1;
-    }
-    for v in 0..nv {
-        deg[v + 1] += deg[v];
-    }
-    let mut fill = deg.clone();
-    let mut nbr = vec![(0u32, 0.0f64); deg[nv]];
-    for e in &edges {
-        let (a, b) = (e[0] as usize, e[1] as usize);
-        let len = shapes.iter().map(|s| norm(sub(s[a], s[b]))).sum::<f64>() / shapes.len().max(1) as f64;
-        nbr[fill[a]] = (e[1], len);
-        fill[a] += 1;
-        nbr[fill[b]] = (e[0], len);
-        fill[b] += 1;
-    }
+    let edge_len: Vec<f64> = edges
+        .iter()
+        .map(|e| shapes.iter().map(|s| norm(sub(s[e[0] as usize], s[e[1] as usize]))).sum::<f64>() / shapes.len().max(1) as f64)
+        .collect();
+    let neighbours = VertexNeighbours::new(&edges, nv);
     // raw[v]: (part, raw weight) pairs; the own part first.
     let mut raw: Vec<Vec<(u32, f64)>> = labels.iter().map(|&l| vec![(l, 1.0)]).collect();
     let mut dist = vec![f64::INFINITY; nv];
@@ -180,9 +167,9 @@ pub fn smooth_weights(
             if d > dist[v] {
                 continue;
             }
-            for &(u, len) in &nbr[deg[v]..deg[v + 1]] {
+            for &(u, e) in neighbours.of(v) {
                 let u = u as usize;
-                let nd = d + len;
+                let nd = d + edge_len[e];
                 if nd < cutoff && nd < dist[u] {
                     if dist[u].is_infinite() {
                         touched.push(u);
