@@ -533,19 +533,6 @@ impl FitModel {
         Ok(obj.into())
     }
 
-    /// Binary glTF 2.0 (.glb) of the articulated model; `weights`: "rigid" (default) or "smooth".
-    #[wasm_bindgen(js_name = toGlb)]
-    pub fn to_glb(&self, weights: Option<String>) -> Result<Uint8Array, JsValue> {
-        let w = match weights.as_deref() {
-            None | Some("rigid") => crate::export::gltf::Weights::Rigid,
-            Some("smooth") => crate::export::gltf::Weights::Smooth,
-            Some(o) => return Err(js_err(format!("weights '{o}': use rigid or smooth"))),
-        };
-        let opts = crate::export::gltf::GltfOptions { weights: w, ..Default::default() };
-        let glb = crate::export::gltf::to_glb(&*self.articulation()?, &opts)?;
-        Ok(Uint8Array::from(glb.as_slice()))
-    }
-
     /// The rig as a .glb and its error measured on the file, as `posemfa export-gltf` writes it and
     /// `posemfa rig-report` measures it (`export::rig_report::export_rig`). `opts`: {weights: "rigid" | "smooth" |
     /// "fitted", influences: 1..8, joints: "free" | "fixed", morphs: "none" | "residual", bindPose}; missing fields

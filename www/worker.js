@@ -263,7 +263,6 @@ const QUERIES = {
   rotationAngles: (part, ref) => model.rotationAngles(part, ref),
   toJson: () => model.toJson(),
   interpolate: (i, j, t, opts) => model.interpolate(i, j, t, opts ?? {}),
-  toGlb: (weights) => model.toGlb(weights),
   rig: (opts) => model.rig(opts ?? {}),
   articulationReport: (i, j, t) => model.articulationReport(i, j, t),
 };

@@ -233,7 +233,7 @@ test('fixed joints and residual morphs: in three.js every bone keeps its length 
 
 // The same functions through the wasm build for Node (pkg-node/, written by scripts/build-wasm.sh, which
 // scripts/test.sh runs before these tests).
-test('wasm: interpolate, keyframes, skinWeights, skeleton, toGlb', async (t) => {
+test('wasm: interpolate, keyframes, skinWeights, skeleton, rig', async (t) => {
   const pkg = path.join(root, 'pkg-node', 'posemfa.js');
   let wasm;
   try {
@@ -242,7 +242,7 @@ test('wasm: interpolate, keyframes, skinWeights, skeleton, toGlb', async (t) => 
     t.skip(`no wasm build for Node at ${pkg} (run npm run build:wasm): ${e.message}`);
     return;
   }
-  assert.equal(typeof wasm.FitModel.prototype.toGlb, 'function', 'pkg-node is older than the articulation bindings: rebuild');
+  assert.equal(typeof wasm.FitModel.prototype.rig, 'function', 'pkg-node is older than the articulation bindings: rebuild');
   const syn = new wasm.Synthetic({ preset: 'quadruped', vertices: 1200, poses: 4, seed: 3 });
   const pop = syn.population();
   const fitter = new wasm.Fitter(pop, {});
@@ -279,7 +279,7 @@ test('wasm: interpolate, keyframes, skinWeights, skeleton, toGlb', async (t) => 
   const report = model.articulationReport(0, 3, 0.5);
   assert.ok(report.methods.length >= 5);
   for (const weights of ['rigid', 'smooth']) {
-    const glb = model.toGlb(weights);
+    const { glb } = model.rig({ weights });
     const file = path.join(dir, `wasm-${weights}.glb`);
     (await import('node:fs')).writeFileSync(file, glb);
     const r = await validateFile(file);
