@@ -38,14 +38,7 @@ pub struct RigError {
 
 /// Diagonal of the bounding box of `points`.
 pub fn bbox_diagonal(points: &[Vec3]) -> f64 {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        for d in 0..3 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
+    let (lo, hi) = crate::geometry::bounds(points);
     norm(sub(hi, lo))
 }
 

@@ -119,6 +119,19 @@ pub fn norm(a: Vec3) -> f64 {
     dot(a, a).sqrt()
 }
 
+/// Smallest and largest coordinates of `points` (an empty set gives +inf / -inf).
+pub fn bounds<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> (Vec3, Vec3) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    (lo, hi)
+}
+
 /// Largest deviation of R^T R from I, and det R: for checking rotations.
 pub fn orthonormality_error(r: &Mat3) -> f64 {
     (mat_mul(&transpose(r), r) - IDENTITY).amax()

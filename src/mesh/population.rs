@@ -168,16 +168,7 @@ impl Population {
         // The smallest fit (one part) of this population must fit in the memory budget: refuse now, before
         // the normalised copy is made.
         crate::model::memory::check(first.positions.len(), named.len(), 1, crate::model::memory::budget_bytes()?)?;
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for (_, mesh) in &named {
-            for p in &mesh.positions {
-                for d in 0..3 {
-                    lo[d] = lo[d].min(p[d]);
-                    hi[d] = hi[d].max(p[d]);
-                }
-            }
-        }
+        let (lo, hi) = crate::geometry::bounds(named.iter().flat_map(|(_, mesh)| &mesh.positions));
         let side = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
         if !(side > 0.0) {
             return Err(Error::Population {

@@ -248,15 +248,7 @@ fn farthest_first_shapes(data: &Data) -> Vec<usize> {
 /// Vertices sorted along a Z-order curve of their positions in the first shape (10 bits per axis).
 fn morton_order(data: &Data) -> Vec<usize> {
     let nv = data.n_vertices;
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for j in 0..nv {
-        let p = data.vertex(j)[0];
-        for c in 0..3 {
-            lo[c] = lo[c].min(p[c]);
-            hi[c] = hi[c].max(p[c]);
-        }
-    }
+    let (lo, hi) = crate::geometry::bounds((0..nv).map(|j| &data.vertex(j)[0]));
     let spread = |x: u32| -> u64 {
         let mut v = 0u64;
         for bit in 0..10 {

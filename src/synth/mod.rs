@@ -340,17 +340,7 @@ pub fn generate(spec: &Spec) -> Result<Generated> {
 }
 
 fn bounds<'a>(sets: impl Iterator<Item = &'a Vec<Vec3>>) -> (Vec3, Vec3) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for s in sets {
-        for p in s {
-            for d in 0..3 {
-                lo[d] = lo[d].min(p[d]);
-                hi[d] = hi[d].max(p[d]);
-            }
-        }
-    }
-    (lo, hi)
+    crate::geometry::bounds(sets.flatten())
 }
 
 /// The population as OBJ files: (`pose01.obj`, text), ... in order. Coordinates are in original units,
