@@ -61,6 +61,29 @@ dual_test! {
         assert!(accuracy.ari > 0.5, "{accuracy:?}");
     }
 
+    fn fit_progress_and_stages_are_camel_case() {
+        // The teaching mode reads every stage the pipeline passes through, the refinement's `subParts` included
+        // (it crossed as `sub_parts` and the page showed "m_k = undefined").
+        let spec = Spec { preset: posemfa::synth::Preset::Arm, vertices: 800, poses: 5, ..Default::default() };
+        let g = posemfa::synth::generate(&spec).unwrap();
+        let params = Params { parts: 3, ..Default::default() };
+        let mut pipe = posemfa::model::hierarchy::Pipeline::new(&g.population, &params).unwrap();
+        let mut values = vec![serde_json::to_value(pipe.stage()).unwrap()];
+        while !pipe.is_done() {
+            values.push(serde_json::to_value(pipe.step().unwrap()).unwrap());
+            values.push(serde_json::to_value(pipe.stage()).unwrap());
+        }
+        let refine: Vec<&serde_json::Value> = values.iter().filter(|v| v["kind"] == "refine").collect();
+        assert!(!refine.is_empty(), "the fit never reached the refinement");
+        assert!(refine.iter().all(|v| v["subParts"].as_u64().is_some_and(|m| m >= 1)), "{:?}", refine[0]);
+        let mut k = Vec::new();
+        for v in &values {
+            keys(v, &mut k);
+        }
+        let snake: Vec<&String> = k.iter().filter(|k| k.contains('_')).collect();
+        assert!(snake.is_empty(), "snake_case keys: {snake:?}");
+    }
+
     fn errors_become_problems_with_file_and_line() {
         let files = vec![
             ("a.obj".to_string(), b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_vec()),

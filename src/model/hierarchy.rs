@@ -27,7 +27,7 @@ use serde::Serialize;
 
 /// Where the pipeline is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(tag = "kind", rename_all = "camelCase")]
+#[serde(tag = "kind", rename_all = "camelCase", rename_all_fields = "camelCase")]
 pub enum Stage {
     Coarse,
     /// Refining coarse part `part` (0-based) of `of`, trying `sub_parts` components.

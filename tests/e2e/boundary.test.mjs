@@ -77,7 +77,7 @@ test('misspelled fields of parameters, generator specs, options and mesh descrip
   assert.equal(thrown(() => model.reconstruct(99)).kind, 'request');
 });
 
-test('what comes out is camelCase: summary, examples, articulation report, ground truth', () => {
+test('what comes out is camelCase: summary, examples, articulation report, ground truth, progress and stages', () => {
   const { files, pop, model } = fitted();
   const s = model.summary();
   assert.deepEqual(notCamel(s), []);
@@ -100,6 +100,13 @@ test('what comes out is camelCase: summary, examples, articulation report, groun
   const f = new w.Fitter(sp, { ...w.defaultParams(), parts: 3 });
   while (!f.isDone()) f.run(1000);
   const g = synth.groundTruth(f.result());
+  // a teaching fit's progress objects and stages, step by step through Algorithm 1 (the refinement's subParts)
+  const t = new w.Fitter(sp, { ...w.defaultParams(), parts: 3 });
+  const seen = [t.stage()];
+  while (!t.isDone()) seen.push(t.step(), t.stage(), t.currentResponsibilities());
+  assert.deepEqual(notCamel(seen), []);
+  assert.ok(seen.some((x) => x.kind === 'refine' && x.subParts >= 1), 'the refinement was seen with its subParts');
+  assert.deepEqual(notCamel(f.result().kernelLimit(1)), []);
   assert.deepEqual(Object.keys(g).sort(), ['ari', 'rotationErrorDeg', 'rotationErrorDegMax', 'rotationErrorsDeg', 'trueParts']);
   assert.equal(g.trueParts, 3);
 });

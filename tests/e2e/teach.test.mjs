@@ -280,6 +280,27 @@ test('a shared teaching link opens on the same step and stage', async () => {
   await context.close();
 });
 
+test('the teaching panel never shows "undefined", through every stage of Algorithm 1', async () => {
+  const { page, context, log } = await fitted('#ex=arm');
+  // Every text the panel shows while a teaching run goes from the coarse stage to done.
+  await page.evaluate(() => {
+    const panel = document.getElementById('teach');
+    window.teachTexts = new Set([panel.innerText]);
+    new MutationObserver(() => window.teachTexts.add(panel.innerText)).observe(panel, { subtree: true, childList: true, characterData: true, attributes: true });
+  });
+  await page.click('#teach-run');
+  await page.waitForFunction(() => window.posemfa.teaching().stage?.kind === 'refine', null, { timeout: 60000, polling: 10 });
+  await waitState(page, 'fitted', 60000);
+  const texts = await page.evaluate(() => [...window.teachTexts]);
+  const bad = texts.filter((t) => /undefined|NaN|\[object /.test(t));
+  assert.deepEqual(bad, [], 'texts of the teaching panel');
+  // the refinement's note names its coarse part and m_k, a number
+  assert.ok(texts.some((t) => /Refinement of coarse part \d+ of \d+: .* m_k = \d+ component/.test(t)), texts.join('\n---\n').slice(0, 2000));
+  assert.ok(texts.some((t) => /Done: labels/.test(t)));
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
 test('embed=1 and the hide/show flags give a minimal view', async () => {
   const { page, context } = await fitted('#ex=arm&embed=1', { width: 640, height: 400 });
   for (const sel of ['header', '#panel', '.toolbar', '.poses', '#interp']) assert.equal(await page.locator(sel).isVisible(), false, `${sel} hidden`);

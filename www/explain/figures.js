@@ -928,7 +928,7 @@ class Ends extends Figure {
 
 const STAGE_TEXT = {
   coarse: () => 'coarse AECM on all vertices',
-  refine: (st) => `refining coarse part ${st.part + 1} of ${st.of} with m_k = ${st.subParts ?? st.sub_parts} (the rest grey)`,
+  refine: (st) => `refining coarse part ${st.part + 1} of ${st.of} with m_k = ${st.subParts} (the rest grey)`,
   final: () => 'final AECM on all vertices, from the refined labels',
   done: () => 'done',
 };
