@@ -189,8 +189,9 @@ fn command<T: Args>(
 const HEADER: &str = "posemfa: learn rigid parts and their motion from registered triangle meshes
 
 Inputs (DIR_OR_FILES): a folder of OBJ files, the files themselves (natural order of the names), or
-synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]], a generated population (quadruped, arm, snake, blob)
-whose ground truth (adjusted Rand index, rotation error) is then reported too. Poses are numbered from 1.";
+synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]], a generated population (quadruped, arm, snake,
+blob, spider, giraffe, hand) whose ground truth (adjusted Rand index, rotation error) is then reported
+too. Poses are numbered from 1.";
 
 fn group_text(g: &GroupHelp) -> String {
     let mut s = format!("  {}:\n", g.title);
@@ -272,7 +273,7 @@ fn commands() -> Vec<Command> {
         command::<GenerateArgs>(
             "generate",
             "PRESET --out DIR [options]",
-            "write a generated population (quadruped, arm, snake, blob) as OBJ files",
+            "write a generated population (quadruped, arm, snake, blob, spider, giraffe, hand) as OBJ files",
             cmd_generate,
         ),
         command::<InterpolateArgs>(
@@ -798,7 +799,10 @@ fn load_inputs(
 
 fn preset(name: &str) -> Result<posemfa::synth::Preset, String> {
     serde_json::from_value(serde_json::json!(name))
-        .map_err(|_| format!("unknown preset '{name}': use quadruped, arm, snake or blob"))
+        .map_err(|_| {
+            let all: Vec<&str> = posemfa::synth::Preset::ALL.iter().map(|p| p.name()).collect();
+            format!("unknown preset '{name}': use one of {}", all.join(", "))
+        })
 }
 
 /// Adjusted Rand index of the labels and rotation errors (degrees) against a generated population's truth

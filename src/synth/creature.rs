@@ -6,7 +6,7 @@
 //! wall and end in a rounded pole.
 
 use super::Preset;
-use crate::geometry::Vec3;
+use crate::geometry::{cross, norm, scale, Vec3};
 
 /// Joint limits of one part relative to its parent: the local rotation is the product, in this order, of
 /// rotations about `axis` (rest-pose world frame) by an angle drawn uniformly in `[lo, hi] * max_angle`.
@@ -98,7 +98,20 @@ pub fn design(preset: Preset) -> Design {
         Preset::Arm => arm(),
         Preset::Snake => snake(),
         Preset::Blob => blob(),
+        Preset::Spider => spider(),
+        Preset::Giraffe => giraffe(),
+        Preset::Hand => hand(),
     }
+}
+
+fn unit(v: Vec3) -> Vec3 {
+    scale(v, 1.0 / norm(v))
+}
+
+/// Horizontal axis perpendicular to a limb's direction (`Z x dir`): turning the limb about it by a positive
+/// angle lowers its tip, whichever way the limb points (so mirrored limbs get mirrored joints).
+fn lift_axis(dir: Vec3) -> Vec3 {
+    unit(cross(Z, dir))
 }
 
 fn quadruped() -> Design {
@@ -222,4 +235,323 @@ fn blob() -> Design {
         min_around: 8,
     };
     Design { names: vec!["blob".to_string()], parent: vec![None], joints: vec![None], spine, limbs: Vec::new() }
+}
+
+/// Legs per side of the spider.
+pub const SPIDER_LEGS_PER_SIDE: usize = 4;
+
+/// Thin limbs on a small body: `cephalothorax` (root) and `abdomen` along the spine, and eight legs of two
+/// parts (`leg1_left_femur`, `leg1_left_tibia`, ... `leg4_right_tibia`; leg 1 points forward, leg 4 back),
+/// each about 1.1 long and 0.02 thick against a body 0.95 long: 18 parts. Neighbouring legs of a side leave
+/// the body at alternating heights (the side and the underside), so their sockets stay apart at coarse
+/// resolutions. Hips swing about the vertical and lift about the leg's own horizontal axis; knees bend down.
+fn spider() -> Design {
+    let mut names: Vec<String> = vec!["cephalothorax".into(), "abdomen".into()];
+    let mut parent = vec![None, Some(0)];
+    let mut joints = vec![None, j(&[(Y, -0.4, 0.4), (Z, -0.4, 0.4)])];
+    let spine = SpineDef {
+        points: vec![
+            [-0.62, 0.0, 0.10],
+            [-0.56, 0.0, 0.12],
+            [-0.42, 0.0, 0.14],
+            [-0.27, 0.0, 0.12],
+            [-0.18, 0.0, 0.07],
+            [-0.10, 0.0, 0.05],
+            [0.00, 0.0, 0.05],
+            [0.11, 0.0, 0.05],
+            [0.22, 0.0, 0.05],
+            [0.33, 0.0, 0.05],
+            [0.40, 0.0, 0.05],
+        ],
+        radii: vec![
+            [0.03, 0.03],
+            [0.12, 0.11],
+            [0.17, 0.15],
+            [0.13, 0.11],
+            [0.05, 0.045],
+            [0.11, 0.075],
+            [0.14, 0.085],
+            [0.15, 0.09],
+            [0.14, 0.085],
+            [0.11, 0.075],
+            [0.05, 0.045],
+        ],
+        parts: vec![1, 0],
+        cuts_t: vec![4.0],
+        min_around: 16,
+    };
+    // leg k (1 = front) on the left: spine knot, socket angle, azimuth of its direction from +x (degrees)
+    let legs: [(f64, f64, f64); 4] = [(9.0, -15.0, 45.0), (8.0, -40.0, 75.0), (7.0, -15.0, 105.0), (6.0, -40.0, 140.0)];
+    let mut limbs = Vec::new();
+    for (side_k, side) in ["left", "right"].iter().enumerate() {
+        for (k, &(t, phi, azimuth)) in legs.iter().enumerate() {
+            let first = names.len();
+            names.push(format!("leg{}_{side}_femur", k + 1));
+            names.push(format!("leg{}_{side}_tibia", k + 1));
+            parent.extend([Some(0), Some(first)]);
+            let a = f64::to_radians(azimuth);
+            let y = if side_k == 0 { a.sin() } else { -a.sin() };
+            // out and 25 degrees down
+            let dir = unit([a.cos() * 0.9063, y * 0.9063, -0.4226]);
+            let lift = lift_axis(dir);
+            joints.extend([j(&[(Z, -0.3, 0.3), (lift, -0.6, 0.4)]), j(&[(lift, -0.2, 1.2)])]);
+            limbs.push(LimbDef {
+                attach_t: t,
+                attach_phi: phi.to_radians(),
+                mirror_of: if side_k == 1 { Some(k) } else { None },
+                dir,
+                length: 1.1,
+                radii: vec![(0.0, 0.025), (0.08, 0.02), (0.5, 0.017), (0.9, 0.012), (1.1, 0.009)],
+                parts: vec![first, first + 1],
+                cuts_u: vec![0.5],
+                attached_to: 0,
+            });
+        }
+    }
+    Design { names, parent, joints, spine, limbs }
+}
+
+/// Neck parts of the giraffe.
+pub const GIRAFFE_NECK: usize = 4;
+
+/// A long neck: `trunk` (root), `tail`, `neck1` (at the shoulders) .. `neck4`, `head` along the spine, and
+/// four long legs of two parts (`front_left_upper`, `front_left_lower`, ... `hind_right_lower`): 15 parts.
+/// The neck rises at about 65 degrees; its joints nod about the lateral axis and bend sideways about the
+/// axis across the neck.
+fn giraffe() -> Design {
+    let mut names: Vec<String> = vec!["trunk".into(), "tail".into()];
+    names.extend((1..=GIRAFFE_NECK).map(|k| format!("neck{k}")));
+    names.push("head".into());
+    let head = names.len() - 1;
+    let mut parent = vec![None, Some(0), Some(0)];
+    parent.extend((3..=head).map(|k| Some(k - 1)));
+    let points: Vec<Vec3> = vec![
+        [-0.90, 0.0, 0.86],
+        [-0.78, 0.0, 0.96],
+        [-0.62, 0.0, 1.04],
+        [-0.50, 0.0, 1.08],
+        [-0.15, 0.0, 1.10],
+        [0.22, 0.0, 1.14],
+        [0.42, 0.0, 1.26],
+        [0.52, 0.0, 1.50],
+        [0.62, 0.0, 1.76],
+        [0.72, 0.0, 2.02],
+        [0.81, 0.0, 2.24],
+        [0.94, 0.0, 2.36],
+        [1.12, 0.0, 2.37],
+    ];
+    // the sideways axis of a neck joint: across the neck, in the x-z plane
+    let neck_dir = unit([0.10, 0.0, 0.26]);
+    let side = cross(neck_dir, Y);
+    let mut joints = vec![None, j(&[(Z, -1.0, 1.0), (Y, -0.5, 0.5)])];
+    for _ in 0..GIRAFFE_NECK {
+        joints.push(j(&[(Y, -0.4, 0.4), (side, -0.6, 0.6), (neck_dir, -0.15, 0.15)]));
+    }
+    joints.push(j(&[(Y, -0.7, 0.7), (side, -0.5, 0.5)]));
+    let spine = SpineDef {
+        points,
+        radii: vec![
+            [0.02, 0.02],
+            [0.025, 0.025],
+            [0.05, 0.05],
+            [0.17, 0.18],
+            [0.20, 0.21],
+            [0.19, 0.21],
+            [0.11, 0.12],
+            [0.085, 0.09],
+            [0.075, 0.08],
+            [0.065, 0.07],
+            [0.07, 0.075],
+            [0.08, 0.085],
+            [0.045, 0.05],
+        ],
+        parts: vec![1, 0, 2, 3, 4, 5, 6],
+        cuts_t: vec![2.6, 6.0, 7.0, 8.0, 9.0, 10.0],
+        min_around: 16,
+    };
+    let mut limbs = Vec::new();
+    for (k, (prefix, t, knee)) in [("front", 5.0, (Y, -1.0, 0.1)), ("hind", 3.5, (Y, -0.1, 1.0))].iter().enumerate() {
+        for (side_k, side) in ["left", "right"].iter().enumerate() {
+            let first = names.len();
+            names.push(format!("{prefix}_{side}_upper"));
+            names.push(format!("{prefix}_{side}_lower"));
+            parent.extend([Some(0), Some(first)]);
+            joints.extend([j(&[(Y, -0.7, 0.7), (X, -0.15, 0.15)]), j(&[*knee])]);
+            limbs.push(LimbDef {
+                attach_t: *t,
+                attach_phi: -40f64.to_radians(),
+                mirror_of: if side_k == 1 { Some(2 * k) } else { None },
+                dir: [0.0, 0.0, -1.0],
+                length: 0.92,
+                radii: vec![(0.0, 0.06), (0.2, 0.045), (0.46, 0.033), (0.8, 0.028), (0.92, 0.032)],
+                parts: vec![first, first + 1],
+                cuts_u: vec![0.46],
+                attached_to: 0,
+            });
+        }
+    }
+    Design { names, parent, joints, spine, limbs }
+}
+
+/// Finger names of the hand, thumb first.
+pub const HAND_FINGERS: [&str; 5] = ["thumb", "index", "middle", "ring", "little"];
+
+/// Many small parts: a flat `palm` (root; its spine runs across the hand, from the little finger's side to
+/// the thumb's) and five fingers of three phalanges (`thumb1` .. `thumb3`, `index1` .. `little3`, 1 at the
+/// palm): 16 parts, each phalanx 0.08-0.14 long and 0.025 thick against a palm 0.75 wide. The four fingers
+/// fan out from the palm's edge; the thumb leaves its underside near the thumb's end. Knuckles flex towards
+/// the palm and spread a little; the middle and end joints only flex.
+fn hand() -> Design {
+    let mut names: Vec<String> = vec!["palm".into()];
+    let mut parent = vec![None];
+    let mut joints = vec![None];
+    let xs = [-0.42, -0.36, -0.27, -0.09, 0.09, 0.27, 0.36, 0.42];
+    let lat = [0.10, 0.21, 0.25, 0.26, 0.26, 0.25, 0.21, 0.10];
+    let up = [0.04, 0.055, 0.06, 0.065, 0.065, 0.06, 0.055, 0.04];
+    let spine = SpineDef {
+        points: xs.iter().map(|&x| [x, 0.0, 0.0]).collect(),
+        radii: lat.iter().zip(&up).map(|(&l, &u)| [l, u]).collect(),
+        parts: vec![0],
+        cuts_t: Vec::new(),
+        min_around: 16,
+    };
+    let mut limbs = Vec::new();
+    // (spine parameter, socket angle in degrees, direction, length, phalanx cuts, base radius)
+    let fingers: [(f64, f64, Vec3, f64, [f64; 2], f64); 5] = [
+        (5.2, -130.0, unit([0.6, 0.2, -0.75]), 0.36, [0.14, 0.26], 0.034),
+        (5.0, 0.0, unit([0.1, 1.0, 0.0]), 0.40, [0.16, 0.28], 0.03),
+        (4.0, 0.0, unit([0.02, 1.0, 0.0]), 0.44, [0.18, 0.31], 0.03),
+        (3.0, 0.0, unit([-0.06, 1.0, 0.0]), 0.40, [0.16, 0.28], 0.029),
+        (2.0, 0.0, unit([-0.16, 1.0, 0.0]), 0.32, [0.13, 0.23], 0.026),
+    ];
+    for (f, &(t, phi, dir, length, cuts, r)) in HAND_FINGERS.iter().zip(&fingers) {
+        let first = names.len();
+        for k in 1..=3 {
+            names.push(format!("{f}{k}"));
+        }
+        parent.extend([Some(0), Some(first), Some(first + 1)]);
+        // flexion: the axis across the finger, turning its tip towards the palm side (-z)
+        let flex = if *f == "thumb" { unit(cross(dir, [0.0, 0.0, -1.0])) } else { unit(cross([0.0, 0.0, 1.0], dir)) };
+        let spread = unit(cross(dir, flex));
+        joints.extend([
+            j(&[(flex, -0.2, 1.0), (spread, -0.15, 0.15)]),
+            j(&[(flex, 0.0, 1.2)]),
+            j(&[(flex, 0.0, 0.8)]),
+        ]);
+        limbs.push(LimbDef {
+            attach_t: t,
+            attach_phi: phi.to_radians(),
+            mirror_of: None,
+            dir,
+            length,
+            radii: vec![(0.0, r), (cuts[0], 0.95 * r), (cuts[1], 0.85 * r), (length, 0.8 * r)],
+            parts: vec![first, first + 1, first + 2],
+            cuts_u: cuts.to_vec(),
+            attached_to: 0,
+        });
+    }
+    Design { names, parent, joints, spine, limbs }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::{generate, Spec};
+
+    fn index(d: &Design, name: &str) -> usize {
+        d.names.iter().position(|n| n == name).unwrap_or_else(|| panic!("no part {name}"))
+    }
+
+    /// `chain[0]` hangs from `root`, each next part from the one before.
+    fn assert_chain(d: &Design, root: &str, chain: &[String]) {
+        let mut up = index(d, root);
+        for c in chain {
+            let k = index(d, c);
+            assert_eq!(d.parent[k], Some(up), "{c} should hang from {}", d.names[up]);
+            assert!(d.joints[k].is_some(), "{c} has no joint");
+            up = k;
+        }
+    }
+
+    fn assert_tree(d: &Design, parts: usize, root: &str) {
+        assert_eq!(d.names.len(), parts);
+        assert_eq!(d.parent.len(), parts);
+        assert_eq!(d.joints.len(), parts);
+        assert_eq!(d.root(), index(d, root));
+        assert_eq!(d.root(), 0, "the generator keeps the root at index 0");
+        assert!(d.joints[0].is_none());
+        assert_eq!(d.topological_order().len(), parts);
+        let mut names = d.names.clone();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), parts, "part names are unique");
+        // every part is on exactly one chain (the spine or one limb)
+        let mut seen = vec![0; parts];
+        for &p in d.spine.parts.iter().chain(d.limbs.iter().flat_map(|l| l.parts.iter())) {
+            seen[p] += 1;
+        }
+        assert!(seen.iter().all(|&s| s == 1), "{seen:?}");
+    }
+
+    #[test]
+    fn spider_has_a_small_body_and_eight_two_part_legs() {
+        let d = design(Preset::Spider);
+        assert_tree(&d, 2 + 8 * 2, "cephalothorax");
+        assert_chain(&d, "cephalothorax", &["abdomen".into()]);
+        assert_eq!(d.limbs.len(), 2 * SPIDER_LEGS_PER_SIDE);
+        for k in 1..=SPIDER_LEGS_PER_SIDE {
+            for side in ["left", "right"] {
+                assert_chain(&d, "cephalothorax", &[format!("leg{k}_{side}_femur"), format!("leg{k}_{side}_tibia")]);
+            }
+        }
+        // thin: every leg is over 40 times as long as it is thick, and longer than the body
+        let body = d.spine.points.last().unwrap()[0] - d.spine.points[0][0];
+        for l in &d.limbs {
+            let thickest = l.radii.iter().map(|r| r.1).fold(0.0, f64::max);
+            assert!(l.length > 40.0 * thickest && l.length > body, "{} {thickest} {body}", l.length);
+        }
+    }
+
+    #[test]
+    fn giraffe_has_a_four_part_neck() {
+        let d = design(Preset::Giraffe);
+        assert_tree(&d, 7 + 4 * 2, "trunk");
+        let mut neck: Vec<String> = (1..=GIRAFFE_NECK).map(|k| format!("neck{k}")).collect();
+        neck.push("head".into());
+        assert_chain(&d, "trunk", &neck);
+        assert_chain(&d, "trunk", &["tail".into()]);
+        for leg in ["front_left", "front_right", "hind_left", "hind_right"] {
+            assert_chain(&d, "trunk", &[format!("{leg}_upper"), format!("{leg}_lower")]);
+        }
+        // the neck rises: its top is well above the trunk
+        let top = d.spine.points[10][2];
+        assert!(top > d.spine.points[4][2] + 1.0);
+    }
+
+    #[test]
+    fn hand_has_a_palm_and_five_three_phalanx_fingers() {
+        let d = design(Preset::Hand);
+        assert_tree(&d, 1 + 5 * 3, "palm");
+        for f in HAND_FINGERS {
+            assert_chain(&d, "palm", &[format!("{f}1"), format!("{f}2"), format!("{f}3")]);
+        }
+    }
+
+    #[test]
+    fn every_part_of_the_new_creatures_has_vertices_at_3000() {
+        for preset in [Preset::Spider, Preset::Giraffe, Preset::Hand] {
+            for seed in 0..2 {
+                let g = generate(&Spec { preset, vertices: 3000, poses: 10, seed, ..Spec::default() }).unwrap();
+                let nv = g.population.n_vertices();
+                assert!((2400..=3600).contains(&nv), "{preset:?}: {nv} vertices");
+                let mut count = vec![0usize; g.n_parts()];
+                for &l in &g.part_of_vertex {
+                    count[l as usize] += 1;
+                }
+                for (name, c) in g.part_names.iter().zip(&count) {
+                    assert!(*c >= 30, "{preset:?}: part {name} has {c} vertices at 3000");
+                }
+            }
+        }
+    }
 }

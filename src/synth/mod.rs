@@ -44,15 +44,31 @@ pub enum Preset {
     /// in a random plane and twisted about its axis, both smoothly (no rigid parts). Ground truth: one part
     /// `blob`, its rotation the best rigid (Procrustes) fit of each pose to the rest shape.
     Blob,
+    /// 18 thin-limbed parts: a small body (`cephalothorax` (root), `abdomen`) and eight long thin legs of two
+    /// parts (`leg1_left_femur`, `leg1_left_tibia` .. `leg4_right_tibia`, leg 1 in front).
+    Spider,
+    /// 15 parts with a long neck: `trunk` (root), `tail`, `neck1` .. `neck4`, `head`, and four long legs of
+    /// two parts (`front_left_upper`, `front_left_lower`, ... `hind_right_lower`).
+    Giraffe,
+    /// 16 parts, many of them small: a flat `palm` (root) and five fingers of three phalanges (`thumb1` ..
+    /// `thumb3`, `index1` .. `little3`; 1 next to the palm).
+    Hand,
 }
 
 impl Preset {
+    /// Every preset, in the order the CLI lists them.
+    pub const ALL: [Preset; 7] =
+        [Preset::Quadruped, Preset::Arm, Preset::Snake, Preset::Blob, Preset::Spider, Preset::Giraffe, Preset::Hand];
+
     pub fn name(&self) -> &'static str {
         match self {
             Preset::Quadruped => "quadruped",
             Preset::Arm => "arm",
             Preset::Snake => "snake",
             Preset::Blob => "blob",
+            Preset::Spider => "spider",
+            Preset::Giraffe => "giraffe",
+            Preset::Hand => "hand",
         }
     }
 }
@@ -417,7 +433,7 @@ mod tests {
         assert_eq!(part_index(Preset::Quadruped, "front_right_upper"), Some(9));
         assert_eq!(part_index(Preset::Quadruped, "hind_right_foot"), Some(17));
         assert_eq!(part_index(Preset::Quadruped, "wing"), None);
-        for p in [Preset::Quadruped, Preset::Arm, Preset::Snake, Preset::Blob] {
+        for p in Preset::ALL {
             assert_eq!(part_parents(p).iter().filter(|x| x.is_none()).count(), 1);
         }
     }

@@ -27,6 +27,12 @@ fn quadruped_spec() -> Spec {
     Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, seed: 0, joint_band: 0.01, max_angle_deg: 60.0, ..Spec::default() }
 }
 
+/// The creatures of other proportions (issue 15) at the generator's defaults, 3 000 vertices and 10 poses;
+/// their examples fit with the default parameters.
+fn new_creature(preset: Preset) -> Spec {
+    Spec { preset, vertices: 3000, poses: 10, ..Spec::default() }
+}
+
 fn synth_params() -> Params {
     Params { refine_threshold: SYNTH_REFINE_THRESHOLD, ..Params::default() }
 }
@@ -66,6 +72,30 @@ pub fn examples() -> Vec<Example> {
             fails_on_purpose: false,
             spec: Spec { preset: Preset::Snake, vertices: 2500, poses: 10, joint_band: 0.01, max_angle_deg: 45.0, ..Spec::default() },
             params: Params { parts: 6, ..synth_params() },
+        },
+        Example {
+            id: "spider",
+            title: "Spider (18 parts, thin legs)",
+            note: "Eight long, thin two-part legs on a small body: each leg piece holds few vertices and little volume, the hardest case for the part count. Default parameters; compare the parts found with the ground truth.",
+            fails_on_purpose: false,
+            spec: new_creature(Preset::Spider),
+            params: Params::default(),
+        },
+        Example {
+            id: "giraffe",
+            title: "Giraffe (15 parts, long neck)",
+            note: "A neck of four parts, a head, a tail and four long two-part legs: each neck joint bends a little and the bends add up. Default parameters; see whether the neck is cut at its joints.",
+            fails_on_purpose: false,
+            spec: new_creature(Preset::Giraffe),
+            params: Params::default(),
+        },
+        Example {
+            id: "hand",
+            title: "Hand (16 parts, small phalanges)",
+            note: "A palm and five fingers of three phalanges each: parts ten times smaller than the palm, side by side. Default parameters; see whether every phalanx is found.",
+            fails_on_purpose: false,
+            spec: new_creature(Preset::Hand),
+            params: Params::default(),
         },
         Example {
             id: "literal-eq18",
