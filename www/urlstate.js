@@ -4,7 +4,8 @@
 //   ex=ID                      a built-in example (posemfa::synth::presets), or
 //   gen=PRESET,VERTICES,POSES,SEED   a generated population, or
 //   src=files                  opened or dropped files (not in the link: the default example is shown)
-//   parts, seed, tol, floor, lambda=exact|paper-eq18, refine=0|1     fit parameters (the form's)
+//   parts, bones=N|auto, seed, tol, floor, lambda=exact|paper-eq18, refine=0|1   fit parameters (the form's;
+//                              bones: "Parts in the end", targetParts; absent = auto, Algorithm 1's own count)
 //   teach=N, stage=coarse|refine|final   a teaching fit N steps in (and the Algorithm 1 stage it was in): the
 //                              link opens on the same step (the steps are deterministic)
 //   view=parts|stages|recon|latent|interp|truth   flat=0|1   pose=I (0-based)
@@ -20,7 +21,7 @@ export const CONTROLS = ['header', 'panel', 'toolbar', 'modes', 'caption', 'pose
 const EMBED_HIDES = ['header', 'panel', 'toolbar', 'poses', 'interp'];
 const MODES = ['parts', 'stages', 'recon', 'latent', 'interp', 'truth'];
 const STAGES = ['coarse', 'refine', 'final', 'done'];
-const ORDER = ['ex', 'gen', 'src', 'parts', 'seed', 'tol', 'floor', 'lambda', 'refine', 'teach', 'stage', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];
+const ORDER = ['ex', 'gen', 'src', 'parts', 'bones', 'seed', 'tol', 'floor', 'lambda', 'refine', 'teach', 'stage', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];
 
 const num = (v) => (v === null || v === undefined || v === '' || !Number.isFinite(Number(v)) ? undefined : Number(v));
 const bool = (v) => (v === '1' ? true : v === '0' ? false : undefined);
@@ -38,6 +39,8 @@ export function parseHash(hash) {
   if (q.get('src') === 'files') s.src = 'files';
   const params = {};
   if (num(q.get('parts')) !== undefined) params.parts = num(q.get('parts'));
+  if (q.get('bones') === 'auto') params.targetParts = null;
+  else if (Number.isInteger(num(q.get('bones')))) params.targetParts = num(q.get('bones'));
   if (num(q.get('seed')) !== undefined) params.seed = num(q.get('seed'));
   if (num(q.get('tol')) !== undefined) params.tol = num(q.get('tol'));
   if (num(q.get('floor')) !== undefined) params.varianceFloor = num(q.get('floor'));
@@ -72,6 +75,7 @@ export function formatHash(s) {
   if (s.src) q.src = s.src;
   const p = s.params ?? {};
   if (p.parts !== undefined) q.parts = p.parts;
+  if (Number.isInteger(p.targetParts)) q.bones = p.targetParts; // auto (null) is the default: left out
   if (p.seed !== undefined) q.seed = p.seed;
   if (p.tol !== undefined) q.tol = p.tol;
   if (p.varianceFloor !== undefined) q.floor = p.varianceFloor;
@@ -126,8 +130,8 @@ export function installUrlState(ctx) {
   function current() {
     const s = { ...source };
     if (fitParams && !s.src) {
-      const { parts, seed, tol, varianceFloor, lambdaRule, refine } = fitParams;
-      s.params = { parts, seed, tol, varianceFloor, lambdaRule, refine };
+      const { parts, targetParts, seed, tol, varianceFloor, lambdaRule, refine } = fitParams;
+      s.params = { parts, targetParts, seed, tol, varianceFloor, lambdaRule, refine };
     }
     const t = state.teach;
     if (t && state.fitId === t.id && t.iteration > 0 && !s.src) s.teach = { steps: t.iteration, stage: t.stage?.kind ?? 'coarse' };

@@ -280,6 +280,34 @@ test('a shared teaching link opens on the same step and stage', async () => {
   await context.close();
 });
 
+test('"Parts in the end" (targetParts) is in the link: bones=N restores it, auto is left out', async () => {
+  const { page, context, log } = await fitted('#ex=arm&parts=4&bones=5');
+  assert.equal(await page.locator('#params [name=targetParts]').inputValue(), '5');
+  assert.equal((await summary(page)).parts, 5, 'the link\'s count was fitted');
+  assert.equal((await page.evaluate(() => window.posemfa.urlState())).params.targetParts, 5);
+  await page.waitForFunction(() => /^#ex=arm&parts=4&bones=5&/.test(location.hash), null, { timeout: 10000 });
+  // chosen in the form: the link follows each fit
+  const fit = async (value) => {
+    const n = await page.evaluate(() => window.posemfa.fitCount());
+    await page.fill('#params [name=targetParts]', value);
+    await page.click('#params [type=submit]');
+    await page.waitForFunction((c) => window.posemfa.fitCount() > c && document.body.dataset.state === 'fitted', n, { timeout: 60000 });
+  };
+  await fit('2');
+  assert.equal((await summary(page)).parts, 2);
+  await page.waitForFunction(() => /&bones=2&/.test(location.hash), null, { timeout: 10000 });
+  await fit('auto');
+  await page.waitForFunction(() => !/bones=/.test(location.hash), null, { timeout: 10000 });
+  assert.equal((await page.evaluate(() => window.posemfa.urlState())).params.targetParts, null);
+  // bones=auto in a link is the same as none
+  const b = await fitted('#ex=arm&parts=4&bones=auto');
+  assert.equal(await b.page.locator('#params [name=targetParts]').inputValue(), '');
+  assert.deepEqual(log.errors, []);
+  assert.deepEqual(b.log.errors, []);
+  await b.context.close();
+  await context.close();
+});
+
 test('the teaching panel never shows "undefined", through every stage of Algorithm 1', async () => {
   const { page, context, log } = await fitted('#ex=arm');
   // Every text the panel shows while a teaching run goes from the coarse stage to done.
