@@ -317,7 +317,12 @@ test('the teaching panel never shows "undefined", through every stage of Algorit
     new MutationObserver(() => window.teachTexts.add(panel.innerText)).observe(panel, { subtree: true, childList: true, characterData: true, attributes: true });
   });
   await page.click('#teach-run');
-  await page.waitForFunction(() => window.posemfa.teaching().stage?.kind === 'refine', null, { timeout: 60000, polling: 10 });
+  // Waits on the texts the observer saw (after every message), not on polling, which can miss a short stage
+  // when the page is busy.
+  await page.waitForFunction(() => [...window.teachTexts].some((t) => /Done: labels/.test(t)), null, { timeout: 120000, polling: 100 })
+    .catch(async (e) => {
+      throw new Error(`${e.message}: teaching ${JSON.stringify(await teaching(page))}, state ${await page.evaluate(() => document.body.dataset.state)}`);
+    });
   await waitState(page, 'fitted', 60000);
   const texts = await page.evaluate(() => [...window.teachTexts]);
   const bad = texts.filter((t) => /undefined|NaN|\[object /.test(t));
