@@ -134,6 +134,15 @@ impl WasmPopulation {
         Float64Array::from(&[n.offset[0], n.offset[1], n.offset[2], n.scale][..])
     }
 
+    /// Where every vertex of shape i lies along the longest side of its bounding box, 0 to 1
+    /// (`geometry::along_longest_axis`).
+    #[wasm_bindgen(js_name = alongLongestAxis)]
+    pub fn along_longest_axis(&self, shape: usize) -> Result<Float32Array, JsValue> {
+        let s = self.inner.shapes.get(shape).ok_or_else(|| js_err(format!("no shape {shape}")))?;
+        let t: Vec<f32> = crate::geometry::along_longest_axis(s).iter().map(|&x| x as f32).collect();
+        Ok(Float32Array::from(t.as_slice()))
+    }
+
     /// Unit-box lengths in the population's original units.
     #[wasm_bindgen(js_name = originalLengths)]
     pub fn original_lengths(&self, unit: Vec<f64>) -> Float64Array {
@@ -323,6 +332,14 @@ impl FitModel {
         flat_f32(&self.model().latent)
     }
 
+    /// The latent shape with every part moved to its place in shape i but not turned (v_j^ref + b^i_{l_j}),
+    /// unit box, flat xyz.
+    #[wasm_bindgen(js_name = latentPlaced)]
+    pub fn latent_placed(&self, shape: usize) -> Result<Float32Array, JsValue> {
+        self.shape(shape)?;
+        Ok(flat_f32(&self.model().latent_placed(shape)))
+    }
+
     /// Shape i rebuilt from the latent shape (eq 22), unit box, flat xyz.
     pub fn reconstruct(&self, shape: usize) -> Result<Float32Array, JsValue> {
         self.shape(shape)?;
@@ -504,6 +521,17 @@ impl FitModel {
     #[wasm_bindgen(js_name = linearInterpolate)]
     pub fn linear_interpolate(&self, i: usize, j: usize, t: f64) -> Result<Float32Array, JsValue> {
         Ok(flat_f32(&self.articulation()?.linear(i, j, t)?))
+    }
+
+    /// Per vertex, the distance of the interpolation at t (`opts` as [`FitModel::interpolate`]) from the plain
+    /// linear blend of the two poses at t (unit box): at t = 0 and 1 the blend is the end pose itself, so this
+    /// is the interpolation's end error there.
+    #[wasm_bindgen(js_name = distancesToLinear)]
+    pub fn distances_to_linear(&self, i: usize, j: usize, t: f64, opts: JsValue) -> Result<Float32Array, JsValue> {
+        let o = articulate_options(opts)?;
+        let art = self.articulation()?;
+        let d = crate::geometry::distances(&art.interpolate(i, j, t, &o)?, &art.linear(i, j, t)?);
+        Ok(Float32Array::from(d.iter().map(|&x| x as f32).collect::<Vec<f32>>().as_slice()))
     }
 
     /// Skinning weights, dense: `[vertex * nParts + part]`. `skin`: "smooth" (default) or "rigid".

@@ -58,6 +58,13 @@ dual_test! {
             assert!(snake.is_empty(), "snake_case keys: {snake:?}");
         }
         assert_eq!(accuracy.true_parts, 3);
+        // the latent shape placed for showing: every vertex moved by its part's translation in that pose
+        let m = &result.model;
+        let placed = m.latent_placed(2);
+        for (v, p) in placed.iter().enumerate() {
+            let b = m.parts[m.labels[v] as usize].translations[2];
+            assert!((0..3).all(|d| (p[d] - (m.latent[v][d] + b[d])).abs() < 1e-12), "vertex {v}");
+        }
         assert!(accuracy.ari > 0.5, "{accuracy:?}");
     }
 

@@ -1,7 +1,6 @@
 // Colours of parts and errors. Which palette colour each part gets comes from the core with the labels (parts
-// that share a mesh edge differ; posemfa::articulate::graph::colour_parts): paletteColours looks them up.
-// (colourParts / labelColours below still colour in JS for the article's figures, www/explain/, until its pool
-// worker sends the core's colouring as www/worker.js does.)
+// that share a mesh edge differ; posemfa::articulate::graph::colour_parts): paletteColours looks them up, for
+// the app and the article alike.
 
 // Well separated hues (after Kelly and Trubetskoy); no grey, white or black, which the background and the
 // shading use.
@@ -11,7 +10,7 @@ export const PALETTE = [ // 12 colours: PALETTE_SIZE in worker.js
 ];
 
 export const hexToRgb = (hex) => [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16) / 255);
-const PALETTE_RGB = PALETTE.map(hexToRgb);
+export const PALETTE_RGB = PALETTE.map(hexToRgb);
 
 /**
  * Per-vertex RGB (Float32Array, 3 per vertex) of part labels, given the palette index of every part (from the
@@ -23,52 +22,22 @@ export function paletteColours(labels, partPalette) {
   return { vertexColours: out, partColour: Array.from(partPalette, (c) => PALETTE[c % PALETTE.length]) };
 }
 
-/** Sets of neighbouring parts, from every triangle edge whose two vertices lie in different parts. */
-export function partAdjacency(labels, faces, nParts) {
-  const adj = Array.from({ length: nParts }, () => new Set());
-  for (let f = 0; f < faces.length; f += 3) {
-    for (let e = 0; e < 3; e++) {
-      const a = labels[faces[f + e]];
-      const b = labels[faces[f + ((e + 1) % 3)]];
-      if (a !== b) {
-        adj[a].add(b);
-        adj[b].add(a);
-      }
+/**
+ * Soft colours of responsibilities: row j (one per vertex of a run) gets the colours of its parts blended by
+ * its γ (`gamma[j * parts + k]`), part k in palette colour `colourOf[k]` (from the core). Flat RGB per row.
+ */
+export function gammaColours(gamma, parts, colourOf) {
+  const rows = gamma.length / parts;
+  const out = new Float32Array(rows * 3);
+  for (let j = 0; j < rows; j++) {
+    for (let k = 0; k < parts; k++) {
+      const w = gamma[j * parts + k];
+      if (!w) continue;
+      const c = PALETTE_RGB[colourOf[k] % PALETTE.length];
+      for (let a = 0; a < 3; a++) out[3 * j + a] += w * c[a];
     }
   }
-  return adj;
-}
-
-/** Palette index of every part: never the colour of a neighbour (while the palette has one left). */
-export function colourParts(labels, faces) {
-  let nParts = 0;
-  for (const l of labels) nParts = Math.max(nParts, l + 1);
-  const adj = partAdjacency(labels, faces, nParts);
-  const size = new Array(nParts).fill(0);
-  for (const l of labels) size[l]++;
-  // Most constrained first (Welsh-Powell), then the larger part.
-  const order = [...Array(nParts).keys()].sort((a, b) => adj[b].size - adj[a].size || size[b] - size[a] || a - b);
-  const colour = new Array(nParts).fill(-1);
-  const used = new Array(PALETTE.length).fill(0);
-  for (const p of order) {
-    const taken = new Set([...adj[p]].map((q) => colour[q]));
-    let best = -1;
-    for (let c = 0; c < PALETTE.length; c++) {
-      if (!taken.has(c) && (best < 0 || used[c] < used[best])) best = c;
-    }
-    if (best < 0) best = used.indexOf(Math.min(...used)); // more neighbours than colours
-    colour[p] = best;
-    used[best]++;
-  }
-  return colour;
-}
-
-/** Per-vertex RGB (Float32Array, 3 per vertex) for part labels. */
-export function labelColours(labels, faces) {
-  const colour = colourParts(labels, faces);
-  const out = new Float32Array(labels.length * 3);
-  labels.forEach((l, v) => out.set(PALETTE_RGB[colour[l]], 3 * v));
-  return { vertexColours: out, partColour: colour.map((c) => PALETTE[c]) };
+  return out;
 }
 
 // Error colour map: dark blue (0) -> teal -> yellow -> red (max), like the paper's Fig 4.

@@ -4,7 +4,7 @@
 // (part colours blended by γ), the Algorithm 1 stage in progress, and beside the controls the equations the
 // iteration computes. Nothing is computed here but colours. The teaching fit lives in the page state as
 // state.teach = { id, running, iteration, stage, values, runs, soft } (null when there is none).
-import { PALETTE, hexToRgb } from './colors.js';
+import { PALETTE_RGB, gammaColours } from './colors.js';
 import { state, update, subscribe } from './state.js';
 import { client, watchFit, jobKey } from './session.js';
 import { readParams } from './controls/form.js';
@@ -13,7 +13,6 @@ import { plot } from './views/viewer-instance.js';
 import { showStep, stageText } from './views/result.js';
 import { showProblems } from './problems.js';
 
-const PALETTE_RGB = PALETTE.map(hexToRgb);
 const OUTSIDE = [0.86, 0.87, 0.89]; // vertices outside the part being refined
 const STAGES = ['coarse', 'refine', 'final', 'done'];
 const $ = (id) => document.getElementById(id);
@@ -70,8 +69,9 @@ function assignColours(m) {
   assigned.colourOf = Array.from(m.colours);
 }
 
-// Soft colours: every vertex of the run gets its parts' colours blended by its responsibilities. Returns the
-// colours and { vertices: with no part above γ = 0.9, blended: how many of them show a blend }.
+// Soft colours: every vertex of the run gets its parts' colours blended by its responsibilities (colors.js
+// gammaColours). Returns the colours and { vertices: with no part above γ = 0.9, blended: how many of them show
+// a blend }.
 function softColours(m) {
   const n = state.pop.nVertices;
   const K = m.parts;
@@ -80,32 +80,18 @@ function softColours(m) {
     for (let v = 0; v < n; v++) out.set(OUTSIDE, 3 * v);
     return { colours: out, soft: null };
   }
-  const rows = m.gamma.length / K;
-  const argmax = new Uint32Array(rows);
-  for (let j = 0; j < rows; j++) {
-    let best = 0;
-    for (let k = 1; k < K; k++) if (m.gamma[j * K + k] > m.gamma[j * K + best]) best = k;
-    argmax[j] = best;
-  }
   assignColours(m);
+  const rows = gammaColours(m.gamma, K, assigned.colourOf);
   if (m.vertices) for (let v = 0; v < n; v++) out.set(OUTSIDE, 3 * v);
   const soft = { vertices: 0, blended: 0 };
-  for (let j = 0; j < rows; j++) {
-    let r = 0;
-    let g = 0;
-    let b = 0;
-    for (let k = 0; k < K; k++) {
-      const w = m.gamma[j * K + k];
-      if (w === 0) continue;
-      const c = PALETTE_RGB[assigned.colourOf[k]];
-      r += w * c[0];
-      g += w * c[1];
-      b += w * c[2];
-    }
-    out.set([r, g, b], 3 * (m.vertices ? m.vertices[j] : j));
-    if (m.gamma[j * K + argmax[j]] < 0.9) {
+  for (let j = 0; j < rows.length / 3; j++) {
+    const rgb = rows.subarray(3 * j, 3 * j + 3);
+    out.set(rgb, 3 * (m.vertices ? m.vertices[j] : j));
+    let top = 0;
+    for (let k = 0; k < K; k++) top = Math.max(top, m.gamma[j * K + k]);
+    if (top < 0.9) {
       soft.vertices++;
-      if (!PALETTE_RGB.some((c) => Math.abs(c[0] - r) + Math.abs(c[1] - g) + Math.abs(c[2] - b) < 0.02)) soft.blended++;
+      if (!PALETTE_RGB.some((c) => Math.abs(c[0] - rgb[0]) + Math.abs(c[1] - rgb[1]) + Math.abs(c[2] - rgb[2]) < 0.02)) soft.blended++;
     }
   }
   return { colours: out, soft };

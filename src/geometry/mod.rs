@@ -132,6 +132,40 @@ pub fn bounds<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> (Vec3, Vec3) {
     (lo, hi)
 }
 
+/// |a_j - b_j| for every pair of points (`a` and `b` of the same length).
+pub fn distances(a: &[Vec3], b: &[Vec3]) -> Vec<f64> {
+    a.iter().zip(b).map(|(&p, &q)| norm(sub(p, q))).collect()
+}
+
+/// Where every point lies along the longest side of the points' bounding box: 0 at its low end, 1 at its high
+/// end (all 0 when the box has no extent). The page's first figure colours a population's poses by it.
+pub fn along_longest_axis(points: &[Vec3]) -> Vec<f64> {
+    let (lo, hi) = bounds(points);
+    let axis = (0..3).fold(0, |best, d| if hi[d] - lo[d] > hi[best] - lo[best] { d } else { best });
+    let extent = hi[axis] - lo[axis];
+    if !(extent > 0.0) {
+        return vec![0.0; points.len()];
+    }
+    points.iter().map(|p| (p[axis] - lo[axis]) / extent).collect()
+}
+
+#[cfg(test)]
+mod point_tests {
+    use super::*;
+
+    #[test]
+    fn distances_and_position_along_the_longest_axis() {
+        let a = [[0.0, 0.0, 0.0], [1.0, 2.0, 2.0]];
+        let b = [[3.0, 4.0, 0.0], [1.0, 2.0, 2.0]];
+        assert_eq!(distances(&a, &b), vec![5.0, 0.0]);
+        // the box is 4 long in y, 1 in x, 0.5 in z: y decides
+        let pts = [[0.0, -1.0, 0.0], [1.0, 3.0, 0.5], [0.5, 0.0, 0.25]];
+        assert_eq!(along_longest_axis(&pts), vec![0.0, 1.0, 0.25]);
+        assert_eq!(along_longest_axis(&[[2.0, 2.0, 2.0]; 3]), vec![0.0; 3]);
+        assert!(along_longest_axis(&[]).is_empty());
+    }
+}
+
 /// Largest deviation of R^T R from I, and det R: for checking rotations.
 pub fn orthonormality_error(r: &Mat3) -> f64 {
     (mat_mul(&transpose(r), r) - IDENTITY).amax()

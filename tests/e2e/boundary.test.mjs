@@ -59,6 +59,44 @@ test('OBJ problems cross as data: every file, its line, kind and message', () =>
   assert.match(e.message, /^file b\.obj, line 2: /);
 });
 
+test('what the article shows is measured by the core: placed latent shape, distances to the linear blend, position along the body', () => {
+  const { pop, model } = fitted();
+  const hyp = (a, b, v) => Math.hypot(a[3 * v] - b[3 * v], a[3 * v + 1] - b[3 * v + 1], a[3 * v + 2] - b[3 * v + 2]);
+  // the latent shape with each part moved by its translation in pose 2 (the JSON export's b^i)
+  const json = JSON.parse(model.toJson());
+  const latent = model.latent();
+  const placed = model.latentPlaced(2);
+  const labels = model.labels();
+  let worst = 0;
+  for (let v = 0; v < labels.length; v++) {
+    const b = json.parts[labels[v]].translations[2];
+    for (let a = 0; a < 3; a++) worst = Math.max(worst, Math.abs(placed[3 * v + a] - (latent[3 * v + a] + b[a])));
+  }
+  assert.ok(worst < 1e-6, `largest difference ${worst}`);
+  assert.match(thrown(() => model.latentPlaced(99)).message, /no pose 99/);
+  // per vertex |interpolation - linear blend| at t, for the options asked
+  for (const [t, opts] of [[0.4, {}], [1, { root: 'paper', tree: 'breadth-first', exactEnds: false, residual: false }]]) {
+    const d = model.distancesToLinear(0, 3, t, opts);
+    const a = model.interpolate(0, 3, t, opts);
+    const lin = model.linearInterpolate(0, 3, t);
+    assert.equal(d.length, labels.length);
+    let off = 0;
+    for (let v = 0; v < d.length; v++) off = Math.max(off, Math.abs(d[v] - hyp(a, lin, v)));
+    assert.ok(off < 1e-5, `t ${t}: ${off}`);
+    assert.ok(Math.max(...d) > 1e-4, `t ${t}: the interpolation differs from the blend somewhere`);
+  }
+  // at t = 1 the blend is pose 4: the largest distance is the articulation report's end error
+  const end = model.articulationReport(0, 3, 1).methods[0].endpointError[1];
+  assert.ok(Math.abs(Math.max(...model.distancesToLinear(0, 3, 1, {})) - end) < 1e-5 * Math.max(1, end), `report ${end}`);
+  assert.match(thrown(() => model.distancesToLinear(0, 3, 0.5, { skinn: 'rigid' })).message, /skinn/);
+  // 0 at one end of the longest side of the box, 1 at the other
+  const along = pop.alongLongestAxis(0);
+  assert.equal(along.length, labels.length);
+  assert.equal(Math.min(...along), 0);
+  assert.equal(Math.max(...along), 1);
+  assert.match(thrown(() => pop.alongLongestAxis(9)).message, /no shape 9/);
+});
+
 test('misspelled fields of parameters, generator specs, options and mesh descriptors are errors naming the field', () => {
   const { pop, model } = fitted();
   const cases = [

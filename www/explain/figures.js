@@ -4,9 +4,8 @@
 // figure is in view (explain.js calls setVisible).
 import { mount } from '../mount.js';
 import { Chart } from './chart.js';
-import { PALETTE, hexToRgb, colourParts, labelColours, errorColours, rampColour } from '../colors.js';
+import { PALETTE, PALETTE_RGB, hexToRgb, paletteColours, gammaColours, errorColours } from '../colors.js';
 
-const PALETTE_RGB = PALETTE.map(hexToRgb);
 const GREY = [0.8, 0.81, 0.84];
 const LITERAL = '#d1495b';
 const EXACT = '#2f6fb3';
@@ -20,39 +19,10 @@ const SYNTH = { refineThreshold: 2e-6 }; // as the app's examples (src/synth/pre
 
 let nextId = 100000;
 
-/** Soft colours: every vertex gets the colours of its parts blended by its responsibilities. */
-function softColours(gamma, parts, colourOf, n) {
-  const out = new Float32Array(n * 3);
-  for (let j = 0; j < n; j++) {
-    let r = 0;
-    let g = 0;
-    let b = 0;
-    for (let k = 0; k < parts; k++) {
-      const w = gamma[j * parts + k];
-      if (!w) continue;
-      const c = PALETTE_RGB[colourOf[k]];
-      r += w * c[0];
-      g += w * c[1];
-      b += w * c[2];
-    }
-    out[3 * j] = r;
-    out[3 * j + 1] = g;
-    out[3 * j + 2] = b;
-  }
-  return out;
-}
-
 /** Per-vertex colours: the chosen part in its colour, the rest grey. */
 function highlight(labels, part, colour) {
   const out = new Float32Array(labels.length * 3);
   labels.forEach((l, v) => out.set(l === part ? colour : GREY, 3 * v));
-  return out;
-}
-
-/** |a - b| per vertex (flat xyz), for error colours. */
-function distances(a, b) {
-  const out = new Float32Array(a.length / 3);
-  for (let v = 0; v < out.length; v++) out[v] = Math.hypot(a[3 * v] - b[3 * v], a[3 * v + 1] - b[3 * v + 1], a[3 * v + 2] - b[3 * v + 2]);
   return out;
 }
 
@@ -298,23 +268,10 @@ class Poses extends Figure {
     this.ticker = new Ticker(2500, () => this.shift(1));
   }
 
-  colours() {
-    const p = this.v.pop.positions[0];
-    const n = this.v.pop.nVertices;
-    const lo = [0, 1, 2].map((a) => Math.min(...Array.from({ length: n }, (_, v) => p[3 * v + a])));
-    const hi = [0, 1, 2].map((a) => Math.max(...Array.from({ length: n }, (_, v) => p[3 * v + a])));
-    const axis = [0, 1, 2].reduce((b, a) => (hi[a] - lo[a] > hi[b] - lo[b] ? a : b), 0);
-    const out = new Float32Array(n * 3);
-    for (let v = 0; v < n; v++) {
-      const t = (p[3 * v + axis] - lo[axis]) / (hi[axis] - lo[axis] || 1);
-      out.set(rampColour(t), 3 * v);
-    }
-    return out;
-  }
-
   draw(frame = false) {
     const { pop } = this.v;
-    const colours = this.colour ?? (this.colour = this.colours());
+    const colours = this.colour;
+    if (!colours) return;
     const shown = [0, 1, 2, 3].map((k) => (this.first + k) % pop.nShapes);
     this.v.handle.viewer.show(shown.map((i) => ({ positions: pop.positions[i], colours })), { frame });
     this.statusNote = `Poses ${shown.map((i) => i + 1).join(', ')} of ${pop.nShapes}.`;
@@ -325,8 +282,16 @@ class Poses extends Figure {
     return `${this.statusNote} A first, coarse fit of this population: ${s.parts} parts in ${Math.round(s.fitMs)} ms.`;
   }
 
-  onFitted() {
+  // Every vertex coloured by where it lies along the body's longest side in pose 1 (the core measures it): a
+  // vertex keeps its colour in every pose, which is what "in correspondence" means.
+  async onFitted() {
     this.colour = null;
+    try {
+      this.colour = errorColours(await this.v.handle.query('alongLongestAxis', 0), 1);
+    } catch (e) {
+      this.setState('error', e.message);
+      return;
+    }
     this.draw(true);
   }
 
@@ -384,7 +349,7 @@ class Model extends Figure {
 
   async onFitted() {
     const { model, pop } = this.v;
-    const { partColour } = labelColours(model.labels, pop.faces);
+    const { partColour } = paletteColours(model.labels, model.colours.final);
     this.partColour = partColour;
     this.partSel.replaceChildren(...partColour.map((c, k) => Object.assign(document.createElement('option'), { value: String(k), textContent: `part ${k + 1}` })));
     this.poseIn.max = String(pop.nShapes - 1);
@@ -584,21 +549,16 @@ class Responsibilities extends Stepping {
 
   showStep(m) {
     if (!m.gamma || !m.parts || !this.v.pop) return;
-    const n = this.v.pop.nVertices;
+    // the core's palette index per component (neighbours differ), kept for the whole run so that colours do
+    // not jump between steps
     const key = `${this.stepper.id}:${m.parts}`;
-    if (key !== this.colourKey) {
+    if (key !== this.colourKey && m.colours?.length === m.parts) {
       this.colourKey = key;
-      const labels = new Uint32Array(n);
-      for (let j = 0; j < n; j++) {
-        let best = 0;
-        for (let k = 1; k < m.parts; k++) if (m.gamma[j * m.parts + k] > m.gamma[j * m.parts + best]) best = k;
-        labels[j] = best;
-      }
-      const c = colourParts(labels, this.v.pop.faces);
-      this.colourOf = Array.from({ length: m.parts }, (_, k) => (c[k] >= 0 ? c[k] : k % PALETTE.length));
+      this.colourOf = Array.from(m.colours);
     }
+    if (!this.colourOf) return;
     this.gamma = { values: m.gamma, parts: m.parts };
-    this.v.handle.viewer.show([{ positions: this.v.pop.positions[0], colours: softColours(m.gamma, m.parts, this.colourOf, n) }]);
+    this.v.handle.viewer.show([{ positions: this.v.pop.positions[0], colours: gammaColours(m.gamma, m.parts, this.colourOf) }]);
     this.out('iteration', String(this.stepper.iteration));
     this.drawGamma();
   }
@@ -680,7 +640,7 @@ class Aecm extends Stepping {
       const last = this.flips[this.flips.length - 1];
       this.out('flips', `Rotation steps that needed the handedness fix: ${last} in the last iteration, ${total} in ${this.flips.length} iteration${this.flips.length === 1 ? '' : 's'}.`);
     }
-    if (m.labels && this.v.pop) this.v.handle.viewer.show([{ positions: this.v.pop.positions[0], colours: labelColours(m.labels, this.v.pop.faces).vertexColours }]);
+    if (m.labels && m.colours?.length && this.v.pop) this.v.handle.viewer.show([{ positions: this.v.pop.positions[0], colours: paletteColours(m.labels, m.colours).vertexColours }]);
     if (m.kind === 'step') this.flashCycles();
   }
 
@@ -768,7 +728,7 @@ class Eq18 extends Figure {
   onTeach(v, m) {
     const st = this.sides[v.side].stepper;
     if (st.onTeach(m) || (m.kind === 'reset' && m.id === st.id)) {
-      if (m.labels && v.pop) v.handle.viewer.show([{ positions: v.pop.positions[0], colours: labelColours(m.labels, v.pop.faces).vertexColours }]);
+      if (m.labels && m.colours?.length && v.pop) v.handle.viewer.show([{ positions: v.pop.positions[0], colours: paletteColours(m.labels, m.colours).vertexColours }]);
       this.draw();
       this.refreshState();
     }
@@ -880,26 +840,23 @@ class Ends extends Figure {
   }
 
   async draw(frame = false) {
-    const { model, pop } = this.v;
+    const { model } = this.v;
     if (!model) return;
     const seq = ++this.seq;
     this.out('t', this.t.toFixed(2));
-    const [a, b] = await Promise.all([
-      this.v.handle.query('interpolate', this.i, this.j, this.t, PRINTED),
-      this.v.handle.query('interpolate', this.i, this.j, this.t, {}),
+    // Colour: each vertex's distance (from the core) to the linear blend of the two training poses, which is
+    // exactly the end pose at t = 0 and t = 1 (in between, both methods rightly differ from it).
+    const q = (...args) => this.v.handle.query(...args);
+    const [a, b, da, db] = await Promise.all([
+      q('interpolate', this.i, this.j, this.t, PRINTED),
+      q('interpolate', this.i, this.j, this.t, {}),
+      q('distancesToLinear', this.i, this.j, this.t, PRINTED),
+      q('distancesToLinear', this.i, this.j, this.t, {}),
     ]).catch((e) => {
       this.setState('error', e.message);
       return [];
     });
     if (seq !== this.seq || !a) return;
-    // Colour: distance to the straight blend of the two training poses' vertices, which is exactly the end
-    // pose at t = 0 and t = 1 (in between, both methods rightly differ from it).
-    const target = new Float32Array(a.length);
-    const pi = pop.positions[this.i];
-    const pj = pop.positions[this.j];
-    for (let k = 0; k < target.length; k++) target[k] = (1 - this.t) * pi[k] + this.t * pj[k];
-    const da = distances(a, target);
-    const db = distances(b, target);
     const max = Math.max(...da, ...db, 1e-6);
     this.v.handle.viewer.show([{ positions: a, colours: errorColours(da, max) }, { positions: b, colours: errorColours(db, max) }], { frame });
   }
@@ -953,7 +910,7 @@ class Hierarchy extends Stepping {
     this.stage = stage;
     const labels = { coarse: model.coarseLabels, refined: model.refinedLabels, final: model.labels }[stage];
     const parts = new Set(labels).size;
-    this.v.handle.viewer.show([{ positions: pop.positions[0], colours: labelColours(labels, pop.faces).vertexColours }], { frame });
+    this.v.handle.viewer.show([{ positions: pop.positions[0], colours: paletteColours(labels, model.colours[stage]).vertexColours }], { frame });
     this.out('stage', `${stage}, ${parts} parts`);
     for (const b of this.el.querySelectorAll('[data-act]')) b.setAttribute('aria-pressed', String(b.dataset.act === stage));
   }
@@ -967,6 +924,7 @@ class Hierarchy extends Stepping {
     this.out('stage', `replaying: ${STAGE_TEXT[kind](m.stage)}, iteration ${this.stepper.iteration}`);
     for (const b of this.el.querySelectorAll('[data-act]')) b.setAttribute('aria-pressed', 'false');
     let colours;
+    if (!m.colours?.length) return; // none between the runs
     if (kind === 'refine' && m.vertices && m.gamma && m.parts) {
       colours = new Float32Array(pop.nVertices * 3);
       for (let v = 0; v < pop.nVertices; v++) colours.set(GREY, 3 * v);
@@ -974,10 +932,10 @@ class Hierarchy extends Stepping {
       m.vertices.forEach((v, j) => {
         let best = 0;
         for (let k = 1; k < K; k++) if (m.gamma[j * K + k] > m.gamma[j * K + best]) best = k;
-        colours.set(PALETTE_RGB[best % PALETTE.length], 3 * v);
+        colours.set(PALETTE_RGB[m.colours[best] % PALETTE.length], 3 * v);
       });
-    } else if (m.labels) {
-      colours = labelColours(m.labels, pop.faces).vertexColours;
+    } else if (m.labels && kind !== 'refine') {
+      colours = paletteColours(m.labels, m.colours).vertexColours;
     }
     if (colours) this.v.handle.viewer.show([{ positions: pop.positions[0], colours }]);
   }
@@ -1054,7 +1012,7 @@ class Reconstruction extends Figure {
   }
 
   async onFitted() {
-    this.b1 = null;
+    this.placed = null;
     this.poseIn.max = String(this.v.pop.nShapes - 1);
     this.out('rmse', this.v.model.summary.rmse.toExponential(2));
     await this.draw(true);
@@ -1071,33 +1029,21 @@ class Reconstruction extends Figure {
       [rec, err] = await Promise.all([this.v.handle.query('reconstruct', i), this.v.handle.query('vertexErrors', i)]);
       // The latent shape drawn with every part moved to its place in pose 1 (its b^1) but not turned: the
       // parts of eq 21 are all centred on the origin, on top of each other.
-      this.b1 ??= await this.v.handle.query('translations', 0);
+      this.placed ??= await this.v.handle.query('latentPlaced', 0);
     } catch (e) {
       this.setState('error', e.message);
       return;
     }
     if (seq !== this.seq) return;
     const max = Math.max(...err, 1e-9);
-    const parts = labelColours(model.labels, pop.faces).vertexColours;
+    const parts = paletteColours(model.labels, model.colours.final).vertexColours;
     this.v.handle.viewer.show([
       { positions: pop.positions[i], colours: parts },
       { positions: rec, colours: errorColours(err, max) },
-      { positions: this.placedLatent(), colours: parts },
+      { positions: this.placed, colours: parts },
     ], { frame });
     this.out('pose', String(i + 1));
     this.out('max', max.toExponential(1));
-  }
-
-  placedLatent() {
-    const { model } = this.v;
-    if (this.placed?.model === model) return this.placed.positions;
-    const out = Float32Array.from(model.latent);
-    model.labels.forEach((k, v) => {
-      const b = this.b1[k];
-      for (let a = 0; a < 3; a++) out[3 * v + a] += b[a];
-    });
-    this.placed = { model, positions: out };
-    return out;
   }
 
   fittedNote() {
@@ -1197,7 +1143,7 @@ class Interpolation extends Figure {
         this.v.handle.query('linearInterpolate', this.i, this.j, this.t),
       ]);
       if (seq !== this.seq) return;
-      const colours = labelColours(model.labels, pop.faces).vertexColours;
+      const colours = paletteColours(model.labels, model.colours.final).vertexColours;
       this.v.handle.viewer.show([{ positions: a, colours }, { positions: b, colours }], { frame });
       this.out('t', this.t.toFixed(2));
     } catch (e) {
@@ -1248,10 +1194,10 @@ class Limit extends Figure {
     const pose = this.name === 'blob' ? pop.nShapes - 1 : 0;
     const left = this.name === 'blob'
       ? new Float32Array(pop.nVertices * 3).fill(0.75)
-      : labelColours(pop.truth.partOfVertex, pop.faces).vertexColours;
+      : paletteColours(pop.truth.partOfVertex, pop.truth.colours).vertexColours;
     this.v.handle.viewer.show([
       { positions: pop.positions[pose], colours: left },
-      { positions: pop.positions[pose], colours: labelColours(model.labels, pop.faces).vertexColours },
+      { positions: pop.positions[pose], colours: paletteColours(model.labels, model.colours.final).vertexColours },
     ], { frame: true });
   }
 

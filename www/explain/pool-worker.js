@@ -176,8 +176,9 @@ class Session {
       interpolate: (i, j, t, opts) => this.model.interpolate(i, j, t, opts ?? {}),
       linearInterpolate: (i, j, t) => this.model.linearInterpolate(i, j, t),
       articulationReport: (i, j, t) => this.model.articulationReport(i, j, t),
-      // b_k^i of every part k in pose i (unit box), from the model's JSON export
-      translations: (i) => JSON.parse(this.model.toJson()).parts.map((p) => p.translations[i]),
+      distancesToLinear: (i, j, t, opts) => this.model.distancesToLinear(i, j, t, opts ?? {}),
+      latentPlaced: (i) => this.model.latentPlaced(i),
+      alongLongestAxis: (i) => this.population.alongLongestAxis(i),
     };
     try {
       if (!Q[method]) throw new Error(`unknown query ${method}`);
