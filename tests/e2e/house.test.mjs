@@ -1,5 +1,5 @@
-// The page's house rules (issue 10), read from the source in www/ (its generated www/pkg/ left out): no
-// geometry in JS: the core computes positions, distances, part colourings and bounding
+// The page's house rules (issue 10), read from the source in www/ (its generated www/pkg/ left out): no file
+// over 400 lines, and no geometry in JS: the core computes positions, distances, part colourings and bounding
 // boxes; the page only shows them. The only trigonometry or vector lengths allowed are the camera's (viewer.js:
 // framing the view) and the pointer's (views/inspect.js: a click is a drag of at most 4 pixels).
 // Run: node --test tests/e2e/house.test.mjs
@@ -23,6 +23,18 @@ function sources(dir = WWW, out = []) {
   }
   return out;
 }
+
+const MAX_LINES = 400;
+
+test(`no file in www/ is over ${MAX_LINES} lines`, () => {
+  const files = sources();
+  assert.ok(files.length >= 20, `found only ${files.length} files in www/`);
+  assert.ok(files.some((f) => f.endsWith(join('explain', 'figures.js'))), 'the article\'s figures were read');
+  const long = files
+    .map((f) => ({ file: relative(ROOT, f), lines: readFileSync(f, 'utf8').split('\n').length - 1 }))
+    .filter((x) => x.lines > MAX_LINES);
+  assert.deepEqual(long, []);
+});
 
 test('no geometry in www/: no trigonometry or vector lengths outside the camera and the pointer, no part colouring', () => {
   const allowed = new Set(['viewer.js', join('views', 'inspect.js')]);
