@@ -143,6 +143,25 @@ test('a figure starts when scrolled into view, pauses when scrolled away, resume
   }
 });
 
+test('once fitted, every figure\'s status line says something, and never "undefined" or NaN', async () => {
+  const { page, context, log } = await session.open('explain.html');
+  try {
+    const statuses = () => page.evaluate(() => [...document.querySelectorAll('[data-figure]')].map((e) => ({
+      name: e.dataset.figure, state: e.dataset.state, status: e.querySelector('.fig-status')?.textContent ?? null,
+    })));
+    await page.waitForFunction(() => [...document.querySelectorAll('[data-figure]')].every((e) => ['fitted', 'stepping'].includes(e.dataset.state) && e.querySelector('.fig-status').textContent.trim() !== ''), null, { timeout: 20000, polling: 100 })
+      .catch(async (e) => {
+        throw new Error(`${e.message}: ${JSON.stringify(await statuses())}`);
+      });
+    const all = await statuses();
+    assert.equal(all.length, 11);
+    assert.deepEqual(all.filter((f) => /undefined|NaN/.test(f.status)), []);
+    assert.deepEqual(log.errors, []);
+  } finally {
+    await context.close();
+  }
+});
+
 test('the article is linked from the app and back, keyboard reachable, and readable at phone width', async () => {
   const { page, context, log } = await session.open('');
   try {

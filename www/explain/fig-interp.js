@@ -59,6 +59,7 @@ export class Interpolation extends Figure {
         { values: ours, xs: ts, colour: EXACT },
         { values: linear, xs: ts, colour: LITERAL },
       ]);
+      this.refreshState(); // the status gives the largest volume changes, known only now
     } catch (e) {
       this.setState('error', e.message);
       return;
