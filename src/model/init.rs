@@ -27,13 +27,20 @@ fn dist2(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
 }
 
+/// A uniform index below `n`, the same on every target: rand draws a `usize` range from a `usize`, which is 64
+/// bits natively and 32 in wasm32, so `gen_range(0..n)` on `usize` picked other vertices in the page than in the
+/// CLI (another k-means++ start, so another fit: horse-poses 32 parts in wasm, 29 natively). Drawn as `u64`.
+fn index_below(rng: &mut Pcg64, n: usize) -> usize {
+    rng.gen_range(0..n as u64) as usize
+}
+
 /// One k-means++ seeding + Lloyd run. Returns (labels, cost).
 fn kmeans_once(data: &Data, m: usize, rng: &mut Pcg64, lloyd_iters: usize) -> (Vec<u32>, f64) {
     let n = data.n_vertices;
     let dim = data.n_shapes * 3;
     let row = |j: usize| &data.h[j * dim..(j + 1) * dim];
     let mut centres: Vec<f64> = Vec::with_capacity(m * dim);
-    let first = rng.gen_range(0..n);
+    let first = index_below(rng, n);
     centres.extend_from_slice(row(first));
     let mut d2: Vec<f64> = (0..n).map(|j| dist2(row(j), row(first))).collect();
     while centres.len() < m * dim {
@@ -50,7 +57,7 @@ fn kmeans_once(data: &Data, m: usize, rng: &mut Pcg64, lloyd_iters: usize) -> (V
             }
             p
         } else {
-            rng.gen_range(0..n)
+            index_below(rng, n)
         };
         let c = row(pick).to_vec();
         for j in 0..n {
