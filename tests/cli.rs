@@ -159,3 +159,38 @@ fn bones_n_gives_exactly_n_parts() {
     assert_eq!(v["parts"].as_array().map(Vec::len), Some(5), "{}", text(&r.stdout));
     assert_eq!(v["islands"].as_u64(), Some(0));
 }
+
+/// `posemfa generate --format F` writes each format a user can try, and `posemfa fit` reads each back to the
+/// same population: the same fit as from the OBJ files (labels with adjusted Rand index >= 0.99), and the
+/// `poses:` line says where the poses came from.
+#[test]
+fn generate_writes_every_format_and_fit_reads_it_back() {
+    let root = std::env::temp_dir().join(format!("posemfa-cli-formats-{}", std::process::id()));
+    let labels_of = |format: &str, want: &str| -> Vec<u32> {
+        let dir = root.join(format);
+        let dir_arg = dir.to_str().expect("utf-8 temp path");
+        let r = posemfa(&["generate", "arm", "--vertices", "600", "--poses", "5", "--format", format, "--out", dir_arg]);
+        assert!(r.status.success(), "generate --format {format}: {}", text(&r.stderr));
+        let json = root.join(format!("{format}.json"));
+        let r = posemfa(&["fit", dir_arg, "--parts", "3", "--json", json.to_str().unwrap()]);
+        let out = text(&r.stdout);
+        assert!(r.status.success(), "fit of --format {format}: {}", text(&r.stderr));
+        let line = out.lines().find(|l| l.trim_start().starts_with("poses: ")).unwrap_or_else(|| panic!("no poses line:\n{out}"));
+        assert!(line.contains(want), "--format {format}: expected '{want}' in '{line}'");
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(v["shapes"].as_array().map(Vec::len), Some(5), "--format {format}");
+        v["labels"].as_array().unwrap().iter().map(|l| l.as_u64().unwrap() as u32).collect()
+    };
+    let obj = labels_of("obj", "5 OBJ files");
+    for (format, want) in [
+        ("ply", "5 PLY files"),
+        ("ply-ascii", "5 PLY files"),
+        ("pc2", "5 frames of the point cache poses.pc2"),
+        ("glb", "5 frames of animation 'Poses'"),
+    ] {
+        let labels = labels_of(format, want);
+        let ari = posemfa::metrics::adjusted_rand_index(&obj, &labels);
+        assert!(ari >= 0.99, "--format {format}: ARI {ari} against the OBJ files' fit");
+    }
+    let _ = std::fs::remove_dir_all(&root);
+}

@@ -98,8 +98,9 @@ dual_test! {
     }
 }
 
-/// horse-poses as binary PLY and as a .pc2 cache (float32 both) fits like the OBJ folder at the same seed:
-/// same part count, adjusted Rand index >= 0.99. Counted as skipped when the data are absent (fails under CI=true).
+/// horse-poses as ASCII PLY (the OBJ files' own numbers), binary PLY and a .pc2 cache (float32 both) fits like
+/// the OBJ folder at the same seed: same part count, adjusted Rand index >= 0.99. Counted as skipped when the
+/// data are absent (fails under CI=true).
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
@@ -112,6 +113,14 @@ fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
         (n.replace(".obj", ".ply"), write_ply(s, &obj.faces, PlyFormat::Binary, "horse-poses"))
     }).collect();
     let ply = Population::from_files(ply).unwrap();
+    // ASCII PLY of each OBJ file's own coordinates (printed in full: they read back bit for bit)
+    let ascii: Vec<(String, Vec<u8>)> = obj.names.iter().map(|n| {
+        let m = parse_obj(n, &std::fs::read(dir.join(n)).unwrap()).unwrap();
+        (n.replace(".obj", ".ply"), write_ply(&m.positions, &m.faces, PlyFormat::Ascii, "horse-poses"))
+    }).collect();
+    let ascii = Population::from_files(ascii).unwrap();
+    assert_eq!(ascii.source, "11 PLY files");
+    assert_eq!((&ascii.shapes, &ascii.faces), (&obj.shapes, &obj.faces), "ASCII PLY gives the OBJ population exactly");
     let pc2 = Population::from_files(vec![
         ("horse.pc2".into(), write_pc2(&original)),
         ("reference.obj".into(), std::fs::read(dir.join("reference.obj")).unwrap()),
@@ -121,7 +130,7 @@ fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
     let params = Params::default();
     let reference = fit(&obj, &params, &mut |_| true).unwrap();
     let parts = reference.model.parts.len();
-    for (what, pop) in [("binary PLY", &ply), ("pc2", &pc2)] {
+    for (what, pop) in [("ASCII PLY", &ascii), ("binary PLY", &ply), ("pc2", &pc2)] {
         let r = fit(pop, &params, &mut |_| true).unwrap();
         let ari = adjusted_rand_index(&reference.model.labels, &r.model.labels);
         println!("{what}: {} parts (OBJ {parts}), ARI {ari:.4}", r.model.parts.len());

@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Issue 12's must-shows on the real horses, with files written by Blender (into a temporary folder, removed at
+# the end: nothing from ../shared is kept or committed):
+#   1. horse-gallop's 48 frames as Blender shape keys (one .glb, animated one key per frame) fit like the OBJ
+#      folder at the same seed: part count within +-3 and RMSE within 10 % of the OBJ fit's; the poses read from
+#      the animation (49 frames) and from the morph targets (`--poses-from morph-targets`: 48 targets + base).
+#   2. horse-poses rigged by `posemfa export-gltf`, imported by Blender and exported again flat (every vertex
+#      split per face corner, as Blender does for a mesh without smooth normals): welded back to the OBJ
+#      folder's vertex count, and it fits.
+# (PLY ASCII / binary and .pc2 versions of horse-poses: `cargo test --test formats horse`.)
+#
+# Usage: scripts/check-horse-formats.sh [DATA_DIR]   (default ../shared/data; needs Blender:
+#        apt-get install -y blender python3-numpy). Prints one line per check with its figures; exits 1 when a
+#        check fails, 2 when Blender or the data are missing.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+data=${1:-../shared/data}
+for d in horse-gallop horse-poses; do
+  [ -d "$data/$d" ] || { echo "check-horse-formats: $data/$d is absent (give the data folder as the argument)" >&2; exit 2; }
+done
+command -v blender >/dev/null || { echo "check-horse-formats: blender is missing (apt-get install -y blender python3-numpy)" >&2; exit 2; }
+cargo build --release --quiet --bin posemfa
+posemfa=$PWD/target/release/posemfa
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+blender_py() {
+  blender -b --factory-startup --python scripts/fixtures/blender_fixtures.py -- "$@" >"$tmp/blender.log" 2>&1 \
+    || { cat "$tmp/blender.log" >&2; echo "check-horse-formats: Blender failed: $*" >&2; exit 2; }
+  grep -q '^wrote' "$tmp/blender.log" || { cat "$tmp/blender.log" >&2; exit 2; }
+}
+
+echo "[check] Blender: horse-gallop as shape keys; horse-poses rigged by posemfa, re-exported flat"
+blender_py shapekeys "$PWD/$data/horse-gallop" "$tmp/gallop-shapekeys.glb"
+"$posemfa" export-gltf "$data/horse-poses" --out "$tmp/horse-posemfa.glb" >/dev/null
+blender_py reexport "$tmp/horse-posemfa.glb" "$tmp/horse-skinned-flat.glb" --flat
+
+fit() { "$posemfa" fit "$1" --seed 0 --quiet --json "$tmp/$2.json" "${@:3}" >/dev/null; }
+fit "$data/horse-gallop" gallop-obj
+fit "$tmp/gallop-shapekeys.glb" gallop-glb
+fit "$tmp/gallop-shapekeys.glb" gallop-targets --poses-from morph-targets
+fit "$data/horse-poses" poses-obj
+fit "$tmp/horse-skinned-flat.glb" poses-skinned
+
+node - "$tmp" <<'JS'
+const { readFileSync } = require('node:fs');
+const dir = process.argv[2];
+const r = (n) => JSON.parse(readFileSync(`${dir}/${n}.json`, 'utf8'));
+const parts = (j) => j.parts.length;
+let ok = true;
+const check = (pass, line) => { console.log(`${pass ? 'ok  ' : 'FAIL'} ${line}`); ok &&= pass; };
+const go = r('gallop-obj');
+for (const [name, what] of [['gallop-glb', 'animation'], ['gallop-targets', 'morph targets']]) {
+  const gg = r(name);
+  const rel = Math.abs(gg.rmse - go.rmse) / go.rmse;
+  check(gg.shapes.length === go.shapes.length && gg.n_vertices === go.n_vertices
+    && Math.abs(parts(gg) - parts(go)) <= 3 && rel <= 0.1,
+    `horse-gallop, Blender shape-key .glb (${what}): ${gg.shapes.length} poses x ${gg.n_vertices} vertices, ${parts(gg)} parts, RMSE ${gg.rmse.toFixed(5)}`
+    + ` | OBJ folder: ${go.shapes.length} x ${go.n_vertices}, ${parts(go)} parts, RMSE ${go.rmse.toFixed(5)}`
+    + ` (parts within 3, RMSE ${(100 * rel).toFixed(1)} % apart <= 10 %) | ${gg.source}`);
+}
+const [po, ps] = [r('poses-obj'), r('poses-skinned')];
+const welded = /(\d+) vertices welded to (\d+)/.exec(ps.source);
+check(ps.n_vertices === po.n_vertices && welded !== null && Number(welded[1]) > ps.n_vertices && parts(ps) >= 2
+  && Number.isFinite(ps.rmse),
+  `horse-poses, Blender skinned .glb with seams: ${welded ? `${welded[1]} vertices in the file welded to ${welded[2]}` : 'no weld reported'}`
+  + ` (OBJ: ${po.n_vertices}), ${ps.shapes.length} frames, ${parts(ps)} parts, RMSE ${ps.rmse.toFixed(5)} | ${ps.source}`);
+process.exit(ok ? 0 : 1);
+JS
