@@ -697,20 +697,28 @@ fn read_element<V: Values>(
                             Err(Bad::End) => return Err(ended(r, at_index, i)),
                             Err(Bad::Text(t)) => Err(t),
                         };
-                        let (line, at) = r.place(r.mark());
-                        let v = v.map_err(|shown| Fail {
-                            line,
-                            message: format!(
-                                "`{shown}` is not a valid vertex index in face {i}{at}; indices are whole numbers \
-                                 counted from 0"
-                            ),
+                        // where the index is (line, or " (at byte N)") is formatted only for an error: one String per
+                        // corner took most of a binary file's reading time
+                        let v = v.map_err(|shown| {
+                            let (line, at) = r.place(r.mark());
+                            Fail {
+                                line,
+                                message: format!(
+                                    "`{shown}` is not a valid vertex index in face {i}{at}; indices are whole numbers \
+                                     counted from 0"
+                                ),
+                            }
                         })?;
-                        let v = u32::try_from(v).map_err(|_| Fail {
-                            line,
-                            message: format!(
-                                "face {i}{at} refers to vertex {v}, which is {}; the file is damaged: export it again",
-                                if v < 0 { "negative" } else { "beyond 4294967295" }
-                            ),
+                        let v = u32::try_from(v).map_err(|_| {
+                            let (line, at) = r.place(r.mark());
+                            Fail {
+                                line,
+                                message: format!(
+                                    "face {i}{at} refers to vertex {v}, which is {}; the file is damaged: export it \
+                                     again",
+                                    if v < 0 { "negative" } else { "beyond 4294967295" }
+                                ),
+                            }
                         })?;
                         corners.push(v);
                     }
