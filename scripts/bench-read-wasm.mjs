@@ -9,7 +9,7 @@
 // `Population::from_files` (`cargo run --release --example bench_read -- INPUT --population`), alternating R
 // rounds so both see the same machine load. Each round prints one JSON line (medians of N reads); the last
 // line per input gives the medians over rounds: {input, bytes, nativeMs, wasmMs, nativeMBs, wasmMBs, ratio}.
-// Needs `npm run build:wasm` (pkg-node/).
+// Needs `npm run build:wasm` (pkg-node/). Honours CARGO_TARGET_DIR as cargo does.
 import { execFileSync } from 'node:child_process';
 import { readFileSync, readdirSync, statSync, existsSync, mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -39,7 +39,7 @@ if (!existsSync(pkg)) {
 }
 const wasm = createRequire(import.meta.url)(pkg);
 execFileSync('cargo', ['build', '--quiet', '--release', '--example', 'bench_read'], { cwd: ROOT, stdio: 'inherit' });
-const nativeBin = join(ROOT, 'target/release/examples/bench_read');
+const nativeBin = join(process.env.CARGO_TARGET_DIR ? resolve(ROOT, process.env.CARGO_TARGET_DIR) : join(ROOT, 'target'), 'release/examples/bench_read');
 
 // The files bench_read reads: a folder's files (sorted, .mtl left out) or the file itself.
 function filesOf(input) {

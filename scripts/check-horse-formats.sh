@@ -20,7 +20,7 @@ for d in horse-gallop horse-poses; do
 done
 command -v blender >/dev/null || { echo "check-horse-formats: blender is missing (apt-get install -y blender python3-numpy)" >&2; exit 2; }
 cargo build --release --quiet --bin posemfa
-posemfa=$PWD/target/release/posemfa
+posemfa=$(realpath "${CARGO_TARGET_DIR:-target}")/release/posemfa   # cargo honours CARGO_TARGET_DIR too
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 blender_py() {
