@@ -377,7 +377,9 @@ impl FitModel {
 
     /// {shapes, vertices, parts, coarseParts, refinedParts, rmse, rmseOriginal (in the original units),
     /// iterations, converged, complete,
-    /// logLikelihood: [...], stageStats: [...]}
+    /// logLikelihood: [...], stageStats: [...],
+    /// diagnosis: {articulated, reason, singleBodyRmse, partsRmse, explained, parts},
+    /// partCurve: [{parts, score, variance}] (the part rule's merge decisions, most parts first)}
     pub fn summary(&self) -> Result<JsValue, JsValue> {
         let m = self.model();
         let s = &self.result.stages;
@@ -389,6 +391,8 @@ impl FitModel {
             "iterations": m.iterations, "converged": m.converged,
             "complete": self.result.complete, "logLikelihood": m.log_likelihood,
             "stageStats": self.result.stats,
+            "diagnosis": crate::model::diagnosis::diagnose(&self.pop, m),
+            "partCurve": self.result.part_curve,
         });
         to_js(&v)
     }

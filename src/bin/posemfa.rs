@@ -15,7 +15,7 @@ use posemfa::export::gltf::Weights;
 use posemfa::export::json::fit_to_json;
 use posemfa::mesh::Population;
 use posemfa::model::hierarchy::{FitResult, Pipeline, Progress, Stage};
-use posemfa::model::{LambdaRule, Params};
+use posemfa::model::{LambdaRule, Params, PartRule};
 use std::ffi::OsString;
 use std::io::Write;
 use std::process::ExitCode;
@@ -394,11 +394,31 @@ fn fit_group<T: HasFit>() -> Group<T> {
                     o.fit().params.accelerate = false;
                 },
             ),
+            val("--part-rule", "RULE", "how the part count is decided: distinct (default, scale-free) or threshold (the paper's)", |o: &mut T, v| {
+                one_of(v, &[("distinct", PartRule::Distinct), ("threshold", PartRule::Threshold)]).map(|x| o.fit().params.part_rule = x)
+            }),
+            val(
+                "--distinct-ratio",
+                "K",
+                "part rule distinct: a joint must explain K times a typical part's variance to keep two parts (default 4)",
+                |o: &mut T, v| num(v).map(|n| o.fit().params.distinct_ratio = n),
+            ),
+            val(
+                "--blend-ratio",
+                "B",
+                "part rule distinct: a part moving as a fixed blend of two neighbours to within B is flesh (default 0.1)",
+                |o: &mut T, v| num(v).map(|n| o.fit().params.blend_ratio = n),
+            ),
             val(
                 "--refine-threshold",
                 "E",
-                "Algorithm 1: stop splitting a part below this mean variance (default 1e-5)",
-                |o: &mut T, v| num(v).map(|n| o.fit().params.refine_threshold = n),
+                "the paper's part rule: stop splitting a part below this mean variance (default 1e-5; implies --part-rule threshold)",
+                |o: &mut T, v| {
+                    num(v).map(|n| {
+                        o.fit().params.refine_threshold = n;
+                        o.fit().params.part_rule = PartRule::Threshold;
+                    })
+                },
             ),
             val("--max-subparts", "N", "Algorithm 1: most sub-parts per coarse part (default 6)", |o: &mut T, v| {
                 num(v).map(|n| o.fit().params.max_subparts = n)
@@ -669,10 +689,21 @@ fn cmd_fit(o: FitRun) -> Result<(), String> {
         median(&mut totals),
         load_ms
     );
+    let d = posemfa::model::diagnosis::diagnose(&pop, m);
+    out!("  {}: {}", if d.articulated { "articulated" } else { "NOT articulated" }, d.reason);
     if let Some(g) = &truth {
         out!("  ground truth: {}", ground_truth_json(g, m));
     } else {
         out!("  poses: {}", pop.source);
+    }
+    if let [.., last] = result.part_curve.as_slice() {
+        out!(
+            "  part rule: {} merges from {} parts; the next pair scored {:.2} (kept apart from {}: --distinct-ratio)",
+            result.part_curve.len() - 1,
+            result.part_curve[0].parts,
+            last.score,
+            o.fit.params.distinct_ratio
+        );
     }
     for st in &result.stats {
         out!("  {:<7} {:>8.1} ms  {:>5} iterations in {:>3} AECM runs", st.name, st.ms, st.iterations, st.aecm_runs);

@@ -2,6 +2,8 @@
 //! `normalization` maps them back: unit = (original - offset) * scale.
 
 use crate::mesh::{Normalization, Population};
+use crate::model::diagnosis::Diagnosis;
+use crate::model::distinct::CurvePoint;
 use crate::model::hierarchy::{FitResult, StageParts, StageStats};
 use serde::Serialize;
 
@@ -40,6 +42,11 @@ pub struct FitJson {
     pub islands: usize,
     pub timings_ms: std::collections::BTreeMap<String, f64>,
     pub stage_stats: Vec<StageStats>,
+    /// Whether the population looks articulated, and why ([`crate::model::diagnosis`]).
+    pub diagnosis: Diagnosis,
+    /// The part rule's merge decisions, most parts first: why the fit stopped at its part count
+    /// ([`crate::model::distinct::CurvePoint`]; empty with the paper's threshold rule).
+    pub part_curve: Vec<CurvePoint>,
 }
 
 impl FitJson {
@@ -85,6 +92,8 @@ impl FitJson {
             islands: crate::model::islands::island_count(&m.labels, &pop.faces),
             timings_ms,
             stage_stats: result.stats.clone(),
+            diagnosis: crate::model::diagnosis::diagnose(pop, m),
+            part_curve: result.part_curve.clone(),
         }
     }
 }

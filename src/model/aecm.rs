@@ -308,12 +308,13 @@ impl Fit {
         let mut num = 0.0;
         let mut den = 0.0;
         for c in &self.comps {
-            let s: f64 = c.variances.iter().sum::<f64>() / c.variances.len() as f64;
-            num += c.weight * s;
+            num += c.weight * c.mean_variance();
             den += c.weight;
         }
         num / den.max(f64::MIN_POSITIVE)
     }
+
+
 
     /// Labels of the current state: I_j = argmax_k γ_kj (eq 20).
     pub fn labels(&self) -> Vec<u32> {

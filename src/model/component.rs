@@ -54,6 +54,11 @@ impl Component {
         self.rotations.len()
     }
 
+    /// Mean of the per-shape variances s_k^i.
+    pub fn mean_variance(&self) -> f64 {
+        self.variances.iter().sum::<f64>() / self.variances.len().max(1) as f64
+    }
+
     pub fn woodbury(&self) -> Woodbury {
         let ns = self.n_shapes();
         let inv_s: Vec<f64> = self.variances.iter().map(|s| 1.0 / s).collect();

@@ -4,10 +4,13 @@
 //! 1. Coarse: AECM with m parts from k-means++.
 //! 2. Refine: for every coarse part k, AECM on its vertices alone with m_k = 1, 2, ... components; err is
 //!    the mass-weighted mean variance of the sub-components (the paper's plain average is fragile,
-//!    METHOD_NOTES item 8). Stop when err < `refine_threshold`, when m_k does not lower err by at least the
-//!    fraction `refine_min_gain`, when a component died, or at `max_subparts`; keep the best m_k.
-//! 3. Final: AECM on all vertices started from the refined labels; then every part is made one connected
-//!    piece of the mesh ([`super::islands`]).
+//!    METHOD_NOTES item 8). Stop when m_k does not lower err by at least the fraction `refine_min_gain`, when a
+//!    component died, or at `max_subparts`, and with [`PartRule::Threshold`] when err < `refine_threshold`. Keep
+//!    the best m_k; with [`PartRule::Distinct`], the last m_k that lowered err `distinct_ratio` times.
+//! 3. Final: AECM on all vertices started from the refined labels. With [`PartRule::Distinct`], every vertex is
+//!    then labelled by rigid motion ([`super::motion_labels`]) and, once, flesh between parts is dissolved and
+//!    parts without a distinct motion are merged ([`super::distinct`]); if that removed parts, the final AECM
+//!    runs again from those labels. Every part is made one connected piece of the mesh ([`super::islands`]).
 //! 4. Only with `target_parts` = N: parts are split or merged until there are exactly N ([`super::part_count`]),
 //!    then the final AECM runs again from those labels.
 //!
@@ -19,7 +22,7 @@
 
 use super::aecm::{Fit, StepInfo};
 use super::data::Data;
-use super::params::Params;
+use super::params::{PartRule, Params};
 use super::result::Model;
 use crate::error::Result;
 use crate::mesh::Population;
@@ -85,6 +88,8 @@ pub struct FitResult {
     pub stats: Vec<StageStats>,
     /// False if the fit was stopped before the final stage converged or hit its cap.
     pub complete: bool,
+    /// [`PartRule::Distinct`]: the merge decisions, from the most parts down to the count kept (empty otherwise).
+    pub part_curve: Vec<super::distinct::CurvePoint>,
 }
 
 struct Refinement {
@@ -95,6 +100,9 @@ struct Refinement {
     fit: Fit,
     /// Best accepted fit so far for this part.
     best: Option<Best>,
+    /// [`PartRule::Distinct`]: the labelling kept for this part so far (err, local labels): the first fit, then
+    /// every accepted fit whose err is at most 1 / `distinct_ratio` of the kept one's.
+    kept: Option<(f64, Vec<u32>)>,
     /// The split of the current best was already retried with the other rule.
     retried: bool,
     /// Refined labels accumulated over parts (global ids), u32::MAX = not yet assigned.
@@ -175,10 +183,19 @@ pub struct Pipeline {
     subset: Option<Vec<usize>>,
     /// Times the part count was made exact (`target_parts`).
     count_rounds: usize,
+    /// [`PartRule::Distinct`]: times parts were dissolved and merged after a final AECM (at most
+    /// [`DECIDE_ROUNDS`]; the final AECM runs again after each round that removed parts).
+    decide_rounds: usize,
+    /// [`PartRule::Distinct`]: the merge decisions ([`super::distinct::merge_indistinct`]).
+    part_curve: Vec<super::distinct::CurvePoint>,
 }
 
 /// Most times [`Pipeline`] makes the part count exact and refits.
 const COUNT_ROUNDS: usize = 3;
+
+/// Most times [`PartRule::Distinct`] dissolves and merges parts and refits (a refit moves boundaries, which can
+/// leave a new sliver of flesh or a new island part).
+const DECIDE_ROUNDS: usize = 3;
 
 impl Pipeline {
     /// Validates the parameters and the data and runs the coarse initialisation (k-means++).
@@ -220,6 +237,8 @@ impl Pipeline {
             total_iterations: 0,
             subset,
             count_rounds: 0,
+            decide_rounds: 0,
+            part_curve: Vec::new(),
         })
     }
 
@@ -355,7 +374,29 @@ impl Pipeline {
     /// [`COUNT_ROUNDS`] times, in case the AECM drops a part).
     fn finish(&mut self, mut model: Model) -> Result<State> {
         let rounds = self.count_rounds;
-        super::islands::connect_parts(&mut model, &self.pop, rounds == 0, self.params.min_part_vertices);
+        if self.params.part_rule == PartRule::Distinct {
+            super::motion_labels::label_by_motion(&mut model, &self.pop);
+        }
+        // an island becomes a part of its own only after the first final AECM (later ones are boundary shifts)
+        let new_parts = rounds == 0 && self.decide_rounds == 0;
+        super::islands::connect_parts(&mut model, &self.pop, new_parts, self.params.min_part_vertices);
+        if self.params.part_rule == PartRule::Distinct && self.decide_rounds < DECIDE_ROUNDS {
+            self.decide_rounds += 1;
+            let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
+            if dissolved > 0 {
+                super::islands::connect_parts(&mut model, &self.pop, false, self.params.min_part_vertices);
+            }
+            let before = model.n_parts();
+            let (merged, curve) = super::distinct::merge_indistinct(&self.pop, &model.labels, &self.params);
+            self.part_curve = curve;
+            let after = merged.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+            if dissolved > 0 || after < before {
+                self.refined_labels = merged.clone();
+                self.stats.push(StageStats { name: "parts".into(), ..Default::default() });
+                self.stage_started_ms = crate::clock::now_ms();
+                return Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &merged, &self.params)?));
+            }
+        }
         let Some(n) = self.params.target_parts else {
             self.final_model = Some(model);
             return Ok(State::Done);
@@ -413,6 +454,7 @@ impl Pipeline {
             best: None,
             retried: false,
             next_label: 0,
+            kept: None,
         })))
     }
 
@@ -420,6 +462,7 @@ impl Pipeline {
     /// to the next coarse part.
     fn refine_next(&mut self, mut r: Box<Refinement>, done: Fit) -> Result<State> {
         let err = done.mean_variance();
+        let distinct = self.params.part_rule == PartRule::Distinct;
         let died = done.n_parts() < r.sub_parts;
         if std::env::var_os("POSEMFA_DEBUG").is_some() {
             eprintln!(
@@ -442,9 +485,13 @@ impl Pipeline {
         if improved {
             let raw = done.labels();
             let worst = worst_component(&done);
-            r.best = Some(Best { err, local: compact(&raw), raw, worst });
+            let local = compact(&raw);
+            if distinct && r.kept.as_ref().is_none_or(|k| err * self.params.distinct_ratio <= k.0) {
+                r.kept = Some((err, local.clone()));
+            }
+            r.best = Some(Best { err, local, raw, worst });
             r.retried = false;
-            if err >= self.params.refine_threshold && room {
+            if (distinct || err >= self.params.refine_threshold) && room {
                 let labels = self.split(&r, SplitRule::Positions);
                 r.sub_parts += 1;
                 r.fit = self.sub_fit(&r, &labels)?;
@@ -460,8 +507,9 @@ impl Pipeline {
         }
         // accept the best labelling of this part
         let best = r.best.take().expect("the first run of a part is always accepted");
-        let n_local = best.local.iter().map(|&l| l + 1).max().unwrap_or(1);
-        for (&j, &l) in r.members[r.part].iter().zip(&best.local) {
+        let local = r.kept.take().map_or(best.local, |k| k.1);
+        let n_local = local.iter().map(|&l| l + 1).max().unwrap_or(1);
+        for (&j, &l) in r.members[r.part].iter().zip(&local) {
             r.refined[j] = r.next_label + l;
         }
         r.next_label += n_local;
@@ -478,7 +526,11 @@ impl Pipeline {
             None => std::mem::take(&mut r.refined),
             Some(s) => super::multires::extend_labels(&self.pop, s, &r.refined, self.params.variance_floor),
         };
-        self.refined_labels = merge_rigid_neighbours(&self.pop, &refined, &self.params);
+        self.refined_labels = match self.params.part_rule {
+            // parts are merged after the final AECM has cleaned the boundaries ([`Pipeline::finish`])
+            PartRule::Distinct => compact(&refined),
+            PartRule::Threshold => merge_rigid_neighbours(&self.pop, &refined, &self.params),
+        };
         self.close_stage(Some("final"));
         let fit = Fit::from_labels(Data::from_population(&self.pop), &self.refined_labels, &self.params)?;
         Ok(State::Final(fit))
@@ -552,6 +604,7 @@ impl Pipeline {
             refined_labels: self.refined_labels.clone(),
             stats: self.stats.clone(),
             complete: self.is_done(),
+            part_curve: self.part_curve.clone(),
         }
     }
 
@@ -567,7 +620,7 @@ impl Pipeline {
 }
 
 /// Labels renumbered 0.. in order of first appearance of each used value.
-fn compact(labels: &[u32]) -> Vec<u32> {
+pub(crate) fn compact(labels: &[u32]) -> Vec<u32> {
     let mut map = std::collections::HashMap::new();
     labels
         .iter()

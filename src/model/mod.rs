@@ -12,6 +12,9 @@
 //! - [`squarem`]: SQUAREM extrapolation of the AECM iteration (fewer iterations, still monotone).
 //! - [`hierarchy`]: Algorithm 1 (coarse, refinement, final), every stage kept.
 //! - [`multires`]: the coarse and refinement stages on a well-spread vertex subset, labels carried to all.
+//! - [`diagnosis`]: whether the population looks articulated (how much of the motion rigid parts explain).
+//! - [`distinct`]: the default part rule: flesh between parts dissolved, parts without a distinct motion merged.
+//! - [`motion_labels`]: final labels by least-squares rigid motion (boundaries on the joints).
 //! - [`islands`]: every part one connected piece of the mesh (islands moved to the best adjacent part).
 //! - [`result`]: the fitted [`Model`]: labels (eq 20), latent shape (eq 21), reconstruction (eq 22).
 //! - [`limit`]: the E-step's speed against the machine's limit (tight kernels, measured).
@@ -20,18 +23,21 @@ pub mod aecm;
 pub mod cm;
 pub mod component;
 pub mod data;
+pub mod diagnosis;
+pub mod distinct;
 pub mod estep;
 pub mod hierarchy;
 pub mod init;
 pub mod islands;
 pub mod limit;
 pub mod memory;
+pub mod motion_labels;
 pub mod multires;
 pub mod params;
 pub mod part_count;
 pub mod result;
 pub mod squarem;
 
-pub use params::{LambdaRule, Params};
+pub use params::{LambdaRule, Params, PartRule};
 pub use component::Component;
 pub use result::Model;

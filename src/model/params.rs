@@ -16,6 +16,20 @@ pub enum LambdaRule {
     PaperEq18,
 }
 
+/// How Algorithm 1 decides how many parts there are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum PartRule {
+    /// Scale-free ([`super::distinct`]): the refinement splits freely; then flesh between parts (a part moving
+    /// as a fixed blend of two neighbours) is dissolved, and adjacent parts whose motions are not distinct are
+    /// merged. Uses `distinct_ratio` and `blend_ratio`, both dimensionless. Default.
+    #[default]
+    Distinct,
+    /// The paper's: stop splitting when a part's mean variance falls below `refine_threshold` (absolute, unit-box
+    /// units²), and merge neighbours below `merge_ratio * refine_threshold`. Depends on the shape's size.
+    Threshold,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, rename_all = "camelCase", deny_unknown_fields)]
 pub struct Params {
@@ -46,10 +60,21 @@ pub struct Params {
     /// well-spread vertices and only the final AECM on all of them; 0 runs every stage on all vertices (the full
     /// hierarchy). Only with `refine`. Default 2000.
     pub subset_vertices: usize,
-    /// Algorithm 1 step 5: stop splitting a part when its mean variance err falls below this. Default 1e-5.
+    /// How the part count is decided. Default [`PartRule::Distinct`].
+    pub part_rule: PartRule,
+    /// [`PartRule::Distinct`]: two adjacent parts stay apart only if moving both by one rigid motion raises the
+    /// squared error of the smaller one, per vertex, to at least this many times a typical part's variance; and
+    /// a refinement split is kept only if it lowers the variance this many times. Default 4.
+    pub distinct_ratio: f64,
+    /// [`PartRule::Distinct`]: a part whose motion is a fixed in-between of two neighbours' motions to within
+    /// this fraction of their relative rotation is flesh, not a part ([`super::distinct::blend_ratio`]).
+    /// Default 0.1.
+    pub blend_ratio: f64,
+    /// [`PartRule::Threshold`], Algorithm 1 step 5: stop splitting a part when its mean variance err falls below
+    /// this. Default 1e-5.
     pub refine_threshold: f64,
-    /// After the refinement, adjacent parts that one rigid component explains with a mean variance below
-    /// `merge_ratio * refine_threshold` are merged (0 turns the merge off). Default 0.25.
+    /// [`PartRule::Threshold`]: after the refinement, adjacent parts that one rigid component explains with a
+    /// mean variance below `merge_ratio * refine_threshold` are merged (0 turns the merge off). Default 0.25.
     pub merge_ratio: f64,
     /// Most sub-parts tried per coarse part in the refinement. Default 6.
     pub max_subparts: usize,
@@ -82,6 +107,9 @@ impl Default for Params {
             restarts: 4,
             refine: true,
             subset_vertices: 2000,
+            part_rule: PartRule::Distinct,
+            distinct_ratio: 4.0,
+            blend_ratio: 0.1,
             refine_threshold: 1e-5,
             merge_ratio: 0.25,
             max_subparts: 6,
@@ -115,6 +143,12 @@ impl Params {
         }
         if !(self.refine_threshold >= 0.0 && self.refine_threshold.is_finite()) {
             return bad(format!("refine_threshold = {} must be >= 0", self.refine_threshold));
+        }
+        if !(self.distinct_ratio > 0.0 && self.distinct_ratio.is_finite()) {
+            return bad(format!("distinct_ratio = {} must be a positive number (try 4)", self.distinct_ratio));
+        }
+        if !(0.0..1.0).contains(&self.blend_ratio) {
+            return bad(format!("blend_ratio = {} must be in [0, 1) (try 0.1; 0 keeps every part)", self.blend_ratio));
         }
         if !(0.0..=1.0).contains(&self.merge_ratio) {
             return bad(format!("merge_ratio = {} must be in [0, 1]", self.merge_ratio));

@@ -1,0 +1,307 @@
+//! The default part rule ([`super::params::PartRule::Distinct`]): how many parts, decided without any absolute
+//! threshold. Two ratios, both dimensionless, so the rule is the same for a shape at any scale, mesh resolution
+//! or number of poses (README, "A part count without tuning"):
+//!
+//! 1. **Flesh is not a part** ([`dissolve_flesh`]). A part whose motion is, in every pose, one fixed in-between
+//!    of two neighbours' motions (a slice of a skinning blend band) is the joint's flesh: its vertices go to
+//!    whichever neighbour moves them best. Test: [`blend_ratio`] < `blend_ratio`.
+//! 2. **A joint must explain the motion** ([`merge_indistinct`]). Two adjacent parts stay apart only if fitting
+//!    them as one rigid body costs their smaller side, per vertex, at least `distinct_ratio` times the variance of
+//!    a typical part of this very fit (the vertex-weighted median of the parts' variances, fixed before any
+//!    merge). Pairs below are merged, cheapest first.
+//!
+//! Algorithm 1's refinement runs first without a threshold (it splits while a split lowers the variance by
+//! `refine_min_gain`, and keeps a split only when it lowers the variance `distinct_ratio` times); the final
+//! AECM runs on its labels, then 1 and 2, then the final AECM once more if any part went.
+
+use super::data::Data;
+use super::hierarchy::compact;
+use super::motion_labels::motion_residual;
+use super::params::Params;
+use super::result::Model;
+use crate::geometry::rotation::{angle_between, slerp};
+use crate::geometry::Mat3;
+use crate::mesh::Population;
+use serde::Serialize;
+
+/// One merge decision of [`merge_indistinct`]: with `parts` parts, the cheapest adjacent pair scored `score`
+/// (merged when below `distinct_ratio`); `variance` is the vertex-weighted mean variance of the rigid fits of
+/// the `parts` parts (unit-box units²). The last entry is the first pair that was not merged (or the count
+/// reached 1): the reason the fit stopped where it did.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct CurvePoint {
+    pub parts: usize,
+    pub score: f64,
+    pub variance: f64,
+}
+
+/// The parts adjacent to each part (sharing a mesh edge), sorted, and each part's vertices.
+fn adjacency(labels: &[u32], faces: &[[u32; 3]]) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
+    let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+    let mut adjacent = vec![Vec::new(); m];
+    let mut members = vec![Vec::new(); m];
+    for (j, &l) in labels.iter().enumerate() {
+        members[l as usize].push(j);
+    }
+    for f in faces {
+        for e in 0..3 {
+            let (a, b) = (labels[f[e] as usize] as usize, labels[f[(e + 1) % 3] as usize] as usize);
+            if a != b {
+                adjacent[a].push(b);
+                adjacent[b].push(a);
+            }
+        }
+    }
+    for a in adjacent.iter_mut() {
+        a.sort_unstable();
+        a.dedup();
+    }
+    (adjacent, members)
+}
+
+/// Motion of a part relative to the first pose, per pose: R^i (R^0)^T (free of the part's latent frame).
+fn relative_motion(rotations: &[Mat3]) -> Vec<Mat3> {
+    let r0t = rotations[0].transpose();
+    rotations.iter().map(|r| r * r0t).collect()
+}
+
+/// How far part k's motion is from a fixed in-between of two of its neighbours' motions, as a fraction of how far
+/// those two are apart: the minimum over neighbour pairs (a, b) and t in [0, 1] (steps of 1/20) of
+/// RMS_i ∠(M_k^i, slerp(M_a^i, M_b^i, t)) / RMS_i ∠(M_a^i, M_b^i), with M^i = R^i (R^0)^T. A slice of a blend band
+/// moves as one fixed blend of its two sides: near 0. A part with a joint of its own turns independently: large.
+/// Infinity without two neighbours that move apart (more than 1e-3 rad RMS).
+pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize]) -> f64 {
+    let mk = relative_motion(&model.parts[k].rotations);
+    let ms: Vec<Vec<Mat3>> = adjacent.iter().map(|&a| relative_motion(&model.parts[a].rotations)).collect();
+    let rms = |f: &dyn Fn(usize) -> f64| ((0..mk.len()).map(|i| f(i).powi(2)).sum::<f64>() / mk.len() as f64).sqrt();
+    let mut best = f64::INFINITY;
+    for x in 0..ms.len() {
+        for y in x + 1..ms.len() {
+            let (ma, mb) = (&ms[x], &ms[y]);
+            let apart = rms(&|i| angle_between(&ma[i], &mb[i]));
+            if apart < 1e-3 {
+                continue;
+            }
+            for step in 0..=20 {
+                let t = step as f64 / 20.0;
+                let e = rms(&|i| angle_between(&mk[i], &slerp(&ma[i], &mb[i], t)));
+                best = best.min(e / apart);
+            }
+        }
+    }
+    best
+}
+
+/// Rule 1: dissolves, smallest first, every part whose [`blend_ratio`] is below `ratio`; each of its vertices goes
+/// to the adjacent part whose motion moves it best ([`motion_residual`]) and takes its latent image under that part
+/// (eq 21). The removed part's mixing weight is shared out in proportion. Returns how many parts went.
+pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize {
+    let mut dissolved = 0;
+    let mut h = vec![[0.0; 3]; pop.n_shapes()];
+    loop {
+        if model.n_parts() < 3 {
+            return dissolved;
+        }
+        let (adjacent, members) = adjacency(&model.labels, &pop.faces);
+        let mut order: Vec<usize> = (0..model.n_parts()).filter(|&k| adjacent[k].len() >= 2).collect();
+        order.sort_by_key(|&k| members[k].len());
+        let Some(k) = order.into_iter().find(|&k| blend_ratio(model, k, &adjacent[k]) < ratio) else {
+            return dissolved;
+        };
+        for &j in &members[k] {
+            for (i, s) in pop.shapes.iter().enumerate() {
+                h[i] = s[j];
+            }
+            let to = adjacent[k]
+                .iter()
+                .copied()
+                .min_by(|&a, &b| motion_residual(&model.parts[a], &h).total_cmp(&motion_residual(&model.parts[b], &h)))
+                .expect("at least two neighbours");
+            model.labels[j] = to as u32;
+            model.latent[j] = model.parts[to].latent_image(&h);
+        }
+        let gone = model.parts.remove(k).weight;
+        let left = (1.0 - gone).max(f64::MIN_POSITIVE);
+        for c in model.parts.iter_mut() {
+            c.weight /= left;
+        }
+        for l in model.labels.iter_mut() {
+            if *l as usize > k {
+                *l -= 1;
+            }
+        }
+        dissolved += 1;
+    }
+}
+
+/// Mean variance of the best rigid fit (generalised Procrustes, [`super::init::component_from_points`]) of a set of
+/// vertices; with multi-resolution, estimated on at most `subset_vertices` evenly spaced ones.
+pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f64 {
+    let thinned: Vec<usize>;
+    let members = if params.subset_vertices > 0 && members.len() > params.subset_vertices {
+        let stride = members.len().div_ceil(params.subset_vertices);
+        thinned = members.iter().copied().step_by(stride).collect();
+        &thinned[..]
+    } else {
+        members
+    };
+    let data = Data::from_population_subset(pop, members);
+    let all: Vec<usize> = (0..members.len()).collect();
+    super::init::component_from_points(&data, &all, members.len(), params.variance_floor).mean_variance()
+}
+
+/// The vertex-weighted median of per-part values.
+fn weighted_median(values: &[f64], weights: &[usize]) -> f64 {
+    let mut by: Vec<(f64, usize)> = values.iter().copied().zip(weights.iter().copied()).collect();
+    by.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let half = by.iter().map(|x| x.1).sum::<usize>().div_ceil(2);
+    let mut acc = 0;
+    for (v, w) in &by {
+        acc += w;
+        if acc >= half {
+            return *v;
+        }
+    }
+    by.last().map_or(0.0, |x| x.0)
+}
+
+/// Rule 2: merges adjacent parts whose motions are not distinct, cheapest first. The score of a pair (a, b) is
+///
+///   (n_ab s_ab - n_a s_a - n_b s_b) / (min(n_a, n_b) s_ref),
+///
+/// the rise in squared error when one rigid motion has to move both, per vertex of the smaller side, over the
+/// variance s_ref of a typical part of the fit (vertex-weighted median of the parts' s before any merge; fixed, so
+/// that a merge does not make the next one look cheap). s = [`rigid_variance`]. Pairs scoring below
+/// `params.distinct_ratio` are merged. Returns compact labels and the curve of decisions.
+pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &Params) -> (Vec<u32>, Vec<CurvePoint>) {
+    let mut labels = compact(labels);
+    let (_, members) = adjacency(&labels, &pop.faces);
+    let mut err: Vec<f64> = members.iter().map(|m| rigid_variance(pop, m, params)).collect();
+    let sizes: Vec<usize> = members.iter().map(|m| m.len()).collect();
+    let s_ref = weighted_median(&err, &sizes).max(params.variance_floor);
+    let mut cache: std::collections::HashMap<(u32, u32), (f64, f64)> = std::collections::HashMap::new();
+    let mut curve = Vec::new();
+    loop {
+        let (adjacent, members) = adjacency(&labels, &pop.faces);
+        let n_total = labels.len().max(1) as f64;
+        let variance = members.iter().zip(&err).map(|(m, e)| m.len() as f64 * e).sum::<f64>() / n_total;
+        let mut best: Option<((u32, u32), f64, f64)> = None;
+        for (a, adj) in adjacent.iter().enumerate() {
+            for &b in adj.iter().filter(|&&b| b > a) {
+                let key = (a as u32, b as u32);
+                let (score, joint) = *cache.entry(key).or_insert_with(|| {
+                    let mut union = members[a].clone();
+                    union.extend_from_slice(&members[b]);
+                    let joint = rigid_variance(pop, &union, params);
+                    let (na, nb) = (members[a].len() as f64, members[b].len() as f64);
+                    let rise = union.len() as f64 * joint - na * err[a] - nb * err[b];
+                    (rise / (na.min(nb) * s_ref), joint)
+                });
+                if best.is_none_or(|x| score < x.1) {
+                    best = Some((key, score, joint));
+                }
+            }
+        }
+        let n_parts = members.len();
+        let Some(((a, b), score, joint)) = best else {
+            curve.push(CurvePoint { parts: n_parts, score: f64::INFINITY, variance });
+            break;
+        };
+        curve.push(CurvePoint { parts: n_parts, score, variance });
+        if score >= params.distinct_ratio {
+            break;
+        }
+        // merge b into a; labels above b shift down, cached pairs with them
+        for l in labels.iter_mut() {
+            if *l == b {
+                *l = a;
+            } else if *l > b {
+                *l -= 1;
+            }
+        }
+        err[a as usize] = joint;
+        err.remove(b as usize);
+        let shift = |x: u32| if x > b { x - 1 } else { x };
+        cache = cache
+            .into_iter()
+            .filter(|((p, q), _)| *p != a && *q != a && *p != b && *q != b)
+            .map(|((p, q), e)| ((shift(p), shift(q)), e))
+            .collect();
+    }
+    (labels, curve)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::rotation::axis_angle;
+    use crate::model::Component;
+    use crate::synth::{generate, Preset, Spec};
+
+    fn part(angles: &[f64], axis: [f64; 3]) -> Component {
+        Component {
+            rotations: angles.iter().map(|&a| axis_angle(axis, a)).collect(),
+            translations: vec![[0.0; 3]; angles.len()],
+            lambda: [0.1; 3],
+            variances: vec![1e-6; angles.len()],
+            weight: 1.0 / 3.0,
+        }
+    }
+
+    fn model(parts: Vec<Component>) -> Model {
+        Model {
+            n_shapes: parts[0].rotations.len(),
+            n_vertices: 0,
+            parts,
+            labels: Vec::new(),
+            latent: Vec::new(),
+            log_likelihood: Vec::new(),
+            iterations: 0,
+            converged: true,
+        }
+    }
+
+    #[test]
+    fn a_fixed_blend_of_two_neighbours_is_flesh_and_an_own_joint_is_not() {
+        let a: Vec<f64> = vec![0.0; 6];
+        let b: Vec<f64> = (0..6).map(|i| 0.15 * i as f64 - 0.3).collect();
+        // one third of the way from a to b in every pose
+        let flesh: Vec<f64> = b.iter().map(|x| x / 3.0).collect();
+        let m = model(vec![part(&a, [0.0, 0.0, 1.0]), part(&b, [0.0, 0.0, 1.0]), part(&flesh, [0.0, 0.0, 1.0])]);
+        assert!(blend_ratio(&m, 2, &[0, 1]) < 0.01, "{}", blend_ratio(&m, 2, &[0, 1]));
+        // the same angles in another order: a joint of its own, not a blend
+        let own: Vec<f64> = [0.2, -0.3, 0.1, 0.4, -0.1, 0.0].to_vec();
+        let m = model(vec![part(&a, [0.0, 0.0, 1.0]), part(&b, [0.0, 0.0, 1.0]), part(&own, [1.0, 0.0, 0.0])]);
+        assert!(blend_ratio(&m, 2, &[0, 1]) > 0.5, "{}", blend_ratio(&m, 2, &[0, 1]));
+        // neighbours that move together give no in-between to test
+        let m = model(vec![part(&a, [0.0, 0.0, 1.0]), part(&a, [0.0, 0.0, 1.0]), part(&own, [1.0, 0.0, 0.0])]);
+        assert_eq!(blend_ratio(&m, 2, &[0, 1]), f64::INFINITY);
+        assert_eq!(blend_ratio(&m, 2, &[0]), f64::INFINITY);
+    }
+
+    #[test]
+    fn halves_of_one_rigid_part_merge_and_true_parts_stay_apart() {
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
+        let pop = &g.population;
+        // the true parts, with the forearm (the largest) cut in two across its length by vertex order
+        let mut labels = g.part_of_vertex.clone();
+        let forearm = crate::synth::part_index(Preset::Arm, "forearm").unwrap() as u32;
+        let members: Vec<usize> = (0..labels.len()).filter(|&j| labels[j] == forearm).collect();
+        let mid = crate::geometry::bounds(members.iter().map(|&j| &pop.shapes[0][j]));
+        let axis = (0..3).max_by(|&x, &y| (mid.1[x] - mid.0[x]).total_cmp(&(mid.1[y] - mid.0[y]))).unwrap();
+        let cut = 0.5 * (mid.0[axis] + mid.1[axis]);
+        for &j in &members {
+            if pop.shapes[0][j][axis] > cut {
+                labels[j] = 3;
+            }
+        }
+        let (merged, curve) = merge_indistinct(pop, &labels, &Params::default());
+        let ari = crate::metrics::adjusted_rand_index(&merged, &g.part_of_vertex);
+        assert!(ari > 0.999, "ari {ari}, curve {curve:?}");
+        assert_eq!(curve.len(), 2, "{curve:?}");
+        assert_eq!((curve[0].parts, curve[1].parts), (4, 3));
+        assert!(curve[0].score < 1.0 && curve[1].score > Params::default().distinct_ratio, "{curve:?}");
+        assert!(curve[1].variance >= curve[0].variance);
+    }
+}
