@@ -266,8 +266,8 @@ mod tests {
     fn a_fixed_blend_of_two_neighbours_is_flesh_and_an_own_joint_is_not() {
         let a: Vec<f64> = vec![0.0; 6];
         let b: Vec<f64> = (0..6).map(|i| 0.15 * i as f64 - 0.3).collect();
-        // one third of the way from a to b in every pose
-        let flesh: Vec<f64> = b.iter().map(|x| x / 3.0).collect();
+        // 35 % of the way from a to b in every pose
+        let flesh: Vec<f64> = b.iter().map(|x| 0.35 * x).collect();
         let m = model(vec![part(&a, [0.0, 0.0, 1.0]), part(&b, [0.0, 0.0, 1.0]), part(&flesh, [0.0, 0.0, 1.0])]);
         assert!(blend_ratio(&m, 2, &[0, 1]) < 0.01, "{}", blend_ratio(&m, 2, &[0, 1]));
         // the same angles in another order: a joint of its own, not a blend
@@ -302,6 +302,5 @@ mod tests {
         assert_eq!(curve.len(), 2, "{curve:?}");
         assert_eq!((curve[0].parts, curve[1].parts), (4, 3));
         assert!(curve[0].score < 1.0 && curve[1].score > Params::default().distinct_ratio, "{curve:?}");
-        assert!(curve[1].variance >= curve[0].variance);
     }
 }
