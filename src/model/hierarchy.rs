@@ -374,13 +374,14 @@ impl Pipeline {
     /// [`COUNT_ROUNDS`] times, in case the AECM drops a part).
     fn finish(&mut self, mut model: Model) -> Result<State> {
         let rounds = self.count_rounds;
-        if self.params.part_rule == PartRule::Distinct {
+        // (not once the count is forced: parts split to meet it can share one motion, and would empty each other)
+        if self.params.part_rule == PartRule::Distinct && rounds == 0 {
             super::motion_labels::label_by_motion(&mut model, &self.pop);
         }
         // an island becomes a part of its own only after the first final AECM (later ones are boundary shifts)
         let new_parts = rounds == 0 && self.decide_rounds == 0;
         super::islands::connect_parts(&mut model, &self.pop, new_parts, self.params.min_part_vertices);
-        if self.params.part_rule == PartRule::Distinct && self.decide_rounds < DECIDE_ROUNDS {
+        if self.params.part_rule == PartRule::Distinct && rounds == 0 && self.decide_rounds < DECIDE_ROUNDS {
             self.decide_rounds += 1;
             let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
             if dissolved > 0 {
@@ -392,7 +393,7 @@ impl Pipeline {
             let after = merged.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
             if dissolved > 0 || after < before {
                 self.refined_labels = merged.clone();
-                self.stats.push(StageStats { name: "parts".into(), ..Default::default() });
+                self.stats.push(StageStats { name: "distinct".into(), ..Default::default() });
                 self.stage_started_ms = crate::clock::now_ms();
                 return Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &merged, &self.params)?));
             }

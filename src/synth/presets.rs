@@ -109,7 +109,7 @@ pub fn examples() -> Vec<Example> {
         Example {
             id: "blob",
             title: "Fails on purpose: a non-articulated deformation",
-            note: "A smoothly bent and twisted blob has no rigid parts: the fit is diagnosed as not articulated (rigid parts explain too little of the motion). The model assumes articulated motion; use a deformation model (e.g. PCA of the vertex positions, or skinning with many bones) instead.",
+            note: "A smoothly bent and twisted blob has no rigid parts: the result says it is not articulated (rigid parts explain too little of its motion) and suggests a deformation model instead.",
             fails_on_purpose: true,
             spec: Spec { preset: Preset::Blob, vertices: 2000, poses: 8, ..Spec::default() },
             params: Params::default(),
