@@ -34,6 +34,8 @@ pub struct CurvePoint {
     pub parts: usize,
     pub score: f64,
     pub variance: f64,
+    /// The pair was merged (score below `distinct_ratio`).
+    pub merged: bool,
 }
 
 /// The parts adjacent to each part (sharing a mesh edge), sorted, and each part's vertices.
@@ -205,11 +207,12 @@ pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &Params) -> (V
         }
         let n_parts = members.len();
         let Some(((a, b), score, joint)) = best else {
-            curve.push(CurvePoint { parts: n_parts, score: f64::INFINITY, variance });
+            curve.push(CurvePoint { parts: n_parts, score: f64::INFINITY, variance, merged: false });
             break;
         };
-        curve.push(CurvePoint { parts: n_parts, score, variance });
-        if score >= params.distinct_ratio {
+        let merged = score < params.distinct_ratio;
+        curve.push(CurvePoint { parts: n_parts, score, variance, merged });
+        if !merged {
             break;
         }
         // merge b into a; labels above b shift down, cached pairs with them

@@ -5,6 +5,7 @@ import { state, subscribe } from '../state.js';
 import { onFitProgress } from '../session.js';
 import { accuracyText } from '../presets.js';
 import { plot } from './viewer-instance.js';
+import { drawPartCurve } from './part-curve.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -39,6 +40,14 @@ function showResult() {
   $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
   $('truth-acc').textContent = accuracyText(s?.groundTruth);
   $('truth-acc').classList.toggle('good', s?.groundTruth?.ari >= 0.95);
+  // the core's verdict (model::diagnosis), in its own words, next to the result
+  const d = s?.diagnosis;
+  $('diagnosis').hidden = !d;
+  $('diagnosis').classList.toggle('fails', d ? !d.articulated : false);
+  $('diagnosis').textContent = d ? `${d.articulated ? 'Articulated' : 'Not articulated'}: ${d.reason}.` : '';
+  const curve = s?.partCurve ?? [];
+  $('part-curve').hidden = curve.length === 0;
+  drawPartCurve($('part-curve'), curve);
 }
 
 /** Shows one AECM iteration's progress object. */

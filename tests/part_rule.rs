@@ -1,0 +1,56 @@
+//! The default part rule (issue 15, `model::distinct`) against generated ground truth, at default parameters:
+//! the right part count, the right parts (adjusted Rand index) and the right motions (rotation error), and the
+//! diagnosis: every creature articulated, the blob not. Natively and in wasm. The wider table (3 k to 50 k
+//! vertices, 10 and 20 poses, seeds 0-4) is `cargo run --release --example part_table`.
+
+#[macro_use]
+mod common;
+
+use posemfa::metrics::ground_truth_accuracy;
+use posemfa::model::diagnosis::diagnose;
+use posemfa::model::hierarchy::fit;
+use posemfa::model::Params;
+use posemfa::synth::{generate, Preset, Spec};
+
+/// (parts, ARI, worst rotation error, median rotation error, articulated) at default parameters.
+fn run(preset: Preset, vertices: usize, poses: usize, seed: u64) -> (usize, f64, f64, f64, bool) {
+    let g = generate(&Spec { preset, vertices, poses, seed, ..Spec::default() }).unwrap();
+    let r = fit(&g.population, &Params { seed, ..Params::default() }, &mut |_| true).unwrap();
+    let acc = ground_truth_accuracy(&r.model, &g).unwrap();
+    let d = diagnose(&g.population, &r.model);
+    (r.model.n_parts(), acc.ari, acc.rotation_error_deg_max, acc.rotation_error_deg, d.articulated)
+}
+
+dual_test! {
+    fn creatures_get_their_parts_at_default_parameters() {
+        for seed in 0..2 {
+            for (preset, lo, hi) in [(Preset::Quadruped, 17, 19), (Preset::Arm, 3, 3), (Preset::Snake, 7, 9)] {
+                let (parts, ari, worst, median, articulated) = run(preset, 3000, 10, seed);
+                let what = format!("{preset:?} seed {seed}: {parts} parts, ARI {ari:.3}, rotation worst {worst:.2} median {median:.2}");
+                assert!((lo..=hi).contains(&parts), "{what}");
+                assert!(ari >= 0.97, "{what}");
+                assert!(articulated, "{what}: diagnosed not articulated");
+                if preset == Preset::Quadruped {
+                    assert!(worst <= 5.0 && median <= 1.0, "{what}");
+                }
+            }
+        }
+    }
+
+    fn the_blob_is_diagnosed_not_articulated() {
+        for seed in 0..3 {
+            let (parts, _, _, _, articulated) = run(Preset::Blob, 2000, 8, seed);
+            assert!(!articulated, "blob seed {seed}: {parts} parts, diagnosed articulated");
+        }
+    }
+}
+
+#[test]
+fn the_rule_does_not_depend_on_resolution_or_pose_count() {
+    // the same creature at 4 x the vertices and 2 x the poses: the same parts
+    for seed in 0..2 {
+        let (parts, ari, worst, median, _) = run(Preset::Quadruped, 12000, 20, seed);
+        let what = format!("seed {seed}: {parts} parts, ARI {ari:.3}, rotation worst {worst:.2} median {median:.2}");
+        assert!((17..=19).contains(&parts) && ari >= 0.97 && median <= 1.0, "{what}");
+    }
+}
