@@ -1,0 +1,37 @@
+// Issue 15 in the page: the core's diagnosis next to the result ("Articulated" / "Not articulated" with its reason
+// and what to use instead) and the part rule's curve, on the built-in examples at their (default) parameters.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { pageSession, waitState } from './helpers.mjs';
+
+const session = pageSession();
+
+async function fitExample(page, id) {
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  await page.selectOption('#example', id);
+  await page.click('#generate');
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, n, { timeout: 60000, polling: 20 });
+  return page.evaluate(() => window.posemfa.summary());
+}
+
+test('the quadruped is diagnosed articulated with its 18 parts, the blob is not, in words and with a curve', async () => {
+  const { page, context, log } = await session.open('');
+  await waitState(page, ['fitted', 'idle', 'error'], 60000);
+  const q = await page.evaluate(() => window.posemfa.summary());
+  assert.ok(q.parts >= 17 && q.parts <= 19, `quadruped: ${q.parts} parts`);
+  assert.equal(q.diagnosis.articulated, true, JSON.stringify(q.diagnosis));
+  assert.match(await page.locator('[data-testid=diagnosis]').innerText(), /^Articulated: \d+ rigid parts explain/);
+  assert.ok(q.partCurve.length >= 2 && q.partCurve.at(-1).merged === false, JSON.stringify(q.partCurve));
+  assert.equal(q.partCurve.at(-1).parts, q.parts, 'the curve stops at the part count kept');
+  assert.ok(await page.locator('#part-curve').isVisible());
+
+  const b = await fitExample(page, 'blob');
+  assert.equal(b.diagnosis.articulated, false, JSON.stringify(b.diagnosis));
+  assert.ok(b.diagnosis.explained < 0.975, JSON.stringify(b.diagnosis));
+  const text = await page.locator('[data-testid=diagnosis]').innerText();
+  assert.match(text, /^Not articulated: rigid parts explain only/);
+  assert.match(text, /deformation model/);
+  assert.ok(await page.locator('[data-testid=diagnosis].fails').isVisible());
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
