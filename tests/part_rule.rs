@@ -24,7 +24,14 @@ fn run(preset: Preset, vertices: usize, poses: usize, seed: u64) -> (usize, f64,
 dual_test! {
     fn creatures_get_their_parts_at_default_parameters() {
         for seed in 0..2 {
-            for (preset, lo, hi) in [(Preset::Quadruped, 17, 19), (Preset::Arm, 3, 3), (Preset::Snake, 7, 9)] {
+            for (preset, lo, hi) in [
+                (Preset::Quadruped, 17, 19),
+                (Preset::Arm, 3, 3),
+                (Preset::Snake, 7, 9),
+                (Preset::Spider, 17, 19),
+                (Preset::Giraffe, 14, 16),
+                (Preset::Hand, 15, 17),
+            ] {
                 let (parts, ari, worst, median, articulated) = run(preset, 3000, 10, seed);
                 let what = format!("{preset:?} seed {seed}: {parts} parts, ARI {ari:.3}, rotation worst {worst:.2} median {median:.2}");
                 assert!((lo..=hi).contains(&parts), "{what}");

@@ -38,9 +38,10 @@ pub struct CurvePoint {
     pub merged: bool,
 }
 
-/// The parts adjacent to each part (sharing a mesh edge), sorted, and each part's vertices.
-fn adjacency(labels: &[u32], faces: &[[u32; 3]]) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
-    let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+/// The parts adjacent to each part (sharing a mesh edge), sorted, and each part's vertices, for at least
+/// `n_parts` parts (a part may have no vertex left).
+fn adjacency(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
+    let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0).max(n_parts);
     let mut adjacent = vec![Vec::new(); m];
     let mut members = vec![Vec::new(); m];
     for (j, &l) in labels.iter().enumerate() {
@@ -105,7 +106,7 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
         if model.n_parts() < 3 {
             return dissolved;
         }
-        let (adjacent, members) = adjacency(&model.labels, &pop.faces);
+        let (adjacent, members) = adjacency(&model.labels, &pop.faces, model.n_parts());
         let mut order: Vec<usize> = (0..model.n_parts()).filter(|&k| adjacent[k].len() >= 2).collect();
         order.sort_by_key(|&k| members[k].len());
         let Some(k) = order.into_iter().find(|&k| blend_ratio(model, k, &adjacent[k]) < ratio) else {
@@ -178,14 +179,14 @@ fn weighted_median(values: &[f64], weights: &[usize]) -> f64 {
 /// `params.distinct_ratio` are merged. Returns compact labels and the curve of decisions.
 pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &Params) -> (Vec<u32>, Vec<CurvePoint>) {
     let mut labels = compact(labels);
-    let (_, members) = adjacency(&labels, &pop.faces);
+    let (_, members) = adjacency(&labels, &pop.faces, 0);
     let mut err: Vec<f64> = members.iter().map(|m| rigid_variance(pop, m, params)).collect();
     let sizes: Vec<usize> = members.iter().map(|m| m.len()).collect();
     let s_ref = weighted_median(&err, &sizes).max(params.variance_floor);
     let mut cache: std::collections::HashMap<(u32, u32), (f64, f64)> = std::collections::HashMap::new();
     let mut curve = Vec::new();
     loop {
-        let (adjacent, members) = adjacency(&labels, &pop.faces);
+        let (adjacent, members) = adjacency(&labels, &pop.faces, 0);
         let n_total = labels.len().max(1) as f64;
         let variance = members.iter().zip(&err).map(|(m, e)| m.len() as f64 * e).sum::<f64>() / n_total;
         let mut best: Option<((u32, u32), f64, f64)> = None;
