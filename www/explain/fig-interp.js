@@ -134,7 +134,10 @@ export class Limit extends Figure {
 
   fittedNote() {
     const s = this.v.model.summary;
-    if (this.name === 'blob') return `${s.parts} parts, RMSE ${s.rmse.toExponential(2)} (unit box): the "parts" are slabs, and the error stays large.`;
+    if (this.name === 'blob') {
+      const d = s.diagnosis;
+      return `${s.parts} part${s.parts === 1 ? '' : 's'}, RMSE ${s.rmse.toExponential(2)} (unit box): ${d.articulated ? 'articulated' : 'not articulated'}, rigid parts explain ${(100 * Math.max(d.explained, 0)).toFixed(1)} % of the motion (articulated shapes: 99 % and more).`;
+    }
     // For each piece of the front legs: the fitted part holding most of the left one's and of the right one's
     // vertices; the same part means the fit made the two legs one body.
     const { partNames, partOfVertex } = this.v.pop.truth;

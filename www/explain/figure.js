@@ -15,7 +15,7 @@ export const QUAD = { preset: 'quadruped', vertices: 1100, poses: 6, seed: 0, jo
 export const SNAKE = { preset: 'snake', vertices: 800, poses: 8, seed: 0, jointBand: 0.01, maxAngleDeg: 45 };
 export const ARM = { preset: 'arm', vertices: 600, poses: 6, seed: 0, jointBand: 0.01 };
 export const BLOB = { preset: 'blob', vertices: 800, poses: 6, seed: 0 };
-export const SYNTH = { refineThreshold: 2e-6 }; // as the app's examples (src/synth/presets.rs)
+export const SYNTH = {}; // the default parameters, as the app's examples (src/synth/presets.rs)
 
 // Request ids of the figures' own messages (mount() numbers its own from 1000).
 let nextId = 100000;
