@@ -375,13 +375,19 @@ impl Pipeline {
     fn finish(&mut self, mut model: Model) -> Result<State> {
         let rounds = self.count_rounds;
         // (not once the count is forced: parts split to meet it can share one motion, and would empty each other)
-        if self.params.part_rule == PartRule::Distinct && rounds == 0 {
+        // the part rule decides after Algorithm 1's refinement (a run without it is the coarse AECM as it is)
+        let distinct = self.params.part_rule == PartRule::Distinct && self.params.refine;
+        if distinct && rounds == 0 {
             super::motion_labels::label_by_motion(&mut model, &self.pop);
+            super::motion_labels::drop_empty_parts(&mut model);
         }
         // an island becomes a part of its own only after the first final AECM (later ones are boundary shifts)
         let new_parts = rounds == 0 && self.decide_rounds == 0;
         super::islands::connect_parts(&mut model, &self.pop, new_parts, self.params.min_part_vertices);
-        if self.params.part_rule == PartRule::Distinct && rounds == 0 && self.decide_rounds < DECIDE_ROUNDS {
+        if distinct {
+            super::motion_labels::drop_empty_parts(&mut model);
+        }
+        if distinct && rounds == 0 && self.decide_rounds < DECIDE_ROUNDS {
             self.decide_rounds += 1;
             let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
             if dissolved > 0 {

@@ -84,6 +84,40 @@ pub fn label_by_motion(model: &mut Model, pop: &Population) -> usize {
     moved
 }
 
+/// Removes parts left without a vertex (relabelling can empty a small part): labels renumbered in part order,
+/// mixing weights renormalised. Returns how many went.
+pub fn drop_empty_parts(model: &mut Model) -> usize {
+    let mut count = vec![0usize; model.n_parts()];
+    for &l in &model.labels {
+        count[l as usize] += 1;
+    }
+    if count.iter().all(|&c| c > 0) {
+        return 0;
+    }
+    let mut new_id = vec![u32::MAX; count.len()];
+    let mut next = 0u32;
+    for (k, &c) in count.iter().enumerate() {
+        if c > 0 {
+            new_id[k] = next;
+            next += 1;
+        }
+    }
+    for l in model.labels.iter_mut() {
+        *l = new_id[*l as usize];
+    }
+    let before = model.parts.len();
+    let mut k = 0;
+    model.parts.retain(|_| {
+        k += 1;
+        count[k - 1] > 0
+    });
+    let total: f64 = model.parts.iter().map(|c| c.weight).sum();
+    for c in model.parts.iter_mut() {
+        c.weight /= total.max(f64::MIN_POSITIVE);
+    }
+    before - model.parts.len()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
