@@ -40,7 +40,7 @@ pub struct CurvePoint {
 
 /// The parts adjacent to each part (sharing a mesh edge), sorted, and each part's vertices, for at least
 /// `n_parts` parts (a part may have no vertex left).
-fn adjacency(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
+pub(crate) fn adjacency(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
     let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0).max(n_parts);
     let mut adjacent = vec![Vec::new(); m];
     let mut members = vec![Vec::new(); m];

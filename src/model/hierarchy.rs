@@ -656,21 +656,7 @@ pub fn fit(pop: &Population, params: &Params, observer: &mut dyn FnMut(&Progress
 /// split) out of the final stage. Labels are renumbered 0..
 pub fn merge_rigid_neighbours(pop: &Population, labels: &[u32], params: &Params) -> Vec<u32> {
     let mut labels = compact(labels);
-    let err_of = |members: &[usize]| -> f64 {
-        // with multi-resolution, estimated on at most subset_vertices evenly spaced members
-        let thinned: Vec<usize>;
-        let members = if params.subset_vertices > 0 && members.len() > params.subset_vertices {
-            let stride = members.len().div_ceil(params.subset_vertices);
-            thinned = members.iter().copied().step_by(stride).collect();
-            &thinned[..]
-        } else {
-            members
-        };
-        let data = Data::from_population_subset(pop, members);
-        let all: Vec<usize> = (0..members.len()).collect();
-        let c = super::init::component_from_points(&data, &all, members.len(), params.variance_floor);
-        c.variances.iter().sum::<f64>() / c.variances.len() as f64
-    };
+    let err_of = |members: &[usize]| super::distinct::rigid_variance(pop, members, params);
     let mut cache: std::collections::HashMap<(u32, u32), f64> = std::collections::HashMap::new();
     loop {
         let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);

@@ -44,20 +44,7 @@ pub fn label_by_motion(model: &mut Model, pop: &Population) -> usize {
     if m < 2 {
         return 0;
     }
-    let mut adjacent = vec![Vec::new(); m];
-    for f in &pop.faces {
-        for e in 0..3 {
-            let (a, b) = (model.labels[f[e] as usize] as usize, model.labels[f[(e + 1) % 3] as usize] as usize);
-            if a != b {
-                adjacent[a].push(b);
-                adjacent[b].push(a);
-            }
-        }
-    }
-    for a in adjacent.iter_mut() {
-        a.sort_unstable();
-        a.dedup();
-    }
+    let (adjacent, _) = super::distinct::adjacency(&model.labels, &pop.faces, m);
     let mut moved = 0;
     let mut h = vec![[0.0; 3]; pop.n_shapes()];
     for j in 0..model.n_vertices {
