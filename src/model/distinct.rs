@@ -217,23 +217,34 @@ pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &Params) -> (V
             break;
         }
         // merge b into a; labels above b shift down, cached pairs with them
-        for l in labels.iter_mut() {
-            if *l == b {
-                *l = a;
-            } else if *l > b {
-                *l -= 1;
-            }
-        }
+        cache = merge_pair(&mut labels, cache, a, b);
         err[a as usize] = joint;
         err.remove(b as usize);
-        let shift = |x: u32| if x > b { x - 1 } else { x };
-        cache = cache
-            .into_iter()
-            .filter(|((p, q), _)| *p != a && *q != a && *p != b && *q != b)
-            .map(|((p, q), e)| ((shift(p), shift(q)), e))
-            .collect();
     }
     (labels, curve)
+}
+
+/// Merges label b into a (a < b) in compact labels: labels above b shift down, and the cache of pair scores keeps
+/// the pairs that touch neither, renumbered. Shared by both part rules' greedy merges.
+pub(crate) fn merge_pair<T>(
+    labels: &mut [u32],
+    cache: std::collections::HashMap<(u32, u32), T>,
+    a: u32,
+    b: u32,
+) -> std::collections::HashMap<(u32, u32), T> {
+    for l in labels.iter_mut() {
+        if *l == b {
+            *l = a;
+        } else if *l > b {
+            *l -= 1;
+        }
+    }
+    let shift = |x: u32| if x > b { x - 1 } else { x };
+    cache
+        .into_iter()
+        .filter(|((p, q), _)| *p != a && *q != a && *p != b && *q != b)
+        .map(|((p, q), e)| ((shift(p), shift(q)), e))
+        .collect()
 }
 
 #[cfg(test)]

@@ -687,19 +687,7 @@ pub fn merge_rigid_neighbours(pop: &Population, labels: &[u32], params: &Params)
         }
         let Some(((a, b), _)) = best else { break };
         // merge b into a; labels above b shift down, so cached pairs are renumbered too
-        for l in labels.iter_mut() {
-            if *l == b {
-                *l = a;
-            } else if *l > b {
-                *l -= 1;
-            }
-        }
-        let shift = |x: u32| if x > b { x - 1 } else { x };
-        cache = cache
-            .into_iter()
-            .filter(|((p, q), _)| *p != a && *q != a && *p != b && *q != b)
-            .map(|((p, q), e)| ((shift(p), shift(q)), e))
-            .collect();
+        cache = super::distinct::merge_pair(&mut labels, cache, a, b);
     }
     labels
 }
