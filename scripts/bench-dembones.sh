@@ -3,7 +3,7 @@
 #   scripts/bench-dembones.sh DIR [--bones 23] [--influences 1] [--runs 3]
 # posemfa: the fit time `posemfa fit` prints (reading the files not counted), release build, default parameters.
 # Dem Bones: py-dem-bones 0.13.1 (PyPI; benchmark only, never a dependency of posemfa) in a throwaway venv under
-# /tmp, OMP_NUM_THREADS=1, the time of its solve call alone (scripts/bench-dembones.py).
+# /tmp (scripts/dembones-venv.sh), OMP_NUM_THREADS=1, the time of its solve call alone (scripts/bench-dembones.py).
 # Prints one JSON line per run and tool, then the medians and their ratio.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -19,12 +19,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ -d "$data" ] || { echo "usage: scripts/bench-dembones.sh DIR [--bones 23] [--influences 1] [--runs 3] (DIR: a folder of OBJ files)" >&2; exit 2; }
-venv=${POSEMFA_DEMBONES_VENV:-/tmp/posemfa-dembones-venv}
-if ! "$venv/bin/python" -c 'import py_dem_bones, numpy' 2>/dev/null; then
-  echo "[bench-dembones] making $venv with py-dem-bones 0.13.1 (benchmark only)" >&2
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet 'py-dem-bones==0.13.1' numpy >&2
-fi
+source scripts/dembones-venv.sh   # sets $venv
 cargo build --release --quiet --bin posemfa
 out=$(mktemp /tmp/posemfa-dembones.XXXXXX)
 trap 'rm -f "$out"' EXIT

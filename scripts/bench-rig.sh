@@ -9,7 +9,7 @@
 #   whole command (reading, fit, skinning, writing); its E_RMS is measured on the written .glb by
 #   `posemfa rig-report DIR --glb X.glb` (the clip played by linear blend skinning from the file's own numbers).
 # - Dem Bones: the PyPI package py-dem-bones (benchmark only, never a dependency of posemfa), installed into a
-#   throwaway venv under /tmp; scripts/bench-rig-dembones.py times its solve (compute()) alone.
+#   throwaway venv under /tmp (scripts/dembones-venv.sh); scripts/bench-rig-dembones.py times its solve alone.
 # - Both rigs use the file named reference.obj (else the first file) as the rest pose, and their E_RMS
 #   (Kavan et al. 2010) is taken over the other files (the frames), with the rest pose's bounding-box diagonal.
 # - Times are medians over the runs (default 1); OMP_NUM_THREADS=1 for Dem Bones.
@@ -35,12 +35,7 @@ done
 [ -n "$data" ] || { echo "usage: scripts/bench-rig.sh DIR [--bones 10,20,30] [--runs R]" >&2; exit 2; }
 [ -d "$data" ] || { echo "bench-rig.sh: $data is not a folder of OBJ files" >&2; exit 2; }
 
-venv=/tmp/posemfa-bench-dembones-venv
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c 'import py_dem_bones, numpy' 2>/dev/null; then
-  echo "[bench-rig] creating $venv with py-dem-bones (benchmark only)" >&2
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet 'py-dem-bones==0.13.1' numpy >&2
-fi
+source scripts/dembones-venv.sh   # sets $venv
 
 cargo build --release --quiet --bin posemfa
 bin=$root/target/release/posemfa
