@@ -40,11 +40,7 @@ cargo build --release --quiet --bin posemfa
 posemfa=$(realpath "${CARGO_TARGET_DIR:-target}")/release/posemfa   # cargo honours CARGO_TARGET_DIR too
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-blender_py() {
-  blender -b --factory-startup --python scripts/fixtures/blender_fixtures.py -- "$@" >"$tmp/blender.log" 2>&1 \
-    || { cat "$tmp/blender.log" >&2; echo "check-horse-formats: Blender failed: $*" >&2; exit 2; }
-  grep -q '^wrote' "$tmp/blender.log" || { cat "$tmp/blender.log" >&2; exit 2; }
-}
+source scripts/fixtures/blender.sh   # blender_py
 
 echo "[check] Blender: horse-gallop as shape keys; horse-poses rigged by posemfa, re-exported flat"
 blender_py shapekeys "$data/horse-gallop" "$tmp/gallop-shapekeys.glb"
