@@ -95,8 +95,11 @@ pub struct RigOptions {
     pub joints: Joints,
     /// Training shape the mesh is bound in (0-based). Default 0.
     pub bind_pose: usize,
-    /// Fitted weights: alternations of the weight and bone solves. Default 20.
+    /// Fitted weights: most alternations of the weight and bone solves. Default 20.
     pub iterations: usize,
+    /// Fitted weights: the alternations stop once one lowers the squared error by less than this fraction of
+    /// it (E_RMS by about half of it), >= 0; 0 runs all [`RigOptions::iterations`]. Default 1e-2.
+    pub tol: f64,
     /// Fitted weights: rings of the part graph around a vertex's part that give its candidate bones, 1..=3.
     /// Default 1.
     pub rings: usize,
@@ -114,6 +117,7 @@ impl Default for RigOptions {
             joints: Joints::Free,
             bind_pose: 0,
             iterations: 20,
+            tol: 1e-2,
             rings: 1,
             smoothness: 1e-4,
             fit_rest: true,
@@ -134,6 +138,9 @@ impl RigOptions {
         }
         if !(self.smoothness >= 0.0 && self.smoothness.is_finite()) {
             return Err(Error::Params(format!("smoothness = {} must be a number >= 0 (try 1e-4)", self.smoothness)));
+        }
+        if !(self.tol >= 0.0 && self.tol.is_finite()) {
+            return Err(Error::Params(format!("tol = {} must be a number >= 0 (try 1e-2; 0 runs every iteration)", self.tol)));
         }
         if self.iterations > 10_000 {
             return Err(Error::Params(format!("iterations = {} must be at most 10000", self.iterations)));
@@ -218,86 +225,102 @@ fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
 /// min ½ wᵀHw - fᵀw subject to w >= 0, Σ w = 1 (H symmetric positive definite, c x c row-major), by a
 /// primal active-set method started from `w` (feasible). Indices with `allowed[i] == false` stay at 0.
 pub fn simplex_qp(h: &[f64], f: &[f64], w: &mut [f64], allowed: &[bool]) {
-    let c = f.len();
-    let mut free: Vec<bool> = (0..c).map(|i| allowed[i] && w[i] > 0.0).collect();
-    let mut a = Vec::with_capacity((c + 1) * (c + 1));
-    let mut rhs = Vec::with_capacity(c + 1);
-    for _ in 0..(4 * c + 10) {
-        let idx: Vec<usize> = (0..c).filter(|&i| free[i]).collect();
-        let m = idx.len();
-        // KKT: [H_FF 1; 1ᵀ 0] [p; μ] = [f_F; 1]
-        a.clear();
-        a.resize((m + 1) * (m + 1), 0.0);
-        rhs.clear();
-        rhs.resize(m + 1, 0.0);
-        for (r, &i) in idx.iter().enumerate() {
-            for (s, &j) in idx.iter().enumerate() {
-                a[r * (m + 1) + s] = h[i * c + j];
-            }
-            a[r * (m + 1) + m] = 1.0;
-            a[m * (m + 1) + r] = 1.0;
-            rhs[r] = f[i];
-        }
-        rhs[m] = 1.0;
-        if !solve_dense(&mut a, &mut rhs, m + 1) {
-            return;
-        }
-        let p: Vec<f64> = rhs[..m].to_vec();
-        let mu = rhs[m];
-        if p.iter().all(|&x| x >= 0.0) {
+    QpScratch::default().solve(h, f, w, allowed);
+}
+
+/// Working memory of [`simplex_qp`], kept across the vertices of a weight solve (no allocation per vertex).
+#[derive(Default)]
+struct QpScratch {
+    free: Vec<bool>,
+    idx: Vec<usize>,
+    a: Vec<f64>,
+    rhs: Vec<f64>,
+}
+
+impl QpScratch {
+    /// [`simplex_qp`].
+    fn solve(&mut self, h: &[f64], f: &[f64], w: &mut [f64], allowed: &[bool]) {
+        let QpScratch { free, idx, a, rhs } = self;
+        let c = f.len();
+        free.clear();
+        free.extend((0..c).map(|i| allowed[i] && w[i] > 0.0));
+        for _ in 0..(4 * c + 10) {
+            idx.clear();
+            idx.extend((0..c).filter(|&i| free[i]));
+            let m = idx.len();
+            // KKT: [H_FF 1; 1ᵀ 0] [p; μ] = [f_F; 1]
+            a.clear();
+            a.resize((m + 1) * (m + 1), 0.0);
+            rhs.clear();
+            rhs.resize(m + 1, 0.0);
             for (r, &i) in idx.iter().enumerate() {
-                w[i] = p[r];
-            }
-            for i in 0..c {
-                if !free[i] {
-                    w[i] = 0.0;
+                for (s, &j) in idx.iter().enumerate() {
+                    a[r * (m + 1) + s] = h[i * c + j];
                 }
+                a[r * (m + 1) + m] = 1.0;
+                a[m * (m + 1) + r] = 1.0;
+                rhs[r] = f[i];
             }
-            // multipliers of the bound constraints: ν_i = (H w - f)_i - (-μ)... with the KKT sign convention
-            // H w - f + μ 1 - ν = 0, ν_i = (H w - f)_i + μ must be >= 0 at the optimum
-            let mut worst: Option<(usize, f64)> = None;
-            for i in 0..c {
-                if free[i] || !allowed[i] {
-                    continue;
+            rhs[m] = 1.0;
+            if !solve_dense(a, rhs, m + 1) {
+                return;
+            }
+            let (p, mu) = (&rhs[..m], rhs[m]);
+            if p.iter().all(|&x| x >= 0.0) {
+                for (r, &i) in idx.iter().enumerate() {
+                    w[i] = p[r];
                 }
-                let g: f64 = (0..c).map(|j| h[i * c + j] * w[j]).sum::<f64>() - f[i];
-                let nu = g + mu;
-                if nu < -1e-14 * (1.0 + g.abs()) && worst.is_none_or(|x| nu < x.1) {
-                    worst = Some((i, nu));
-                }
-            }
-            match worst {
-                Some((i, _)) => free[i] = true,
-                None => return,
-            }
-        } else {
-            // step from w toward p until a free weight hits 0
-            let mut t = 1.0;
-            let mut block = None;
-            for (r, &i) in idx.iter().enumerate() {
-                if p[r] < 0.0 {
-                    let s = w[i] / (w[i] - p[r]);
-                    if s < t {
-                        t = s;
-                        block = Some(i);
+                for i in 0..c {
+                    if !free[i] {
+                        w[i] = 0.0;
                     }
                 }
-            }
-            for (r, &i) in idx.iter().enumerate() {
-                w[i] += t * (p[r] - w[i]);
-            }
-            if let Some(i) = block {
-                w[i] = 0.0;
-                free[i] = false;
-            }
-            for i in 0..c {
-                if free[i] && w[i] <= 0.0 {
+                // multipliers of the bound constraints: ν_i = (H w - f)_i - (-μ)... with the KKT sign convention
+                // H w - f + μ 1 - ν = 0, ν_i = (H w - f)_i + μ must be >= 0 at the optimum
+                let mut worst: Option<(usize, f64)> = None;
+                for i in 0..c {
+                    if free[i] || !allowed[i] {
+                        continue;
+                    }
+                    let g: f64 = (0..c).map(|j| h[i * c + j] * w[j]).sum::<f64>() - f[i];
+                    let nu = g + mu;
+                    if nu < -1e-14 * (1.0 + g.abs()) && worst.is_none_or(|x| nu < x.1) {
+                        worst = Some((i, nu));
+                    }
+                }
+                match worst {
+                    Some((i, _)) => free[i] = true,
+                    None => return,
+                }
+            } else {
+                // step from w toward p until a free weight hits 0
+                let mut t = 1.0;
+                let mut block = None;
+                for (r, &i) in idx.iter().enumerate() {
+                    if p[r] < 0.0 {
+                        let s = w[i] / (w[i] - p[r]);
+                        if s < t {
+                            t = s;
+                            block = Some(i);
+                        }
+                    }
+                }
+                for (r, &i) in idx.iter().enumerate() {
+                    w[i] += t * (p[r] - w[i]);
+                }
+                if let Some(i) = block {
                     w[i] = 0.0;
                     free[i] = false;
                 }
-            }
-            if !free.iter().any(|&x| x) {
-                return;
+                for i in 0..c {
+                    if free[i] && w[i] <= 0.0 {
+                        w[i] = 0.0;
+                        free[i] = false;
+                    }
+                }
+                if !free.iter().any(|&x| x) {
+                    return;
+                }
             }
         }
     }
@@ -361,6 +384,22 @@ struct Solver<'a> {
     bind: usize,
 }
 
+/// Working memory of [`Solver::weights`], reused by every vertex and every pass.
+#[derive(Default)]
+struct WeightScratch {
+    qp: QpScratch,
+    cols: Vec<f64>,
+    h: Vec<f64>,
+    f: Vec<f64>,
+    w: Vec<f64>,
+    start: Vec<f64>,
+    allowed: Vec<bool>,
+    order: Vec<usize>,
+    dense_nbr: Vec<f64>,
+    /// The weight lists of the pass before last, overwritten in place.
+    new: Vec<Vec<(u32, f64)>>,
+}
+
 impl<'a> Solver<'a> {
     fn new(art: &'a Articulation, rig: &Rig, opts: &RigOptions) -> Solver<'a> {
         let nv = art.n_vertices();
@@ -404,27 +443,33 @@ impl<'a> Solver<'a> {
     fn sse(&self, rig: &Rig) -> f64 {
         let mut s = 0.0;
         for (i, target) in self.targets.iter().enumerate() {
-            for (p, q) in rig.pose(i).iter().zip(target) {
-                let d = sub(*p, *q);
+            for (v, q) in target.iter().enumerate() {
+                let mut x = [0.0; 3];
+                for (k, w) in rig.weights.influences(v) {
+                    x = add(x, scale(rig.bones[i][k].apply(rig.rest[v]), w));
+                }
+                let d = sub(x, *q);
                 s += dot(d, d);
             }
         }
         s
     }
 
-    /// One pass of the weight solve (module doc), Jacobi in the smoothness term.
-    fn weights(&self, rig: &mut Rig) {
+    /// One pass of the weight solve (module doc), Jacobi in the smoothness term. `scratch` keeps the working
+    /// memory (and the previous pass's weight lists) from one pass to the next: nothing is allocated per vertex.
+    fn weights(&self, rig: &mut Rig, scratch: &mut WeightScratch) {
         let nv = rig.rest.len();
         let ns = self.targets.len();
-        let old = rig.weights.clone();
-        let mut dense_nbr: Vec<f64> = Vec::new();
-        let mut cols: Vec<f64> = Vec::new();
-        let mut new = Vec::with_capacity(nv);
+        let old = &rig.weights;
+        let WeightScratch { qp, cols, h, f, w, start, allowed, order, dense_nbr, new } = scratch;
+        new.resize_with(nv, Vec::new);
         for v in 0..nv {
             let cand = &self.candidates[v];
             let c = cand.len();
+            let out = &mut new[v];
+            out.clear();
             if c == 1 {
-                new.push(vec![(cand[0], 1.0)]);
+                out.push((cand[0], 1.0));
                 continue;
             }
             let u = rig.rest[v];
@@ -441,8 +486,10 @@ impl<'a> Solver<'a> {
                 }
             }
             let col = |a: usize| &cols[a * 3 * ns..(a + 1) * 3 * ns];
-            let mut h = vec![0.0; c * c];
-            let mut f = vec![0.0; c];
+            h.clear();
+            h.resize(c * c, 0.0);
+            f.clear();
+            f.resize(c, 0.0);
             for a in 1..c {
                 for b in a..c {
                     let s: f64 = col(a).iter().zip(col(b)).map(|(x, y)| x * y).sum();
@@ -458,9 +505,9 @@ impl<'a> Solver<'a> {
             dense_nbr.resize(c, 0.0);
             let nb = self.neighbours.of(v);
             for &(q, _) in nb {
-                for (k, w) in old.influences(q as usize) {
+                for (k, wk) in old.influences(q as usize) {
                     if let Some(a) = cand.iter().position(|&x| x as usize == k) {
-                        dense_nbr[a] += w / nb.len() as f64;
+                        dense_nbr[a] += wk / nb.len() as f64;
                     }
                 }
             }
@@ -468,7 +515,8 @@ impl<'a> Solver<'a> {
                 h[a * c + a] += lambda;
                 f[a] += lambda * dense_nbr[a];
             }
-            let mut w = vec![0.0; c];
+            w.clear();
+            w.resize(c, 0.0);
             // start from the current weights where they are candidates
             let mut any = false;
             for (k, wk) in old.influences(v) {
@@ -484,7 +532,8 @@ impl<'a> Solver<'a> {
             } else {
                 w.iter_mut().for_each(|x| *x /= sum);
             }
-            let start = w.clone();
+            start.clear();
+            start.extend_from_slice(w);
             let objective = |w: &[f64]| -> f64 {
                 let mut o = 0.0;
                 for a in 0..c {
@@ -495,11 +544,13 @@ impl<'a> Solver<'a> {
                 }
                 o
             };
-            let mut allowed = vec![true; c];
-            simplex_qp(&h, &f, &mut w, &allowed);
+            allowed.clear();
+            allowed.resize(c, true);
+            qp.solve(h, f, w, allowed);
             let nnz = w.iter().filter(|&&x| x > 0.0).count();
             if nnz > self.influences {
-                let mut order: Vec<usize> = (0..c).collect();
+                order.clear();
+                order.extend(0..c);
                 order.sort_by(|&a, &b| w[b].total_cmp(&w[a]).then(a.cmp(&b)));
                 for &a in &order[self.influences..] {
                     allowed[a] = false;
@@ -507,19 +558,19 @@ impl<'a> Solver<'a> {
                 }
                 let s: f64 = w.iter().sum();
                 w.iter_mut().for_each(|x| *x /= s);
-                simplex_qp(&h, &f, &mut w, &allowed);
+                qp.solve(h, f, w, allowed);
                 // the cap makes this a heuristic: never take a worse point than the current weights
-                if start.iter().filter(|&&x| x > 0.0).count() <= self.influences && objective(&start) < objective(&w) {
-                    w = start;
+                if start.iter().filter(|&&x| x > 0.0).count() <= self.influences && objective(start) < objective(w) {
+                    w.copy_from_slice(start);
                 }
             }
-            let mut inf: Vec<(u32, f64)> = cand.iter().zip(&w).filter(|(_, &x)| x > 0.0).map(|(&k, &x)| (k, x)).collect();
-            inf.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-            let s: f64 = inf.iter().map(|x| x.1).sum();
-            inf.iter_mut().for_each(|x| x.1 /= s);
-            new.push(inf);
+            out.extend(cand.iter().zip(w.iter()).filter(|(_, &x)| x > 0.0).map(|(&k, &x)| (k, x)));
+            out.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            let s: f64 = out.iter().map(|x| x.1).sum();
+            out.iter_mut().for_each(|x| x.1 /= s);
         }
-        rig.weights = SkinWeights { influences: new };
+        new.truncate(nv);
+        std::mem::swap(&mut rig.weights.influences, new);
     }
 
     /// One pass of the bone solve over every pose (module doc).
@@ -545,12 +596,13 @@ impl<'a> Solver<'a> {
             })
             .collect();
         let order = rig.tree.order.clone();
+        let mut pred = vec![[0.0; 3]; nv];
         for i in 0..self.targets.len() {
             if i == self.bind {
                 continue;
             }
-            let mut pred = vec![[0.0; 3]; nv];
             for (v, p) in pred.iter_mut().enumerate() {
+                *p = [0.0; 3];
                 for (k, w) in rig.weights.influences(v) {
                     *p = add(*p, scale(rig.bones[i][k].apply(rig.rest[v]), w));
                 }
@@ -788,33 +840,51 @@ fn constrain(rig: &mut Rig) {
     }
 }
 
+/// Whether an alternation that took the squared error from `before` to `after` lowered it by less than `tol`
+/// of it ([`RigOptions::tol`]; never with tol = 0).
+fn converged(before: f64, after: f64, tol: f64) -> bool {
+    tol > 0.0 && before - after <= tol * after
+}
+
 fn fit(rig: &mut Rig, art: &Articulation, opts: &RigOptions) {
     let solver = Solver::new(art, rig, opts);
+    let mut scratch = WeightScratch::default();
     // the MFA motions map the rigid reconstruction; the bind shape itself differs by its residual
     solver.bones(rig);
     rig.trace.push(solver.sse(rig));
     let free_iters = if opts.joints == Joints::Fixed { opts.iterations / 2 } else { opts.iterations };
-    for _ in 0..free_iters {
-        solver.weights(rig);
+    let mut done = 0;
+    while done < free_iters {
+        solver.weights(rig, &mut scratch);
         solver.bones(rig);
         if opts.fit_rest {
             solver.rest(rig);
         }
-        rig.trace.push(solver.sse(rig));
+        done += 1;
+        let (before, after) = (rig.trace[rig.trace.len() - 1], solver.sse(rig));
+        rig.trace.push(after);
+        if converged(before, after, opts.tol) {
+            break;
+        }
     }
     if opts.joints == Joints::Fixed {
         fit_joint_points(rig);
         constrain(rig);
         rig.trace.push(solver.sse(rig));
-        for _ in free_iters..opts.iterations.max(free_iters + 1) {
+        for _ in done..opts.iterations.max(done + 1) {
+            let before = rig.trace[rig.trace.len() - 1];
             solver.bones_fixed(rig);
             solver.bones_fixed(rig);
             rig.trace.push(solver.sse(rig));
-            solver.weights(rig);
+            solver.weights(rig, &mut scratch);
             if opts.fit_rest {
                 solver.rest(rig);
             }
-            rig.trace.push(solver.sse(rig));
+            let after = solver.sse(rig);
+            rig.trace.push(after);
+            if converged(before, after, opts.tol) {
+                break;
+            }
         }
         solver.bones_fixed(rig);
         rig.trace.push(solver.sse(rig));
