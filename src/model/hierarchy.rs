@@ -387,7 +387,10 @@ impl Pipeline {
         if distinct {
             super::motion_labels::drop_empty_parts(&mut model);
         }
-        if distinct && rounds == 0 && self.decide_rounds < DECIDE_ROUNDS {
+        // with `target_parts` the part rule decides once: its later rounds would refit counts the exact part count
+        // then changes anyway
+        let decide_rounds = if self.params.target_parts.is_some() { 1 } else { DECIDE_ROUNDS };
+        if distinct && rounds == 0 && self.decide_rounds < decide_rounds {
             self.decide_rounds += 1;
             let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
             if dissolved > 0 {
@@ -399,6 +402,14 @@ impl Pipeline {
             let after = merged.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
             if dissolved > 0 || after < before {
                 self.refined_labels = merged.clone();
+                if let Some(n) = self.params.target_parts.filter(|&n| n != after) {
+                    // the count is made exact on the decided labels at once (a refit first would be changed anyway)
+                    self.count_rounds += 1;
+                    let (labels, _) = super::part_count::labels_with_count(&self.pop, &merged, n, &self.params)?;
+                    self.stats.push(StageStats { name: "parts".into(), ..Default::default() });
+                    self.stage_started_ms = crate::clock::now_ms();
+                    return Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &labels, &self.params)?));
+                }
                 self.stats.push(StageStats { name: "distinct".into(), ..Default::default() });
                 self.stage_started_ms = crate::clock::now_ms();
                 return Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &merged, &self.params)?));
