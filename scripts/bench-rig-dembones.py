@@ -5,13 +5,14 @@ without one, the first file) as the rest pose and every other file as a frame, s
 py_dem_bones.solve_skinning (bone count N, 4 influences, its default 30 iterations), plays the result by
 linear blend skinning and prints one JSON line: bones found, E_RMS (Kavan et al. 2010: 1000 ||V - V'||_F /
 sqrt(3 n_v n_frames) / diagonal of the rest pose's bounding box), per-frame E_RMS, max error / diagonal,
-and the solve time (compute() alone; reading and evaluating are not counted).
+and the solve time, wall clock and CPU (compute() alone; reading and evaluating are not counted).
 Reading, solving and playing back: scripts/dembones_common.py (shared with bench-dembones.py).
 
 Usage: python bench-rig-dembones.py DIR BONES [INFLUENCES]
 """
 import json
 import sys
+import time
 
 import numpy as np
 import py_dem_bones
@@ -23,7 +24,9 @@ def main():
     folder, bones = sys.argv[1], int(sys.argv[2])
     influences = int(sys.argv[3]) if len(sys.argv) > 3 else 4
     rest_name, rest, faces, frame_names, frames = read_folder(folder)
+    c0 = time.process_time()
     result, solve_s = solve(rest, faces, frames, bones, influences)
+    solve_cpu_s = time.process_time() - c0  # the same call's CPU time (one thread: OMP_NUM_THREADS=1)
     w = result.weights  # (B, V)
     diag = float(np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)))
     sq, per_frame, worst = 0.0, [], 0.0
@@ -47,6 +50,7 @@ def main():
         "max_error_over_diagonal": worst / diag,
         "per_frame_e_rms": per_frame,
         "solve_s": solve_s,
+        "solve_cpu_s": solve_cpu_s,
     }))
 
 
