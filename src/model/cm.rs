@@ -56,12 +56,20 @@ pub fn cycle1(data: &Data, members: &Members, comps: &mut [Component]) -> Vec<f6
     let mut sums = vec![0.0; m * ns * 3];
     for (k, list) in members.iter().enumerate().take(m) {
         let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
-        for &Member { j, g, .. } in list {
-            let j = j as usize;
-            mass[k] += g;
-            let h = &data.h[j * ns * 3..(j + 1) * ns * 3];
-            for (a, v) in acc.iter_mut().zip(h) {
-                *a += g * v;
+        // chunks of members, shape by shape (every sum still adds the members in list order: the same rounding)
+        for chunk in list.chunks(CHUNK) {
+            for &Member { g, .. } in chunk {
+                mass[k] += g;
+            }
+            for (i, a) in acc.chunks_exact_mut(3).enumerate() {
+                let mut s = [a[0], a[1], a[2]];
+                for &Member { j, g, .. } in chunk {
+                    let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+                    for d in 0..3 {
+                        s[d] += g * p[d];
+                    }
+                }
+                a.copy_from_slice(&s);
             }
         }
     }
@@ -94,6 +102,10 @@ struct Stats {
     scatter: Vec<Mat3>,
 }
 
+/// Members per chunk of the sums' shape-outer loops ([`cycle1`], [`accumulate`]): each shape's accumulators
+/// stay in registers over the chunk, and the chunk's data rows are read side by side, each in order.
+const CHUNK: usize = 8;
+
 fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
     let ns = data.n_shapes;
     let wb = c.woodbury();
@@ -105,36 +117,59 @@ fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, w
         moment: Mat3::zeros(),
         scatter: if want_scatter { vec![Mat3::zeros(); ns] } else { Vec::new() },
     };
-    for &Member { j, g, y } in list {
-        let h = data.vertex(j as usize);
-        let ez = [wb.post_gain[0] * y[0], wb.post_gain[1] * y[1], wb.post_gain[2] * y[2]];
-        st.n += g;
-        for d in 0..3 {
-            st.second[d] += g * (wb.post_var[d] + ez[d] * ez[d]);
-        }
-        if want_moment {
-            for a in 0..3 {
-                for b in 0..3 {
-                    st.moment[(a, b)] += g * ez[a] * ez[b];
+    // γ E[z] per member of the chunk; the per-shape sums then run shape by shape over the chunk with their
+    // accumulators in registers (every sum still adds the members in list order: the same rounding)
+    let mut gez = [[0.0; 3]; CHUNK];
+    for chunk in list.chunks(CHUNK) {
+        for (q, &Member { g, y, .. }) in gez.iter_mut().zip(chunk) {
+            let ez = [wb.post_gain[0] * y[0], wb.post_gain[1] * y[1], wb.post_gain[2] * y[2]];
+            st.n += g;
+            for d in 0..3 {
+                st.second[d] += g * (wb.post_var[d] + ez[d] * ez[d]);
+            }
+            if want_moment {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        st.moment[(a, b)] += g * ez[a] * ez[b];
+                    }
                 }
             }
+            *q = [g * ez[0], g * ez[1], g * ez[2]];
         }
-        let gez = [g * ez[0], g * ez[1], g * ez[2]];
         for i in 0..ns {
             let b = c.translations[i];
-            let x = [h[i][0] - b[0], h[i][1] - b[1], h[i][2] - b[2]];
-            st.sq[i] += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
-            let cr = &mut st.cross[i];
+            let mut sq = st.sq[i];
+            let mut cr = [[0.0; 3]; 3];
             for a in 0..3 {
-                for b in 0..3 {
-                    cr[(a, b)] += x[a] * gez[b];
+                for e in 0..3 {
+                    cr[a][e] = st.cross[i][(a, e)];
+                }
+            }
+            for (&Member { j, g, .. }, q) in chunk.iter().zip(&gez) {
+                let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+                let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
+                sq += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+                for a in 0..3 {
+                    for e in 0..3 {
+                        cr[a][e] += x[a] * q[e];
+                    }
+                }
+            }
+            st.sq[i] = sq;
+            for a in 0..3 {
+                for e in 0..3 {
+                    st.cross[i][(a, e)] = cr[a][e];
                 }
             }
             if want_scatter {
                 let sc = &mut st.scatter[i];
-                for a in 0..3 {
-                    for b in 0..3 {
-                        sc[(a, b)] += g * x[a] * x[b];
+                for &Member { j, g, .. } in chunk {
+                    let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+                    let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
+                    for a in 0..3 {
+                        for e in 0..3 {
+                            sc[(a, e)] += g * x[a] * x[e];
+                        }
                     }
                 }
             }

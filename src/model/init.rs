@@ -172,18 +172,27 @@ pub fn component_from_points(data: &Data, members: &[usize], n_total: usize, flo
     // generalised Procrustes: X_i ≈ R_i mean
     let mut mean: Vec<Vec3> = members.iter().map(|&j| pts(0, j)).collect();
     let mut rots = vec![crate::geometry::IDENTITY; ns];
+    // the sums over members run on chunks of CHUNK members, shape by shape, so the members' rows are read side
+    // by side in order (a shape-outer loop over all members jumps n_s points between reads); every sum still
+    // adds the members in order, so the rounding is the same
+    const CHUNK: usize = 8;
+    let mut cross = vec![Mat3::zeros(); ns];
     for _ in 0..4 {
-        for (i, rot) in rots.iter_mut().enumerate() {
-            let mut c = Mat3::zeros();
-            for (mm, &j) in mean.iter().zip(members) {
-                let x = pts(i, j);
-                for a in 0..3 {
-                    for b in 0..3 {
-                        c[(a, b)] += x[a] * mm[b];
+        cross.iter_mut().for_each(|c| *c = Mat3::zeros());
+        for (means, js) in mean.chunks(CHUNK).zip(members.chunks(CHUNK)) {
+            for (i, c) in cross.iter_mut().enumerate() {
+                for (mm, &j) in means.iter().zip(js) {
+                    let x = pts(i, j);
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            c[(a, b)] += x[a] * mm[b];
+                        }
                     }
                 }
             }
-            *rot = best_rotation(&c);
+        }
+        for (rot, c) in rots.iter_mut().zip(&cross) {
+            *rot = best_rotation(c);
         }
         for (mm, &j) in mean.iter_mut().zip(members) {
             let mut acc = [0.0; 3];
@@ -208,15 +217,16 @@ pub fn component_from_points(data: &Data, members: &[usize], n_total: usize, flo
     let (vals, p) = principal_axes(&cov);
     let latent: Vec<Vec3> = mean.iter().map(|&mm| mat_t_vec(&p, mm)).collect();
     let rotations: Vec<Mat3> = rots.iter().map(|r| mat_mul(r, &p)).collect();
-    let mut variances = vec![0.0; ns];
-    for i in 0..ns {
-        let mut s = 0.0;
-        for (y, &j) in latent.iter().zip(members) {
-            let d = sub(pts(i, j), mat_vec(&rotations[i], *y));
-            s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let mut sums = vec![0.0; ns];
+    for (ys, js) in latent.chunks(CHUNK).zip(members.chunks(CHUNK)) {
+        for (i, s) in sums.iter_mut().enumerate() {
+            for (y, &j) in ys.iter().zip(js) {
+                let d = sub(pts(i, j), mat_vec(&rotations[i], *y));
+                *s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            }
         }
-        variances[i] = (s / (3.0 * n)).max(floor);
     }
+    let variances: Vec<f64> = sums.iter().map(|s| (s / (3.0 * n)).max(floor)).collect();
     Component {
         rotations,
         translations: centroids,
