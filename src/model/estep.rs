@@ -295,6 +295,15 @@ fn accumulate_block<T: Real>(packed: &[[T; 13]], h: &[[T; LANES]], y: &mut [[T; 
     }
 }
 
+/// [`accumulate_block`] in f64, as a function of its own: the E-step calls it for every evaluation it keeps
+/// (the owners', the f64 checks' and the survivors' shapes). Kept out of [`EStep::run`]'s body so that it is
+/// compiled as the small loop it is (in wasm the engine allocates its registers as in [`kernel_pass`], the
+/// limit it is compared with, instead of within the whole E-step).
+#[inline(never)]
+fn accumulate_block_f64(packed: &[[f64; 13]], h: &[Lanes], y: &mut [Lanes; 3], sq: &mut Lanes) {
+    accumulate_block(packed, h, y, sq);
+}
+
 /// log_norm - q/2 with q = sq - Σ_d shrink_d y_d², per lane.
 #[inline(always)]
 fn log_density_lanes(log_norm: f64, shrink: &[f64; 3], y: &[Lanes; 3], sq: &Lanes) -> Lanes {
@@ -319,10 +328,10 @@ pub struct EStep {
     /// Per component, the packed constants of the screened shapes in f32, and the screen's constants.
     packed32: Vec<[f32; 13]>,
     screen: Vec<Screen>,
-    /// The screen's threshold per component for the current block.
-    thr32: Vec<f32>,
     /// Per component, an upper bound of its log-density over the current group of blocks.
     group_bound: Vec<f64>,
+    /// The group bound's constants with the components in lanes ([`GroupConsts`]).
+    group_consts: Vec<GroupConsts>,
     /// Floating-point operations of the last run: in f64 (shape evaluations, bounds and final densities) and
     /// in f32 (the screen and its checks).
     pub flops_f64: f64,
@@ -342,8 +351,8 @@ impl EStep {
             alive: Vec::new(),
             packed32: Vec::new(),
             screen: Vec::new(),
-            thr32: Vec::new(),
             group_bound: Vec::new(),
+            group_consts: Vec::new(),
             flops_f64: 0.0,
             flops_f32: 0.0,
             owner: Vec::new(),
@@ -433,15 +442,19 @@ impl EStep {
         let mut screens = 0usize; // lanes x screen checks, f32
         let gs = self.blocked.group_shapes;
         self.group_bound.clear();
-        self.group_bound.resize(m, f64::INFINITY);
+        self.group_bound.resize(m.next_multiple_of(LANES), f64::INFINITY);
+        self.group_consts.clear();
+        if gs > 0 {
+            self.group_consts.extend((0..m).step_by(LANES).map(|k0| GroupConsts::new(&wbs[k0..(k0 + LANES).min(m)], &shrinks[k0..], gs)));
+        }
         for b in 0..self.blocked.n_blocks() {
             if b % GROUP_BLOCKS == 0 && gs > 0 {
                 // the group bound of every component for the next GROUP_BLOCKS blocks
                 let g = b / GROUP_BLOCKS;
                 let centre = &self.blocked.centres[g * gs..(g + 1) * gs];
                 let radii2 = &self.blocked.radii2[g * gs..(g + 1) * gs];
-                for (k, wb) in wbs.iter().enumerate() {
-                    self.group_bound[k] = group_upper_bound(wb, &shrinks[k][gs - 1], centre, radii2);
+                for (gc, out) in self.group_consts.iter().zip(self.group_bound.chunks_exact_mut(LANES)) {
+                    out.copy_from_slice(&group_upper_bounds(gc, centre, radii2));
                 }
                 evals += gs * m;
                 bounds += m;
@@ -462,7 +475,7 @@ impl EStep {
                 self.alive.push(k);
                 let mut y = [[0.0; LANES]; 3];
                 let mut sq = [0.0; LANES];
-                accumulate_block(&wbs[k].packed, h, &mut y, &mut sq);
+                accumulate_block_f64(&wbs[k].packed, h, &mut y, &mut sq);
                 let v = log_density_lanes(wbs[k].log_norm, &wbs[k].shrink, &y, &sq);
                 bounds += LANES;
                 for l in 0..LANES {
@@ -473,10 +486,7 @@ impl EStep {
                 evals += ns * LANES;
             }
             // the others, each stopped early once negligible in every lane
-            if ts > 0 {
-                thresholds(&self.screen, &best, &mut self.thr32);
-            }
-            let best_min = best.iter().fold(f64::INFINITY, |a, &v| a.min(v));
+            let mut best_min = best.iter().fold(f64::INFINITY, |a, &v| a.min(v));
             for k in 0..m {
                 if self.is_hint[k] {
                     continue;
@@ -490,7 +500,7 @@ impl EStep {
                     evals += ts * LANES;
                     screen_evals += ts * LANES;
                     screens += LANES;
-                    if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], self.thr32[k]) {
+                    if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], threshold(&self.screen[k], best_min)) {
                         continue;
                     }
                 }
@@ -499,7 +509,7 @@ impl EStep {
                 let mut start = 0;
                 let mut pruned = false;
                 for &t in &checks {
-                    accumulate_block(&wb.packed[start..t], &h[3 * start..3 * t], &mut y, &mut sq);
+                    accumulate_block_f64(&wb.packed[start..t], &h[3 * start..3 * t], &mut y, &mut sq);
                     start = t;
                     let ub = log_density_lanes(wb.log_norm, &shrinks[k][t - 1], &y, &sq);
                     bounds += LANES;
@@ -512,16 +522,14 @@ impl EStep {
                 if pruned {
                     continue;
                 }
-                accumulate_block(&wb.packed[start..], &h[3 * start..], &mut y, &mut sq);
+                accumulate_block_f64(&wb.packed[start..], &h[3 * start..], &mut y, &mut sq);
                 evals += (ns - start) * LANES;
                 let v = log_density_lanes(wb.log_norm, &wb.shrink, &y, &sq);
                 bounds += LANES;
                 for l in 0..LANES {
                     best[l] = best[l].max(v[l]);
                 }
-                if ts > 0 {
-                    thresholds(&self.screen, &best, &mut self.thr32);
-                }
+                best_min = best.iter().fold(f64::INFINITY, |a, &v| a.min(v));
                 self.vals[k] = v;
                 self.ys[k] = y;
                 self.alive.push(k);
@@ -594,7 +602,7 @@ impl EStep {
 /// and log π N(h) <= log_norm - q_T(h) / 2 <= log_norm - max(0, sqrt q_T(c) - R)² / 2. Rounding: q_T(c) is a
 /// difference of two sums of at most sq = Σ |x_t|²/s_t, each rounded at 1e-16 relative; 1e-12 sq is taken off
 /// it and R is taken 1e-12 larger.
-#[inline]
+#[cfg(test)]
 fn group_upper_bound(wb: &Woodbury, shrink: &[f64; 3], centre: &[[f64; 3]], radii2: &[f64]) -> f64 {
     let t = centre.len();
     let (y, sq) = super::component::project_packed(&wb.packed[..t], centre);
@@ -603,6 +611,58 @@ fn group_upper_bound(wb: &Woodbury, shrink: &[f64; 3], centre: &[[f64; 3]], radi
     let r2: f64 = wb.packed[..t].iter().zip(radii2).map(|(p, r2)| r2 * p[3]).sum();
     let gap = (q_low.sqrt() - r2.sqrt() * (1.0 + 1e-12)).max(0.0);
     wb.log_norm - 0.5 * gap * gap
+}
+
+/// The constants of [`group_upper_bound`] for [`LANES`] components at once, one component per lane (the last
+/// component repeated in unused lanes), so that the group bound runs with the components in SIMD lanes.
+#[derive(Debug, Clone)]
+struct GroupConsts {
+    /// Per shape of the group bound, the packed constants ([`super::component::PackedShape`]) by lane.
+    packed: Vec<[Lanes; 13]>,
+    shrink: [Lanes; 3],
+    log_norm: Lanes,
+}
+
+impl GroupConsts {
+    /// `wbs` (1 to [`LANES`] components) and their prefix shrinks; `gs` shapes.
+    fn new(wbs: &[Woodbury], shrinks: &[Vec<[f64; 3]>], gs: usize) -> GroupConsts {
+        let k = |l: usize| l.min(wbs.len() - 1);
+        GroupConsts {
+            packed: (0..gs).map(|t| std::array::from_fn(|e| std::array::from_fn(|l| wbs[k(l)].packed[t][e]))).collect(),
+            shrink: std::array::from_fn(|d| std::array::from_fn(|l| shrinks[k(l)][gs - 1][d])),
+            log_norm: std::array::from_fn(|l| wbs[k(l)].log_norm),
+        }
+    }
+}
+
+/// [`group_upper_bound`] for the components of `gc`, one per lane: the same arithmetic in the same order, so
+/// the same values.
+#[inline]
+fn group_upper_bounds(gc: &GroupConsts, centre: &[[f64; 3]], radii2: &[f64]) -> Lanes {
+    let mut y = [[0.0; LANES]; 3];
+    let mut sq = [0.0; LANES];
+    let mut r2 = [0.0; LANES];
+    for (q, (p, &rr)) in gc.packed.iter().zip(centre.iter().zip(radii2)) {
+        for l in 0..LANES {
+            let x0 = p[0] - q[0][l];
+            let x1 = p[1] - q[1][l];
+            let x2 = p[2] - q[2][l];
+            sq[l] += (x0 * x0 + x1 * x1 + x2 * x2) * q[3][l];
+            y[0][l] += q[4][l] * x0 + q[5][l] * x1 + q[6][l] * x2;
+            y[1][l] += q[7][l] * x0 + q[8][l] * x1 + q[9][l] * x2;
+            y[2][l] += q[10][l] * x0 + q[11][l] * x1 + q[12][l] * x2;
+            r2[l] += rr * q[3][l];
+        }
+    }
+    let mut out = [0.0; LANES];
+    for l in 0..LANES {
+        let sh = [gc.shrink[0][l], gc.shrink[1][l], gc.shrink[2][l]];
+        let q = sq[l] - (sh[0] * y[0][l] * y[0][l] + sh[1] * y[1][l] * y[1][l] + sh[2] * y[2][l] * y[2][l]);
+        let q_low = (q - 1e-12 * sq[l]).max(0.0);
+        let gap = (q_low.sqrt() - r2[l].sqrt() * (1.0 + 1e-12)).max(0.0);
+        out[l] = gc.log_norm[l] - 0.5 * gap * gap;
+    }
+    out
 }
 
 /// Per component, what the f32 screen needs.
@@ -639,16 +699,14 @@ fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, thr32: 
     out
 }
 
-/// Per component, the screen's threshold for the block: log_norm - q_low / 2 < best - margin in every lane
-/// follows from q_low > 2 (log_norm + margin) - 2 min(best). Rounded up to f32: the conversion errs by at most
-/// half an f32 ulp (6e-8 relative), so 2.4e-7 relative is added first (NaN stays NaN and never prunes).
-fn thresholds(screen: &[Screen], best: &Lanes, thr32: &mut Vec<f32>) {
-    let best_min = best.iter().fold(f64::INFINITY, |a, &b| a.min(b));
-    thr32.clear();
-    thr32.extend(screen.iter().map(|sc| {
-        let thr = sc.thr_base - 2.0 * best_min;
-        (thr + thr.abs() * 2.4e-7) as f32
-    }));
+/// A component's screen threshold for the block (`best_min` the smallest best log-density of its lanes):
+/// log_norm - q_low / 2 < best - margin in every lane follows from q_low > 2 (log_norm + margin) - 2 min(best).
+/// Rounded up to f32: the conversion errs by at most half an f32 ulp (6e-8 relative), so 2.4e-7 relative is
+/// added first (NaN stays NaN and never prunes).
+#[inline(always)]
+fn threshold(sc: &Screen, best_min: f64) -> f32 {
+    let thr = sc.thr_base - 2.0 * best_min;
+    (thr + thr.abs() * 2.4e-7) as f32
 }
 
 fn argmax(row: &[f64]) -> usize {
@@ -828,6 +886,36 @@ mod tests {
     use super::*;
     use crate::geometry::rotation::axis_angle;
     use crate::mesh::Population;
+
+    /// The group bound with the components in lanes gives every component's scalar bound, bit for bit (5
+    /// components: a full chunk and a padded one).
+    #[test]
+    fn group_bounds_in_lanes_equal_the_scalar_ones() {
+        let ns = 9;
+        let gs = 8;
+        let comps: Vec<Component> = (0..5)
+            .map(|k| Component {
+                rotations: (0..ns).map(|i| axis_angle([1.0, k as f64, i as f64], 0.3 * (i + k) as f64)).collect(),
+                translations: (0..ns).map(|i| [0.1 * k as f64, -0.05 * i as f64, 0.02]).collect(),
+                lambda: [0.3, 0.2 / (k + 1) as f64, 0.1],
+                variances: (0..ns).map(|i| 1e-4 + 1e-3 * (i + k) as f64).collect(),
+                weight: 0.2,
+            })
+            .collect();
+        let order: Vec<usize> = (0..ns).rev().collect();
+        let wbs = ordered_woodbury(&comps, &order);
+        let shrinks = prefix_shrinks(&comps, &order);
+        let centre: Vec<[f64; 3]> = (0..gs).map(|t| [0.05 * t as f64, 0.3, -0.1 * t as f64]).collect();
+        let radii2: Vec<f64> = (0..gs).map(|t| 1e-4 * (t + 1) as f64).collect();
+        for k0 in [0, 4] {
+            let gc = GroupConsts::new(&wbs[k0..(k0 + LANES).min(5)], &shrinks[k0..], gs);
+            let lanes = group_upper_bounds(&gc, &centre, &radii2);
+            for k in k0..(k0 + LANES).min(5) {
+                let one = group_upper_bound(&wbs[k], &shrinks[k][gs - 1], &centre, &radii2);
+                assert_eq!(lanes[k - k0].to_bits(), one.to_bits(), "component {k}: {} vs {one}", lanes[k - k0]);
+            }
+        }
+    }
 
     #[test]
     fn vectorised_e_step_equals_direct_loop() {
