@@ -415,6 +415,9 @@ impl Pipeline {
                 return Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &merged, &self.params)?));
             }
         }
+        if distinct && rounds == 0 {
+            super::label_fit::fit_to_labels(&mut model, &self.pop, &self.params);
+        }
         let Some(n) = self.params.target_parts else {
             self.final_model = Some(model);
             return Ok(State::Done);

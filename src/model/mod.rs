@@ -29,6 +29,7 @@ pub mod estep;
 pub mod hierarchy;
 pub mod init;
 pub mod islands;
+pub mod label_fit;
 pub mod limit;
 pub mod memory;
 pub mod motion_labels;
