@@ -441,36 +441,38 @@ impl<'a> Solver<'a> {
     }
 
     fn sse(&self, rig: &Rig) -> f64 {
-        let mut s = 0.0;
-        for (i, target) in self.targets.iter().enumerate() {
-            for (v, q) in target.iter().enumerate() {
-                let mut x = [0.0; 3];
-                for (k, w) in rig.weights.influences(v) {
-                    x = add(x, scale(rig.bones[i][k].apply(rig.rest[v]), w));
-                }
-                let d = sub(x, *q);
-                s += dot(d, d);
-            }
-        }
-        s
+        self.targets.iter().enumerate().map(|(i, target)| pose_sse(rig, i, target)).sum()
     }
 
     /// One pass of the weight solve (module doc), Jacobi in the smoothness term. `scratch` keeps the working
     /// memory (and the previous pass's weight lists) from one pass to the next: nothing is allocated per vertex.
     fn weights(&self, rig: &mut Rig, scratch: &mut WeightScratch) {
         let nv = rig.rest.len();
+        let mut new = std::mem::take(&mut scratch.new);
+        new.resize_with(nv, Vec::new);
+        for (v, out) in new.iter_mut().enumerate() {
+            self.vertex_weights(v, rig, scratch, out);
+        }
+        new.truncate(nv);
+        std::mem::swap(&mut rig.weights.influences, &mut new);
+        scratch.new = new;
+    }
+
+    /// Vertex v's weights of [`Solver::weights`] into `out`. A function of its own, called once per vertex, for
+    /// the page: V8 runs a wasm function in its baseline compiler until it is hot and uses the optimised code
+    /// from its next call on, so one long call per pass ran mostly unoptimised.
+    #[inline(never)]
+    fn vertex_weights(&self, v: usize, rig: &Rig, scratch: &mut WeightScratch, out: &mut Vec<(u32, f64)>) {
         let ns = self.targets.len();
         let old = &rig.weights;
-        let WeightScratch { qp, cols, h, f, w, start, allowed, order, dense_nbr, new } = scratch;
-        new.resize_with(nv, Vec::new);
-        for v in 0..nv {
+        let WeightScratch { qp, cols, h, f, w, start, allowed, order, dense_nbr, .. } = scratch;
+        {
             let cand = &self.candidates[v];
             let c = cand.len();
-            let out = &mut new[v];
             out.clear();
             if c == 1 {
                 out.push((cand[0], 1.0));
-                continue;
+                return;
             }
             let u = rig.rest[v];
             // D columns: (M_k u - M_own u) over the poses; and the target's offset y - M_own u
@@ -569,8 +571,6 @@ impl<'a> Solver<'a> {
             let s: f64 = out.iter().map(|x| x.1).sum();
             out.iter_mut().for_each(|x| x.1 /= s);
         }
-        new.truncate(nv);
-        std::mem::swap(&mut rig.weights.influences, new);
     }
 
     /// One pass of the bone solve over every pose (module doc).
@@ -601,38 +601,14 @@ impl<'a> Solver<'a> {
             if i == self.bind {
                 continue;
             }
-            for (v, p) in pred.iter_mut().enumerate() {
-                *p = [0.0; 3];
-                for (k, w) in rig.weights.influences(v) {
-                    *p = add(*p, scale(rig.bones[i][k].apply(rig.rest[v]), w));
-                }
-            }
+            predict(rig, i, &mut pred);
             for &k in &order {
                 let (ubar, w2) = stats[k];
                 if w2 <= 0.0 {
                     continue;
                 }
-                let old = rig.bones[i][k];
-                let mut cm = Mat3::zeros();
-                let mut wr = [0.0; 3];
-                for &(v, w) in &support[k] {
-                    let v = v as usize;
-                    let r = add(sub(self.targets[i][v], pred[v]), scale(old.apply(rig.rest[v]), w));
-                    let uu = sub(rig.rest[v], ubar);
-                    wr = add(wr, scale(r, w));
-                    for a in 0..3 {
-                        for b in 0..3 {
-                            cm[(a, b)] += w * r[a] * uu[b];
-                        }
-                    }
-                }
-                let rot = best_rotation(&cm);
-                let new = RigidMotion { rotation: rot, translation: sub(scale(wr, 1.0 / w2), mat_vec(&rot, ubar)) };
+                let new = bone_update(&self.targets[i], &rig.rest, &support[k], rig.bones[i][k], ubar, w2, &mut pred);
                 rig.bones[i][k] = new;
-                for &(v, w) in &support[k] {
-                    let v = v as usize;
-                    pred[v] = add(pred[v], scale(sub(new.apply(rig.rest[v]), old.apply(rig.rest[v])), w));
-                }
             }
         }
     }
@@ -761,6 +737,17 @@ impl Solver<'_> {
     /// (Σ_i L_iᵀ L_i) u = Σ_i L_iᵀ (v_i - c_i), with L_i, c_i the blended linear part and translation.
     fn rest(&self, rig: &mut Rig) {
         for v in 0..rig.rest.len() {
+            if let Some(u) = self.vertex_rest(v, rig) {
+                rig.rest[v] = u;
+            }
+        }
+    }
+
+    /// Vertex v's bind position of [`Solver::rest`], None when its system is singular (a function of its own
+    /// for V8's tiering, as [`Solver::vertex_weights`]).
+    #[inline(never)]
+    fn vertex_rest(&self, v: usize, rig: &Rig) -> Option<Vec3> {
+        {
             let mut a = [0.0; 9];
             let mut b = [0.0; 3];
             for (i, target) in self.targets.iter().enumerate() {
@@ -784,11 +771,62 @@ impl Solver<'_> {
                 }
             }
             let tr = a[0] + a[4] + a[8];
-            if solve_dense(&mut a, &mut b, 3) && b.iter().all(|x| x.is_finite()) && tr > 0.0 {
-                rig.rest[v] = b;
+            (solve_dense(&mut a, &mut b, 3) && b.iter().all(|x| x.is_finite()) && tr > 0.0).then_some(b)
+        }
+    }
+}
+
+/// Squared error of pose i (a function of its own for V8's tiering, as [`Solver::vertex_weights`]).
+#[inline(never)]
+fn pose_sse(rig: &Rig, i: usize, target: &[Vec3]) -> f64 {
+    let mut s = 0.0;
+    for (v, q) in target.iter().enumerate() {
+        let mut x = [0.0; 3];
+        for (k, w) in rig.weights.influences(v) {
+            x = add(x, scale(rig.bones[i][k].apply(rig.rest[v]), w));
+        }
+        let d = sub(x, *q);
+        s += dot(d, d);
+    }
+    s
+}
+
+/// Linear blend skinning of every vertex for pose i into `pred` (a function of its own for V8's tiering, as
+/// [`Solver::vertex_weights`]).
+#[inline(never)]
+fn predict(rig: &Rig, i: usize, pred: &mut [Vec3]) {
+    for (v, p) in pred.iter_mut().enumerate() {
+        *p = [0.0; 3];
+        for (k, w) in rig.weights.influences(v) {
+            *p = add(*p, scale(rig.bones[i][k].apply(rig.rest[v]), w));
+        }
+    }
+}
+
+/// One bone's weighted Procrustes step of [`Solver::bones`] for one pose (module doc): its new motion, with
+/// `pred` updated to it (a function of its own for V8's tiering, as [`Solver::vertex_weights`]).
+#[inline(never)]
+fn bone_update(target: &[Vec3], rest: &[Vec3], support: &[(u32, f64)], old: RigidMotion, ubar: Vec3, w2: f64, pred: &mut [Vec3]) -> RigidMotion {
+    let mut cm = Mat3::zeros();
+    let mut wr = [0.0; 3];
+    for &(v, w) in support {
+        let v = v as usize;
+        let r = add(sub(target[v], pred[v]), scale(old.apply(rest[v]), w));
+        let uu = sub(rest[v], ubar);
+        wr = add(wr, scale(r, w));
+        for a in 0..3 {
+            for b in 0..3 {
+                cm[(a, b)] += w * r[a] * uu[b];
             }
         }
     }
+    let rot = best_rotation(&cm);
+    let new = RigidMotion { rotation: rot, translation: sub(scale(wr, 1.0 / w2), mat_vec(&rot, ubar)) };
+    for &(v, w) in support {
+        let v = v as usize;
+        pred[v] = add(pred[v], scale(sub(new.apply(rest[v]), old.apply(rest[v])), w));
+    }
+    new
 }
 
 /// Joint points where parent and child bones move most alike (module doc), from the current bones.
