@@ -347,16 +347,7 @@ impl Fit {
                 [comps[k].lambda[0] * e[0], comps[k].lambda[1] * e[1], comps[k].lambda[2] * e[2]]
             })
             .collect();
-        let parts = comps
-            .iter()
-            .map(|c| {
-                let mut c = c.clone();
-                for (t, o) in c.translations.iter_mut().zip(&self.data.offsets) {
-                    *t = crate::geometry::add(*t, *o);
-                }
-                c
-            })
-            .collect();
+        let parts = super::multires::from_frame(&self.data, comps);
         Model {
             n_shapes: self.data.n_shapes,
             n_vertices: self.data.n_vertices,

@@ -11,6 +11,7 @@
 //!    then labelled by rigid motion ([`super::motion_labels`]) and, once, flesh between parts is dissolved and
 //!    parts without a distinct motion are merged ([`super::distinct`]); if that removed parts, the final AECM
 //!    runs again from those labels. Every part is made one connected piece of the mesh ([`super::islands`]).
+//!    The final model's parts are then fitted to those labels ([`super::label_fit`]).
 //! 4. Only with `target_parts` = N: parts are split or merged until there are exactly N ([`super::part_count`]),
 //!    then the final AECM runs again from those labels.
 //!
@@ -406,26 +407,22 @@ impl Pipeline {
                     // the count is made exact on the decided labels at once (a refit first would be changed anyway)
                     self.count_rounds += 1;
                     let (labels, _) = super::part_count::labels_with_count(&self.pop, &merged, n, &self.params)?;
-                    self.stats.push(StageStats { name: "parts".into(), ..Default::default() });
-                    self.stage_started_ms = crate::clock::now_ms();
-                    return Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &labels, &self.params)?));
+                    return self.refit("parts", &labels);
                 }
-                self.stats.push(StageStats { name: "distinct".into(), ..Default::default() });
-                self.stage_started_ms = crate::clock::now_ms();
-                return Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &merged, &self.params)?));
+                return self.refit("distinct", &merged);
             }
         }
-        if distinct && rounds == 0 {
-            super::label_fit::fit_to_labels(&mut model, &self.pop, &self.params);
-        }
-        let Some(n) = self.params.target_parts else {
-            self.final_model = Some(model);
-            return Ok(State::Done);
+        let n = match self.params.target_parts {
+            Some(n) if !(model.n_parts() == n && compact(&model.labels).iter().max().map_or(0, |&l| l as usize + 1) == n) => n,
+            _ => {
+                // the model is final: with the part rule's motion labels, its parts are fitted to them
+                if distinct && rounds == 0 {
+                    super::label_fit::fit_to_labels(&mut model, &self.pop, &self.params);
+                }
+                self.final_model = Some(model);
+                return Ok(State::Done);
+            }
         };
-        if model.n_parts() == n && compact(&model.labels).iter().max().map_or(0, |&l| l as usize + 1) == n {
-            self.final_model = Some(model);
-            return Ok(State::Done);
-        }
         if rounds == COUNT_ROUNDS {
             return Err(crate::error::Error::Data(format!(
                 "cannot keep exactly {n} parts: the final AECM dropped parts {rounds} times (each needs a responsibility \
@@ -435,9 +432,14 @@ impl Pipeline {
         }
         self.count_rounds += 1;
         let (labels, _) = super::part_count::labels_with_count(&self.pop, &model.labels, n, &self.params)?;
-        self.stats.push(StageStats { name: "parts".into(), ..Default::default() });
+        self.refit("parts", &labels)
+    }
+
+    /// A new stage `stage`: the final AECM again on all vertices, from `labels`.
+    fn refit(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
+        self.stats.push(StageStats { name: stage.into(), ..Default::default() });
         self.stage_started_ms = crate::clock::now_ms();
-        Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), &labels, &self.params)?))
+        Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), labels, &self.params)?))
     }
 
     fn sub_params(&self) -> Params {

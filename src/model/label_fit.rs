@@ -54,12 +54,7 @@ pub fn fit_to_labels(model: &mut Model, pop: &Population, params: &Params) -> Ve
         return Vec::new();
     }
     // the model's translations are in unit-box coordinates, the data centred per shape
-    let mut comps = model.parts.clone();
-    for c in comps.iter_mut() {
-        for (t, o) in c.translations.iter_mut().zip(&data.offsets) {
-            *t = crate::geometry::sub(*t, *o);
-        }
-    }
+    let mut comps = super::multires::to_frame(&data, &model.parts);
     let labels = model.labels.clone();
     let mut trace = Vec::new();
     let mut prev = classification_log_likelihood(&data, &labels, &comps);
@@ -76,15 +71,14 @@ pub fn fit_to_labels(model: &mut Model, pop: &Population, params: &Params) -> Ve
             break;
         }
     }
-    for c in comps.iter_mut() {
-        for (t, o) in c.translations.iter_mut().zip(&data.offsets) {
-            *t = crate::geometry::add(*t, *o);
-        }
-    }
+    // the latent shape under the new parameters (eq 21), then the translations back to unit-box coordinates
+    let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
     for (j, &l) in labels.iter().enumerate() {
-        model.latent[j] = comps[l as usize].latent_image(&pop.shapes.iter().map(|s| s[j]).collect::<Vec<_>>());
+        let (c, wb) = (&comps[l as usize], &wbs[l as usize]);
+        let e = c.posterior_mean(wb, data.vertex(j));
+        model.latent[j] = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
     }
-    model.parts = comps;
+    model.parts = super::multires::from_frame(&data, &comps);
     trace
 }
 
@@ -106,12 +100,7 @@ mod tests {
         let (g, mut model) = fitted(&spec);
         let labels = model.labels.clone();
         let data = Data::from_population(&g.population);
-        let mut centred = model.parts.clone();
-        for c in centred.iter_mut() {
-            for (t, o) in c.translations.iter_mut().zip(&data.offsets) {
-                *t = crate::geometry::sub(*t, *o);
-            }
-        }
+        let centred = crate::model::multires::to_frame(&data, &model.parts);
         let before = classification_log_likelihood(&data, &labels, &centred);
         let trace = fit_to_labels(&mut model, &g.population, &Params::default());
         assert!(!trace.is_empty());
