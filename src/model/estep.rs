@@ -304,6 +304,19 @@ fn accumulate_block_f64(packed: &[[f64; 13]], h: &[Lanes], y: &mut [Lanes; 3], s
     accumulate_block(packed, h, y, sq);
 }
 
+/// The smallest lane by comparisons (`f64::min` is a call to `fmax`/`fmin` in wasm); the best values it is
+/// used on are never NaN (they start at -inf and only grow by `>`).
+#[inline(always)]
+fn lanes_min(v: &Lanes) -> f64 {
+    let mut a = f64::INFINITY;
+    for &x in v {
+        if x < a {
+            a = x;
+        }
+    }
+    a
+}
+
 /// log_norm - q/2 with q = sq - Σ_d shrink_d y_d², per lane.
 #[inline(always)]
 fn log_density_lanes(log_norm: f64, shrink: &[f64; 3], y: &[Lanes; 3], sq: &Lanes) -> Lanes {
@@ -479,14 +492,16 @@ impl EStep {
                 let v = log_density_lanes(wbs[k].log_norm, &wbs[k].shrink, &y, &sq);
                 bounds += LANES;
                 for l in 0..LANES {
-                    best[l] = best[l].max(v[l]);
+                    if v[l] > best[l] {
+                        best[l] = v[l];
+                    }
                 }
                 self.vals[k] = v;
                 self.ys[k] = y;
                 evals += ns * LANES;
             }
             // the others, each stopped early once negligible in every lane
-            let mut best_min = best.iter().fold(f64::INFINITY, |a, &v| a.min(v));
+            let mut best_min = lanes_min(&best);
             for k in 0..m {
                 if self.is_hint[k] {
                     continue;
@@ -527,9 +542,11 @@ impl EStep {
                 let v = log_density_lanes(wb.log_norm, &wb.shrink, &y, &sq);
                 bounds += LANES;
                 for l in 0..LANES {
-                    best[l] = best[l].max(v[l]);
+                    if v[l] > best[l] {
+                        best[l] = v[l];
+                    }
                 }
-                best_min = best.iter().fold(f64::INFINITY, |a, &v| a.min(v));
+                best_min = lanes_min(&best);
                 self.vals[k] = v;
                 self.ys[k] = y;
                 self.alive.push(k);
@@ -685,7 +702,7 @@ struct Screen {
 /// the Woodbury term behaves the same by Cauchy-Schwarz, and the ~20 f32 operations per value add about
 /// 1e-6 relative. So q_t >= sq (1 - 1e-4) - r (1 + 1e-4) - t (1 + 5e-8/s_min), with sq and r the f32 values
 /// of Σ|x|²/s and Σ shrink y²: that lower bound is what is compared (NaN never prunes).
-#[inline(always)]
+#[inline(never)]
 fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, thr32: f32) -> bool {
     let mut y = [[0.0f32; LANES]; 3];
     let mut sq = [0.0f32; LANES];
