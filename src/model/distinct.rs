@@ -14,7 +14,6 @@
 //! `refine_min_gain`, and keeps a split only when it lowers the variance `distinct_ratio` times); the final
 //! AECM runs on its labels, then 1 and 2, then the final AECM once more if any part went.
 
-use super::data::Data;
 use super::hierarchy::compact;
 use super::motion_labels::motion_residual;
 use super::params::Params;
@@ -149,9 +148,7 @@ pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f
     } else {
         members
     };
-    let data = Data::from_population_subset(pop, members);
-    let all: Vec<usize> = (0..members.len()).collect();
-    super::init::component_from_points(&data, &all, members.len(), params.variance_floor).mean_variance()
+    super::init::component_from_population(pop, members, members.len(), params.variance_floor).mean_variance()
 }
 
 /// The vertex-weighted median of per-part values.

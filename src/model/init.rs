@@ -159,50 +159,79 @@ fn principal_axes(cov: &Mat3) -> (Vec3, Mat3) {
 /// One component fitted to the vertices `members` by generalised Procrustes analysis.
 pub fn component_from_points(data: &Data, members: &[usize], n_total: usize, floor: f64) -> Component {
     let ns = data.n_shapes;
-    let n = members.len().max(1) as f64;
-    let mut centroids = vec![[0.0; 3]; ns];
-    for &j in members {
+    let n = members.len();
+    // the members' points, shape-major (read vertex by vertex, each h_j contiguous)
+    let mut xs = vec![[0.0; 3]; ns * n];
+    for (m, &j) in members.iter().enumerate() {
         for (i, p) in data.vertex(j).iter().enumerate() {
-            for d in 0..3 {
-                centroids[i][d] += p[d] / n;
-            }
+            xs[i * n + m] = *p;
         }
     }
-    let pts = |i: usize, j: usize| sub(data.vertex(j)[i], centroids[i]);
+    procrustes_start(ns, n, xs, n_total, floor)
+}
+
+/// [`component_from_points`] of `Data::from_population_subset(pop, members)`'s vertices, all of them, without
+/// the copy: the same points (each shape centred on the members' centroid), so the same component bit for bit.
+pub fn component_from_population(pop: &crate::mesh::Population, members: &[usize], n_total: usize, floor: f64) -> Component {
+    let ns = pop.n_shapes();
+    let n = members.len();
+    let mut xs = vec![[0.0; 3]; ns * n];
+    for (i, shape) in pop.shapes.iter().enumerate() {
+        // the centroid as Data::from_population_subset takes it
+        let mut c = [0.0; 3];
+        for &j in members {
+            for d in 0..3 {
+                c[d] += shape[j][d];
+            }
+        }
+        let offset = c.map(|v| v / n.max(1) as f64);
+        for (x, &j) in xs[i * n..(i + 1) * n].iter_mut().zip(members) {
+            *x = sub(shape[j], offset);
+        }
+    }
+    procrustes_start(ns, n, xs, n_total, floor)
+}
+
+/// Generalised Procrustes on `n` points in each of `ns` shapes, `xs[i * n + m]` = point m in shape i (see the
+/// module doc). Every loop runs shape by shape over the points in order (contiguous reads), with a sum's
+/// accumulators in registers; each sum adds the points in their order.
+fn procrustes_start(ns: usize, n: usize, mut xs: Vec<Vec3>, n_total: usize, floor: f64) -> Component {
+    let nf = n.max(1) as f64;
+    let mut centroids = vec![[0.0; 3]; ns];
+    for (c, shape) in centroids.iter_mut().zip(xs.chunks_exact_mut(n.max(1))) {
+        for p in shape.iter() {
+            for d in 0..3 {
+                c[d] += p[d] / nf;
+            }
+        }
+        for p in shape.iter_mut() {
+            *p = sub(*p, *c);
+        }
+    }
+    let shape = |i: usize| &xs[i * n..(i + 1) * n];
     // generalised Procrustes: X_i ≈ R_i mean
-    let mut mean: Vec<Vec3> = members.iter().map(|&j| pts(0, j)).collect();
+    let mut mean: Vec<Vec3> = if ns > 0 { shape(0).to_vec() } else { vec![[0.0; 3]; n] };
     let mut rots = vec![crate::geometry::IDENTITY; ns];
-    // the sums over members run on chunks of CHUNK members, shape by shape, so the members' rows are read side
-    // by side in order (a shape-outer loop over all members jumps n_s points between reads); every sum still
-    // adds the members in order, so the rounding is the same
-    const CHUNK: usize = 8;
-    let mut cross = vec![Mat3::zeros(); ns];
     for _ in 0..4 {
-        cross.iter_mut().for_each(|c| *c = Mat3::zeros());
-        for (means, js) in mean.chunks(CHUNK).zip(members.chunks(CHUNK)) {
-            for (i, c) in cross.iter_mut().enumerate() {
-                for (mm, &j) in means.iter().zip(js) {
-                    let x = pts(i, j);
-                    for a in 0..3 {
-                        for b in 0..3 {
-                            c[(a, b)] += x[a] * mm[b];
-                        }
+        for (i, rot) in rots.iter_mut().enumerate() {
+            let mut c = [[0.0; 3]; 3];
+            for (x, mm) in shape(i).iter().zip(&mean) {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        c[a][b] += x[a] * mm[b];
                     }
                 }
             }
+            *rot = best_rotation(&Mat3::from_fn(|a, b| c[a][b]));
         }
-        for (rot, c) in rots.iter_mut().zip(&cross) {
-            *rot = best_rotation(c);
-        }
-        for (mm, &j) in mean.iter_mut().zip(members) {
-            let mut acc = [0.0; 3];
-            for (i, rot) in rots.iter().enumerate() {
-                let v = mat_t_vec(rot, pts(i, j));
+        mean.iter_mut().for_each(|mm| *mm = [0.0; 3]);
+        for (i, rot) in rots.iter().enumerate() {
+            for (mm, &x) in mean.iter_mut().zip(shape(i)) {
+                let v = mat_t_vec(rot, x);
                 for d in 0..3 {
-                    acc[d] += v[d] / ns as f64;
+                    mm[d] += v[d] / ns as f64;
                 }
             }
-            *mm = acc;
         }
     }
     // principal axes of the mean shape
@@ -210,29 +239,31 @@ pub fn component_from_points(data: &Data, members: &[usize], n_total: usize, flo
     for mm in &mean {
         for a in 0..3 {
             for b in 0..3 {
-                cov[(a, b)] += mm[a] * mm[b] / n;
+                cov[(a, b)] += mm[a] * mm[b] / nf;
             }
         }
     }
     let (vals, p) = principal_axes(&cov);
     let latent: Vec<Vec3> = mean.iter().map(|&mm| mat_t_vec(&p, mm)).collect();
     let rotations: Vec<Mat3> = rots.iter().map(|r| mat_mul(r, &p)).collect();
-    let mut sums = vec![0.0; ns];
-    for (ys, js) in latent.chunks(CHUNK).zip(members.chunks(CHUNK)) {
-        for (i, s) in sums.iter_mut().enumerate() {
-            for (y, &j) in ys.iter().zip(js) {
-                let d = sub(pts(i, j), mat_vec(&rotations[i], *y));
-                *s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let variances: Vec<f64> = rotations
+        .iter()
+        .enumerate()
+        .map(|(i, rot)| {
+            let mut s = 0.0;
+            for (&x, y) in shape(i).iter().zip(&latent) {
+                let d = sub(x, mat_vec(rot, *y));
+                s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             }
-        }
-    }
-    let variances: Vec<f64> = sums.iter().map(|s| (s / (3.0 * n)).max(floor)).collect();
+            (s / (3.0 * nf)).max(floor)
+        })
+        .collect();
     Component {
         rotations,
         translations: centroids,
         lambda: vals.map(|v| v.max(0.0).sqrt().max(super::cm::LAMBDA_FLOOR)),
         variances,
-        weight: n / n_total.max(1) as f64,
+        weight: nf / n_total.max(1) as f64,
     }
 }
 
