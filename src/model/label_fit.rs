@@ -22,26 +22,24 @@ use super::data::Data;
 use super::{Model, Params};
 use crate::mesh::Population;
 
-/// The responsibilities of the labels (γ = 1 for each vertex's own part), with y under the current parameters.
-fn label_members(data: &Data, labels: &[u32], comps: &[super::Component]) -> Members {
+/// The responsibilities of the labels (γ = 1 for each vertex's own part) with y under `comps`, written into
+/// `members` (emptied first, its lists' capacity kept), and L_c of the labels under `comps` from the same
+/// projections (log N = log_norm - (Σ|x|²/s - Σ shrink y²) / 2, as [`super::Component::log_weighted_density`]).
+fn label_members(data: &Data, labels: &[u32], comps: &[super::Component], members: &mut Members) -> f64 {
     let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
-    let mut members: Members = vec![Vec::new(); comps.len()];
+    members.resize_with(comps.len(), Vec::new);
+    members.iter_mut().for_each(|list| list.clear());
+    // (the sum as f64's Sum adds: in order from -0.0)
+    let mut ll = -0.0;
     for (j, &l) in labels.iter().enumerate() {
         let k = l as usize;
-        let (y, _) = comps[k].project(&wbs[k], data.vertex(j));
+        let (y, sq) = comps[k].project(&wbs[k], data.vertex(j));
+        let wb = &wbs[k];
+        let quad = sq - (wb.shrink[0] * y[0] * y[0] + wb.shrink[1] * y[1] * y[1] + wb.shrink[2] * y[2] * y[2]);
+        ll += wb.log_norm - 0.5 * quad;
         members[k].push(Member { j: j as u32, g: 1.0, y });
     }
-    members
-}
-
-/// L_c of the labels under `comps`.
-fn classification_log_likelihood(data: &Data, labels: &[u32], comps: &[super::Component]) -> f64 {
-    let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
-    labels
-        .iter()
-        .enumerate()
-        .map(|(j, &l)| comps[l as usize].log_weighted_density(&wbs[l as usize], data.vertex(j)))
-        .sum()
+    ll
 }
 
 /// Refits `model.parts` to `model.labels` (see the module documentation) and recomputes the latent shape;
@@ -57,13 +55,15 @@ pub fn fit_to_labels(model: &mut Model, pop: &Population, params: &Params) -> Ve
     let mut comps = super::multires::to_frame(&data, &model.parts);
     let labels = model.labels.clone();
     let mut trace = Vec::new();
-    let mut prev = classification_log_likelihood(&data, &labels, &comps);
+    // `members` always holds the projections under the current `comps`: the pass that gives L_c after cycle 2
+    // also gives the next cycle 1 its members
+    let mut members = Members::new();
+    let mut prev = label_members(&data, &labels, &comps, &mut members);
     for _ in 0..params.max_iter {
-        let members = label_members(&data, &labels, &comps);
         cm::cycle1(&data, &members, &mut comps);
-        let members = label_members(&data, &labels, &comps);
+        label_members(&data, &labels, &comps, &mut members);
         cm::cycle2(&data, &members, &mut comps, params.lambda_rule, params.variance_floor, params.px_em);
-        let ll = classification_log_likelihood(&data, &labels, &comps);
+        let ll = label_members(&data, &labels, &comps, &mut members);
         trace.push(ll);
         let done = ((ll - prev) / data.n_vertices as f64).abs() < params.tol;
         prev = ll;
@@ -71,12 +71,14 @@ pub fn fit_to_labels(model: &mut Model, pop: &Population, params: &Params) -> Ve
             break;
         }
     }
-    // the latent shape under the new parameters (eq 21), then the translations back to unit-box coordinates
-    let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
-    for (j, &l) in labels.iter().enumerate() {
-        let (c, wb) = (&comps[l as usize], &wbs[l as usize]);
-        let e = c.posterior_mean(wb, data.vertex(j));
-        model.latent[j] = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
+    // the latent shape under the new parameters (eq 21: Λ E[z|h] with E[z|h] = post_gain y, y of the last pass),
+    // then the translations back to unit-box coordinates
+    for (c, list) in comps.iter().zip(&members) {
+        let wb = c.woodbury();
+        for mb in list {
+            let e = [wb.post_gain[0] * mb.y[0], wb.post_gain[1] * mb.y[1], wb.post_gain[2] * mb.y[2]];
+            model.latent[mb.j as usize] = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
+        }
     }
     model.parts = super::multires::from_frame(&data, &comps);
     trace
@@ -101,7 +103,7 @@ mod tests {
         let labels = model.labels.clone();
         let data = Data::from_population(&g.population);
         let centred = crate::model::multires::to_frame(&data, &model.parts);
-        let before = classification_log_likelihood(&data, &labels, &centred);
+        let before = label_members(&data, &labels, &centred, &mut Members::new());
         let trace = fit_to_labels(&mut model, &g.population, &Params::default());
         assert!(!trace.is_empty());
         assert_eq!(model.labels, labels);
