@@ -59,21 +59,45 @@ pub fn angle_between(a: &Mat3, b: &Mat3) -> f64 {
 /// Spherical linear interpolation along the SHORTER arc: when the quaternions' dot product is negative,
 /// one is negated first (q and -q are the same rotation).
 pub fn slerp_quat(a: Quat, b: Quat, t: f64) -> Quat {
-    let (qa, qb) = (a.into_inner(), b.into_inner());
-    let qb = if qa.dot(&qb) < 0.0 { -qb } else { qb };
-    // the angle between them by the same atan2 form (|qa - qb| and |qa + qb| are 2 sin and 2 cos of half of it)
-    let theta = 2.0 * (qa - qb).norm().atan2((qa + qb).norm());
-    if theta < 1e-12 {
-        return UnitQuaternion::from_quaternion(qa * (1.0 - t) + qb * t);
-    }
-    let s = theta.sin();
-    let wa = ((1.0 - t) * theta).sin() / s;
-    let wb = (t * theta).sin() / s;
-    UnitQuaternion::from_quaternion(qa * wa + qb * wb)
+    SlerpPath::new(a, b).at(t)
 }
 
 pub fn slerp(a: &Mat3, b: &Mat3, t: f64) -> Mat3 {
-    from_quat(slerp_quat(to_quat(a), to_quat(b), t).into_inner())
+    SlerpPath::new(to_quat(a), to_quat(b)).matrix_at(t)
+}
+
+/// [`slerp_quat`] from `a` to `b` with what does not depend on t (the short-arc sign, the angle) computed once,
+/// for many t: `at(t)` is `slerp_quat(a, b, t)` bit for bit.
+pub struct SlerpPath {
+    qa: Quaternion<f64>,
+    qb: Quaternion<f64>,
+    theta: f64,
+    sin: f64,
+}
+
+impl SlerpPath {
+    pub fn new(a: Quat, b: Quat) -> SlerpPath {
+        let (qa, qb) = (a.into_inner(), b.into_inner());
+        let qb = if qa.dot(&qb) < 0.0 { -qb } else { qb };
+        // the angle between them by the same atan2 form (|qa - qb| and |qa + qb| are 2 sin and 2 cos of half of it)
+        let theta = 2.0 * (qa - qb).norm().atan2((qa + qb).norm());
+        SlerpPath { qa, qb, theta, sin: theta.sin() }
+    }
+
+    pub fn at(&self, t: f64) -> Quat {
+        let (qa, qb, theta) = (self.qa, self.qb, self.theta);
+        if theta < 1e-12 {
+            return UnitQuaternion::from_quaternion(qa * (1.0 - t) + qb * t);
+        }
+        let wa = ((1.0 - t) * theta).sin() / self.sin;
+        let wb = (t * theta).sin() / self.sin;
+        UnitQuaternion::from_quaternion(qa * wa + qb * wb)
+    }
+
+    /// [`slerp`] at t: the rotation matrix of [`SlerpPath::at`].
+    pub fn matrix_at(&self, t: f64) -> Mat3 {
+        from_quat(self.at(t).into_inner())
+    }
 }
 
 #[cfg(test)]

@@ -18,7 +18,7 @@ use super::hierarchy::compact;
 use super::motion_labels::motion_residual;
 use super::params::Params;
 use super::result::Model;
-use crate::geometry::rotation::{angle_between, slerp};
+use crate::geometry::rotation::{angle_between, to_quat, Quat, SlerpPath};
 use crate::geometry::Mat3;
 use crate::mesh::Population;
 use serde::Serialize;
@@ -76,6 +76,8 @@ fn relative_motion(rotations: &[Mat3]) -> Vec<Mat3> {
 pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize]) -> f64 {
     let mk = relative_motion(&model.parts[k].rotations);
     let ms: Vec<Vec<Mat3>> = adjacent.iter().map(|&a| relative_motion(&model.parts[a].rotations)).collect();
+    // the neighbours' motions as quaternions once (slerp converts both ends at every t otherwise)
+    let qs: Vec<Vec<Quat>> = ms.iter().map(|m| m.iter().map(to_quat).collect()).collect();
     let rms = |f: &dyn Fn(usize) -> f64| ((0..mk.len()).map(|i| f(i).powi(2)).sum::<f64>() / mk.len() as f64).sqrt();
     let mut best = f64::INFINITY;
     for x in 0..ms.len() {
@@ -85,9 +87,11 @@ pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize]) -> f64 {
             if apart < 1e-3 {
                 continue;
             }
+            // slerp(ma[i], mb[i], t) = paths[i].matrix_at(t), bit for bit
+            let paths: Vec<SlerpPath> = qs[x].iter().zip(&qs[y]).map(|(&a, &b)| SlerpPath::new(a, b)).collect();
             for step in 0..=20 {
                 let t = step as f64 / 20.0;
-                let e = rms(&|i| angle_between(&mk[i], &slerp(&ma[i], &mb[i], t)));
+                let e = rms(&|i| angle_between(&mk[i], &paths[i].matrix_at(t)));
                 best = best.min(e / apart);
             }
         }
@@ -115,11 +119,13 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
             for (i, s) in pop.shapes.iter().enumerate() {
                 h[i] = s[j];
             }
+            // (each neighbour's residual once; min_by keeps the first of equal ones, as before)
             let to = adjacent[k]
                 .iter()
-                .copied()
-                .min_by(|&a, &b| motion_residual(&model.parts[a], &h).total_cmp(&motion_residual(&model.parts[b], &h)))
-                .expect("at least two neighbours");
+                .map(|&a| (a, motion_residual(&model.parts[a], &h)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .expect("at least two neighbours")
+                .0;
             model.labels[j] = to as u32;
             model.latent[j] = model.parts[to].latent_image(&h);
         }

@@ -19,9 +19,18 @@ use crate::mesh::Population;
 /// The residual r_k(j) of vertex `h` (one point per shape) under a part's motion.
 pub fn motion_residual(part: &super::Component, h: &[[f64; 3]]) -> f64 {
     let ns = h.len();
-    let mut ys = Vec::with_capacity(ns);
+    // the back-transformed points on the stack (no allocation per vertex and part) unless there are many shapes
+    const ON_STACK: usize = 64;
+    let mut stack = [[0.0; 3]; ON_STACK];
+    let mut heap = Vec::new();
+    let ys: &mut [[f64; 3]] = if ns <= ON_STACK {
+        &mut stack[..ns]
+    } else {
+        heap.resize(ns, [0.0; 3]);
+        &mut heap
+    };
     let mut mean = [0.0; 3];
-    for (i, p) in h.iter().enumerate() {
+    for ((i, p), slot) in h.iter().enumerate().zip(ys.iter_mut()) {
         let (r, b) = (&part.rotations[i], part.translations[i]);
         let d = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
         let y = [
@@ -32,7 +41,7 @@ pub fn motion_residual(part: &super::Component, h: &[[f64; 3]]) -> f64 {
         for a in 0..3 {
             mean[a] += y[a] / ns as f64;
         }
-        ys.push(y);
+        *slot = y;
     }
     ys.iter().map(|y| (0..3).map(|a| (y[a] - mean[a]).powi(2)).sum::<f64>()).sum()
 }
