@@ -318,7 +318,7 @@ impl Fit {
 
     /// Labels of the current state: I_j = argmax_k γ_kj (eq 20).
     pub fn labels(&self) -> Vec<u32> {
-        labels_from_gamma(&self.responsibilities(), self.comps.len())
+        labels_from_members(&self.members, self.data.n_vertices, self.comps.len())
     }
 
     /// The model of the current state (converged) or of the best state seen (not converged, e.g. the literal
@@ -327,18 +327,17 @@ impl Fit {
         let current_is_best = self.converged
             || self.best.as_ref().is_none_or(|b| self.trace.last().is_some_and(|&l| l >= b.0));
         if current_is_best {
-            self.model_of(&self.comps, &self.responsibilities())
+            self.model_of(&self.comps, self.labels())
         } else {
             let comps = self.best.as_ref().map(|b| b.1.clone()).unwrap_or_default();
             let mut gamma = Vec::new();
             e_step(&self.data, &comps, &mut gamma);
-            self.model_of(&comps, &gamma)
+            let labels = labels_from_gamma(&gamma, comps.len());
+            self.model_of(&comps, labels)
         }
     }
 
-    fn model_of(&self, comps: &[Component], gamma: &[f64]) -> Model {
-        let m = comps.len();
-        let labels = labels_from_gamma(gamma, m);
+    fn model_of(&self, comps: &[Component], labels: Vec<u32>) -> Model {
         let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
         let latent: Vec<Vec3> = (0..self.data.n_vertices)
             .map(|j| {
@@ -359,6 +358,29 @@ impl Fit {
             converged: self.converged,
         }
     }
+}
+
+/// [`labels_from_gamma`] of [`cm::dense_responsibilities`]`(members, n, m)`, without building the dense matrix:
+/// the same comparisons (a component's γ against the best so far, the first of equal ones kept; a vertex
+/// missing from a component's list has γ = 0 there, which never wins against γ >= 0).
+fn labels_from_members(members: &cm::Members, n: usize, m: usize) -> Vec<u32> {
+    if m == 0 {
+        return Vec::new();
+    }
+    let mut labels = vec![0u32; n];
+    let mut best = vec![0.0; n];
+    for (k, list) in members.iter().enumerate().take(m) {
+        for mb in list {
+            let j = mb.j as usize;
+            if k == 0 {
+                best[j] = mb.g;
+            } else if mb.g > best[j] {
+                labels[j] = k as u32;
+                best[j] = mb.g;
+            }
+        }
+    }
+    labels
 }
 
 pub fn labels_from_gamma(gamma: &[f64], m: usize) -> Vec<u32> {
