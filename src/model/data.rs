@@ -36,12 +36,13 @@ impl Data {
             }
             offsets[i] = c.map(|v| v / nv.max(1) as f64);
         }
-        let mut h = vec![0.0; nv * ns * 3];
-        for (jj, &j) in vertices.iter().enumerate() {
+        // written in order (not zeroed first: in wasm a zeroed allocation clears reused memory)
+        let mut h = Vec::with_capacity(nv * ns * 3);
+        for &j in vertices {
             for i in 0..ns {
                 let p = pop.shapes[i][j];
                 for d in 0..3 {
-                    h[(jj * ns + i) * 3 + d] = p[d] - offsets[i][d];
+                    h.push(p[d] - offsets[i][d]);
                 }
             }
         }
