@@ -734,44 +734,75 @@ impl Solver<'_> {
 
 impl Solver<'_> {
     /// The bind positions that the current weights and bones carry best onto every pose: per vertex
-    /// (Σ_i L_iᵀ L_i) u = Σ_i L_iᵀ (v_i - c_i), with L_i, c_i the blended linear part and translation.
-    fn rest(&self, rig: &mut Rig) {
+    /// (Σ_i L_iᵀ L_i) u = Σ_i L_iᵀ (v_i - c_i), with L_i, c_i the blended linear part and translation. Returns the
+    /// squared error over all poses at the new bind positions (what [`Solver::sse`] gives, from the same sums).
+    fn rest(&self, rig: &mut Rig) -> f64 {
+        let mut sse = 0.0;
         for v in 0..rig.rest.len() {
-            if let Some(u) = self.vertex_rest(v, rig) {
+            let (u, e) = self.vertex_rest(v, rig);
+            if let Some(u) = u {
                 rig.rest[v] = u;
             }
+            sse += e;
         }
+        sse
     }
 
-    /// Vertex v's bind position of [`Solver::rest`], None when its system is singular (a function of its own
-    /// for V8's tiering, as [`Solver::vertex_weights`]).
+    /// Vertex v's bind position of [`Solver::rest`] (None when its system is singular: the position is kept), and
+    /// the vertex's squared error over the poses at the position it ends with: with A = Σ_i L_iᵀ L_i,
+    /// b = Σ_i L_iᵀ y_i, y_i = v_i - c_i, it is uᵀA u - 2 bᵀu + Σ_i |y_i|² (a function of its own for V8's tiering,
+    /// as [`Solver::vertex_weights`]).
     #[inline(never)]
-    fn vertex_rest(&self, v: usize, rig: &Rig) -> Option<Vec3> {
-        {
-            let mut a = [0.0; 9];
-            let mut b = [0.0; 3];
-            for (i, target) in self.targets.iter().enumerate() {
-                let mut l = [[0.0; 3]; 3];
-                let mut c = [0.0; 3];
-                for (k, w) in rig.weights.influences(v) {
-                    let m = &rig.bones[i][k];
-                    for r in 0..3 {
-                        for q in 0..3 {
-                            l[r][q] += w * m.rotation[(r, q)];
-                        }
-                        c[r] += w * m.translation[r];
-                    }
+    fn vertex_rest(&self, v: usize, rig: &Rig) -> (Option<Vec3>, f64) {
+        // A symmetric: its 6 entries a00 a01 a02 a11 a12 a22
+        let mut a6 = [0.0; 6];
+        let mut b = [0.0; 3];
+        let mut yy = 0.0;
+        let infl = &rig.weights.influences[v];
+        for (i, target) in self.targets.iter().enumerate() {
+            let bones = &rig.bones[i];
+            let mut l = [0.0; 9];
+            let mut c = [0.0; 3];
+            for &(k, w) in infl {
+                let m = &bones[k as usize];
+                let r = m.rotation.as_slice(); // column-major: r[q * 3 + row]
+                for (x, y) in l.iter_mut().zip(r) {
+                    *x += w * y;
                 }
-                let y = sub(target[v], c);
-                for r in 0..3 {
-                    for q in 0..3 {
-                        a[r * 3 + q] += (0..3).map(|m| l[m][r] * l[m][q]).sum::<f64>();
-                    }
-                    b[r] += (0..3).map(|m| l[m][r] * y[m]).sum::<f64>();
+                for (x, y) in c.iter_mut().zip(&m.translation) {
+                    *x += w * y;
                 }
             }
-            let tr = a[0] + a[4] + a[8];
-            (solve_dense(&mut a, &mut b, 3) && b.iter().all(|x| x.is_finite()) && tr > 0.0).then_some(b)
+            let t = target[v];
+            let y = [t[0] - c[0], t[1] - c[1], t[2] - c[2]];
+            // column q of L is l[3q..3q+3]
+            let (c0, c1, c2) = ([l[0], l[1], l[2]], [l[3], l[4], l[5]], [l[6], l[7], l[8]]);
+            a6[0] += dot(c0, c0);
+            a6[1] += dot(c0, c1);
+            a6[2] += dot(c0, c2);
+            a6[3] += dot(c1, c1);
+            a6[4] += dot(c1, c2);
+            a6[5] += dot(c2, c2);
+            b[0] += dot(c0, y);
+            b[1] += dot(c1, y);
+            b[2] += dot(c2, y);
+            yy += dot(y, y);
+        }
+        let a = [a6[0], a6[1], a6[2], a6[1], a6[3], a6[4], a6[2], a6[4], a6[5]];
+        let error = |u: Vec3| {
+            let au = [
+                a[0] * u[0] + a[1] * u[1] + a[2] * u[2],
+                a[3] * u[0] + a[4] * u[1] + a[5] * u[2],
+                a[6] * u[0] + a[7] * u[1] + a[8] * u[2],
+            ];
+            (dot(u, au) - 2.0 * dot(b, u) + yy).max(0.0)
+        };
+        let (mut m, mut x) = (a, b);
+        let tr = a[0] + a[4] + a[8];
+        if solve_dense(&mut m, &mut x, 3) && x.iter().all(|x| x.is_finite()) && tr > 0.0 {
+            (Some(x), error(x))
+        } else {
+            (None, error(rig.rest[v]))
         }
     }
 }
@@ -895,11 +926,9 @@ fn fit(rig: &mut Rig, art: &Articulation, opts: &RigOptions) {
     while done < free_iters {
         solver.weights(rig, &mut scratch);
         solver.bones(rig);
-        if opts.fit_rest {
-            solver.rest(rig);
-        }
+        let sse = if opts.fit_rest { solver.rest(rig) } else { solver.sse(rig) };
         done += 1;
-        let (before, after) = (rig.trace[rig.trace.len() - 1], solver.sse(rig));
+        let (before, after) = (rig.trace[rig.trace.len() - 1], sse);
         rig.trace.push(after);
         if converged(before, after, opts.tol) {
             break;
@@ -915,10 +944,7 @@ fn fit(rig: &mut Rig, art: &Articulation, opts: &RigOptions) {
             solver.bones_fixed(rig);
             rig.trace.push(solver.sse(rig));
             solver.weights(rig, &mut scratch);
-            if opts.fit_rest {
-                solver.rest(rig);
-            }
-            let after = solver.sse(rig);
+            let after = if opts.fit_rest { solver.rest(rig) } else { solver.sse(rig) };
             rig.trace.push(after);
             if converged(before, after, opts.tol) {
                 break;
