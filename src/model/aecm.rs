@@ -10,6 +10,13 @@
 //! kept only when that is at least the plain iteration's; so the trace never decreases. Convergence is still
 //! judged on the plain iteration's own |ΔL| (a converged iteration is never extrapolated), so the final state
 //! is a plain AECM iterate at the same tolerance.
+//!
+//! Extrapolation starts only once a plain iteration changes L by less than [`SQUAREM_START`] per vertex. Early
+//! on, an iteration still moves vertices between components, and an extrapolated step (up to |α| times the
+//! plain one) can carry the fit into another basin: the safeguard keeps L monotone, not the basin. Extrapolating
+//! from the start, horse-gallop's fit at seed 4 ended at 20 parts, RMSE 0.00450, and the same poses rounded to
+//! float32 (as a .glb stores them) at 21 parts, 0.00394; with the start delayed, both give 21 parts, 0.00388, at
+//! every seed 0-4 the two agree, as they do without acceleration.
 
 use super::cm;
 use super::component::Component;
@@ -35,6 +42,10 @@ pub struct StepInfo {
 
 /// SQUAREM's longest step |α| at the start of a run (grows by 4 when used in full and kept).
 const SQUAREM_FIRST_STEP_MAX: f64 = 4.0;
+
+/// SQUAREM extrapolates only after a plain iteration whose |ΔL| / n_v is below this (10 x the default `tol`;
+/// a difference of log-likelihoods per vertex, so free of the shape's scale). See the module doc.
+pub const SQUAREM_START: f64 = 1e-2;
 
 #[derive(Debug, Clone)]
 pub struct Fit {
@@ -201,7 +212,9 @@ impl Fit {
             if dropped > 0 || self.converged {
                 self.sq_prev.clear();
             } else if self.sq_prev.len() == 2 {
-                self.try_extrapolation(ll);
+                if ((ll - prev) / self.data.n_vertices as f64).abs() < SQUAREM_START {
+                    self.try_extrapolation(ll);
+                }
                 self.sq_prev.clear();
             }
         }
