@@ -404,6 +404,9 @@ impl Pipeline {
             let (merged, curve) = super::distinct::merge_indistinct(&self.pop, &model.labels, &self.params);
             self.part_curve = curve;
             let after = merged.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+            if std::env::var_os("POSEMFA_DEBUG").is_some() {
+                eprintln!("part rule, round {}: {dissolved} parts dissolved as flesh, merges {before} -> {after} parts", self.decide_rounds);
+            }
             if dissolved > 0 || after < before {
                 self.refined_labels = merged.clone();
                 if let Some(n) = self.params.target_parts.filter(|&n| n != after) {
