@@ -8,10 +8,10 @@
 //!    component died, or at `max_subparts`, and with [`PartRule::Threshold`] when err < `refine_threshold`. Keep
 //!    the best m_k; with [`PartRule::Distinct`], the last m_k that lowered err `distinct_ratio` times.
 //! 3. Final: AECM on all vertices started from the refined labels. With [`PartRule::Distinct`], every vertex is
-//!    then labelled by rigid motion ([`super::motion_labels`]) and, once, flesh between parts is dissolved and
-//!    parts without a distinct motion are merged ([`super::distinct`]); if that removed parts, the final AECM
-//!    runs again from those labels. Every part is made one connected piece of the mesh ([`super::islands`]).
-//!    The final model's parts are then fitted to those labels ([`super::label_fit`]).
+//!    then labelled by rigid motion ([`super::motion_labels`]), every part is made one connected piece of the
+//!    mesh ([`super::islands`]) and the parts are fitted to those labels ([`super::label_fit`]); then flesh
+//!    between parts is dissolved and parts without a distinct motion are merged ([`super::distinct`]); if that
+//!    removed parts, the final AECM runs again from those labels (at most [`DECIDE_ROUNDS`] times).
 //! 4. Only with `target_parts` = N: parts are split or merged until there are exactly N ([`super::part_count`]),
 //!    then the final AECM runs again from those labels.
 //!
@@ -394,8 +394,15 @@ impl Pipeline {
         // with `target_parts` the part rule decides once: its later rounds would refit counts the exact part count
         // then changes anyway
         let decide_rounds = if self.params.target_parts.is_some() { 1 } else { DECIDE_ROUNDS };
+        // whether the parts were fitted to the motion labels in this call (a model the part rule leaves as it
+        // is stays fitted)
+        let mut fitted = false;
         if distinct && rounds == 0 && self.decide_rounds < decide_rounds {
             self.decide_rounds += 1;
+            // rule 1 judges each part by the motion of its own labelled vertices (the mixture's component of a
+            // short band part leans toward its neighbours' vertices; see label_fit)
+            super::label_fit::fit_to_labels(&mut model, &self.pop, &self.params);
+            fitted = true;
             let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
             if dissolved > 0 {
                 super::islands::connect_parts(&mut model, &self.pop, false, self.params.min_part_vertices);
@@ -422,7 +429,7 @@ impl Pipeline {
             Some(n) if !(model.n_parts() == n && compact(&model.labels).iter().max().map_or(0, |&l| l as usize + 1) == n) => n,
             _ => {
                 // the model is final: with the part rule's motion labels, its parts are fitted to them
-                if distinct && rounds == 0 {
+                if distinct && rounds == 0 && !fitted {
                     super::label_fit::fit_to_labels(&mut model, &self.pop, &self.params);
                 }
                 self.final_model = Some(model);
