@@ -22,20 +22,28 @@ impl Data {
         Data::from_population_subset(pop, &all)
     }
 
+    /// The centroid of the listed vertices in every shape (the offsets [`Data::from_population_subset`] takes).
+    pub fn centroids(pop: &Population, vertices: &[usize]) -> Vec<crate::geometry::Vec3> {
+        let n = vertices.len().max(1) as f64;
+        pop.shapes
+            .iter()
+            .map(|shape| {
+                let mut c = [0.0; 3];
+                for &j in vertices {
+                    for d in 0..3 {
+                        c[d] += shape[j][d];
+                    }
+                }
+                c.map(|v| v / n)
+            })
+            .collect()
+    }
+
     /// Only the listed vertices (in that order), centred on their own centroid.
     pub fn from_population_subset(pop: &Population, vertices: &[usize]) -> Data {
         let ns = pop.n_shapes();
         let nv = vertices.len();
-        let mut offsets = vec![[0.0; 3]; ns];
-        for (i, shape) in pop.shapes.iter().enumerate() {
-            let mut c = [0.0; 3];
-            for &j in vertices {
-                for d in 0..3 {
-                    c[d] += shape[j][d];
-                }
-            }
-            offsets[i] = c.map(|v| v / nv.max(1) as f64);
-        }
+        let offsets = Data::centroids(pop, vertices);
         // written in order (not zeroed first: in wasm a zeroed allocation clears reused memory)
         let mut h = Vec::with_capacity(nv * ns * 3);
         for &j in vertices {

@@ -176,15 +176,8 @@ pub fn component_from_population(pop: &crate::mesh::Population, members: &[usize
     let ns = pop.n_shapes();
     let n = members.len();
     let mut xs = vec![[0.0; 3]; ns * n];
-    for (i, shape) in pop.shapes.iter().enumerate() {
-        // the centroid as Data::from_population_subset takes it
-        let mut c = [0.0; 3];
-        for &j in members {
-            for d in 0..3 {
-                c[d] += shape[j][d];
-            }
-        }
-        let offset = c.map(|v| v / n.max(1) as f64);
+    let offsets = super::data::Data::centroids(pop, members);
+    for ((i, shape), &offset) in pop.shapes.iter().enumerate().zip(&offsets) {
         for (x, &j) in xs[i * n..(i + 1) * n].iter_mut().zip(members) {
             *x = sub(shape[j], offset);
         }
