@@ -4,14 +4,16 @@
 //!
 //! 1. **Flesh is not a part** ([`dissolve_flesh`]). A part whose motion is, in every pose, one fixed in-between
 //!    of two neighbours' motions (a slice of a skinning blend band) is the joint's flesh: its vertices go to
-//!    whichever neighbour moves them best. Test: [`blend_ratio`] < `blend_ratio`.
+//!    whichever neighbour moves them best. Test: [`blend_ratio`] < `blend_ratio`, between two neighbours at least
+//!    the part's own size.
 //! 2. **A joint must explain the motion** ([`merge_indistinct`]). Two adjacent parts stay apart only if fitting
 //!    them as one rigid body costs their smaller side, per vertex, at least `distinct_ratio` times the variance of
 //!    a typical part of this very fit (the vertex-weighted median of the parts' variances, fixed before any
 //!    merge). Pairs below are merged, cheapest first.
 //!
 //! Algorithm 1's refinement runs first without a threshold (it splits while a split lowers the variance by
-//! `refine_min_gain`, and keeps a split only when it lowers the variance `distinct_ratio` times); the final
+//! `refine_min_gain`, and keeps a split only when it lowers the variance, or the cut sub-part's squared residuals,
+//! `distinct_ratio` times); the final
 //! AECM runs on its labels, then 1 and 2, then the final AECM once more if any part went.
 
 use super::hierarchy::compact;
@@ -110,11 +112,20 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
             return dissolved;
         }
         let (adjacent, members) = adjacency(&model.labels, &pop.faces, model.n_parts());
-        let mut order: Vec<usize> = (0..model.n_parts()).filter(|&k| adjacent[k].len() >= 2).collect();
+        // the sides a slice of flesh lies between: its neighbours at least its own size (a band slice is thinner
+        // than the bodies it joins; a small part of its own, whose rotation a few vertices barely fix, must not
+        // make a whole limb look like a blend of it and the next limb)
+        let sides: Vec<Vec<usize>> = (0..model.n_parts())
+            .map(|k| adjacent[k].iter().copied().filter(|&a| members[a].len() >= members[k].len()).collect())
+            .collect();
+        let mut order: Vec<usize> = (0..model.n_parts()).filter(|&k| sides[k].len() >= 2).collect();
         order.sort_by_key(|&k| members[k].len());
-        let Some(k) = order.into_iter().find(|&k| blend_ratio(model, k, &adjacent[k]) < ratio) else {
+        let Some((k, r)) = order.into_iter().map(|k| (k, blend_ratio(model, k, &sides[k]))).find(|&(_, r)| r < ratio) else {
             return dissolved;
         };
+        if std::env::var_os("POSEMFA_DEBUG").is_some() {
+            eprintln!("flesh: part {k} ({} vertices) dissolved, blend ratio {r:.3}", members[k].len());
+        }
         for &j in &members[k] {
             for (i, s) in pop.shapes.iter().enumerate() {
                 h[i] = s[j];
@@ -296,6 +307,47 @@ mod tests {
         let m = model(vec![part(&a, [0.0, 0.0, 1.0]), part(&a, [0.0, 0.0, 1.0]), part(&own, [1.0, 0.0, 0.0])]);
         assert_eq!(blend_ratio(&m, 2, &[0, 1]), f64::INFINITY);
         assert_eq!(blend_ratio(&m, 2, &[0]), f64::INFINITY);
+    }
+
+    #[test]
+    fn a_limb_is_not_flesh_between_its_neighbour_and_a_small_part_beyond_it() {
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
+        let pop = &g.population;
+        let idx = |name| crate::synth::part_index(Preset::Arm, name).unwrap() as u32;
+        let (upper, forearm) = (idx("upper_arm"), idx("forearm"));
+        let mut labels = g.part_of_vertex.clone();
+        let touches = |j: usize, l: u32| {
+            pop.faces.iter().any(|f| f.contains(&(j as u32)) && f.iter().any(|&v| g.part_of_vertex[v as usize] == l))
+        };
+        // part 3: the forearm's ring at the elbow, a slice of flesh (35 % of the way from the upper arm to the
+        // forearm); part 4: the 20 forearm vertices farthest from the elbow, a small part that turns twice as
+        // far as the forearm, so the forearm itself lies halfway between the upper arm and it
+        let forearm_ids: Vec<usize> = (0..labels.len()).filter(|&j| labels[j] == forearm).collect();
+        let ring: Vec<usize> = forearm_ids.iter().copied().filter(|&j| touches(j, upper)).collect();
+        assert!(!ring.is_empty() && ring.len() < 200, "{} ring vertices", ring.len());
+        let elbow = ring[0];
+        let d = |j: usize| {
+            let (p, q) = (pop.shapes[0][j], pop.shapes[0][elbow]);
+            (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)
+        };
+        let mut far = forearm_ids.clone();
+        far.sort_by(|&a, &b| d(b).total_cmp(&d(a)));
+        ring.iter().for_each(|&j| labels[j] = 3);
+        far[..20].iter().for_each(|&j| labels[j] = 4);
+        let n = pop.n_shapes();
+        let b: Vec<f64> = (0..n).map(|i| 0.1 * i as f64 - 0.3).collect();
+        let mut angles = vec![vec![0.0; n]; 5];
+        angles[forearm as usize] = b.clone();
+        angles[3] = b.iter().map(|x| 0.35 * x).collect();
+        angles[4] = b.iter().map(|x| 2.0 * x).collect();
+        let mut m = model(angles.iter().map(|a| part(a, [0.0, 0.0, 1.0])).collect());
+        m.n_vertices = labels.len();
+        m.labels = labels;
+        m.latent = vec![[0.0; 3]; m.n_vertices];
+        let forearm_size = forearm_ids.len() - ring.len() - 20;
+        assert_eq!(dissolve_flesh(&mut m, pop, Params::default().blend_ratio), 1, "only the slice is flesh");
+        assert_eq!(m.n_parts(), 4);
+        assert!(m.labels.iter().filter(|&&l| l == forearm).count() >= forearm_size);
     }
 
     #[test]

@@ -6,7 +6,8 @@
 //!    the mass-weighted mean variance of the sub-components (the paper's plain average is fragile,
 //!    METHOD_NOTES item 8). Stop when m_k does not lower err by at least the fraction `refine_min_gain`, when a
 //!    component died, or at `max_subparts`, and with [`PartRule::Threshold`] when err < `refine_threshold`. Keep
-//!    the best m_k; with [`PartRule::Distinct`], the last m_k that lowered err `distinct_ratio` times.
+//!    the best m_k; with [`PartRule::Distinct`], the last m_k that lowered err `distinct_ratio` times, or whose
+//!    split lowered the squared residuals of the sub-part it cut `distinct_ratio` times.
 //! 3. Final: AECM on all vertices started from the refined labels. With [`PartRule::Distinct`], every vertex is
 //!    then labelled by rigid motion ([`super::motion_labels`]), every part is made one connected piece of the
 //!    mesh ([`super::islands`]) and the parts are fitted to those labels ([`super::label_fit`]); then flesh
@@ -127,8 +128,20 @@ struct Best {
     worst: (Vec<usize>, Vec<f64>),
 }
 
+/// The residual h_j - (R Λ E[z|h_j] + b) of vertex `j` of `fit`'s data under component `c`, appended to `out`
+/// (3 n_s values).
+fn push_residual(fit: &Fit, c: &super::component::Component, wb: &super::component::Woodbury, j: usize, out: &mut Vec<f64>) {
+    let h = fit.data().vertex(j);
+    let e = c.posterior_mean(wb, h);
+    let v = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
+    for (i, p) in h.iter().enumerate() {
+        let q = c.place(i, v);
+        out.extend_from_slice(&[p[0] - q[0], p[1] - q[1], p[2] - q[2]]);
+    }
+}
+
 /// The component with the largest mass x mean variance, its vertices (local ids) and their residuals
-/// h_j - (R Λ E[z|h_j] + b).
+/// ([`push_residual`]).
 fn worst_component(fit: &Fit) -> (Vec<usize>, Vec<f64>) {
     let comps = fit.components();
     let labels = fit.labels();
@@ -138,23 +151,28 @@ fn worst_component(fit: &Fit) -> (Vec<usize>, Vec<f64>) {
         .unwrap_or(0);
     let c = &comps[worst];
     let wb = c.woodbury();
-    let data = fit.data();
     let mut members = Vec::new();
     let mut residuals = Vec::new();
     for (j, &l) in labels.iter().enumerate() {
-        if l as usize != worst {
-            continue;
-        }
-        members.push(j);
-        let h = data.vertex(j);
-        let e = c.posterior_mean(&wb, h);
-        let v = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
-        for (i, p) in h.iter().enumerate() {
-            let q = c.place(i, v);
-            residuals.extend_from_slice(&[p[0] - q[0], p[1] - q[1], p[2] - q[2]]);
+        if l as usize == worst {
+            members.push(j);
+            push_residual(fit, c, &wb, j, &mut residuals);
         }
     }
     (members, residuals)
+}
+
+/// The squared residuals of `vertices` (local ids of `fit`'s data), each under the component that owns it.
+fn residual_ss(fit: &Fit, vertices: &[usize]) -> f64 {
+    let comps = fit.components();
+    let labels = fit.labels();
+    let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
+    let mut r = Vec::new();
+    for &j in vertices {
+        let k = labels[j] as usize;
+        push_residual(fit, &comps[k], &wbs[k], j, &mut r);
+    }
+    r.iter().map(|x| x * x).sum()
 }
 
 enum State {
@@ -500,9 +518,16 @@ impl Pipeline {
         let err = done.mean_variance();
         let distinct = self.params.part_rule == PartRule::Distinct;
         let died = done.n_parts() < r.sub_parts;
+        // The split's own gain: the squared residuals of the sub-part that was cut, before / after. The mean
+        // variance over the whole coarse part understates it when another sub-part is still mixed (a few
+        // vertices of a neighbour inflate its variance), so a true joint cut can lower err only 2-3 times.
+        let split_gain = r.best.as_ref().map_or(f64::INFINITY, |b| {
+            let before: f64 = b.worst.1.iter().map(|x| x * x).sum();
+            before / residual_ss(&done, &b.worst.0).max(f64::MIN_POSITIVE)
+        });
         if std::env::var_os("POSEMFA_DEBUG").is_some() {
             eprintln!(
-                "refine part {} ({} vertices) m_k={} err={:.3e} died={died} iterations={} retry={}",
+                "refine part {} ({} vertices) m_k={} err={:.3e} split_gain={split_gain:.2} died={died} iterations={} retry={}",
                 r.part,
                 r.members[r.part].len(),
                 r.sub_parts,
@@ -522,7 +547,8 @@ impl Pipeline {
             let raw = done.labels();
             let worst = worst_component(&done);
             let local = compact(&raw);
-            if distinct && r.kept.as_ref().is_none_or(|k| err * self.params.distinct_ratio <= k.0) {
+            let ratio = self.params.distinct_ratio;
+            if distinct && r.kept.as_ref().is_none_or(|k| err * ratio <= k.0 || split_gain >= ratio) {
                 r.kept = Some((err, local.clone()));
             }
             r.best = Some(Best { err, local, raw, worst });
