@@ -391,7 +391,7 @@ impl FitModel {
             "iterations": m.iterations, "converged": m.converged,
             "complete": self.result.complete, "logLikelihood": m.log_likelihood,
             "stageStats": self.result.stats,
-            "diagnosis": crate::model::diagnosis::diagnose(&self.pop, m),
+            "diagnosis": crate::model::diagnosis::diagnose_fit(&self.pop, &self.result),
             "partCurve": self.result.part_curve,
         });
         to_js(&v)

@@ -689,7 +689,7 @@ fn cmd_fit(o: FitRun) -> Result<(), String> {
         median(&mut totals),
         load_ms
     );
-    let d = posemfa::model::diagnosis::diagnose(&pop, m);
+    let d = posemfa::model::diagnosis::diagnose_fit(&pop, &result);
     out!("  {}: {}", if d.articulated { "articulated" } else { "NOT articulated" }, d.reason);
     if let Some(g) = &truth {
         out!("  ground truth: {}", ground_truth_json(g, m));

@@ -92,7 +92,7 @@ impl FitJson {
             islands: crate::model::islands::island_count(&m.labels, &pop.faces),
             timings_ms,
             stage_stats: result.stats.clone(),
-            diagnosis: crate::model::diagnosis::diagnose(pop, m),
+            diagnosis: crate::model::diagnosis::diagnose_fit(pop, result),
             part_curve: result.part_curve.clone(),
         }
     }

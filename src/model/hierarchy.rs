@@ -92,6 +92,9 @@ pub struct FitResult {
     pub complete: bool,
     /// [`PartRule::Distinct`]: the merge decisions, from the most parts down to the count kept (empty otherwise).
     pub part_curve: Vec<super::distinct::CurvePoint>,
+    /// With `target_parts` and [`PartRule::Distinct`]: the labels the part rule decided, before the count was made
+    /// exact (what auto would have kept), for the diagnosis ([`super::diagnosis::diagnose_fit`]).
+    pub decided_labels: Option<Vec<u32>>,
 }
 
 struct Refinement {
@@ -210,6 +213,8 @@ pub struct Pipeline {
     decide_rounds: usize,
     /// [`PartRule::Distinct`]: the merge decisions ([`super::distinct::merge_indistinct`]).
     part_curve: Vec<super::distinct::CurvePoint>,
+    /// See [`FitResult::decided_labels`].
+    decided_labels: Option<Vec<u32>>,
 }
 
 /// Most times [`Pipeline`] makes the part count exact and refits.
@@ -261,6 +266,7 @@ impl Pipeline {
             count_rounds: 0,
             decide_rounds: 0,
             part_curve: Vec::new(),
+            decided_labels: None,
         })
     }
 
@@ -428,6 +434,9 @@ impl Pipeline {
             let before = model.n_parts();
             let (merged, curve) = super::distinct::merge_indistinct(&self.pop, &model.labels, &self.params);
             self.part_curve = curve;
+            if self.params.target_parts.is_some() {
+                self.decided_labels = Some(merged.clone());
+            }
             let after = merged.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
             if std::env::var_os("POSEMFA_DEBUG").is_some() {
                 eprintln!("part rule, round {}: {dissolved} parts dissolved as flesh, merges {before} -> {after} parts", self.decide_rounds);
@@ -667,6 +676,7 @@ impl Pipeline {
             stats: self.stats.clone(),
             complete: self.is_done(),
             part_curve: self.part_curve.clone(),
+            decided_labels: self.decided_labels.clone(),
         }
     }
 
