@@ -433,7 +433,7 @@ fn fit_group<T: HasFit>() -> Group<T> {
             val(
                 "--subset",
                 "N",
-                "with at least 3N vertices: coarse and refinement stages on about N well-spread vertices, final AECM on all (default 2000; 0 = all)",
+                "with at least 5N vertices: coarse and refinement stages on about N well-spread vertices, final AECM on all (default 2000; 0 = all)",
                 |o: &mut T, v| num(v).map(|n| o.fit().params.subset_vertices = n),
             ),
             val("--bones", "N", "exact part count: auto (default, Algorithm 1's own) or N (split / merge until N)", |o: &mut T, v| {
