@@ -65,7 +65,7 @@ pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     let data = Data::from_population(pop);
     let decided = super::hierarchy::compact(labels);
     let n = decided.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
-    if n == asked.parts || asked.single_body_rmse < RIGID_RMSE || asked.single_body_rmse <= 0.0 {
+    if n == asked.parts || asked.single_body_rmse < RIGID_RMSE {
         return asked;
     }
     let single = asked.single_body_rmse;

@@ -13,8 +13,8 @@
 //!
 //! Algorithm 1's refinement runs first without a threshold (it splits while a split lowers the variance by
 //! `refine_min_gain`, and keeps a split only when it lowers the variance, or the cut sub-part's squared residuals,
-//! `distinct_ratio` times); the final
-//! AECM runs on its labels, then 1 and 2, then the final AECM once more if any part went.
+//! `distinct_ratio` times); the final AECM runs on its labels, then 1 and 2, then the final AECM once more if any
+//! part went.
 
 use super::hierarchy::compact;
 use super::motion_labels::motion_residual;

@@ -171,11 +171,14 @@ fn residual_ss(fit: &Fit, vertices: &[usize]) -> f64 {
     let labels = fit.labels();
     let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
     let mut r = Vec::new();
+    let mut ss = 0.0;
     for &j in vertices {
         let k = labels[j] as usize;
+        r.clear();
         push_residual(fit, &comps[k], &wbs[k], j, &mut r);
+        ss += r.iter().map(|x| x * x).sum::<f64>();
     }
-    r.iter().map(|x| x * x).sum()
+    ss
 }
 
 enum State {
