@@ -56,7 +56,7 @@ fn rigid_rmse(data: &Data, labels: &[u32]) -> f64 {
 /// The verdict for a fit of `pop`: [`diagnose`] of its model, except with an exact part count (`target_parts`)
 /// other than the one the part rule decided. The question is about the population, not the count asked for:
 /// horse-gallop asked for 10 parts is still articulated although 10 rigid parts explain only 96.6 % of its
-/// motion (its own 36 explain 99 %), so the verdict is also taken at the part rule's count
+/// motion (its own 33 explain 99.9 %), so the verdict is also taken at the part rule's count
 /// ([`FitResult::decided_labels`], each part fitted rigidly), and the reason gives both figures. The figures
 /// (`parts_rmse`, `explained`, `parts`) stay the asked model's.
 pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {

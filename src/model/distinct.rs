@@ -4,8 +4,9 @@
 //!
 //! 1. **Flesh is not a part** ([`dissolve_flesh`]). A part whose motion is, in every pose, one fixed in-between
 //!    of two neighbours' motions (a slice of a skinning blend band) is the joint's flesh: its vertices go to
-//!    whichever neighbour moves them best. Test: [`blend_ratio`] < `blend_ratio`, between two neighbours at least
-//!    the part's own size.
+//!    whichever neighbour moves them best. Test: [`blend_ratio`] < `blend_ratio` (on rotations) or
+//!    [`blend_fit_ratio`] < 1 (on positions: the two sides' motions blended per vertex explain the part better
+//!    than its own rigid motion), between two neighbours at least the part's own size.
 //! 2. **A joint must explain the motion** ([`merge_indistinct`]). Two adjacent parts stay apart only if fitting
 //!    them as one rigid body costs their smaller side, per vertex, at least `distinct_ratio` times the variance of
 //!    a typical part of this very fit (the vertex-weighted median of the parts' variances, fixed before any
