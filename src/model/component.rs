@@ -125,6 +125,19 @@ impl Component {
             r[(2, 0)] * v[0] + r[(2, 1)] * v[1] + r[(2, 2)] * v[2] + b[2],
         ]
     }
+
+    /// (R^i)^T (p - b^i): the inverse of [`Component::place`], a point of shape `shape` brought back to the
+    /// part's frame.
+    pub fn unplace(&self, shape: usize, p: Vec3) -> Vec3 {
+        let r = &self.rotations[shape];
+        let b = self.translations[shape];
+        let d = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
+        [
+            r[(0, 0)] * d[0] + r[(1, 0)] * d[1] + r[(2, 0)] * d[2],
+            r[(0, 1)] * d[0] + r[(1, 1)] * d[1] + r[(2, 1)] * d[2],
+            r[(0, 2)] * d[0] + r[(1, 2)] * d[1] + r[(2, 2)] * d[2],
+        ]
+    }
 }
 
 #[cfg(test)]

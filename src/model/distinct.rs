@@ -108,11 +108,10 @@ pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize]) -> f64 {
 fn rigid_trajectory(part: &super::Component, h: &[[f64; 3]], out: &mut [[f64; 3]]) {
     let ns = h.len();
     let mut mean = [0.0; 3];
-    for (i, p) in h.iter().enumerate() {
-        let (r, b) = (&part.rotations[i], part.translations[i]);
-        let d = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
+    for (i, &p) in h.iter().enumerate() {
+        let y = part.unplace(i, p);
         for a in 0..3 {
-            mean[a] += (r[(0, a)] * d[0] + r[(1, a)] * d[1] + r[(2, a)] * d[2]) / ns as f64;
+            mean[a] += y[a] / ns as f64;
         }
     }
     for (i, o) in out.iter_mut().enumerate() {

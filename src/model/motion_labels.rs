@@ -30,14 +30,8 @@ pub fn motion_residual(part: &super::Component, h: &[[f64; 3]]) -> f64 {
         &mut heap
     };
     let mut mean = [0.0; 3];
-    for ((i, p), slot) in h.iter().enumerate().zip(ys.iter_mut()) {
-        let (r, b) = (&part.rotations[i], part.translations[i]);
-        let d = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
-        let y = [
-            r[(0, 0)] * d[0] + r[(1, 0)] * d[1] + r[(2, 0)] * d[2],
-            r[(0, 1)] * d[0] + r[(1, 1)] * d[1] + r[(2, 1)] * d[2],
-            r[(0, 2)] * d[0] + r[(1, 2)] * d[1] + r[(2, 2)] * d[2],
-        ];
+    for ((i, &p), slot) in h.iter().enumerate().zip(ys.iter_mut()) {
+        let y = part.unplace(i, p);
         for a in 0..3 {
             mean[a] += y[a] / ns as f64;
         }
