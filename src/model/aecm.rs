@@ -21,7 +21,7 @@
 use super::cm;
 use super::component::Component;
 use super::data::Data;
-use super::estep::{e_step, EStep};
+use super::estep::{e_step, Blocked, EStep};
 use super::init;
 use super::memory;
 use super::params::{LambdaRule, Params};
@@ -83,6 +83,12 @@ pub struct Fit {
 impl Fit {
     /// Starts from k-means++ (m = `params.parts`) with the per-cluster Procrustes initialisation.
     pub fn new(data: Data, params: &Params) -> Result<Fit> {
+        let layout = Blocked::new(&data);
+        Fit::new_laid_out(data, layout, params)
+    }
+
+    /// [`Fit::new`] with the E-step's layout of `data` (`Blocked::new(&data)`) already built.
+    pub fn new_laid_out(data: Data, layout: Blocked, params: &Params) -> Result<Fit> {
         params.validate()?;
         let most = memory::max_components(params.parts, params.refine, params.max_subparts, data.n_vertices);
         if data.n_vertices < 3 {
@@ -94,11 +100,17 @@ impl Fit {
         check_data(&data, params.parts, most)?;
         check_motion(&data)?;
         let labels = init::kmeans(&data, params.parts, params.seed, params.restarts);
-        Fit::from_labels(data, &labels, params)
+        Fit::from_labels_laid_out(data, layout, &labels, params)
     }
 
     /// Starts from a labelling (one component per distinct label).
     pub fn from_labels(data: Data, labels: &[u32], params: &Params) -> Result<Fit> {
+        let layout = Blocked::new(&data);
+        Fit::from_labels_laid_out(data, layout, labels, params)
+    }
+
+    /// [`Fit::from_labels`] with the E-step's layout of `data` (`Blocked::new(&data)`) already built.
+    pub fn from_labels_laid_out(data: Data, layout: Blocked, labels: &[u32], params: &Params) -> Result<Fit> {
         params.validate()?;
         let most = labels.iter().max().map_or(1, |&l| l as usize + 1).min(data.n_vertices);
         check_data(&data, 1, most)?;
@@ -108,17 +120,18 @@ impl Fit {
         let comps = init::components_from_labels(&data, labels, params.variance_floor);
         // the labels' components are evaluated first in the first E-step (they are its best guess)
         let owners = (comps.len() == labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0)).then_some(labels);
-        Ok(Fit::from_components_owned(data, comps, params, owners))
+        Ok(Fit::from_components_owned(data, EStep::with_layout(layout), comps, params, owners))
     }
 
     pub fn from_components(data: Data, comps: Vec<Component>, params: &Params) -> Fit {
-        Fit::from_components_owned(data, comps, params, None)
+        let estep = EStep::new(&data);
+        Fit::from_components_owned(data, estep, comps, params, None)
     }
 
     /// [`Fit::from_components`] with each vertex's likeliest component, if known, for the first E-step's order.
-    fn from_components_owned(data: Data, comps: Vec<Component>, params: &Params, owners: Option<&[u32]>) -> Fit {
+    fn from_components_owned(data: Data, estep: EStep, comps: Vec<Component>, params: &Params, owners: Option<&[u32]>) -> Fit {
         let mut fit = Fit {
-            estep: EStep::new(&data),
+            estep,
             data,
             comps,
             members: Vec::new(),

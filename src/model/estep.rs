@@ -354,8 +354,14 @@ pub struct EStep {
 
 impl EStep {
     pub fn new(data: &Data) -> EStep {
+        EStep::with_layout(Blocked::new(data))
+    }
+
+    /// An E-step on data already laid out (`Blocked::new` of the same data: it depends on nothing else, so one
+    /// layout serves every run on the same vertices).
+    pub fn with_layout(blocked: Blocked) -> EStep {
         EStep {
-            blocked: Blocked::new(data),
+            blocked,
             vals: Vec::new(),
             ys: Vec::new(),
             is_hint: Vec::new(),

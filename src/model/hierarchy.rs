@@ -24,6 +24,7 @@
 
 use super::aecm::{Fit, StepInfo};
 use super::data::Data;
+use super::estep::Blocked;
 use super::params::{PartRule, Params};
 use super::result::Model;
 use crate::error::Result;
@@ -113,6 +114,17 @@ struct Refinement {
     /// Refined labels accumulated over parts (global ids), u32::MAX = not yet assigned.
     refined: Vec<u32>,
     next_label: u32,
+    /// The current coarse part's data and E-step layout, for each of its trials.
+    laid: (Data, Blocked),
+}
+
+/// The whole population's data and their E-step layout, kept in `full` (built on first use).
+fn full_data<'a>(full: &'a mut Option<(Data, Blocked)>, pop: &Population) -> &'a (Data, Blocked) {
+    full.get_or_insert_with(|| {
+        let data = Data::from_population(pop);
+        let layout = Blocked::new(&data);
+        (data, layout)
+    })
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -218,6 +230,8 @@ pub struct Pipeline {
     part_curve: Vec<super::distinct::CurvePoint>,
     /// See [`FitResult::decided_labels`].
     decided_labels: Option<Vec<u32>>,
+    /// The whole population's data and their E-step layout, built once for every run on all vertices.
+    full: Option<(Data, Blocked)>,
 }
 
 /// Most times [`Pipeline`] makes the part count exact and refits.
@@ -253,7 +267,10 @@ impl Pipeline {
             }
             None => Data::from_population(pop),
         };
-        let fit = Fit::new(data, &coarse)?;
+        let layout = Blocked::new(&data);
+        // without a subset the coarse run's data are the whole population's: kept for the final-stage runs
+        let full = subset.is_none().then(|| (data.clone(), layout.clone()));
+        let fit = Fit::new_laid_out(data, layout, &coarse)?;
         Ok(Pipeline {
             pop: pop.clone(),
             params: params.clone(),
@@ -270,6 +287,7 @@ impl Pipeline {
             decide_rounds: 0,
             part_curve: Vec::new(),
             decided_labels: None,
+            full,
         })
     }
 
@@ -428,7 +446,7 @@ impl Pipeline {
             self.decide_rounds += 1;
             // rule 1 judges each part by the motion of its own labelled vertices (the mixture's component of a
             // short band part leans toward its neighbours' vertices; see label_fit)
-            super::label_fit::fit_to_labels(&mut model, &self.pop, &self.params);
+            super::label_fit::fit_to_labels(&mut model, &full_data(&mut self.full, &self.pop).0, &self.params);
             fitted = true;
             let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
             if dissolved > 0 {
@@ -460,7 +478,7 @@ impl Pipeline {
             _ => {
                 // the model is final: with the part rule's motion labels, its parts are fitted to them
                 if distinct && rounds == 0 && !fitted {
-                    super::label_fit::fit_to_labels(&mut model, &self.pop, &self.params);
+                    super::label_fit::fit_to_labels(&mut model, &full_data(&mut self.full, &self.pop).0, &self.params);
                 }
                 self.final_model = Some(model);
                 return Ok(State::Done);
@@ -482,7 +500,13 @@ impl Pipeline {
     fn refit(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
         self.stats.push(StageStats { name: stage.into(), ..Default::default() });
         self.stage_started_ms = crate::clock::now_ms();
-        Ok(State::Final(Fit::from_labels(Data::from_population(&self.pop), labels, &self.params)?))
+        Ok(State::Final(self.fit_all(labels)?))
+    }
+
+    /// An AECM run on all vertices from `labels`, with the final stage's parameters.
+    fn fit_all(&mut self, labels: &[u32]) -> Result<Fit> {
+        let (data, layout) = full_data(&mut self.full, &self.pop).clone();
+        Fit::from_labels_laid_out(data, layout, labels, &self.params)
     }
 
     fn sub_params(&self) -> Params {
@@ -506,12 +530,10 @@ impl Pipeline {
             Some(s) => s.iter().for_each(|&j| members[labels[j] as usize].push(j)),
         }
         members.retain(|m| !m.is_empty());
-        let fit = Fit::from_labels(
-            Data::from_population_subset(&self.pop, &members[0]),
-            &vec![0; members[0].len()],
-            &self.sub_params(),
-        )?;
+        let laid = self.laid_out(&members[0]);
+        let fit = Fit::from_labels_laid_out(laid.0.clone(), laid.1.clone(), &vec![0; members[0].len()], &self.sub_params())?;
         Ok(State::Refine(Box::new(Refinement {
+            laid,
             refined: vec![u32::MAX; labels.len()],
             members,
             part: 0,
@@ -591,6 +613,7 @@ impl Pipeline {
         r.retried = false;
         if r.part < r.members.len() {
             r.sub_parts = 1;
+            r.laid = self.laid_out(&r.members[r.part]);
             let n = r.members[r.part].len();
             r.fit = self.sub_fit(&r, &vec![0; n])?;
             return Ok(State::Refine(r));
@@ -606,12 +629,19 @@ impl Pipeline {
             PartRule::Threshold => merge_rigid_neighbours(&self.pop, &refined, &self.params),
         };
         self.close_stage(Some("final"));
-        let fit = Fit::from_labels(Data::from_population(&self.pop), &self.refined_labels, &self.params)?;
-        Ok(State::Final(fit))
+        let labels = self.refined_labels.clone();
+        Ok(State::Final(self.fit_all(&labels)?))
     }
 
     fn sub_fit(&self, r: &Refinement, labels: &[u32]) -> Result<Fit> {
-        Fit::from_labels(Data::from_population_subset(&self.pop, &r.members[r.part]), labels, &self.sub_params())
+        Fit::from_labels_laid_out(r.laid.0.clone(), r.laid.1.clone(), labels, &self.sub_params())
+    }
+
+    /// The data of the listed vertices and their E-step layout.
+    fn laid_out(&self, vertices: &[usize]) -> (Data, Blocked) {
+        let data = Data::from_population_subset(&self.pop, vertices);
+        let layout = Blocked::new(&data);
+        (data, layout)
     }
 
     /// Labels of the best fit so far with its worst sub-part cut in two by 2-means (on the vertices'

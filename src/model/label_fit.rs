@@ -20,7 +20,6 @@
 use super::cm::{self, Member, Members};
 use super::data::Data;
 use super::{Model, Params};
-use crate::mesh::Population;
 
 /// The responsibilities of the labels (γ = 1 for each vertex's own part) with y under `comps`, written into
 /// `members` (emptied first, its lists' capacity kept), and L_c of the labels under `comps` from the same
@@ -45,25 +44,24 @@ fn label_members(data: &Data, labels: &[u32], comps: &[super::Component], member
 /// Refits `model.parts` to `model.labels` (see the module documentation) and recomputes the latent shape;
 /// the labels are kept. Returns the classification log-likelihood after every iteration (never decreasing).
 /// Every part must have at least one vertex.
-pub fn fit_to_labels(model: &mut Model, pop: &Population, params: &Params) -> Vec<f64> {
-    let data = Data::from_population(pop);
+pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64> {
     let m = model.n_parts();
     if m == 0 || model.labels.len() != data.n_vertices || model.labels.iter().any(|&l| l as usize >= m) {
         return Vec::new();
     }
     // the model's translations are in unit-box coordinates, the data centred per shape
-    let mut comps = super::multires::to_frame(&data, &model.parts);
+    let mut comps = super::multires::to_frame(data, &model.parts);
     let labels = model.labels.clone();
     let mut trace = Vec::new();
     // `members` always holds the projections under the current `comps`: the pass that gives L_c after cycle 2
     // also gives the next cycle 1 its members
     let mut members = Members::new();
-    let mut prev = label_members(&data, &labels, &comps, &mut members);
+    let mut prev = label_members(data, &labels, &comps, &mut members);
     for _ in 0..params.max_iter {
-        cm::cycle1(&data, &members, &mut comps);
-        label_members(&data, &labels, &comps, &mut members);
-        cm::cycle2(&data, &members, &mut comps, params.lambda_rule, params.variance_floor, params.px_em);
-        let ll = label_members(&data, &labels, &comps, &mut members);
+        cm::cycle1(data, &members, &mut comps);
+        label_members(data, &labels, &comps, &mut members);
+        cm::cycle2(data, &members, &mut comps, params.lambda_rule, params.variance_floor, params.px_em);
+        let ll = label_members(data, &labels, &comps, &mut members);
         trace.push(ll);
         let done = ((ll - prev) / data.n_vertices as f64).abs() < params.tol;
         prev = ll;
@@ -80,7 +78,7 @@ pub fn fit_to_labels(model: &mut Model, pop: &Population, params: &Params) -> Ve
             model.latent[mb.j as usize] = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
         }
     }
-    model.parts = super::multires::from_frame(&data, &comps);
+    model.parts = super::multires::from_frame(data, &comps);
     trace
 }
 
@@ -104,7 +102,7 @@ mod tests {
         let data = Data::from_population(&g.population);
         let centred = crate::model::multires::to_frame(&data, &model.parts);
         let before = label_members(&data, &labels, &centred, &mut Members::new());
-        let trace = fit_to_labels(&mut model, &g.population, &Params::default());
+        let trace = fit_to_labels(&mut model, &data, &Params::default());
         assert!(!trace.is_empty());
         assert_eq!(model.labels, labels);
         let mut last = before;
@@ -128,7 +126,7 @@ mod tests {
         model.labels = g.part_of_vertex.clone();
         let worst = |model: &Model| crate::metrics::ground_truth_accuracy(model, &g).unwrap().rotation_error_deg_max;
         let before = worst(&model);
-        fit_to_labels(&mut model, &g.population, &params);
+        fit_to_labels(&mut model, &Data::from_population(&g.population), &params);
         let after = worst(&model);
         assert!(after < before, "worst rotation {before:.2} -> {after:.2} degrees");
     }
