@@ -372,6 +372,9 @@ impl RigidMotion {
 
 struct Solver<'a> {
     targets: &'a [Vec<Vec3>],
+    /// The targets vertex by vertex: `by_vertex[v * n_s + i]` is vertex v in pose i (a vertex's poses contiguous,
+    /// for the per-vertex solves).
+    by_vertex: Vec<Vec3>,
     /// Candidate parts per vertex (own part first).
     candidates: Vec<Vec<u32>>,
     /// CSR mesh neighbours.
@@ -437,7 +440,14 @@ impl<'a> Solver<'a> {
             })
             .sum::<f64>()
             / edges.len().max(1) as f64;
-        Solver { targets: &art.shapes, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
+        let ns = art.shapes.len();
+        let mut by_vertex = vec![[0.0; 3]; nv * ns];
+        for (i, shape) in art.shapes.iter().enumerate() {
+            for (v, &p) in shape.iter().enumerate() {
+                by_vertex[v * ns + i] = p;
+            }
+        }
+        Solver { targets: &art.shapes, by_vertex, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
     }
 
     fn sse(&self, rig: &Rig) -> f64 {
@@ -475,30 +485,50 @@ impl<'a> Solver<'a> {
                 return;
             }
             let u = rig.rest[v];
-            // D columns: (M_k u - M_own u) over the poses; and the target's offset y - M_own u
-            cols.clear();
-            cols.resize((c + 1) * 3 * ns, 0.0);
-            for i in 0..ns {
-                let own = rig.bones[i][cand[0] as usize].apply(u);
-                let y = sub(self.targets[i][v], own);
-                cols[c * 3 * ns + 3 * i..c * 3 * ns + 3 * i + 3].copy_from_slice(&y);
-                for (a, &k) in cand.iter().enumerate().skip(1) {
-                    let d = sub(rig.bones[i][k as usize].apply(u), own);
-                    cols[a * 3 * ns + 3 * i..a * 3 * ns + 3 * i + 3].copy_from_slice(&d);
-                }
-            }
-            let col = |a: usize| &cols[a * 3 * ns..(a + 1) * 3 * ns];
+            // D columns: (M_k u - M_own u) over the poses, and the target's offset y - M_own u; their Gram matrix
+            // H and f = Dᵀy are summed row by row (pose by pose, x y z), each sum in the rows' order as a dot
+            // product of two columns would add them, so the sums are independent chains (no column is stored)
             h.clear();
             h.resize(c * c, 0.0);
             f.clear();
             f.resize(c, 0.0);
             for a in 1..c {
                 for b in a..c {
-                    let s: f64 = col(a).iter().zip(col(b)).map(|(x, y)| x * y).sum();
-                    h[a * c + b] = s;
-                    h[b * c + a] = s;
+                    h[a * c + b] = -0.0;
                 }
-                f[a] = col(a).iter().zip(col(c)).map(|(x, y)| x * y).sum();
+                f[a] = -0.0;
+            }
+            cols.clear();
+            cols.resize(3 * c, 0.0);
+            let targets = &self.by_vertex[v * ns..(v + 1) * ns];
+            for (i, target) in targets.iter().enumerate() {
+                let bones = &rig.bones[i];
+                let own = bones[cand[0] as usize].apply(u);
+                let y = sub(*target, own);
+                for (a, &k) in cand.iter().enumerate().skip(1) {
+                    let d = sub(bones[k as usize].apply(u), own);
+                    cols[3 * a..3 * a + 3].copy_from_slice(&d);
+                }
+                for a in 1..c {
+                    let da = [cols[3 * a], cols[3 * a + 1], cols[3 * a + 2]];
+                    for b in a..c {
+                        let mut s = h[a * c + b];
+                        s += da[0] * cols[3 * b];
+                        s += da[1] * cols[3 * b + 1];
+                        s += da[2] * cols[3 * b + 2];
+                        h[a * c + b] = s;
+                    }
+                    let mut s = f[a];
+                    s += da[0] * y[0];
+                    s += da[1] * y[1];
+                    s += da[2] * y[2];
+                    f[a] = s;
+                }
+            }
+            for a in 1..c {
+                for b in a + 1..c {
+                    h[b * c + a] = h[a * c + b];
+                }
             }
             let tr: f64 = (1..c).map(|a| h[a * c + a]).sum::<f64>() / c as f64;
             let lambda = self.smoothness * ns as f64 * self.edge2 + 1e-12 * tr + 1e-300;
@@ -759,7 +789,8 @@ impl Solver<'_> {
         let mut b = [0.0; 3];
         let mut yy = 0.0;
         let infl = &rig.weights.influences[v];
-        for (i, target) in self.targets.iter().enumerate() {
+        let ns = self.targets.len();
+        for (i, &t) in self.by_vertex[v * ns..(v + 1) * ns].iter().enumerate() {
             let bones = &rig.bones[i];
             let mut l = [0.0; 9];
             let mut c = [0.0; 3];
@@ -773,7 +804,6 @@ impl Solver<'_> {
                     *x += w * y;
                 }
             }
-            let t = target[v];
             let y = [t[0] - c[0], t[1] - c[1], t[2] - c[2]];
             // column q of L is l[3q..3q+3]
             let (c0, c1, c2) = ([l[0], l[1], l[2]], [l[3], l[4], l[5]], [l[6], l[7], l[8]]);
