@@ -29,7 +29,10 @@
 //!   - *bones*, pose by pose and part by part in tree order (block coordinate descent): with the others
 //!     fixed, the part's rigid motion minimising Σ_j |r_j - w_jk (R u_j + t)|² (r_j: the target minus the
 //!     other bones' share) is a weighted Procrustes problem: C = Σ_j w_jk r_j (u_j - ū)^T with
-//!     ū = Σ w² u / Σ w², R by SVD with the handedness fix, t = (Σ w r) / Σ w² - R ū. The bind pose's bones
+//!     ū = Σ w² u / Σ w², R by SVD with the handedness fix, t = (Σ w r) / Σ w² - R ū. C and Σ w r come from
+//!     sums, not from a pass over the vertices per update: the target's share once per pose and bone, and per
+//!     pair of bones sharing vertices pose-free sums of w_k w_l u (u - ū)ᵀ, carried by the other bone's current
+//!     motion ([`Solver::bones`]). The bind pose's bones
 //!     stay the identity: otherwise a bone's motions and its vertices' bind positions can drift together
 //!     (M_k G, G⁻¹ u give the same poses), and the mesh stored in the file wanders away from the bind pose
 //!     (measured on horse-gallop at 10 bones: 3736 of 8431 vertices more than 1 % of the diagonal away,
@@ -626,22 +629,121 @@ impl<'a> Solver<'a> {
             })
             .collect();
         let order = rig.tree.order.clone();
-        let mut pred = vec![[0.0; 3]; nv];
-        for i in 0..self.targets.len() {
+        let ns = self.targets.len();
+        // The step of bone k in pose i needs C = Σ_v w_k r_v (u_v - ū_k)ᵀ and Σ_v w_k r_v with
+        // r_v = y_v - Σ_{l≠k} w_l (R_l u_v + t_l) (the target minus the other bones' share), so
+        //   C = Σ_v w_k y_v (u_v - ū_k)ᵀ - Σ_{l≠k} (R_l S_kl + t_l s_klᵀ),
+        //   Σ_v w_k r_v = Σ_v w_k y_v - Σ_{l≠k} (R_l g_kl + m_kl t_l),
+        // with the pose-free sums S_kl = Σ_v w_k w_l u_v (u_v - ū_k)ᵀ, s_kl = Σ_v w_k w_l (u_v - ū_k),
+        // g_kl = Σ_v w_k w_l u_v, m_kl = Σ_v w_k w_l over the vertices both bones carry, and the target sums
+        // (first terms) once per pose and bone: no pass over the vertices per bone update.
+        let mut pair_of = vec![usize::MAX; n_parts * n_parts];
+        let mut pairs: Vec<Vec<(usize, PairSums)>> = vec![Vec::new(); n_parts];
+        for v in 0..nv {
+            let u = rig.rest[v];
+            let infl = &rig.weights.influences[v];
+            for &(k, wk) in infl {
+                let k = k as usize;
+                let ubar = stats[k].0;
+                let d = sub(u, ubar);
+                for &(l, wl) in infl {
+                    let l = l as usize;
+                    if l == k {
+                        continue;
+                    }
+                    let slot = &mut pair_of[k * n_parts + l];
+                    if *slot == usize::MAX {
+                        *slot = pairs[k].len();
+                        pairs[k].push((l, PairSums::default()));
+                    }
+                    let ps = &mut pairs[k][*slot].1;
+                    let ww = wk * wl;
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            ps.s[a * 3 + b] += ww * u[a] * d[b];
+                        }
+                        ps.d[a] += ww * d[a];
+                        ps.g[a] += ww * u[a];
+                    }
+                    ps.m += ww;
+                }
+            }
+        }
+        // target sums per bone and pose: [C row-major (9), Σ w y (3)]
+        let mut sums = vec![[0.0; 12]; n_parts * ns];
+        for &k in &order {
+            if stats[k].1 > 0.0 {
+                bone_target_sums(&self.by_vertex, ns, &rig.rest, &support[k], stats[k].0, &mut sums[k * ns..(k + 1) * ns]);
+            }
+        }
+        for i in 0..ns {
             if i == self.bind {
                 continue;
             }
-            predict(rig, i, &mut pred);
             for &k in &order {
                 let (ubar, w2) = stats[k];
                 if w2 <= 0.0 {
                     continue;
                 }
-                let new = bone_update(&self.targets[i], &rig.rest, &support[k], rig.bones[i][k], ubar, w2, &mut pred);
+                let new = bone_step(&sums[k * ns + i], &pairs[k], &rig.bones[i], ubar, w2);
                 rig.bones[i][k] = new;
             }
         }
     }
+}
+
+/// Pose-free sums of one ordered pair of bones (k, l) sharing vertices, for [`Solver::bones`].
+#[derive(Debug, Clone, Copy, Default)]
+struct PairSums {
+    /// S_kl = Σ w_k w_l u (u - ū_k)ᵀ, row-major.
+    s: [f64; 9],
+    /// s_kl = Σ w_k w_l (u - ū_k).
+    d: Vec3,
+    /// g_kl = Σ w_k w_l u.
+    g: Vec3,
+    /// m_kl = Σ w_k w_l.
+    m: f64,
+}
+
+/// Bone k's target sums of [`Solver::bones`] in every pose: `out[i]` = [Σ_v w y_v (u_v - ū)ᵀ row-major,
+/// Σ_v w y_v] over its support (a function of its own for V8's tiering, as [`Solver::vertex_weights`]).
+#[inline(never)]
+fn bone_target_sums(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+    for &(v, w) in support {
+        let v = v as usize;
+        let d = scale(sub(rest[v], ubar), w);
+        for (o, y) in out.iter_mut().zip(&by_vertex[v * ns..(v + 1) * ns]) {
+            for a in 0..3 {
+                o[a * 3] += y[a] * d[0];
+                o[a * 3 + 1] += y[a] * d[1];
+                o[a * 3 + 2] += y[a] * d[2];
+                o[9 + a] += w * y[a];
+            }
+        }
+    }
+}
+
+/// One bone's weighted Procrustes step of [`Solver::bones`] for one pose (module doc), from its target sums and
+/// the pair sums with the bones it shares vertices with, at their current motions `bones`.
+#[inline(never)]
+fn bone_step(sums: &[f64; 12], pairs: &[(usize, PairSums)], bones: &[RigidMotion], ubar: Vec3, w2: f64) -> RigidMotion {
+    let mut c = [0.0; 9];
+    c.copy_from_slice(&sums[..9]);
+    let mut wr = [sums[9], sums[10], sums[11]];
+    for (l, ps) in pairs {
+        let m = &bones[*l];
+        let r = &m.rotation;
+        let t = m.translation;
+        for a in 0..3 {
+            for b in 0..3 {
+                c[a * 3 + b] -= r[(a, 0)] * ps.s[b] + r[(a, 1)] * ps.s[3 + b] + r[(a, 2)] * ps.s[6 + b] + t[a] * ps.d[b];
+            }
+            wr[a] -= r[(a, 0)] * ps.g[0] + r[(a, 1)] * ps.g[1] + r[(a, 2)] * ps.g[2] + t[a] * ps.m;
+        }
+    }
+    let cm = Mat3::from_row_slice(&c);
+    let rot = best_rotation(&cm);
+    RigidMotion { rotation: rot, translation: sub(scale(wr, 1.0 / w2), mat_vec(&rot, ubar)) }
 }
 
 impl Solver<'_> {
@@ -850,44 +952,6 @@ fn pose_sse(rig: &Rig, i: usize, target: &[Vec3]) -> f64 {
         s += dot(d, d);
     }
     s
-}
-
-/// Linear blend skinning of every vertex for pose i into `pred` (a function of its own for V8's tiering, as
-/// [`Solver::vertex_weights`]).
-#[inline(never)]
-fn predict(rig: &Rig, i: usize, pred: &mut [Vec3]) {
-    for (v, p) in pred.iter_mut().enumerate() {
-        *p = [0.0; 3];
-        for (k, w) in rig.weights.influences(v) {
-            *p = add(*p, scale(rig.bones[i][k].apply(rig.rest[v]), w));
-        }
-    }
-}
-
-/// One bone's weighted Procrustes step of [`Solver::bones`] for one pose (module doc): its new motion, with
-/// `pred` updated to it (a function of its own for V8's tiering, as [`Solver::vertex_weights`]).
-#[inline(never)]
-fn bone_update(target: &[Vec3], rest: &[Vec3], support: &[(u32, f64)], old: RigidMotion, ubar: Vec3, w2: f64, pred: &mut [Vec3]) -> RigidMotion {
-    let mut cm = Mat3::zeros();
-    let mut wr = [0.0; 3];
-    for &(v, w) in support {
-        let v = v as usize;
-        let r = add(sub(target[v], pred[v]), scale(old.apply(rest[v]), w));
-        let uu = sub(rest[v], ubar);
-        wr = add(wr, scale(r, w));
-        for a in 0..3 {
-            for b in 0..3 {
-                cm[(a, b)] += w * r[a] * uu[b];
-            }
-        }
-    }
-    let rot = best_rotation(&cm);
-    let new = RigidMotion { rotation: rot, translation: sub(scale(wr, 1.0 / w2), mat_vec(&rot, ubar)) };
-    for &(v, w) in support {
-        let v = v as usize;
-        pred[v] = add(pred[v], scale(sub(new.apply(rest[v]), old.apply(rest[v])), w));
-    }
-    new
 }
 
 /// Joint points where parent and child bones move most alike (module doc), from the current bones.
