@@ -48,43 +48,45 @@ pub fn dense_responsibilities(members: &Members, n_vertices: usize, m: usize) ->
 /// Smallest λ_d allowed (keeps M invertible and A = RΛ a proper, non-reflecting map).
 pub const LAMBDA_FLOOR: f64 = 1e-6;
 
-/// Cycle 1 CM step. Returns n_k (responsibility mass) per component. Components with no mass keep their b.
-pub fn cycle1(data: &Data, members: &Members, comps: &mut [Component]) -> Vec<f64> {
-    let m = comps.len();
-    let ns = data.n_shapes;
-    let mut mass = vec![0.0; m];
-    let mut sums = vec![0.0; m * ns * 3];
-    for (k, list) in members.iter().enumerate().take(m) {
-        let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
-        // chunks of members, shape by shape (every sum still adds the members in list order: the same rounding)
-        for chunk in list.chunks(CHUNK) {
-            for &Member { g, .. } in chunk {
-                mass[k] += g;
+avx2_fn! {
+    /// Cycle 1 CM step. Returns n_k (responsibility mass) per component. Components with no mass keep their b.
+    pub fn cycle1(data: &Data, members: &Members, comps: &mut [Component]) -> Vec<f64> {
+        let m = comps.len();
+        let ns = data.n_shapes;
+        let mut mass = vec![0.0; m];
+        let mut sums = vec![0.0; m * ns * 3];
+        for (k, list) in members.iter().enumerate().take(m) {
+            let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
+            // chunks of members, shape by shape (every sum still adds the members in list order: the same rounding)
+            for chunk in list.chunks(CHUNK) {
+                for &Member { g, .. } in chunk {
+                    mass[k] += g;
+                }
+                for (i, a) in acc.chunks_exact_mut(3).enumerate() {
+                    let mut s = [a[0], a[1], a[2]];
+                    for &Member { j, g, .. } in chunk {
+                        let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+                        for d in 0..3 {
+                            s[d] += g * p[d];
+                        }
+                    }
+                    a.copy_from_slice(&s);
+                }
             }
-            for (i, a) in acc.chunks_exact_mut(3).enumerate() {
-                let mut s = [a[0], a[1], a[2]];
-                for &Member { j, g, .. } in chunk {
-                    let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+        }
+        let nv = data.n_vertices as f64;
+        for (k, c) in comps.iter_mut().enumerate() {
+            c.weight = mass[k] / nv;
+            if mass[k] > 0.0 {
+                for i in 0..ns {
                     for d in 0..3 {
-                        s[d] += g * p[d];
+                        c.translations[i][d] = sums[(k * ns + i) * 3 + d] / mass[k];
                     }
                 }
-                a.copy_from_slice(&s);
             }
         }
+        mass
     }
-    let nv = data.n_vertices as f64;
-    for (k, c) in comps.iter_mut().enumerate() {
-        c.weight = mass[k] / nv;
-        if mass[k] > 0.0 {
-            for i in 0..ns {
-                for d in 0..3 {
-                    c.translations[i][d] = sums[(k * ns + i) * 3 + d] / mass[k];
-                }
-            }
-        }
-    }
-    mass
 }
 
 /// Sufficient statistics of one component for cycle 2.
@@ -106,81 +108,83 @@ struct Stats {
 /// stay in registers over the chunk, and the chunk's data rows are read side by side, each in order.
 const CHUNK: usize = 8;
 
-fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
-    let ns = data.n_shapes;
-    let wb = c.woodbury();
-    let mut st = Stats {
-        n: 0.0,
-        sq: vec![0.0; ns],
-        cross: vec![Mat3::zeros(); ns],
-        second: [0.0; 3],
-        moment: Mat3::zeros(),
-        scatter: if want_scatter { vec![Mat3::zeros(); ns] } else { Vec::new() },
-    };
-    // γ E[z] per member of the chunk; the per-shape sums then run shape by shape over the chunk with their
-    // accumulators in registers (every sum still adds the members in list order: the same rounding)
-    let mut gez = [[0.0; 3]; CHUNK];
-    for chunk in list.chunks(CHUNK) {
-        for (q, &Member { g, y, .. }) in gez.iter_mut().zip(chunk) {
-            let ez = [wb.post_gain[0] * y[0], wb.post_gain[1] * y[1], wb.post_gain[2] * y[2]];
-            st.n += g;
-            for d in 0..3 {
-                st.second[d] += g * (wb.post_var[d] + ez[d] * ez[d]);
-            }
-            if want_moment {
-                for a in 0..3 {
-                    for b in 0..3 {
-                        st.moment[(a, b)] += g * ez[a] * ez[b];
+avx2_fn! {
+    fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
+        let ns = data.n_shapes;
+        let wb = c.woodbury();
+        let mut st = Stats {
+            n: 0.0,
+            sq: vec![0.0; ns],
+            cross: vec![Mat3::zeros(); ns],
+            second: [0.0; 3],
+            moment: Mat3::zeros(),
+            scatter: if want_scatter { vec![Mat3::zeros(); ns] } else { Vec::new() },
+        };
+        // γ E[z] per member of the chunk; the per-shape sums then run shape by shape over the chunk with their
+        // accumulators in registers (every sum still adds the members in list order: the same rounding)
+        let mut gez = [[0.0; 3]; CHUNK];
+        for chunk in list.chunks(CHUNK) {
+            for (q, &Member { g, y, .. }) in gez.iter_mut().zip(chunk) {
+                let ez = [wb.post_gain[0] * y[0], wb.post_gain[1] * y[1], wb.post_gain[2] * y[2]];
+                st.n += g;
+                for d in 0..3 {
+                    st.second[d] += g * (wb.post_var[d] + ez[d] * ez[d]);
+                }
+                if want_moment {
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            st.moment[(a, b)] += g * ez[a] * ez[b];
+                        }
                     }
                 }
+                *q = [g * ez[0], g * ez[1], g * ez[2]];
             }
-            *q = [g * ez[0], g * ez[1], g * ez[2]];
-        }
-        for i in 0..ns {
-            let b = c.translations[i];
-            let mut sq = st.sq[i];
-            let mut cr = [[0.0; 3]; 3];
-            for a in 0..3 {
-                for e in 0..3 {
-                    cr[a][e] = st.cross[i][(a, e)];
-                }
-            }
-            for (&Member { j, g, .. }, q) in chunk.iter().zip(&gez) {
-                let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
-                let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
-                sq += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+            for i in 0..ns {
+                let b = c.translations[i];
+                let mut sq = st.sq[i];
+                let mut cr = [[0.0; 3]; 3];
                 for a in 0..3 {
                     for e in 0..3 {
-                        cr[a][e] += x[a] * q[e];
+                        cr[a][e] = st.cross[i][(a, e)];
                     }
                 }
-            }
-            st.sq[i] = sq;
-            for a in 0..3 {
-                for e in 0..3 {
-                    st.cross[i][(a, e)] = cr[a][e];
-                }
-            }
-            if want_scatter {
-                let sc = &mut st.scatter[i];
-                for &Member { j, g, .. } in chunk {
+                for (&Member { j, g, .. }, q) in chunk.iter().zip(&gez) {
                     let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
                     let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
+                    sq += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
                     for a in 0..3 {
                         for e in 0..3 {
-                            sc[(a, e)] += g * x[a] * x[e];
+                            cr[a][e] += x[a] * q[e];
+                        }
+                    }
+                }
+                st.sq[i] = sq;
+                for a in 0..3 {
+                    for e in 0..3 {
+                        st.cross[i][(a, e)] = cr[a][e];
+                    }
+                }
+                if want_scatter {
+                    let sc = &mut st.scatter[i];
+                    for &Member { j, g, .. } in chunk {
+                        let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+                        let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
+                        for a in 0..3 {
+                            for e in 0..3 {
+                                sc[(a, e)] += g * x[a] * x[e];
+                            }
                         }
                     }
                 }
             }
         }
-    }
-    if want_moment {
-        for d in 0..3 {
-            st.moment[(d, d)] += st.n * wb.post_var[d];
+        if want_moment {
+            for d in 0..3 {
+                st.moment[(d, d)] += st.n * wb.post_var[d];
+            }
         }
+        st
     }
-    st
 }
 
 /// Cycle 2 CM step (Λ, then R, then Φ, then optionally the parameter-expanded fold of [`px_fold`]) for every

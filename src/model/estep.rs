@@ -293,13 +293,15 @@ fn accumulate_block<T: Real>(packed: &[[T; 13]], h: &[[T; LANES]], y: &mut [[T; 
     }
 }
 
-/// [`accumulate_block`] in f64, as a function of its own: the E-step calls it for every evaluation it keeps
-/// (the owners', the f64 checks' and the survivors' shapes). Kept out of [`EStep::run`]'s body so that it is
-/// compiled as the small loop it is (in wasm the engine allocates its registers as in [`kernel_pass`], the
-/// limit it is compared with, instead of within the whole E-step).
-#[inline(never)]
-fn accumulate_block_f64(packed: &[[f64; 13]], h: &[Lanes], y: &mut [Lanes; 3], sq: &mut Lanes) {
-    accumulate_block(packed, h, y, sq);
+avx2_fn! {
+    /// [`accumulate_block`] in f64, as a function of its own: the E-step calls it for every evaluation it keeps
+    /// (the owners', the f64 checks' and the survivors' shapes). Kept out of [`EStep::run`]'s body so that it is
+    /// compiled as the small loop it is (in wasm the engine allocates its registers as in [`kernel_pass`], the
+    /// limit it is compared with, instead of within the whole E-step).
+    #[inline(never)]
+    fn accumulate_block_f64(packed: &[[f64; 13]], h: &[Lanes], y: &mut [Lanes; 3], sq: &mut Lanes) {
+        accumulate_block(packed, h, y, sq);
+    }
 }
 
 /// The smallest lane by comparisons (`f64::min` is a call to `fmax`/`fmin` in wasm); the best values it is

@@ -185,78 +185,81 @@ pub fn component_from_population(pop: &crate::mesh::Population, members: &[usize
     procrustes_start(ns, n, xs, n_total, floor)
 }
 
-/// Generalised Procrustes on `n` points in each of `ns` shapes, `xs[i * n + m]` = point m in shape i (see the
-/// module doc). Every loop runs shape by shape over the points in order (contiguous reads), with a sum's
-/// accumulators in registers; each sum adds the points in their order.
-fn procrustes_start(ns: usize, n: usize, mut xs: Vec<Vec3>, n_total: usize, floor: f64) -> Component {
-    let nf = n.max(1) as f64;
-    let mut centroids = vec![[0.0; 3]; ns];
-    for (c, shape) in centroids.iter_mut().zip(xs.chunks_exact_mut(n.max(1))) {
-        for p in shape.iter() {
-            for d in 0..3 {
-                c[d] += p[d] / nf;
+avx2_fn! {
+    /// Generalised Procrustes on `n` points in each of `ns` shapes, `xs[i * n + m]` = point m in shape i (see the
+    /// module doc). Every loop runs shape by shape over the points in order (contiguous reads), with a sum's
+    /// accumulators in registers; each sum adds the points in their order.
+    fn procrustes_start(ns: usize, n: usize, xs: Vec<Vec3>, n_total: usize, floor: f64) -> Component {
+        let mut xs = xs;
+        let nf = n.max(1) as f64;
+        let mut centroids = vec![[0.0; 3]; ns];
+        for (c, shape) in centroids.iter_mut().zip(xs.chunks_exact_mut(n.max(1))) {
+            for p in shape.iter() {
+                for d in 0..3 {
+                    c[d] += p[d] / nf;
+                }
+            }
+            for p in shape.iter_mut() {
+                *p = sub(*p, *c);
             }
         }
-        for p in shape.iter_mut() {
-            *p = sub(*p, *c);
-        }
-    }
-    let shape = |i: usize| &xs[i * n..(i + 1) * n];
-    // generalised Procrustes: X_i ≈ R_i mean
-    let mut mean: Vec<Vec3> = if ns > 0 { shape(0).to_vec() } else { vec![[0.0; 3]; n] };
-    let mut rots = vec![crate::geometry::IDENTITY; ns];
-    for _ in 0..4 {
-        for (i, rot) in rots.iter_mut().enumerate() {
-            let mut c = [[0.0; 3]; 3];
-            for (x, mm) in shape(i).iter().zip(&mean) {
-                for a in 0..3 {
-                    for b in 0..3 {
-                        c[a][b] += x[a] * mm[b];
+        let shape = |i: usize| &xs[i * n..(i + 1) * n];
+        // generalised Procrustes: X_i ≈ R_i mean
+        let mut mean: Vec<Vec3> = if ns > 0 { shape(0).to_vec() } else { vec![[0.0; 3]; n] };
+        let mut rots = vec![crate::geometry::IDENTITY; ns];
+        for _ in 0..4 {
+            for (i, rot) in rots.iter_mut().enumerate() {
+                let mut c = [[0.0; 3]; 3];
+                for (x, mm) in shape(i).iter().zip(&mean) {
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            c[a][b] += x[a] * mm[b];
+                        }
+                    }
+                }
+                *rot = best_rotation(&Mat3::from_fn(|a, b| c[a][b]));
+            }
+            mean.iter_mut().for_each(|mm| *mm = [0.0; 3]);
+            for (i, rot) in rots.iter().enumerate() {
+                for (mm, &x) in mean.iter_mut().zip(shape(i)) {
+                    let v = mat_t_vec(rot, x);
+                    for d in 0..3 {
+                        mm[d] += v[d] / ns as f64;
                     }
                 }
             }
-            *rot = best_rotation(&Mat3::from_fn(|a, b| c[a][b]));
         }
-        mean.iter_mut().for_each(|mm| *mm = [0.0; 3]);
-        for (i, rot) in rots.iter().enumerate() {
-            for (mm, &x) in mean.iter_mut().zip(shape(i)) {
-                let v = mat_t_vec(rot, x);
-                for d in 0..3 {
-                    mm[d] += v[d] / ns as f64;
+        // principal axes of the mean shape
+        let mut cov = Mat3::zeros();
+        for mm in &mean {
+            for a in 0..3 {
+                for b in 0..3 {
+                    cov[(a, b)] += mm[a] * mm[b] / nf;
                 }
             }
         }
-    }
-    // principal axes of the mean shape
-    let mut cov = Mat3::zeros();
-    for mm in &mean {
-        for a in 0..3 {
-            for b in 0..3 {
-                cov[(a, b)] += mm[a] * mm[b] / nf;
-            }
+        let (vals, p) = principal_axes(&cov);
+        let latent: Vec<Vec3> = mean.iter().map(|&mm| mat_t_vec(&p, mm)).collect();
+        let rotations: Vec<Mat3> = rots.iter().map(|r| mat_mul(r, &p)).collect();
+        let variances: Vec<f64> = rotations
+            .iter()
+            .enumerate()
+            .map(|(i, rot)| {
+                let mut s = 0.0;
+                for (&x, y) in shape(i).iter().zip(&latent) {
+                    let d = sub(x, mat_vec(rot, *y));
+                    s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                }
+                (s / (3.0 * nf)).max(floor)
+            })
+            .collect();
+        Component {
+            rotations,
+            translations: centroids,
+            lambda: vals.map(|v| v.max(0.0).sqrt().max(super::cm::LAMBDA_FLOOR)),
+            variances,
+            weight: nf / n_total.max(1) as f64,
         }
-    }
-    let (vals, p) = principal_axes(&cov);
-    let latent: Vec<Vec3> = mean.iter().map(|&mm| mat_t_vec(&p, mm)).collect();
-    let rotations: Vec<Mat3> = rots.iter().map(|r| mat_mul(r, &p)).collect();
-    let variances: Vec<f64> = rotations
-        .iter()
-        .enumerate()
-        .map(|(i, rot)| {
-            let mut s = 0.0;
-            for (&x, y) in shape(i).iter().zip(&latent) {
-                let d = sub(x, mat_vec(rot, *y));
-                s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-            }
-            (s / (3.0 * nf)).max(floor)
-        })
-        .collect();
-    Component {
-        rotations,
-        translations: centroids,
-        lambda: vals.map(|v| v.max(0.0).sqrt().max(super::cm::LAMBDA_FLOOR)),
-        variances,
-        weight: nf / n_total.max(1) as f64,
     }
 }
 

@@ -21,24 +21,26 @@ use super::cm::{self, Member, Members};
 use super::data::Data;
 use super::{Model, Params};
 
-/// The responsibilities of the labels (γ = 1 for each vertex's own part) with y under `comps`, written into
-/// `members` (emptied first, its lists' capacity kept), and L_c of the labels under `comps` from the same
-/// projections (log N = log_norm - (Σ|x|²/s - Σ shrink y²) / 2, as [`super::Component::log_weighted_density`]).
-fn label_members(data: &Data, labels: &[u32], comps: &[super::Component], members: &mut Members) -> f64 {
-    let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
-    members.resize_with(comps.len(), Vec::new);
-    members.iter_mut().for_each(|list| list.clear());
-    // (the sum as f64's Sum adds: in order from -0.0)
-    let mut ll = -0.0;
-    for (j, &l) in labels.iter().enumerate() {
-        let k = l as usize;
-        let (y, sq) = comps[k].project(&wbs[k], data.vertex(j));
-        let wb = &wbs[k];
-        let quad = sq - (wb.shrink[0] * y[0] * y[0] + wb.shrink[1] * y[1] * y[1] + wb.shrink[2] * y[2] * y[2]);
-        ll += wb.log_norm - 0.5 * quad;
-        members[k].push(Member { j: j as u32, g: 1.0, y });
+avx2_fn! {
+    /// The responsibilities of the labels (γ = 1 for each vertex's own part) with y under `comps`, written into
+    /// `members` (emptied first, its lists' capacity kept), and L_c of the labels under `comps` from the same
+    /// projections (log N = log_norm - (Σ|x|²/s - Σ shrink y²) / 2, as [`super::Component::log_weighted_density`]).
+    fn label_members(data: &Data, labels: &[u32], comps: &[super::Component], members: &mut Members) -> f64 {
+        let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
+        members.resize_with(comps.len(), Vec::new);
+        members.iter_mut().for_each(|list| list.clear());
+        // (the sum as f64's Sum adds: in order from -0.0)
+        let mut ll = -0.0;
+        for (j, &l) in labels.iter().enumerate() {
+            let k = l as usize;
+            let (y, sq) = comps[k].project(&wbs[k], data.vertex(j));
+            let wb = &wbs[k];
+            let quad = sq - (wb.shrink[0] * y[0] * y[0] + wb.shrink[1] * y[1] * y[1] + wb.shrink[2] * y[2] * y[2]);
+            ll += wb.log_norm - 0.5 * quad;
+            members[k].push(Member { j: j as u32, g: 1.0, y });
+        }
+        ll
     }
-    ll
 }
 
 /// Refits `model.parts` to `model.labels` (see the module documentation) and recomputes the latent shape;
