@@ -83,12 +83,6 @@ pub struct Fit {
 impl Fit {
     /// Starts from k-means++ (m = `params.parts`) with the per-cluster Procrustes initialisation.
     pub fn new(data: Data, params: &Params) -> Result<Fit> {
-        let layout = Blocked::new(&data);
-        Fit::new_laid_out(data, layout, params)
-    }
-
-    /// [`Fit::new`] with the E-step's layout of `data` (`Blocked::new(&data)`) already built.
-    pub fn new_laid_out(data: Data, layout: Blocked, params: &Params) -> Result<Fit> {
         params.validate()?;
         let most = memory::max_components(params.parts, params.refine, params.max_subparts, data.n_vertices);
         if data.n_vertices < 3 {
@@ -100,7 +94,7 @@ impl Fit {
         check_data(&data, params.parts, most)?;
         check_motion(&data)?;
         let labels = init::kmeans(&data, params.parts, params.seed, params.restarts);
-        Fit::from_labels_laid_out(data, layout, &labels, params)
+        Fit::from_labels(data, &labels, params)
     }
 
     /// Starts from a labelling (one component per distinct label).
@@ -292,6 +286,11 @@ impl Fit {
             }
         }
         last
+    }
+
+    /// The fit's data and E-step layout, for another run on the same vertices.
+    pub fn into_laid_out(self) -> (Data, Blocked) {
+        (self.data, self.estep.into_layout())
     }
 
     pub fn converged(&self) -> bool {

@@ -379,6 +379,11 @@ impl EStep {
         }
     }
 
+    /// The layout it runs on.
+    pub fn into_layout(self) -> Blocked {
+        self.blocked
+    }
+
     /// Forgets the previous owners (the components were renumbered).
     pub fn forget_owners(&mut self) {
         self.owner_parts = 0;

@@ -230,7 +230,8 @@ pub struct Pipeline {
     part_curve: Vec<super::distinct::CurvePoint>,
     /// See [`FitResult::decided_labels`].
     decided_labels: Option<Vec<u32>>,
-    /// The whole population's data and their E-step layout, built once for every run on all vertices.
+    /// The whole population's data and their E-step layout, built once: a run on all vertices takes them and
+    /// hands them back when it finishes (no second copy), the label fits read them.
     full: Option<(Data, Blocked)>,
 }
 
@@ -267,10 +268,7 @@ impl Pipeline {
             }
             None => Data::from_population(pop),
         };
-        let layout = Blocked::new(&data);
-        // without a subset the coarse run's data are the whole population's: kept for the final-stage runs
-        let full = subset.is_none().then(|| (data.clone(), layout.clone()));
-        let fit = Fit::new_laid_out(data, layout, &coarse)?;
+        let fit = Fit::new(data, &coarse)?;
         Ok(Pipeline {
             pop: pop.clone(),
             params: params.clone(),
@@ -287,7 +285,7 @@ impl Pipeline {
             decide_rounds: 0,
             part_curve: Vec::new(),
             decided_labels: None,
-            full,
+            full: None,
         })
     }
 
@@ -390,6 +388,10 @@ impl Pipeline {
             State::Coarse(fit) => {
                 self.account(&fit);
                 let model = self.coarse_model(&fit);
+                if self.subset.is_none() {
+                    // the coarse run's data are the whole population's
+                    self.full = Some(fit.into_laid_out());
+                }
                 self.coarse_labels = model.labels.clone();
                 self.coarse = Some(model);
                 if self.params.refine {
@@ -411,6 +413,7 @@ impl Pipeline {
                 self.account(&fit);
                 self.close_stage(None);
                 let model = fit.model();
+                self.full = Some(fit.into_laid_out());
                 self.finish(model)?
             }
             State::Done => State::Done,
@@ -505,7 +508,8 @@ impl Pipeline {
 
     /// An AECM run on all vertices from `labels`, with the final stage's parameters.
     fn fit_all(&mut self, labels: &[u32]) -> Result<Fit> {
-        let (data, layout) = full_data(&mut self.full, &self.pop).clone();
+        full_data(&mut self.full, &self.pop);
+        let (data, layout) = self.full.take().expect("just built");
         Fit::from_labels_laid_out(data, layout, labels, &self.params)
     }
 
