@@ -1,8 +1,8 @@
 //! The rig stage alone: `cargo run --release --example rig_probe -- DIR [--bones 10,20,30] [--builds R] [--out F]`.
 //! Fits DIR once per bone count (`target_parts`, fitted weights, 4 influences, bind pose as the CLI's), then times
 //! R builds of the rig (`articulate::rig::build`) and R runs of the part count (`model::part_count::labels_with_count`
-//! on the labels the part rule decided) and prints JSON: per count the wall-clock milliseconds of each. With
-//! `--out F` it also writes every result in full precision (the count's labels, the rig's trace, weights, bind
+//! on the labels the part rule decided) and prints JSON: per count the wall-clock and CPU milliseconds of each
+//! (CPU: this thread's, from Linux's /proc/thread-self/schedstat; 0 elsewhere). With `--out F` it also writes every result in full precision (the count's labels, the rig's trace, weights, bind
 //! positions, bones and f64 E_RMS / max error over the training poses), to compare two builds of the code.
 use posemfa::articulate::rig::{build, RigOptions, RigWeights};
 use posemfa::articulate::Articulation;
@@ -10,6 +10,11 @@ use posemfa::mesh::Population;
 use posemfa::model::hierarchy::Pipeline;
 use posemfa::model::Params;
 use std::time::Instant;
+
+/// CPU milliseconds this thread has run (Linux: /proc/thread-self/schedstat, nanoseconds), else 0.
+fn cpu_ms() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat").ok().and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok()).map_or(0.0, |ns| ns / 1e6)
+}
 
 fn main() -> Result<(), String> {
     let mut args = std::env::args().skip(1);
@@ -43,23 +48,29 @@ fn main() -> Result<(), String> {
         let mut pipe = Pipeline::new(&pop, &params).map_err(|e| e.to_string())?;
         let result = pipe.run(&mut |_| true).map_err(|e| e.to_string())?;
         let mut count_ms = Vec::new();
+        let mut count_cpu_ms = Vec::new();
         let mut counted = None;
         if let Some(decided) = &result.decided_labels {
             for _ in 0..builds {
                 let t = Instant::now();
+                let c = cpu_ms();
                 let (labels, _) = posemfa::model::part_count::labels_with_count(&pop, decided, n, &params).map_err(|e| e.to_string())?;
                 count_ms.push(t.elapsed().as_secs_f64() * 1e3);
+                count_cpu_ms.push(cpu_ms() - c);
                 counted = Some(labels);
             }
         }
         let art = Articulation::new(&result.model, &pop).map_err(|e| e.to_string())?;
         let opts = RigOptions { weights: RigWeights::Fitted, bind_pose: bind, ..Default::default() };
         let mut rig_ms = Vec::new();
+        let mut rig_cpu_ms = Vec::new();
         let mut rig = None;
         for _ in 0..builds {
             let t = Instant::now();
+            let c = cpu_ms();
             rig = Some(build(&art, &opts).map_err(|e| e.to_string())?);
             rig_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            rig_cpu_ms.push(cpu_ms() - c);
         }
         let rig = rig.expect("builds >= 1");
         let (mut sq, mut worst) = (0.0f64, 0.0f64);
@@ -71,7 +82,7 @@ fn main() -> Result<(), String> {
             }
         }
         let e_rms = (sq / (3.0 * (pop.n_vertices() * pop.n_shapes()) as f64)).sqrt();
-        report.push(serde_json::json!({"bones": n, "count_ms": count_ms, "rig_ms": rig_ms, "alternations": rig.trace.len() - 1, "e_rms_unit": e_rms}));
+        report.push(serde_json::json!({"bones": n, "count_ms": count_ms, "count_cpu_ms": count_cpu_ms, "rig_ms": rig_ms, "rig_cpu_ms": rig_cpu_ms, "alternations": rig.trace.len() - 1, "e_rms_unit": e_rms}));
         if out.is_some() {
             full.push(serde_json::json!({
                 "bones": n,

@@ -13,7 +13,8 @@
 //!   - *weights*, vertex by vertex: min_w |A_j w - v_j|² + λ |w - w̄_j|² subject to w >= 0, Σ w = 1, with
 //!     A_j's columns the vertex's bind position moved by each candidate bone over all poses (3 n_s rows).
 //!     Candidates: the vertex's own part and the parts within [`RigOptions::rings`] steps of it in the part
-//!     graph. Solved exactly by a primal active-set method on the (small) KKT system; when more than K
+//!     graph. A_jᵀA_j and A_jᵀv_j come from sums over the poses kept per part ([`OwnPart`]): per vertex, one
+//!     pass over its poses per candidate, none per pair of candidates. Solved exactly by a primal active-set method on the (small) KKT system; when more than K
 //!     weights are non-zero, the K largest are kept and the problem is solved again on them (kept only if
 //!     it beats the current weights).
 //!   - *smoothness*: w̄_j is the mean of the mesh neighbours' weights of the previous iteration and
@@ -380,6 +381,12 @@ struct Solver<'a> {
     by_vertex: Vec<Vec3>,
     /// Candidate parts per vertex (own part first).
     candidates: Vec<Vec<u32>>,
+    /// Each vertex's part (its candidates are `near[label]`).
+    labels: Vec<u32>,
+    /// Candidate parts of the vertices of each part.
+    near: Vec<Vec<u32>>,
+    /// Mean bind position of each part's vertices at the start ([`OwnPart`]'s fixed point).
+    origin: Vec<Vec3>,
     /// CSR mesh neighbours.
     neighbours: VertexNeighbours,
     influences: usize,
@@ -404,7 +411,89 @@ struct WeightScratch {
     dense_nbr: Vec<f64>,
     /// The weight lists of the pass before last, overwritten in place.
     new: Vec<Vec<(u32, f64)>>,
+    /// Per part, its candidates' motions relative to it and their sums over the poses (this pass's bones).
+    own: Vec<OwnPart>,
 }
+
+/// What the weight solve of the vertices of one part needs of the bones, for the current pass: with p the part,
+/// a = 1..c its other candidate bones, o a fixed point near the part (its vertices' mean bind position),
+/// ΔR_a = R_a - R_p and Δt'_a = ΔR_a o + t_a - t_p per pose (so M_a u - M_p u = ΔR_a (u - o) + Δt'_a), the
+/// per-vertex Gram matrix of [`Solver::vertex_weights`] is a quadratic in u - o whose coefficients are sums over
+/// the poses, and its right-hand side needs, per vertex, only Σ_i ΔR_aᵀ y'_i and Σ_i Δt'_a · y'_i.
+#[derive(Default)]
+struct OwnPart {
+    origin: Vec3,
+    /// Per pose: M_p o (3), then per a: ΔR_a row-major (9), Δt'_a (3).
+    poses: Vec<f64>,
+    /// Per pair a <= b (index a c + b, 16 each): Σ ΔR_aᵀ ΔR_b row-major (9), Σ ΔR_aᵀ Δt'_b (3), Σ Δt'_a · Δt'_b,
+    /// Σ ΔR_bᵀ Δt'_a (3).
+    pairs: Vec<f64>,
+    /// Per a (12 each): Σ ΔR_aᵀ R_p row-major (9), Σ R_pᵀ Δt'_a (3).
+    own: Vec<f64>,
+}
+
+impl OwnPart {
+    fn update(&mut self, cand: &[u32], origin: Vec3, bones: &[Vec<RigidMotion>]) {
+        let c = cand.len();
+        self.origin = origin;
+        self.poses.clear();
+        self.pairs.clear();
+        self.pairs.resize(c * c * 16, 0.0);
+        self.own.clear();
+        self.own.resize(c * 12, 0.0);
+        if c <= 1 {
+            return;
+        }
+        let mut rel = vec![[0.0; 12]; c];
+        for pose in bones {
+            let mp = &pose[cand[0] as usize];
+            let rp = &mp.rotation;
+            let po = mp.apply(origin);
+            self.poses.extend_from_slice(&po);
+            for a in 1..c {
+                let ma = &pose[cand[a] as usize];
+                let m = &mut rel[a];
+                for r in 0..3 {
+                    for q in 0..3 {
+                        m[r * 3 + q] = ma.rotation[(r, q)] - rp[(r, q)];
+                    }
+                }
+                let dro = [
+                    m[0] * origin[0] + m[1] * origin[1] + m[2] * origin[2],
+                    m[3] * origin[0] + m[4] * origin[1] + m[5] * origin[2],
+                    m[6] * origin[0] + m[7] * origin[1] + m[8] * origin[2],
+                ];
+                for r in 0..3 {
+                    m[9 + r] = dro[r] + (ma.translation[r] - mp.translation[r]);
+                }
+                self.poses.extend_from_slice(m);
+            }
+            for a in 1..c {
+                let ma = &rel[a];
+                for b in a..c {
+                    let mb = &rel[b];
+                    let q = &mut self.pairs[(a * c + b) * 16..(a * c + b + 1) * 16];
+                    for r in 0..3 {
+                        for s in 0..3 {
+                            q[r * 3 + s] += ma[r] * mb[s] + ma[3 + r] * mb[3 + s] + ma[6 + r] * mb[6 + s];
+                        }
+                        q[9 + r] += ma[r] * mb[9] + ma[3 + r] * mb[10] + ma[6 + r] * mb[11];
+                        q[13 + r] += mb[r] * ma[9] + mb[3 + r] * ma[10] + mb[6 + r] * ma[11];
+                    }
+                    q[12] += ma[9] * mb[9] + ma[10] * mb[10] + ma[11] * mb[11];
+                }
+                let q = &mut self.own[a * 12..(a + 1) * 12];
+                for r in 0..3 {
+                    for s in 0..3 {
+                        q[r * 3 + s] += ma[r] * rp[(0, s)] + ma[3 + r] * rp[(1, s)] + ma[6 + r] * rp[(2, s)];
+                    }
+                    q[9 + r] += rp[(0, r)] * ma[9] + rp[(1, r)] * ma[10] + rp[(2, r)] * ma[11];
+                }
+            }
+        }
+    }
+}
+
 
 impl<'a> Solver<'a> {
     fn new(art: &'a Articulation, rig: &Rig, opts: &RigOptions) -> Solver<'a> {
@@ -432,6 +521,15 @@ impl<'a> Solver<'a> {
             })
             .collect();
         let candidates = art.model.labels.iter().map(|&l| near[l as usize].clone()).collect();
+        let mut origin = vec![[0.0; 3]; n_parts];
+        let mut count = vec![0usize; n_parts];
+        for (&l, &u) in art.model.labels.iter().zip(&rig.rest) {
+            origin[l as usize] = add(origin[l as usize], u);
+            count[l as usize] += 1;
+        }
+        for (o, &n) in origin.iter_mut().zip(&count) {
+            *o = scale(*o, 1.0 / n.max(1) as f64);
+        }
         let edges = mesh_edges(&art.faces);
         let neighbours = VertexNeighbours::new(&edges, nv);
         let bind = &art.shapes[opts.bind_pose];
@@ -450,7 +548,7 @@ impl<'a> Solver<'a> {
                 by_vertex[v * ns + i] = p;
             }
         }
-        Solver { targets: &art.shapes, by_vertex, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
+        Solver { targets: &art.shapes, by_vertex, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
     }
 
     fn sse(&self, rig: &Rig) -> f64 {
@@ -461,6 +559,12 @@ impl<'a> Solver<'a> {
     /// memory (and the previous pass's weight lists) from one pass to the next: nothing is allocated per vertex.
     fn weights(&self, rig: &mut Rig, scratch: &mut WeightScratch) {
         let nv = rig.rest.len();
+        let mut own = std::mem::take(&mut scratch.own);
+        own.resize_with(self.near.len(), OwnPart::default);
+        for (p, op) in own.iter_mut().enumerate() {
+            op.update(&self.near[p], self.origin[p], &rig.bones);
+        }
+        scratch.own = own;
         let mut new = std::mem::take(&mut scratch.new);
         new.resize_with(nv, Vec::new);
         for (v, out) in new.iter_mut().enumerate() {
@@ -478,7 +582,7 @@ impl<'a> Solver<'a> {
     fn vertex_weights(&self, v: usize, rig: &Rig, scratch: &mut WeightScratch, out: &mut Vec<(u32, f64)>) {
         let ns = self.targets.len();
         let old = &rig.weights;
-        let WeightScratch { qp, cols, h, f, w, start, allowed, order, dense_nbr, .. } = scratch;
+        let WeightScratch { qp, cols, h, f, w, start, allowed, order, dense_nbr, own, .. } = scratch;
         {
             let cand = &self.candidates[v];
             let c = cand.len();
@@ -487,51 +591,49 @@ impl<'a> Solver<'a> {
                 out.push((cand[0], 1.0));
                 return;
             }
-            let u = rig.rest[v];
-            // D columns: (M_k u - M_own u) over the poses, and the target's offset y - M_own u; their Gram matrix
-            // H and f = Dᵀy are summed row by row (pose by pose, x y z), each sum in the rows' order as a dot
-            // product of two columns would add them, so the sums are independent chains (no column is stored)
+            // H = DᵀD and f = Dᵀy, D's columns (M_k u - M_own u) over the poses and y the target's offset
+            // y - M_own u, from the own part's sums over the poses ([`OwnPart`]): only Σ_i ΔR_aᵀ y'_i and
+            // Σ_i Δt'_a · y'_i (y'_i = v_i - M_own o) are summed over the vertex's poses
+            let op = &own[self.labels[v] as usize];
+            let u = sub(rig.rest[v], op.origin);
             h.clear();
             h.resize(c * c, 0.0);
             f.clear();
             f.resize(c, 0.0);
+            cols.clear();
+            cols.resize(4 * c, 0.0);
+            let stride = 3 + 12 * (c - 1);
+            let targets = &self.by_vertex[v * ns..(v + 1) * ns];
+            for (t, pose) in targets.iter().zip(op.poses.chunks_exact(stride)) {
+                let y = [t[0] - pose[0], t[1] - pose[1], t[2] - pose[2]];
+                for (g, m) in cols[4..].chunks_exact_mut(4).zip(pose[3..].chunks_exact(12)) {
+                    // m: ΔR row-major (9), Δt' (3); g: ΔRᵀ y' (3), Δt' · y'
+                    g[0] += m[0] * y[0] + m[3] * y[1] + m[6] * y[2];
+                    g[1] += m[1] * y[0] + m[4] * y[1] + m[7] * y[2];
+                    g[2] += m[2] * y[0] + m[5] * y[1] + m[8] * y[2];
+                    g[3] += m[9] * y[0] + m[10] * y[1] + m[11] * y[2];
+                }
+            }
             for a in 1..c {
                 for b in a..c {
-                    h[a * c + b] = -0.0;
+                    let q = &op.pairs[(a * c + b) * 16..(a * c + b + 1) * 16];
+                    let ku = [
+                        q[0] * u[0] + q[1] * u[1] + q[2] * u[2],
+                        q[3] * u[0] + q[4] * u[1] + q[5] * u[2],
+                        q[6] * u[0] + q[7] * u[1] + q[8] * u[2],
+                    ];
+                    let s = dot(u, ku) + u[0] * q[9] + u[1] * q[10] + u[2] * q[11] + q[12] + q[13] * u[0] + q[14] * u[1] + q[15] * u[2];
+                    h[a * c + b] = s;
+                    h[b * c + a] = s;
                 }
-                f[a] = -0.0;
-            }
-            cols.clear();
-            cols.resize(3 * c, 0.0);
-            let targets = &self.by_vertex[v * ns..(v + 1) * ns];
-            for (i, target) in targets.iter().enumerate() {
-                let bones = &rig.bones[i];
-                let own = bones[cand[0] as usize].apply(u);
-                let y = sub(*target, own);
-                for (a, &k) in cand.iter().enumerate().skip(1) {
-                    let d = sub(bones[k as usize].apply(u), own);
-                    cols[3 * a..3 * a + 3].copy_from_slice(&d);
-                }
-                for a in 1..c {
-                    let da = [cols[3 * a], cols[3 * a + 1], cols[3 * a + 2]];
-                    for b in a..c {
-                        let mut s = h[a * c + b];
-                        s += da[0] * cols[3 * b];
-                        s += da[1] * cols[3 * b + 1];
-                        s += da[2] * cols[3 * b + 2];
-                        h[a * c + b] = s;
-                    }
-                    let mut s = f[a];
-                    s += da[0] * y[0];
-                    s += da[1] * y[1];
-                    s += da[2] * y[2];
-                    f[a] = s;
-                }
-            }
-            for a in 1..c {
-                for b in a + 1..c {
-                    h[b * c + a] = h[a * c + b];
-                }
+                let g = &cols[4 * a..4 * a + 4];
+                let q = &op.own[a * 12..(a + 1) * 12];
+                let ju = [
+                    q[0] * u[0] + q[1] * u[1] + q[2] * u[2],
+                    q[3] * u[0] + q[4] * u[1] + q[5] * u[2],
+                    q[6] * u[0] + q[7] * u[1] + q[8] * u[2],
+                ];
+                f[a] = u[0] * g[0] + u[1] * g[1] + u[2] * g[2] + g[3] - dot(u, ju) - (u[0] * q[9] + u[1] * q[10] + u[2] * q[11]);
             }
             let tr: f64 = (1..c).map(|a| h[a * c + a]).sum::<f64>() / c as f64;
             let lambda = self.smoothness * ns as f64 * self.edge2 + 1e-12 * tr + 1e-300;
