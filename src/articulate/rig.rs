@@ -379,6 +379,8 @@ struct Solver<'a> {
     /// The targets vertex by vertex: `by_vertex[v * n_s + i]` is vertex v in pose i (a vertex's poses contiguous,
     /// for the per-vertex solves).
     by_vertex: Vec<Vec3>,
+    /// Σ_i |v_i|² of every vertex over the poses.
+    target_norms: Vec<f64>,
     /// Candidate parts per vertex (own part first).
     candidates: Vec<Vec<u32>>,
     /// Each vertex's part (its candidates are `near[label]`).
@@ -548,7 +550,8 @@ impl<'a> Solver<'a> {
                 by_vertex[v * ns + i] = p;
             }
         }
-        Solver { targets: &art.shapes, by_vertex, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
+        let target_norms = (0..nv).map(|v| by_vertex[v * ns..(v + 1) * ns].iter().map(|&p| dot(p, p)).sum()).collect();
+        Solver { targets: &art.shapes, by_vertex, target_norms, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
     }
 
     fn sse(&self, rig: &Rig) -> f64 {
@@ -970,10 +973,46 @@ impl Solver<'_> {
     /// The bind positions that the current weights and bones carry best onto every pose: per vertex
     /// (Σ_i L_iᵀ L_i) u = Σ_i L_iᵀ (v_i - c_i), with L_i, c_i the blended linear part and translation. Returns the
     /// squared error over all poses at the new bind positions (what [`Solver::sse`] gives, from the same sums).
+    ///
+    /// With L_i = Σ_k w_k R_k^i and c_i = Σ_l w_l t_l^i these sums are, per vertex, Σ_kl w_k w_l P_kl,
+    /// Σ_k w_k z_k - Σ_kl w_k w_l q_kl and Σ_i |v_i - c_i|² = Σ_i |v_i|² - 2 Σ_l w_l s_l + Σ_kl w_k w_l τ_kl, from
+    /// per pair of bones P_kl = Σ_i R_kᵀ R_l, q_kl = Σ_i R_kᵀ t_l, τ_kl = Σ_i t_k · t_l and per vertex and bone
+    /// z_k = Σ_i R_kᵀ v_i, s_k = Σ_i t_k · v_i: one pass over the poses per influence, none per pair.
     fn rest(&self, rig: &mut Rig) -> f64 {
+        let ns = self.targets.len();
+        let n_parts = rig.bones[0].len();
+        // bone-major motions: [R row-major (9), t (3)] of bone k in pose i at k ns + i
+        let mut motions = vec![[0.0; 12]; n_parts * ns];
+        for (i, pose) in rig.bones.iter().enumerate() {
+            for (k, m) in pose.iter().enumerate() {
+                let x = &mut motions[k * ns + i];
+                for r in 0..3 {
+                    for q in 0..3 {
+                        x[r * 3 + q] = m.rotation[(r, q)];
+                    }
+                    x[9 + r] = m.translation[r];
+                }
+            }
+        }
+        // per ordered pair (k, l): P_kl row-major (9), q_kl (3), τ_kl
+        let mut pairs = vec![[0.0; 13]; n_parts * n_parts];
+        for k in 0..n_parts {
+            for l in 0..n_parts {
+                let out = &mut pairs[k * n_parts + l];
+                for (a, b) in motions[k * ns..(k + 1) * ns].iter().zip(&motions[l * ns..(l + 1) * ns]) {
+                    for r in 0..3 {
+                        for q in 0..3 {
+                            out[r * 3 + q] += a[r] * b[q] + a[3 + r] * b[3 + q] + a[6 + r] * b[6 + q];
+                        }
+                        out[9 + r] += a[r] * b[9] + a[3 + r] * b[10] + a[6 + r] * b[11];
+                    }
+                    out[12] += a[9] * b[9] + a[10] * b[10] + a[11] * b[11];
+                }
+            }
+        }
         let mut sse = 0.0;
         for v in 0..rig.rest.len() {
-            let (u, e) = self.vertex_rest(v, rig);
+            let (u, e) = self.vertex_rest(v, rig, &motions, &pairs, n_parts);
             if let Some(u) = u {
                 rig.rest[v] = u;
             }
@@ -987,42 +1026,39 @@ impl Solver<'_> {
     /// b = Σ_i L_iᵀ y_i, y_i = v_i - c_i, it is uᵀA u - 2 bᵀu + Σ_i |y_i|² (a function of its own for V8's tiering,
     /// as [`Solver::vertex_weights`]).
     #[inline(never)]
-    fn vertex_rest(&self, v: usize, rig: &Rig) -> (Option<Vec3>, f64) {
-        // A symmetric: its 6 entries a00 a01 a02 a11 a12 a22
-        let mut a6 = [0.0; 6];
-        let mut b = [0.0; 3];
-        let mut yy = 0.0;
-        let infl = &rig.weights.influences[v];
+    fn vertex_rest(&self, v: usize, rig: &Rig, motions: &[[f64; 12]], pairs: &[[f64; 13]], n_parts: usize) -> (Option<Vec3>, f64) {
         let ns = self.targets.len();
-        for (i, &t) in self.by_vertex[v * ns..(v + 1) * ns].iter().enumerate() {
-            let bones = &rig.bones[i];
-            let mut l = [0.0; 9];
-            let mut c = [0.0; 3];
-            for &(k, w) in infl {
-                let m = &bones[k as usize];
-                let r = m.rotation.as_slice(); // column-major: r[q * 3 + row]
-                for (x, y) in l.iter_mut().zip(r) {
-                    *x += w * y;
-                }
-                for (x, y) in c.iter_mut().zip(&m.translation) {
-                    *x += w * y;
-                }
+        let targets = &self.by_vertex[v * ns..(v + 1) * ns];
+        let infl = &rig.weights.influences[v];
+        let mut a = [0.0; 9];
+        let mut b = [0.0; 3];
+        let mut yy = self.target_norms[v];
+        for &(k, wk) in infl {
+            let k = k as usize;
+            // z_k = Σ_i R_kᵀ v_i, s_k = Σ_i t_k · v_i
+            let (mut z0, mut z1, mut z2, mut sk) = (0.0, 0.0, 0.0, 0.0);
+            for (m, t) in motions[k * ns..(k + 1) * ns].iter().zip(targets) {
+                z0 += m[0] * t[0] + m[3] * t[1] + m[6] * t[2];
+                z1 += m[1] * t[0] + m[4] * t[1] + m[7] * t[2];
+                z2 += m[2] * t[0] + m[5] * t[1] + m[8] * t[2];
+                sk += m[9] * t[0] + m[10] * t[1] + m[11] * t[2];
             }
-            let y = [t[0] - c[0], t[1] - c[1], t[2] - c[2]];
-            // column q of L is l[3q..3q+3]
-            let (c0, c1, c2) = ([l[0], l[1], l[2]], [l[3], l[4], l[5]], [l[6], l[7], l[8]]);
-            a6[0] += dot(c0, c0);
-            a6[1] += dot(c0, c1);
-            a6[2] += dot(c0, c2);
-            a6[3] += dot(c1, c1);
-            a6[4] += dot(c1, c2);
-            a6[5] += dot(c2, c2);
-            b[0] += dot(c0, y);
-            b[1] += dot(c1, y);
-            b[2] += dot(c2, y);
-            yy += dot(y, y);
+            b[0] += wk * z0;
+            b[1] += wk * z1;
+            b[2] += wk * z2;
+            yy -= 2.0 * wk * sk;
+            for &(l, wl) in infl {
+                let p = &pairs[k * n_parts + l as usize];
+                let ww = wk * wl;
+                for (x, y) in a.iter_mut().zip(&p[..9]) {
+                    *x += ww * y;
+                }
+                b[0] -= ww * p[9];
+                b[1] -= ww * p[10];
+                b[2] -= ww * p[11];
+                yy += ww * p[12];
+            }
         }
-        let a = [a6[0], a6[1], a6[2], a6[1], a6[3], a6[4], a6[2], a6[4], a6[5]];
         let error = |u: Vec3| {
             let au = [
                 a[0] * u[0] + a[1] * u[1] + a[2] * u[2],
