@@ -14,9 +14,9 @@
 //!     A_j's columns the vertex's bind position moved by each candidate bone over all poses (3 n_s rows).
 //!     Candidates: the vertex's own part and the parts within [`RigOptions::rings`] steps of it in the part
 //!     graph. A_jᵀA_j and A_jᵀv_j come from sums over the poses kept per part ([`OwnPart`]): per vertex, one
-//!     pass over its poses per candidate, none per pair of candidates. Solved exactly by a primal active-set method on the (small) KKT system; when more than K
-//!     weights are non-zero, the K largest are kept and the problem is solved again on them (kept only if
-//!     it beats the current weights).
+//!     pass over its poses per candidate, none per pair of candidates. Solved exactly by a primal active-set
+//!     method on the (small) KKT system; when more than K weights are non-zero, the K largest are kept and
+//!     the problem is solved again on them (kept only if it beats the current weights).
 //!   - *smoothness*: w̄_j is the mean of the mesh neighbours' weights of the previous iteration and
 //!     λ = [`RigOptions::smoothness`] · n_s · ℓ², ℓ² the mean squared edge length of the bind shape: a weight
 //!     vector that differs from its neighbours' mean by 1 costs as much as an error of sqrt(smoothness) edge
