@@ -1,4 +1,5 @@
-//! Rotation that best aligns two point sets or maximises trace(R^T Q): SVD with the handedness fix of
+//! Rotation that best aligns two point sets or maximises trace(R^T Q). With det Q > 0 it is Q's orthogonal
+//! polar factor (Newton's polar iteration, [`polar_rotation`]); otherwise the SVD with the handedness fix of
 //! Lemma 1 (eq 31), i.e. the Kabsch/Umeyama correction: if det(V U^T) < 0, flip the singular direction with
 //! the SMALLEST singular value. Every rotation returned has det = +1.
 
