@@ -810,19 +810,21 @@ struct PairSums {
     m: f64,
 }
 
-/// Bone k's target sums of [`Solver::bones`] in every pose: `out[i]` = [Σ_v w y_v (u_v - ū)ᵀ row-major,
-/// Σ_v w y_v] over its support (a function of its own for V8's tiering, as [`Solver::vertex_weights`]).
-#[inline(never)]
-fn bone_target_sums(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
-    for &(v, w) in support {
-        let v = v as usize;
-        let d = scale(sub(rest[v], ubar), w);
-        for (o, y) in out.iter_mut().zip(&by_vertex[v * ns..(v + 1) * ns]) {
-            for a in 0..3 {
-                o[a * 3] += y[a] * d[0];
-                o[a * 3 + 1] += y[a] * d[1];
-                o[a * 3 + 2] += y[a] * d[2];
-                o[9 + a] += w * y[a];
+avx2_fn! {
+    /// Bone k's target sums of [`Solver::bones`] in every pose: `out[i]` = [Σ_v w y_v (u_v - ū)ᵀ row-major,
+    /// Σ_v w y_v] over its support (a function of its own for V8's tiering, as [`Solver::vertex_weights`]).
+    #[inline(never)]
+    fn bone_target_sums(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+        for &(v, w) in support {
+            let v = v as usize;
+            let d = scale(sub(rest[v], ubar), w);
+            for (o, y) in out.iter_mut().zip(&by_vertex[v * ns..(v + 1) * ns]) {
+                for a in 0..3 {
+                    o[a * 3] += y[a] * d[0];
+                    o[a * 3 + 1] += y[a] * d[1];
+                    o[a * 3 + 2] += y[a] * d[2];
+                    o[9 + a] += w * y[a];
+                }
             }
         }
     }

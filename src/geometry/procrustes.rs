@@ -5,15 +5,17 @@
 
 use super::Mat3;
 
-/// The rotation R in SO(3) maximising trace(R^T C) = Σ R_ab C_ab, for any 3x3 C (a "cross-covariance").
-///
-/// With C = Σ_j w_j y_j x_j^T this is the R minimising Σ_j w_j |y_j - R x_j|². Returns the identity for C = 0.
-pub fn best_rotation(c: &Mat3) -> Mat3 {
-    let m = *c;
-    if !m.iter().all(|x| x.is_finite()) || m.iter().all(|x| *x == 0.0) {
-        return super::IDENTITY;
+avx2_fn! {
+    /// The rotation R in SO(3) maximising trace(R^T C) = Σ R_ab C_ab, for any 3x3 C (a "cross-covariance").
+    ///
+    /// With C = Σ_j w_j y_j x_j^T this is the R minimising Σ_j w_j |y_j - R x_j|². Returns the identity for C = 0.
+    pub fn best_rotation(c: &Mat3) -> Mat3 {
+        let m = *c;
+        if !m.iter().all(|x| x.is_finite()) || m.iter().all(|x| *x == 0.0) {
+            return super::IDENTITY;
+        }
+        polar_rotation(&m).unwrap_or_else(|| best_rotation_svd(&m))
     }
-    polar_rotation(&m).unwrap_or_else(|| best_rotation_svd(&m))
 }
 
 /// Smallest det(C) / |C|_F³ for which [`polar_rotation`] is used: below it C is close to singular (or a

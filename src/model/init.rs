@@ -34,93 +34,95 @@ fn index_below(rng: &mut Pcg64, n: usize) -> usize {
     rng.gen_range(0..n as u64) as usize
 }
 
-/// One k-means++ seeding + Lloyd run. Returns (labels, cost).
-fn kmeans_once(data: &Data, m: usize, rng: &mut Pcg64, lloyd_iters: usize) -> (Vec<u32>, f64) {
-    let n = data.n_vertices;
-    let dim = data.n_shapes * 3;
-    let row = |j: usize| &data.h[j * dim..(j + 1) * dim];
-    let mut centres: Vec<f64> = Vec::with_capacity(m * dim);
-    let first = index_below(rng, n);
-    centres.extend_from_slice(row(first));
-    let mut d2: Vec<f64> = (0..n).map(|j| dist2(row(j), row(first))).collect();
-    while centres.len() < m * dim {
-        let total: f64 = d2.iter().sum();
-        let pick = if total > 0.0 {
-            let mut t = rng.gen::<f64>() * total;
-            let mut p = n - 1;
-            for (j, &v) in d2.iter().enumerate() {
-                if t < v {
-                    p = j;
-                    break;
+avx2_fn! {
+    /// One k-means++ seeding + Lloyd run. Returns (labels, cost).
+    fn kmeans_once(data: &Data, m: usize, rng: &mut Pcg64, lloyd_iters: usize) -> (Vec<u32>, f64) {
+        let n = data.n_vertices;
+        let dim = data.n_shapes * 3;
+        let row = |j: usize| &data.h[j * dim..(j + 1) * dim];
+        let mut centres: Vec<f64> = Vec::with_capacity(m * dim);
+        let first = index_below(rng, n);
+        centres.extend_from_slice(row(first));
+        let mut d2: Vec<f64> = (0..n).map(|j| dist2(row(j), row(first))).collect();
+        while centres.len() < m * dim {
+            let total: f64 = d2.iter().sum();
+            let pick = if total > 0.0 {
+                let mut t = rng.gen::<f64>() * total;
+                let mut p = n - 1;
+                for (j, &v) in d2.iter().enumerate() {
+                    if t < v {
+                        p = j;
+                        break;
+                    }
+                    t -= v;
                 }
-                t -= v;
-            }
-            p
-        } else {
-            index_below(rng, n)
-        };
-        let c = row(pick).to_vec();
-        for j in 0..n {
-            d2[j] = d2[j].min(dist2(row(j), &c));
-        }
-        centres.extend_from_slice(&c);
-    }
-    let mut labels = vec![0u32; n];
-    let mut cost = f64::INFINITY;
-    for _ in 0..lloyd_iters {
-        // assignment
-        let mut new_cost = 0.0;
-        let mut changed = false;
-        for j in 0..n {
-            let r = row(j);
-            let mut best = (f64::INFINITY, 0u32);
-            for k in 0..m {
-                let d = dist2(r, &centres[k * dim..(k + 1) * dim]);
-                if d < best.0 {
-                    best = (d, k as u32);
-                }
-            }
-            if labels[j] != best.1 {
-                changed = true;
-            }
-            labels[j] = best.1;
-            new_cost += best.0;
-        }
-        // update; re-seed empty clusters with the point farthest from its centre
-        let mut counts = vec![0usize; m];
-        let mut sums = vec![0.0; m * dim];
-        for j in 0..n {
-            let k = labels[j] as usize;
-            counts[k] += 1;
-            for (s, v) in sums[k * dim..(k + 1) * dim].iter_mut().zip(row(j)) {
-                *s += v;
-            }
-        }
-        for k in 0..m {
-            if counts[k] == 0 {
-                let far = (0..n)
-                    .max_by(|&a, &b| {
-                        let da = dist2(row(a), &centres[labels[a] as usize * dim..(labels[a] as usize + 1) * dim]);
-                        let db = dist2(row(b), &centres[labels[b] as usize * dim..(labels[b] as usize + 1) * dim]);
-                        da.partial_cmp(&db).unwrap_or(std::cmp::Ordering::Equal)
-                    })
-                    .unwrap_or(0);
-                centres[k * dim..(k + 1) * dim].copy_from_slice(row(far));
-                labels[far] = k as u32;
-                changed = true;
+                p
             } else {
-                for d in 0..dim {
-                    centres[k * dim + d] = sums[k * dim + d] / counts[k] as f64;
+                index_below(rng, n)
+            };
+            let c = row(pick).to_vec();
+            for j in 0..n {
+                d2[j] = d2[j].min(dist2(row(j), &c));
+            }
+            centres.extend_from_slice(&c);
+        }
+        let mut labels = vec![0u32; n];
+        let mut cost = f64::INFINITY;
+        for _ in 0..lloyd_iters {
+            // assignment
+            let mut new_cost = 0.0;
+            let mut changed = false;
+            for j in 0..n {
+                let r = row(j);
+                let mut best = (f64::INFINITY, 0u32);
+                for k in 0..m {
+                    let d = dist2(r, &centres[k * dim..(k + 1) * dim]);
+                    if d < best.0 {
+                        best = (d, k as u32);
+                    }
+                }
+                if labels[j] != best.1 {
+                    changed = true;
+                }
+                labels[j] = best.1;
+                new_cost += best.0;
+            }
+            // update; re-seed empty clusters with the point farthest from its centre
+            let mut counts = vec![0usize; m];
+            let mut sums = vec![0.0; m * dim];
+            for j in 0..n {
+                let k = labels[j] as usize;
+                counts[k] += 1;
+                for (s, v) in sums[k * dim..(k + 1) * dim].iter_mut().zip(row(j)) {
+                    *s += v;
                 }
             }
+            for k in 0..m {
+                if counts[k] == 0 {
+                    let far = (0..n)
+                        .max_by(|&a, &b| {
+                            let da = dist2(row(a), &centres[labels[a] as usize * dim..(labels[a] as usize + 1) * dim]);
+                            let db = dist2(row(b), &centres[labels[b] as usize * dim..(labels[b] as usize + 1) * dim]);
+                            da.partial_cmp(&db).unwrap_or(std::cmp::Ordering::Equal)
+                        })
+                        .unwrap_or(0);
+                    centres[k * dim..(k + 1) * dim].copy_from_slice(row(far));
+                    labels[far] = k as u32;
+                    changed = true;
+                } else {
+                    for d in 0..dim {
+                        centres[k * dim + d] = sums[k * dim + d] / counts[k] as f64;
+                    }
+                }
+            }
+            let done = !changed || (cost - new_cost).abs() <= 1e-12 * cost.abs();
+            cost = new_cost;
+            if done {
+                break;
+            }
         }
-        let done = !changed || (cost - new_cost).abs() <= 1e-12 * cost.abs();
-        cost = new_cost;
-        if done {
-            break;
-        }
+        (labels, cost)
     }
-    (labels, cost)
 }
 
 /// k-means++ with `restarts` restarts drawn from one stream seeded by `seed`; the lowest cost wins.
