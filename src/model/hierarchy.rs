@@ -114,17 +114,20 @@ struct Refinement {
     /// Refined labels accumulated over parts (global ids), u32::MAX = not yet assigned.
     refined: Vec<u32>,
     next_label: u32,
-    /// The current coarse part's data and E-step layout, for each of its trials.
-    laid: (Data, Blocked),
+    /// The current coarse part's data and E-step layout while no trial runs on them (a trial takes them and
+    /// hands them back when it finishes, as the final-stage runs do with [`Pipeline`]'s `full`).
+    laid: Option<(Data, Blocked)>,
+}
+
+/// Data and their E-step layout (which depends on the data alone, so one serves every run on them).
+fn lay_out(data: Data) -> (Data, Blocked) {
+    let layout = Blocked::new(&data);
+    (data, layout)
 }
 
 /// The whole population's data and their E-step layout, kept in `full` (built on first use).
 fn full_data<'a>(full: &'a mut Option<(Data, Blocked)>, pop: &Population) -> &'a (Data, Blocked) {
-    full.get_or_insert_with(|| {
-        let data = Data::from_population(pop);
-        let layout = Blocked::new(&data);
-        (data, layout)
-    })
+    full.get_or_insert_with(|| lay_out(Data::from_population(pop)))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -508,8 +511,7 @@ impl Pipeline {
 
     /// An AECM run on all vertices from `labels`, with the final stage's parameters.
     fn fit_all(&mut self, labels: &[u32]) -> Result<Fit> {
-        full_data(&mut self.full, &self.pop);
-        let (data, layout) = self.full.take().expect("just built");
+        let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
         Fit::from_labels_laid_out(data, layout, labels, &self.params)
     }
 
@@ -534,10 +536,10 @@ impl Pipeline {
             Some(s) => s.iter().for_each(|&j| members[labels[j] as usize].push(j)),
         }
         members.retain(|m| !m.is_empty());
-        let laid = self.laid_out(&members[0]);
-        let fit = Fit::from_labels_laid_out(laid.0.clone(), laid.1.clone(), &vec![0; members[0].len()], &self.sub_params())?;
+        let (data, layout) = lay_out(Data::from_population_subset(&self.pop, &members[0]));
+        let fit = Fit::from_labels_laid_out(data, layout, &vec![0; members[0].len()], &self.sub_params())?;
         Ok(State::Refine(Box::new(Refinement {
-            laid,
+            laid: None,
             refined: vec![u32::MAX; labels.len()],
             members,
             part: 0,
@@ -581,9 +583,10 @@ impl Pipeline {
         let n_members = r.members[r.part].len();
         let room = r.sub_parts < self.params.max_subparts
             && n_members >= (r.sub_parts + 1) * 2 * self.params.min_part_vertices;
-        if improved {
-            let raw = done.labels();
-            let worst = worst_component(&done);
+        let best_parts = improved.then(|| (done.labels(), worst_component(&done)));
+        // the trial's data and layout serve the next trial on this part
+        r.laid = Some(done.into_laid_out());
+        if let Some((raw, worst)) = best_parts {
             let local = compact(&raw);
             let ratio = self.params.distinct_ratio;
             if distinct && r.kept.as_ref().is_none_or(|k| err * ratio <= k.0 || split_gain >= ratio) {
@@ -594,7 +597,7 @@ impl Pipeline {
             if (distinct || err >= self.params.refine_threshold) && room {
                 let labels = self.split(&r, SplitRule::Positions);
                 r.sub_parts += 1;
-                r.fit = self.sub_fit(&r, &labels)?;
+                r.fit = self.sub_fit(&mut r, &labels)?;
                 return Ok(State::Refine(r));
             }
         } else if !r.retried && r.sub_parts > 1 {
@@ -602,7 +605,7 @@ impl Pipeline {
             // instead (a different boundary) before giving up on this part.
             r.retried = true;
             let labels = self.split(&r, SplitRule::Residuals);
-            r.fit = self.sub_fit(&r, &labels)?;
+            r.fit = self.sub_fit(&mut r, &labels)?;
             return Ok(State::Refine(r));
         }
         // accept the best labelling of this part
@@ -617,9 +620,9 @@ impl Pipeline {
         r.retried = false;
         if r.part < r.members.len() {
             r.sub_parts = 1;
-            r.laid = self.laid_out(&r.members[r.part]);
+            r.laid = Some(lay_out(Data::from_population_subset(&self.pop, &r.members[r.part])));
             let n = r.members[r.part].len();
-            r.fit = self.sub_fit(&r, &vec![0; n])?;
+            r.fit = self.sub_fit(&mut r, &vec![0; n])?;
             return Ok(State::Refine(r));
         }
         // all parts refined: final stage
@@ -637,15 +640,9 @@ impl Pipeline {
         Ok(State::Final(self.fit_all(&labels)?))
     }
 
-    fn sub_fit(&self, r: &Refinement, labels: &[u32]) -> Result<Fit> {
-        Fit::from_labels_laid_out(r.laid.0.clone(), r.laid.1.clone(), labels, &self.sub_params())
-    }
-
-    /// The data of the listed vertices and their E-step layout.
-    fn laid_out(&self, vertices: &[usize]) -> (Data, Blocked) {
-        let data = Data::from_population_subset(&self.pop, vertices);
-        let layout = Blocked::new(&data);
-        (data, layout)
+    fn sub_fit(&self, r: &mut Refinement, labels: &[u32]) -> Result<Fit> {
+        let (data, layout) = r.laid.take().unwrap_or_else(|| lay_out(Data::from_population_subset(&self.pop, &r.members[r.part])));
+        Fit::from_labels_laid_out(data, layout, labels, &self.sub_params())
     }
 
     /// Labels of the best fit so far with its worst sub-part cut in two by 2-means (on the vertices'
