@@ -23,9 +23,11 @@
 //! range (positive ones must refer to lines above the face, negative ones count back from the latest), faces
 //! with fewer than 3 vertices, and a file without any vertex.
 //!
-//! Speed: lines are found with `memchr` and numbers parsed from the bytes in place by `fast-float2`
-//! (Eisel-Lemire; the maintained fork of `fast-float`), so no line is copied or validated as UTF-8 first;
-//! the binary-data check is one branch-free pass over the file.
+//! Speed: a one-line `v x y z` or `f` of in-range references (what exporters write) is read straight
+//! from the text up to its line end; every other line is found with `memchr` and read token by token.
+//! Numbers are parsed from the bytes in place by `fast-float2` (Eisel-Lemire; the maintained fork of
+//! `fast-float`), so no line is copied or validated as UTF-8 first; the binary-data check is one
+//! branch-free pass over the file.
 //!
 //! Why not tobj: tobj (kept in Cargo.toml) re-indexes the vertices of each model in order of first use by
 //! a face and drops the vertices no face uses, so the `v` order cannot be recovered from its output; it also
@@ -67,7 +69,17 @@ fn parse(bytes: &[u8]) -> Res<Mesh> {
     let mut lines = PhysicalLines { rest: text, done: false };
     let mut joined: Vec<u8> = Vec::new();
     let mut lineno = 0usize;
-    while let Some(first) = lines.next() {
+    loop {
+        // The common one-line `v` and `f` statements are read straight from the text, line end included;
+        // any other line (and any line the fast path does not take whole) goes through `statement`.
+        if !lines.done {
+            if let Some(after) = reader.line_fast(lines.rest) {
+                lines.rest = after;
+                lineno += 1;
+                continue;
+            }
+        }
+        let Some(first) = lines.next() else { break };
         lineno += 1;
         let start = lineno;
         let (head, mut continued) = split_continuation(first);
@@ -133,6 +145,37 @@ impl<'a> Iterator for Tokens<'a> {
     }
 }
 
+/// `bytes` without its leading separators other than line ends (tab, space, form feed).
+fn skip_blank(bytes: &[u8]) -> &[u8] {
+    let n = bytes.iter().position(|&b| !matches!(b, b' ' | b'\t' | 0x0C)).unwrap_or(bytes.len());
+    bytes.get(n..).unwrap_or(&[])
+}
+
+/// What follows a line end (LF, CRLF or a lone CR) at the start of `bytes`; `None` when none is there.
+fn after_line_end(bytes: &[u8]) -> Option<&[u8]> {
+    match bytes {
+        [b'\r', b'\n', after @ ..] | [b'\n' | b'\r', after @ ..] => Some(after),
+        _ => None,
+    }
+}
+
+/// Three finite numbers (`x y z` after a `v`), each ended by a separator, a line end or the end of `text`,
+/// and the text after the third.
+fn leading_xyz(text: &[u8]) -> Option<([f64; 3], &[u8])> {
+    let mut rest = text;
+    let mut xyz = [0.0f64; 3];
+    for slot in &mut xyz {
+        rest = skip_blank(rest);
+        let (x, n) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
+        rest = rest.get(n..)?;
+        if !x.is_finite() || !at_token_end(rest) {
+            return None;
+        }
+        *slot = x;
+    }
+    Some((xyz, rest))
+}
+
 /// `bytes` without its leading separators.
 fn skip_space(bytes: &[u8]) -> &[u8] {
     let n = bytes.iter().position(|&b| !is_space(b)).unwrap_or(bytes.len());
@@ -151,12 +194,20 @@ fn leading_int(bytes: &[u8]) -> Option<(i64, &[u8])> {
         [b'+', rest @ ..] => (false, rest),
         _ => (false, bytes),
     };
-    let n = digits.iter().take(19).position(|b| !b.is_ascii_digit()).unwrap_or(digits.len().min(19));
-    if n == 0 || n > 18 {
+    // One pass: the value of the first 18 digits, and whether a 19th follows (then None).
+    let mut value = 0i64;
+    let mut n = 0usize;
+    while let Some(&d) = digits.get(n) {
+        if !d.is_ascii_digit() || n == 18 {
+            break;
+        }
+        value = value * 10 + i64::from(d - b'0');
+        n += 1;
+    }
+    if n == 0 || digits.get(n).is_some_and(u8::is_ascii_digit) {
         return None;
     }
-    let (number, after) = digits.split_at(n);
-    let value = number.iter().fold(0i64, |acc, &d| acc * 10 + i64::from(d - b'0'));
+    let after = digits.get(n..).unwrap_or(&[]);
     Some((if negative { -value } else { value }, after))
 }
 
@@ -388,21 +439,35 @@ impl Reader {
         })
     }
 
+    /// A whole line at the start of `text`, `v x y z` or a face of in-range references, ended by a line end
+    /// (no comment, no continuation): stores it and returns the text after the line end. `None` (with
+    /// nothing stored) for anything else, which [`Reader::statement`] then reads; it stores the same for
+    /// the lines taken here.
+    fn line_fast<'t>(&mut self, text: &'t [u8]) -> Option<&'t [u8]> {
+        match text {
+            [b'v', b' ' | b'\t' | 0x0C, rest @ ..] => {
+                let (xyz, rest) = leading_xyz(rest)?;
+                let after = after_line_end(skip_blank(rest))?;
+                self.push_vertex(xyz).then_some(after)
+            }
+            [b'f', b' ' | b'\t' | 0x0C, rest @ ..] => {
+                let after = after_line_end(self.corners_fast(rest)?)?;
+                self.push_fan().then_some(after)
+            }
+            _ => None,
+        }
+    }
+
     /// `x y z` (then a comment or nothing): true when read and stored.
     fn vertex_fast(&mut self, line: &[u8]) -> bool {
-        let mut rest = line;
-        let mut xyz = [0.0f64; 3];
-        for slot in &mut xyz {
-            rest = skip_space(rest);
-            let Ok((x, n)) = fast_float2::parse_partial::<f64, _>(rest) else { return false };
-            rest = rest.get(n..).unwrap_or(&[]);
-            if !x.is_finite() || !at_token_end(rest) {
-                return false;
-            }
-            *slot = x;
-        }
-        rest = skip_space(rest);
-        if !(rest.is_empty() || rest.first() == Some(&b'#')) || self.mesh.positions.len() >= u32::MAX as usize {
+        let Some((xyz, rest)) = leading_xyz(line) else { return false };
+        let rest = skip_space(rest);
+        (rest.is_empty() || rest.first() == Some(&b'#')) && self.push_vertex(xyz)
+    }
+
+    /// Stores a vertex unless there are already u32::MAX of them (the slow path then says so).
+    fn push_vertex(&mut self, xyz: [f64; 3]) -> bool {
+        if self.mesh.positions.len() >= u32::MAX as usize {
             return false;
         }
         self.mesh.positions.push(xyz);
@@ -411,39 +476,44 @@ impl Reader {
 
     /// A face of `v`, `v/vt`, `v//vn` or `v/vt/vn` references, all in range: true when read and stored.
     fn face_fast(&mut self, line: &[u8]) -> bool {
+        self.corners_fast(line).is_some() && self.push_fan()
+    }
+
+    /// Reads `v`, `v/vt`, `v//vn` or `v/vt/vn` references, all in range, into `corners`, up to a comment, a
+    /// line end or the end of `text`, and returns the text from there.
+    fn corners_fast<'t>(&mut self, text: &'t [u8]) -> Option<&'t [u8]> {
         self.corners.clear();
-        let mut rest = skip_space(line);
+        let mut rest = skip_blank(text);
         while let Some(&first) = rest.first() {
-            if first == b'#' {
+            if matches!(first, b'#' | b'\n' | b'\r') {
                 break;
             }
-            let Some((v, after)) = leading_int(rest) else { return false };
-            let Some(v) = resolve_fast(v, self.mesh.positions.len()).and_then(|v| u32::try_from(v).ok()) else {
-                return false;
-            };
+            let (v, after) = leading_int(rest)?;
+            let v = resolve_fast(v, self.mesh.positions.len()).and_then(|v| u32::try_from(v).ok())?;
             rest = after;
             if let [b'/', after @ ..] = rest {
                 rest = after;
                 if let Some((t, after)) = leading_int(rest) {
-                    if resolve_fast(t, self.texcoords).is_none() {
-                        return false;
-                    }
+                    resolve_fast(t, self.texcoords)?;
                     rest = after;
                 }
                 if let [b'/', after @ ..] = rest {
-                    let Some((n, after)) = leading_int(after) else { return false };
-                    if resolve_fast(n, self.normals).is_none() {
-                        return false;
-                    }
+                    let (n, after) = leading_int(after)?;
+                    resolve_fast(n, self.normals)?;
                     rest = after;
                 }
             }
             if !at_token_end(rest) {
-                return false;
+                return None;
             }
             self.corners.push(v);
-            rest = skip_space(rest);
+            rest = skip_blank(rest);
         }
+        Some(rest)
+    }
+
+    /// Stores the face in `corners` as a fan of triangles when it has at least 3 corners.
+    fn push_fan(&mut self) -> bool {
         if self.corners.len() < 3 {
             return false;
         }
@@ -922,6 +992,36 @@ mod tests {
         assert_eq!(err_bytes(b"v 0 0 0\n\xFF\n\x00\n").0, 3);
         // UTF-16 without a byte-order mark is NUL bytes.
         assert_eq!(err_bytes(b"v\x00 \x000\x00").0, 1);
+    }
+
+    #[test]
+    fn fast_and_token_paths_agree() {
+        // Every line once as it is (whole lines such as these are read straight from the text) and once with
+        // a comment after it (read token by token): the same mesh, with each kind of line end.
+        let lines = [
+            "v 0.1 -2.5e3 7",
+            "v\t1 2 3 ",
+            "v -0 .5 5.",
+            "v\x0c+1e-300 1E2 -0.022739015899999999",
+            "f 1 2 3",
+            "f 3/1 2/1 1/1",
+            "f 1//1 2//1 3//1 4//1",
+            "f -1 -2 -3\t",
+            "f 1/1/1 +2/1/-1 3/-1/1 4 1",
+        ];
+        for end in ["\n", "\r\n", "\r"] {
+            let text = |suffix: &str| {
+                let mut t = format!("vt 0 0{end}vn 0 0 1{end}");
+                for l in lines {
+                    t.push_str(&format!("{l}{suffix}{end}"));
+                }
+                t
+            };
+            let (fast, slow) = (ok(&text("")), ok(&text(" # note")));
+            assert_eq!(fast.positions.len(), 4);
+            assert_eq!(fast.faces.len(), 1 + 1 + 2 + 1 + 3);
+            assert_eq!((fast.positions, fast.faces), (slow.positions, slow.faces));
+        }
     }
 
     #[test]
