@@ -171,11 +171,15 @@ pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std:
     if !errors.is_empty() {
         return Err(errors);
     }
+    Ok(Loaded { poses, source: mesh_files_source(n_obj, n_ply) })
+}
+
+/// Where poses read from one mesh file each came from: "11 OBJ files", "1 OBJ and 2 PLY files".
+pub(super) fn mesh_files_source(n_obj: usize, n_ply: usize) -> String {
     let plural = |n: usize, what: &str| format!("{n} {what} file{}", if n == 1 { "" } else { "s" });
-    let source = match (n_obj, n_ply) {
+    match (n_obj, n_ply) {
         (o, 0) => plural(o, "OBJ"),
         (0, p) => plural(p, "PLY"),
         (o, p) => format!("{o} OBJ and {}", plural(p, "PLY")),
-    };
-    Ok(Loaded { poses, source })
+    }
 }
