@@ -187,7 +187,9 @@ impl Rig {
 }
 
 /// Small dense solve (Gaussian elimination, partial pivoting) of the n x n system a x = b, a row-major.
-/// Returns false when singular.
+/// Returns false when singular. Inlined where it is called, so the bind-position solve's 3 x 3 case is
+/// compiled for n = 3 (the same operations in the same order).
+#[inline(always)]
 fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
     for col in 0..n {
         let mut piv = col;
@@ -420,12 +422,13 @@ struct WeightScratch {
 /// What the weight solve of the vertices of one part needs of the bones, for the current pass: with p the part,
 /// a = 1..c its other candidate bones, o a fixed point near the part (its vertices' mean bind position),
 /// ΔR_a = R_a - R_p and Δt'_a = ΔR_a o + t_a - t_p per pose (so M_a u - M_p u = ΔR_a (u - o) + Δt'_a), the
-/// per-vertex Gram matrix of [`Solver::vertex_weights`] is a quadratic in u - o whose coefficients are sums over
+/// per-vertex Gram matrix of [`vertex_weights`] is a quadratic in u - o whose coefficients are sums over
 /// the poses, and its right-hand side needs, per vertex, only Σ_i ΔR_aᵀ y'_i and Σ_i Δt'_a · y'_i.
 #[derive(Default)]
 struct OwnPart {
     origin: Vec3,
-    /// Per pose: M_p o (3), then per a: ΔR_a row-major (9), Δt'_a (3).
+    /// Per pose: M_p o (3), then per a: [ΔR_a | Δt'_a] row-major (3 x 4, so that ΔR_aᵀ y and Δt'_a · y are one
+    /// 4-lane sum of its rows weighted by y).
     poses: Vec<f64>,
     /// Per pair a <= b (index a c + b, 16 each): Σ ΔR_aᵀ ΔR_b row-major (9), Σ ΔR_aᵀ Δt'_b (3), Σ Δt'_a · Δt'_b,
     /// Σ ΔR_bᵀ Δt'_a (3).
@@ -468,7 +471,9 @@ impl OwnPart {
                 for r in 0..3 {
                     m[9 + r] = dro[r] + (ma.translation[r] - mp.translation[r]);
                 }
-                self.poses.extend_from_slice(m);
+                for r in 0..3 {
+                    self.poses.extend_from_slice(&[m[r * 3], m[r * 3 + 1], m[r * 3 + 2], m[9 + r]]);
+                }
             }
             for a in 1..c {
                 let ma = &rel[a];
@@ -571,144 +576,11 @@ impl<'a> Solver<'a> {
         let mut new = std::mem::take(&mut scratch.new);
         new.resize_with(nv, Vec::new);
         for (v, out) in new.iter_mut().enumerate() {
-            self.vertex_weights(v, rig, scratch, out);
+            vertex_weights(self, v, rig, scratch, out);
         }
         new.truncate(nv);
         std::mem::swap(&mut rig.weights.influences, &mut new);
         scratch.new = new;
-    }
-
-    /// Vertex v's weights of [`Solver::weights`] into `out`. A function of its own, called once per vertex, for
-    /// the page: V8 runs a wasm function in its baseline compiler until it is hot and uses the optimised code
-    /// from its next call on, so one long call per pass ran mostly unoptimised.
-    #[inline(never)]
-    fn vertex_weights(&self, v: usize, rig: &Rig, scratch: &mut WeightScratch, out: &mut Vec<(u32, f64)>) {
-        let ns = self.targets.len();
-        let old = &rig.weights;
-        let WeightScratch { qp, cols, h, f, w, start, allowed, order, dense_nbr, own, .. } = scratch;
-        {
-            let cand = &self.candidates[v];
-            let c = cand.len();
-            out.clear();
-            if c == 1 {
-                out.push((cand[0], 1.0));
-                return;
-            }
-            // H = DᵀD and f = Dᵀy, D's columns (M_k u - M_own u) over the poses and y the target's offset
-            // y - M_own u, from the own part's sums over the poses ([`OwnPart`]): only Σ_i ΔR_aᵀ y'_i and
-            // Σ_i Δt'_a · y'_i (y'_i = v_i - M_own o) are summed over the vertex's poses
-            let op = &own[self.labels[v] as usize];
-            let u = sub(rig.rest[v], op.origin);
-            h.clear();
-            h.resize(c * c, 0.0);
-            f.clear();
-            f.resize(c, 0.0);
-            cols.clear();
-            cols.resize(4 * c, 0.0);
-            let stride = 3 + 12 * (c - 1);
-            let targets = &self.by_vertex[v * ns..(v + 1) * ns];
-            for (t, pose) in targets.iter().zip(op.poses.chunks_exact(stride)) {
-                let y = [t[0] - pose[0], t[1] - pose[1], t[2] - pose[2]];
-                for (g, m) in cols[4..].chunks_exact_mut(4).zip(pose[3..].chunks_exact(12)) {
-                    // m: ΔR row-major (9), Δt' (3); g: ΔRᵀ y' (3), Δt' · y'
-                    g[0] += m[0] * y[0] + m[3] * y[1] + m[6] * y[2];
-                    g[1] += m[1] * y[0] + m[4] * y[1] + m[7] * y[2];
-                    g[2] += m[2] * y[0] + m[5] * y[1] + m[8] * y[2];
-                    g[3] += m[9] * y[0] + m[10] * y[1] + m[11] * y[2];
-                }
-            }
-            for a in 1..c {
-                for b in a..c {
-                    let q = &op.pairs[(a * c + b) * 16..(a * c + b + 1) * 16];
-                    let ku = [
-                        q[0] * u[0] + q[1] * u[1] + q[2] * u[2],
-                        q[3] * u[0] + q[4] * u[1] + q[5] * u[2],
-                        q[6] * u[0] + q[7] * u[1] + q[8] * u[2],
-                    ];
-                    let s = dot(u, ku) + u[0] * q[9] + u[1] * q[10] + u[2] * q[11] + q[12] + q[13] * u[0] + q[14] * u[1] + q[15] * u[2];
-                    h[a * c + b] = s;
-                    h[b * c + a] = s;
-                }
-                let g = &cols[4 * a..4 * a + 4];
-                let q = &op.own[a * 12..(a + 1) * 12];
-                let ju = [
-                    q[0] * u[0] + q[1] * u[1] + q[2] * u[2],
-                    q[3] * u[0] + q[4] * u[1] + q[5] * u[2],
-                    q[6] * u[0] + q[7] * u[1] + q[8] * u[2],
-                ];
-                f[a] = u[0] * g[0] + u[1] * g[1] + u[2] * g[2] + g[3] - dot(u, ju) - (u[0] * q[9] + u[1] * q[10] + u[2] * q[11]);
-            }
-            let tr: f64 = (1..c).map(|a| h[a * c + a]).sum::<f64>() / c as f64;
-            let lambda = self.smoothness * ns as f64 * self.edge2 + 1e-12 * tr + 1e-300;
-            // neighbours' mean weights on the candidates
-            dense_nbr.clear();
-            dense_nbr.resize(c, 0.0);
-            let nb = self.neighbours.of(v);
-            for &(q, _) in nb {
-                for (k, wk) in old.influences(q as usize) {
-                    if let Some(a) = cand.iter().position(|&x| x as usize == k) {
-                        dense_nbr[a] += wk / nb.len() as f64;
-                    }
-                }
-            }
-            for a in 0..c {
-                h[a * c + a] += lambda;
-                f[a] += lambda * dense_nbr[a];
-            }
-            w.clear();
-            w.resize(c, 0.0);
-            // start from the current weights where they are candidates
-            let mut any = false;
-            for (k, wk) in old.influences(v) {
-                if let Some(a) = cand.iter().position(|&x| x as usize == k) {
-                    w[a] = wk;
-                    any = true;
-                }
-            }
-            let sum: f64 = w.iter().sum();
-            if !any || !(sum > 0.0) {
-                w.iter_mut().for_each(|x| *x = 0.0);
-                w[0] = 1.0;
-            } else {
-                w.iter_mut().for_each(|x| *x /= sum);
-            }
-            start.clear();
-            start.extend_from_slice(w);
-            let objective = |w: &[f64]| -> f64 {
-                let mut o = 0.0;
-                for a in 0..c {
-                    o -= 2.0 * f[a] * w[a];
-                    for b in 0..c {
-                        o += w[a] * h[a * c + b] * w[b];
-                    }
-                }
-                o
-            };
-            allowed.clear();
-            allowed.resize(c, true);
-            qp.solve(h, f, w, allowed);
-            let nnz = w.iter().filter(|&&x| x > 0.0).count();
-            if nnz > self.influences {
-                order.clear();
-                order.extend(0..c);
-                order.sort_by(|&a, &b| w[b].total_cmp(&w[a]).then(a.cmp(&b)));
-                for &a in &order[self.influences..] {
-                    allowed[a] = false;
-                    w[a] = 0.0;
-                }
-                let s: f64 = w.iter().sum();
-                w.iter_mut().for_each(|x| *x /= s);
-                qp.solve(h, f, w, allowed);
-                // the cap makes this a heuristic: never take a worse point than the current weights
-                if start.iter().filter(|&&x| x > 0.0).count() <= self.influences && objective(start) < objective(w) {
-                    w.copy_from_slice(start);
-                }
-            }
-            out.extend(cand.iter().zip(w.iter()).filter(|(_, &x)| x > 0.0).map(|(&k, &x)| (k, x)));
-            out.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-            let s: f64 = out.iter().map(|x| x.1).sum();
-            out.iter_mut().for_each(|x| x.1 /= s);
-        }
     }
 
     /// One pass of the bone solve over every pose (module doc).
@@ -774,7 +646,7 @@ impl<'a> Solver<'a> {
                 }
             }
         }
-        // target sums per bone and pose: [C row-major (9), Σ w y (3)]
+        // target sums per bone and pose: [C | Σ w y] row-major (3 x 4)
         let mut sums = vec![[0.0; 12]; n_parts * ns];
         for &k in &order {
             if stats[k].1 > 0.0 {
@@ -797,6 +669,144 @@ impl<'a> Solver<'a> {
     }
 }
 
+avx2_fn! {
+    /// Vertex v's weights of [`Solver::weights`] into `out`. A function of its own, called once per vertex, for
+    /// the page: V8 runs a wasm function in its baseline compiler until it is hot and uses the optimised code
+    /// from its next call on, so one long call per pass ran mostly unoptimised.
+    /// Under `avx2_fn!`: the same bits, with AVX2 where the CPU has it.
+    #[inline(never)]
+    fn vertex_weights(solver: &Solver, v: usize, rig: &Rig, scratch: &mut WeightScratch, out: &mut Vec<(u32, f64)>) {
+        let ns = solver.targets.len();
+        let old = &rig.weights;
+        let WeightScratch { qp, cols, h, f, w, start, allowed, order, dense_nbr, own, .. } = scratch;
+        {
+            let cand = &solver.candidates[v];
+            let c = cand.len();
+            out.clear();
+            if c == 1 {
+                out.push((cand[0], 1.0));
+                return;
+            }
+            // H = DᵀD and f = Dᵀy, D's columns (M_k u - M_own u) over the poses and y the target's offset
+            // y - M_own u, from the own part's sums over the poses ([`OwnPart`]): only Σ_i ΔR_aᵀ y'_i and
+            // Σ_i Δt'_a · y'_i (y'_i = v_i - M_own o) are summed over the vertex's poses
+            let op = &own[solver.labels[v] as usize];
+            let u = sub(rig.rest[v], op.origin);
+            h.clear();
+            h.resize(c * c, 0.0);
+            f.clear();
+            f.resize(c, 0.0);
+            cols.clear();
+            cols.resize(4 * c, 0.0);
+            let stride = 3 + 12 * (c - 1);
+            let targets = &solver.by_vertex[v * ns..(v + 1) * ns];
+            for (t, pose) in targets.iter().zip(op.poses.chunks_exact(stride)) {
+                let y = [t[0] - pose[0], t[1] - pose[1], t[2] - pose[2]];
+                for (g, m) in cols[4..].chunks_exact_mut(4).zip(pose[3..].chunks_exact(12)) {
+                    // m: [ΔR | Δt'] row-major (3 x 4); g: ΔRᵀ y' (3), Δt' · y' (read whole, then written whole:
+                    // one 4-lane step)
+                    let mut acc = [g[0], g[1], g[2], g[3]];
+                    for j in 0..4 {
+                        acc[j] += m[j] * y[0] + m[4 + j] * y[1] + m[8 + j] * y[2];
+                    }
+                    g.copy_from_slice(&acc);
+                }
+            }
+            for a in 1..c {
+                for b in a..c {
+                    let q = &op.pairs[(a * c + b) * 16..(a * c + b + 1) * 16];
+                    let ku = [
+                        q[0] * u[0] + q[1] * u[1] + q[2] * u[2],
+                        q[3] * u[0] + q[4] * u[1] + q[5] * u[2],
+                        q[6] * u[0] + q[7] * u[1] + q[8] * u[2],
+                    ];
+                    let s = dot(u, ku) + u[0] * q[9] + u[1] * q[10] + u[2] * q[11] + q[12] + q[13] * u[0] + q[14] * u[1] + q[15] * u[2];
+                    h[a * c + b] = s;
+                    h[b * c + a] = s;
+                }
+                let g = &cols[4 * a..4 * a + 4];
+                let q = &op.own[a * 12..(a + 1) * 12];
+                let ju = [
+                    q[0] * u[0] + q[1] * u[1] + q[2] * u[2],
+                    q[3] * u[0] + q[4] * u[1] + q[5] * u[2],
+                    q[6] * u[0] + q[7] * u[1] + q[8] * u[2],
+                ];
+                f[a] = u[0] * g[0] + u[1] * g[1] + u[2] * g[2] + g[3] - dot(u, ju) - (u[0] * q[9] + u[1] * q[10] + u[2] * q[11]);
+            }
+            let tr: f64 = (1..c).map(|a| h[a * c + a]).sum::<f64>() / c as f64;
+            let lambda = solver.smoothness * ns as f64 * solver.edge2 + 1e-12 * tr + 1e-300;
+            // neighbours' mean weights on the candidates
+            dense_nbr.clear();
+            dense_nbr.resize(c, 0.0);
+            let nb = solver.neighbours.of(v);
+            for &(q, _) in nb {
+                for (k, wk) in old.influences(q as usize) {
+                    if let Some(a) = cand.iter().position(|&x| x as usize == k) {
+                        dense_nbr[a] += wk / nb.len() as f64;
+                    }
+                }
+            }
+            for a in 0..c {
+                h[a * c + a] += lambda;
+                f[a] += lambda * dense_nbr[a];
+            }
+            w.clear();
+            w.resize(c, 0.0);
+            // start from the current weights where they are candidates
+            let mut any = false;
+            for (k, wk) in old.influences(v) {
+                if let Some(a) = cand.iter().position(|&x| x as usize == k) {
+                    w[a] = wk;
+                    any = true;
+                }
+            }
+            let sum: f64 = w.iter().sum();
+            if !any || !(sum > 0.0) {
+                w.iter_mut().for_each(|x| *x = 0.0);
+                w[0] = 1.0;
+            } else {
+                w.iter_mut().for_each(|x| *x /= sum);
+            }
+            start.clear();
+            start.extend_from_slice(w);
+            let objective = |w: &[f64]| -> f64 {
+                let mut o = 0.0;
+                for a in 0..c {
+                    o -= 2.0 * f[a] * w[a];
+                    for b in 0..c {
+                        o += w[a] * h[a * c + b] * w[b];
+                    }
+                }
+                o
+            };
+            allowed.clear();
+            allowed.resize(c, true);
+            qp.solve(h, f, w, allowed);
+            let nnz = w.iter().filter(|&&x| x > 0.0).count();
+            if nnz > solver.influences {
+                order.clear();
+                order.extend(0..c);
+                order.sort_by(|&a, &b| w[b].total_cmp(&w[a]).then(a.cmp(&b)));
+                for &a in &order[solver.influences..] {
+                    allowed[a] = false;
+                    w[a] = 0.0;
+                }
+                let s: f64 = w.iter().sum();
+                w.iter_mut().for_each(|x| *x /= s);
+                qp.solve(h, f, w, allowed);
+                // the cap makes this a heuristic: never take a worse point than the current weights
+                if start.iter().filter(|&&x| x > 0.0).count() <= solver.influences && objective(start) < objective(w) {
+                    w.copy_from_slice(start);
+                }
+            }
+            out.extend(cand.iter().zip(w.iter()).filter(|(_, &x)| x > 0.0).map(|(&k, &x)| (k, x)));
+            out.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            let s: f64 = out.iter().map(|x| x.1).sum();
+            out.iter_mut().for_each(|x| x.1 /= s);
+        }
+    }
+}
+
 /// Pose-free sums of one ordered pair of bones (k, l) sharing vertices, for [`Solver::bones`].
 #[derive(Debug, Clone, Copy, Default)]
 struct PairSums {
@@ -811,20 +821,23 @@ struct PairSums {
 }
 
 avx2_fn! {
-    /// Bone k's target sums of [`Solver::bones`] in every pose: `out[i]` = [Σ_v w y_v (u_v - ū)ᵀ row-major,
-    /// Σ_v w y_v] over its support (a function of its own for V8's tiering, as [`Solver::vertex_weights`]).
+    /// Bone k's target sums of [`Solver::bones`] in every pose: `out[i]` = [Σ_v w y_v (u_v - ū)ᵀ | Σ_v w y_v]
+    /// row-major (3 x 4) over its support (a function of its own for V8's tiering, as [`vertex_weights`]). Row a
+    /// gains y_a [w (u_v - ū), w] per vertex: one 4-lane step per row.
     #[inline(never)]
     fn bone_target_sums(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
         for &(v, w) in support {
             let v = v as usize;
             let d = scale(sub(rest[v], ubar), w);
+            let dw = [d[0], d[1], d[2], w];
             for (o, y) in out.iter_mut().zip(&by_vertex[v * ns..(v + 1) * ns]) {
+                let mut acc = *o;
                 for a in 0..3 {
-                    o[a * 3] += y[a] * d[0];
-                    o[a * 3 + 1] += y[a] * d[1];
-                    o[a * 3 + 2] += y[a] * d[2];
-                    o[9 + a] += w * y[a];
+                    for b in 0..4 {
+                        acc[a * 4 + b] += y[a] * dw[b];
+                    }
                 }
+                *o = acc;
             }
         }
     }
@@ -834,9 +847,8 @@ avx2_fn! {
 /// the pair sums with the bones it shares vertices with, at their current motions `bones`.
 #[inline(never)]
 fn bone_step(sums: &[f64; 12], pairs: &[(usize, PairSums)], bones: &[RigidMotion], ubar: Vec3, w2: f64) -> RigidMotion {
-    let mut c = [0.0; 9];
-    c.copy_from_slice(&sums[..9]);
-    let mut wr = [sums[9], sums[10], sums[11]];
+    let mut c = [sums[0], sums[1], sums[2], sums[4], sums[5], sums[6], sums[8], sums[9], sums[10]];
+    let mut wr = [sums[3], sums[7], sums[11]];
     for (l, ps) in pairs {
         let m = &bones[*l];
         let r = &m.rotation;
@@ -983,16 +995,16 @@ impl Solver<'_> {
     fn rest(&self, rig: &mut Rig) -> f64 {
         let ns = self.targets.len();
         let n_parts = rig.bones[0].len();
-        // bone-major motions: [R row-major (9), t (3)] of bone k in pose i at k ns + i
+        // bone-major motions: [R | t] row-major (3 x 4) of bone k in pose i at k ns + i
         let mut motions = vec![[0.0; 12]; n_parts * ns];
         for (i, pose) in rig.bones.iter().enumerate() {
             for (k, m) in pose.iter().enumerate() {
                 let x = &mut motions[k * ns + i];
                 for r in 0..3 {
                     for q in 0..3 {
-                        x[r * 3 + q] = m.rotation[(r, q)];
+                        x[r * 4 + q] = m.rotation[(r, q)];
                     }
-                    x[9 + r] = m.translation[r];
+                    x[r * 4 + 3] = m.translation[r];
                 }
             }
         }
@@ -1004,17 +1016,17 @@ impl Solver<'_> {
                 for (a, b) in motions[k * ns..(k + 1) * ns].iter().zip(&motions[l * ns..(l + 1) * ns]) {
                     for r in 0..3 {
                         for q in 0..3 {
-                            out[r * 3 + q] += a[r] * b[q] + a[3 + r] * b[3 + q] + a[6 + r] * b[6 + q];
+                            out[r * 3 + q] += a[r] * b[q] + a[4 + r] * b[4 + q] + a[8 + r] * b[8 + q];
                         }
-                        out[9 + r] += a[r] * b[9] + a[3 + r] * b[10] + a[6 + r] * b[11];
+                        out[9 + r] += a[r] * b[3] + a[4 + r] * b[7] + a[8 + r] * b[11];
                     }
-                    out[12] += a[9] * b[9] + a[10] * b[10] + a[11] * b[11];
+                    out[12] += a[3] * b[3] + a[7] * b[7] + a[11] * b[11];
                 }
             }
         }
         let mut sse = 0.0;
         for v in 0..rig.rest.len() {
-            let (u, e) = self.vertex_rest(v, rig, &motions, &pairs, n_parts);
+            let (u, e) = vertex_rest(self, v, rig, &motions, &pairs, n_parts);
             if let Some(u) = u {
                 rig.rest[v] = u;
             }
@@ -1022,43 +1034,58 @@ impl Solver<'_> {
         }
         sse
     }
+}
 
+avx2_fn! {
     /// Vertex v's bind position of [`Solver::rest`] (None when its system is singular: the position is kept), and
     /// the vertex's squared error over the poses at the position it ends with: with A = Σ_i L_iᵀ L_i,
     /// b = Σ_i L_iᵀ y_i, y_i = v_i - c_i, it is uᵀA u - 2 bᵀu + Σ_i |y_i|² (a function of its own for V8's tiering,
-    /// as [`Solver::vertex_weights`]).
+    /// as [`vertex_weights`]).
+    /// Under `avx2_fn!`: the same bits, with AVX2 where the CPU has it.
     #[inline(never)]
-    fn vertex_rest(&self, v: usize, rig: &Rig, motions: &[[f64; 12]], pairs: &[[f64; 13]], n_parts: usize) -> (Option<Vec3>, f64) {
-        let ns = self.targets.len();
-        let targets = &self.by_vertex[v * ns..(v + 1) * ns];
+    fn vertex_rest(solver: &Solver, v: usize, rig: &Rig, motions: &[[f64; 12]], pairs: &[[f64; 13]], n_parts: usize) -> (Option<Vec3>, f64) {
+        let ns = solver.targets.len();
+        let targets = &solver.by_vertex[v * ns..(v + 1) * ns];
         let infl = &rig.weights.influences[v];
         let mut a = [0.0; 9];
         let mut b = [0.0; 3];
-        let mut yy = self.target_norms[v];
-        for &(k, wk) in infl {
-            let k = k as usize;
-            // z_k = Σ_i R_kᵀ v_i, s_k = Σ_i t_k · v_i
-            let (mut z0, mut z1, mut z2, mut sk) = (0.0, 0.0, 0.0, 0.0);
-            for (m, t) in motions[k * ns..(k + 1) * ns].iter().zip(targets) {
-                z0 += m[0] * t[0] + m[3] * t[1] + m[6] * t[2];
-                z1 += m[1] * t[0] + m[4] * t[1] + m[7] * t[2];
-                z2 += m[2] * t[0] + m[5] * t[1] + m[8] * t[2];
-                sk += m[9] * t[0] + m[10] * t[1] + m[11] * t[2];
-            }
-            b[0] += wk * z0;
-            b[1] += wk * z1;
-            b[2] += wk * z2;
-            yy -= 2.0 * wk * sk;
-            for &(l, wl) in infl {
-                let p = &pairs[k * n_parts + l as usize];
-                let ww = wk * wl;
-                for (x, y) in a.iter_mut().zip(&p[..9]) {
-                    *x += ww * y;
+        let mut yy = solver.target_norms[v];
+        let poses = |k: u32| &motions[k as usize * ns..(k as usize + 1) * ns];
+        for two in infl.chunks(2) {
+            // [z_k, s_k] with z_k = Σ_i R_kᵀ v_i, s_k = Σ_i t_k · v_i, for two influences in one pass over the
+            // poses (twice the independent sums in flight; each still summed in pose order)
+            let mut zs = [[0.0; 4]; 2];
+            match *two {
+                [(k, _), (l, _)] => {
+                    for ((m, n), t) in poses(k).iter().zip(poses(l)).zip(targets) {
+                        add_influence_sums(&mut zs[0], m, t);
+                        add_influence_sums(&mut zs[1], n, t);
+                    }
                 }
-                b[0] -= ww * p[9];
-                b[1] -= ww * p[10];
-                b[2] -= ww * p[11];
-                yy += ww * p[12];
+                [(k, _)] => {
+                    for (m, t) in poses(k).iter().zip(targets) {
+                        add_influence_sums(&mut zs[0], m, t);
+                    }
+                }
+                _ => {}
+            }
+            for (&(k, wk), z) in two.iter().zip(&zs) {
+                let k = k as usize;
+                b[0] += wk * z[0];
+                b[1] += wk * z[1];
+                b[2] += wk * z[2];
+                yy -= 2.0 * wk * z[3];
+                for &(l, wl) in infl {
+                    let p = &pairs[k * n_parts + l as usize];
+                    let ww = wk * wl;
+                    for (x, y) in a.iter_mut().zip(&p[..9]) {
+                        *x += ww * y;
+                    }
+                    b[0] -= ww * p[9];
+                    b[1] -= ww * p[10];
+                    b[2] -= ww * p[11];
+                    yy += ww * p[12];
+                }
             }
         }
         let error = |u: Vec3| {
@@ -1079,7 +1106,16 @@ impl Solver<'_> {
     }
 }
 
-/// Squared error of pose i (a function of its own for V8's tiering, as [`Solver::vertex_weights`]).
+/// One pose's terms of [`vertex_rest`]'s sums z_k = Σ_i R_kᵀ v_i (`z[..3]`) and s_k = Σ_i t_k · v_i (`z[3]`), with
+/// `m` = [R_k | t_k] row-major (3 x 4) in pose i and `t` = v_i: the rows of m weighted by v_i, one 4-lane step.
+#[inline(always)]
+fn add_influence_sums(z: &mut [f64; 4], m: &[f64; 12], t: &Vec3) {
+    for j in 0..4 {
+        z[j] += m[j] * t[0] + m[4 + j] * t[1] + m[8 + j] * t[2];
+    }
+}
+
+/// Squared error of pose i (a function of its own for V8's tiering, as [`vertex_weights`]).
 #[inline(never)]
 fn pose_sse(rig: &Rig, i: usize, target: &[Vec3]) -> f64 {
     let mut s = 0.0;
