@@ -700,16 +700,25 @@ avx2_fn! {
             cols.resize(4 * c, 0.0);
             let stride = 3 + 12 * (c - 1);
             let targets = &solver.by_vertex[v * ns..(v + 1) * ns];
-            for (t, pose) in targets.iter().zip(op.poses.chunks_exact(stride)) {
-                let y = [t[0] - pose[0], t[1] - pose[1], t[2] - pose[2]];
-                for (g, m) in cols[4..].chunks_exact_mut(4).zip(pose[3..].chunks_exact(12)) {
-                    // m: [ΔR | Δt'] row-major (3 x 4); g: ΔRᵀ y' (3), Δt' · y' (read whole, then written whole:
-                    // one 4-lane step)
-                    let mut acc = [g[0], g[1], g[2], g[3]];
-                    for j in 0..4 {
-                        acc[j] += m[j] * y[0] + m[4 + j] * y[1] + m[8 + j] * y[2];
+            let sums = &mut cols[4..];
+            match c - 1 {
+                1 => candidate_sums::<1>(targets, &op.poses, sums),
+                2 => candidate_sums::<2>(targets, &op.poses, sums),
+                3 => candidate_sums::<3>(targets, &op.poses, sums),
+                4 => candidate_sums::<4>(targets, &op.poses, sums),
+                5 => candidate_sums::<5>(targets, &op.poses, sums),
+                6 => candidate_sums::<6>(targets, &op.poses, sums),
+                7 => candidate_sums::<7>(targets, &op.poses, sums),
+                8 => candidate_sums::<8>(targets, &op.poses, sums),
+                _ => {
+                    for (t, pose) in targets.iter().zip(op.poses.chunks_exact(stride)) {
+                        let y = [t[0] - pose[0], t[1] - pose[1], t[2] - pose[2]];
+                        for (g, m) in sums.chunks_exact_mut(4).zip(pose[3..].chunks_exact(12)) {
+                            let mut acc = [g[0], g[1], g[2], g[3]];
+                            add_candidate_sums(&mut acc, m, &y);
+                            g.copy_from_slice(&acc);
+                        }
                     }
-                    g.copy_from_slice(&acc);
                 }
             }
             for a in 1..c {
@@ -804,6 +813,32 @@ avx2_fn! {
             let s: f64 = out.iter().map(|x| x.1).sum();
             out.iter_mut().for_each(|x| x.1 /= s);
         }
+    }
+}
+
+/// One pose's terms of [`vertex_weights`]'s sums over the poses of ΔR_aᵀ y'_i (`g[..3]`) and Δt'_a · y'_i
+/// (`g[3]`), with `m` = [ΔR_a | Δt'_a] row-major (3 x 4): the rows of m weighted by y'_i, one 4-lane step.
+#[inline(always)]
+fn add_candidate_sums(g: &mut [f64; 4], m: &[f64], y: &Vec3) {
+    for j in 0..4 {
+        g[j] += m[j] * y[0] + m[4 + j] * y[1] + m[8 + j] * y[2];
+    }
+}
+
+/// [`vertex_weights`]'s sums over the poses for its `N` candidates other than its own part, into `out` (4 each),
+/// with y'_i = v_i - M_own o from `targets` and `poses` ([`OwnPart::poses`]): pose by pose as the general case,
+/// but the N running sums stay in registers (N known at compile time) instead of a load and a store per pose.
+#[inline(always)]
+fn candidate_sums<const N: usize>(targets: &[Vec3], poses: &[f64], out: &mut [f64]) {
+    let mut acc = [[0.0; 4]; N];
+    for (t, pose) in targets.iter().zip(poses.chunks_exact(3 + 12 * N)) {
+        let y = [t[0] - pose[0], t[1] - pose[1], t[2] - pose[2]];
+        for (g, m) in acc.iter_mut().zip(pose[3..].chunks_exact(12)) {
+            add_candidate_sums(g, m, &y);
+        }
+    }
+    for (o, g) in out.chunks_exact_mut(4).zip(&acc) {
+        o.copy_from_slice(g);
     }
 }
 
