@@ -10,7 +10,9 @@
 #               ply_parse: bytes -> posemfa::mesh::ply::parse_ply
 #               point_cache: byte 0 (.pc2/.mdd) + bytes -> parse_pc2/parse_mdd, then mesh::load over a base mesh
 #               gltf_read: byte 0 (options) + a .glb or .gltf -> posemfa::mesh::gltf::read
-#               formats: ply_parse, point_cache and gltf_read in turn
+#               fbx_read: byte 0 (options) + an .fbx -> posemfa::mesh::fbx::read
+#               usd_read: byte 0 (options) + a .usda, .usdc or .usdz -> posemfa::mesh::usd::read
+#               formats: ply_parse, point_cache, gltf_read, fbx_read and usd_read in turn
 #               all: each of them in turn, with the same limits
 #   --runs N    stop after N executions (default 10000000); --time S: stop after S seconds (default: none)
 #   --sanitizer address (default) or none (faster; still catches panics, overflow and debug assertions)
@@ -43,13 +45,13 @@ jobs=1
 extra=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    obj_parse|population|shapes|ply_parse|point_cache|gltf_read|formats|all) target=$1 ;;
+    obj_parse|population|shapes|ply_parse|point_cache|gltf_read|fbx_read|usd_read|formats|all) target=$1 ;;
     --runs) runs=${2:?--runs needs a number}; shift ;;
     --time) time_limit=${2:?--time needs seconds}; shift ;;
     --sanitizer) sanitizer=${2:?--sanitizer needs address or none}; shift ;;
     --jobs) jobs=${2:?--jobs needs a number}; shift ;;
     --) shift; extra=("$@"); break ;;
-    *) echo "fuzz.sh: unknown argument '$1' (targets: obj_parse population shapes ply_parse point_cache gltf_read formats all; options: --runs N --time S --sanitizer address|none --jobs N)" >&2; exit 2 ;;
+    *) echo "fuzz.sh: unknown argument '$1' (targets: obj_parse population shapes ply_parse point_cache gltf_read fbx_read usd_read formats all; options: --runs N --time S --sanitizer address|none --jobs N)" >&2; exit 2 ;;
   esac
   shift
 done
@@ -103,6 +105,8 @@ max_len_of() {
     ply_parse) echo 16384 ;;
     point_cache) echo 8192 ;;
     gltf_read) echo 65536 ;;
+    fbx_read) echo 65536 ;;
+    usd_read) echo 65536 ;;
   esac
 }
 run_one() {
@@ -127,9 +131,9 @@ run_one() {
 }
 
 if [ "$target" = all ]; then
-  for t in obj_parse population shapes ply_parse point_cache gltf_read; do run_one "$t"; done
+  for t in obj_parse population shapes ply_parse point_cache gltf_read fbx_read usd_read; do run_one "$t"; done
 elif [ "$target" = formats ]; then
-  for t in ply_parse point_cache gltf_read; do run_one "$t"; done
+  for t in ply_parse point_cache gltf_read fbx_read usd_read; do run_one "$t"; done
 else
   run_one "$target"
 fi

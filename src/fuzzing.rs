@@ -53,3 +53,82 @@ pub fn decode_shapes(data: &[u8]) -> Option<ShapesInput> {
         .collect();
     Some(ShapesInput { cfg: *cfg, names: (0..n_shapes).map(|i| format!("s{i}")).collect(), faces, shapes })
 }
+
+// ------------------------------------------------------------------------------------- FBX seeds and tests
+
+use crate::mesh::fbx_tree::{Node, Prop};
+
+/// An FBX node without an offset (for [`crate::mesh::fbx_tree::write`]).
+pub fn fbx_node(name: &str, props: Vec<Prop>, children: Vec<Node>) -> Node {
+    Node { name: name.into(), props, children, offset: 0 }
+}
+
+fn s(x: &str) -> Prop {
+    Prop::Str(x.into())
+}
+
+fn p70(entries: Vec<(&str, Vec<Prop>)>) -> Node {
+    let ps = entries
+        .into_iter()
+        .map(|(n, v)| {
+            let mut props = vec![s(n), s(""), s(""), s("")];
+            props.extend(v);
+            fbx_node("P", props, vec![])
+        })
+        .collect();
+    fbx_node("Properties70", vec![], ps)
+}
+
+/// A quad (two triangles) with one blend shape channel animated 0 -> 100 % over 3 frames at 24 fps, Y up,
+/// metres (UnitScaleFactor 100). `edit` changes the Geometry's children before writing.
+pub fn tiny_fbx_with(edit: impl FnOnce(&mut Vec<Node>), compress: bool) -> Vec<u8> {
+    let ktime = 46_186_158_000i64 / 24;
+    let mut geometry = vec![
+        fbx_node("Vertices", vec![Prop::F64s(vec![0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0.])], vec![]),
+        fbx_node("PolygonVertexIndex", vec![Prop::I32s(vec![0, 1, 2, -4])], vec![]),
+    ];
+    edit(&mut geometry);
+    let nodes = vec![
+        fbx_node("GlobalSettings", vec![], vec![p70(vec![
+            ("UpAxis", vec![Prop::Int(1)]),
+            ("UnitScaleFactor", vec![Prop::Float(100.0)]),
+            ("TimeMode", vec![Prop::Int(11)]),
+        ])]),
+        fbx_node("Objects", vec![], vec![
+            fbx_node("Geometry", vec![Prop::Int(10), s("quad\0\u{1}Geometry"), s("Mesh")], geometry),
+            fbx_node("Model", vec![Prop::Int(20), s("Quad\0\u{1}Model"), s("Mesh")], vec![]),
+            fbx_node("Deformer", vec![Prop::Int(30), s("quad\0\u{1}Deformer"), s("BlendShape")], vec![]),
+            fbx_node("Deformer", vec![Prop::Int(31), s("lift\0\u{1}SubDeformer"), s("BlendShapeChannel")], vec![
+                fbx_node("DeformPercent", vec![Prop::Float(0.0)], vec![]),
+            ]),
+            fbx_node("Geometry", vec![Prop::Int(32), s("lift\0\u{1}Geometry"), s("Shape")], vec![
+                fbx_node("Indexes", vec![Prop::I32s(vec![2, 3])], vec![]),
+                fbx_node("Vertices", vec![Prop::F64s(vec![0., 0., 1., 0., 0., 2.])], vec![]),
+            ]),
+            fbx_node("AnimationStack", vec![Prop::Int(40), s("Take 1\0\u{1}AnimStack"), s("")], vec![p70(vec![
+                ("LocalStop", vec![Prop::Int(2 * ktime)]),
+            ])]),
+            fbx_node("AnimationLayer", vec![Prop::Int(41), s("Layer\0\u{1}AnimLayer"), s("")], vec![]),
+            fbx_node("AnimationCurveNode", vec![Prop::Int(42), s("DeformPercent\0\u{1}AnimCurveNode"), s("")], vec![]),
+            fbx_node("AnimationCurve", vec![Prop::Int(43), s("\0\u{1}AnimCurve"), s("")], vec![
+                fbx_node("KeyTime", vec![Prop::I64s(vec![0, 2 * ktime])], vec![]),
+                fbx_node("KeyValueFloat", vec![Prop::F32s(vec![0.0, 100.0])], vec![]),
+            ]),
+        ]),
+        fbx_node("Connections", vec![], [
+            ("OO", 20, 0, None), ("OO", 10, 20, None), ("OO", 30, 10, None), ("OO", 31, 30, None), ("OO", 32, 31, None),
+            ("OO", 41, 40, None), ("OO", 42, 41, None), ("OP", 42, 31, Some("DeformPercent")), ("OP", 43, 42, Some("d|DeformPercent")),
+        ].into_iter().map(|(k, c, p, prop): (&str, i64, i64, Option<&str>)| {
+            let mut props = vec![s(k), Prop::Int(c), Prop::Int(p)];
+            props.extend(prop.map(s));
+            fbx_node("C", props, vec![])
+        }).collect()),
+    ];
+    crate::mesh::fbx_tree::write(&nodes, compress)
+}
+
+
+/// [`tiny_fbx_with`] unchanged: a seed of the fbx_read fuzz target.
+pub fn tiny_fbx(compress: bool) -> Vec<u8> {
+    tiny_fbx_with(|_| {}, compress)
+}

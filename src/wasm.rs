@@ -82,7 +82,8 @@ pub struct WasmPopulation {
 #[wasm_bindgen(js_class = Population)]
 impl WasmPopulation {
     /// Reads and validates the files of one population, each by its extension (`mesh::load`: OBJ or PLY per
-    /// pose, one .glb / .gltf with its .bin files, a .pc2 / .mdd point cache with its base mesh). Throws an Error with one problem per file that has one (`problems`,
+    /// pose, one .glb / .gltf with its .bin files, a .pc2 / .mdd point cache with its base mesh; any other
+    /// extension is refused by name, .mtl ignored). Throws an Error with one problem per file that has one (`problems`,
     /// each {kind, file, line, message}; the message has one line per problem).
     #[wasm_bindgen(constructor)]
     pub fn new(names: Vec<String>, files: Vec<Uint8Array>) -> Result<WasmPopulation, JsValue> {
@@ -164,6 +165,13 @@ impl WasmPopulation {
         Ok(obj_in_original_units(&self.inner, &what.positions(&self.inner, None, None)?, header))
     }
 
+    /// OBJ text of the meshes a view shows side by side that need no model (see `FitModel.objScene`; `parts` must
+    /// be null here).
+    #[wasm_bindgen(js_name = objScene)]
+    pub fn obj_scene(&self, meshes: JsValue, header: &str) -> Result<String, JsValue> {
+        obj_scene(&self.inner, None, meshes, header)
+    }
+
     /// A palette index (< `n_colours`) for every part of `labels` (one per vertex): parts that share a mesh
     /// edge differ while the palette allows (`posemfa::articulate::graph::colour_parts`).
     #[wasm_bindgen(js_name = partColours)]
@@ -172,6 +180,18 @@ impl WasmPopulation {
             return Err(js_err(format!("{} labels for {} vertices", labels.len(), self.inner.n_vertices())));
         }
         Ok(Uint32Array::from(crate::articulate::graph::colour_parts(&labels, &self.inner.faces, n_colours).as_slice()))
+    }
+
+    /// [`Population::part_colours`] keeping the colours of an earlier partition where a part is the same (more
+    /// than half of each in the other): `previous` / `previous_colours` are that partition's labels (one per
+    /// vertex) and its colours (one per part) (`posemfa::articulate::graph::colour_parts_like`).
+    #[wasm_bindgen(js_name = partColoursLike)]
+    pub fn part_colours_like(&self, labels: Vec<u32>, n_colours: usize, previous: Vec<u32>, previous_colours: Vec<u32>) -> Result<Uint32Array, JsValue> {
+        if labels.len() != self.inner.n_vertices() {
+            return Err(js_err(format!("{} labels for {} vertices", labels.len(), self.inner.n_vertices())));
+        }
+        let prev = Some((previous.as_slice(), previous_colours.as_slice()));
+        Ok(Uint32Array::from(crate::articulate::graph::colour_parts_like(&labels, &self.inner.faces, n_colours, prev).as_slice()))
     }
 }
 
@@ -317,6 +337,26 @@ impl FitModel {
         Uint32Array::from(self.model().labels.as_slice())
     }
 
+    /// The merge tree of the default part rule (`posemfa::model::merge_tree`): {most, fewest, decided} part
+    /// counts it holds and the count the rule read off it; null with Algorithm 1's rules.
+    #[wasm_bindgen(js_name = treeCounts)]
+    pub fn tree_counts(&self) -> Result<JsValue, JsValue> {
+        let Some(t) = &self.result.merge_tree else { return Ok(JsValue::NULL) };
+        let (most, fewest) = t.counts();
+        to_js(&serde_json::json!({ "most": most, "fewest": fewest, "decided": self.result.tree_count }))
+    }
+
+    /// The merge tree's partition with `count` parts (one label per vertex; clamped to the tree's counts); at
+    /// the decided count, the fitted model's own labels.
+    #[wasm_bindgen(js_name = treeLabels)]
+    pub fn tree_labels(&self, count: usize) -> Result<Uint32Array, JsValue> {
+        let Some(t) = &self.result.merge_tree else { return Err(js_err("this fit has no merge tree (part rule tree only)")) };
+        if Some(count) == self.result.tree_count && self.model().n_parts() == count {
+            return Ok(self.labels());
+        }
+        Ok(Uint32Array::from(t.labels_at(count).as_slice()))
+    }
+
     #[wasm_bindgen(js_name = coarseLabels)]
     pub fn coarse_labels(&self) -> Uint32Array {
         Uint32Array::from(self.result.coarse_labels.as_slice())
@@ -378,7 +418,8 @@ impl FitModel {
     /// {shapes, vertices, parts, coarseParts, refinedParts, rmse, rmseOriginal (in the original units),
     /// iterations, converged, complete,
     /// logLikelihood: [...], stageStats: [...],
-    /// diagnosis: {articulated, reason, singleBodyRmse, partsRmse, explained, parts},
+    /// diagnosis: {articulated, reason, singleBodyRmse, partsRmse, explained, parts} or null for a fit stopped
+    /// early, unfinished: null or the words to show instead of the verdict,
     /// partCurve: [{parts, score, variance}] (the part rule's merge decisions, most parts first)}
     pub fn summary(&self) -> Result<JsValue, JsValue> {
         let m = self.model();
@@ -391,7 +432,8 @@ impl FitModel {
             "iterations": m.iterations, "converged": m.converged,
             "complete": self.result.complete, "logLikelihood": m.log_likelihood,
             "stageStats": self.result.stats,
-            "diagnosis": crate::model::diagnosis::diagnose_fit(&self.pop, &self.result),
+            "diagnosis": crate::model::diagnosis::diagnose_finished(&self.pop, &self.result),
+            "unfinished": (!self.result.complete).then_some(crate::model::diagnosis::UNFINISHED),
             "partCurve": self.result.part_curve,
         });
         to_js(&v)
@@ -418,6 +460,22 @@ impl FitModel {
 #[wasm_bindgen(js_name = memoryBytes)]
 pub fn memory_bytes() -> f64 {
     (core::arch::wasm32::memory_size(0) * 65536) as f64
+}
+
+/// The fit form's fields, as typed (an object of text values: any of parts, targetParts, seed, tol,
+/// varianceFloor), read over `base` (fit parameters as a plain object; missing fields take defaults) and every
+/// field checked (`Params::with_fields`): {params, problems: []} or {params: null, problems: [{field, message}]},
+/// one problem per field that cannot be used, naming what is allowed.
+#[wasm_bindgen(js_name = formParams)]
+pub fn form_params(base: JsValue, fields: JsValue) -> Result<JsValue, JsValue> {
+    let base: Params = from_js(base, "fit parameters")?;
+    let fields: std::collections::BTreeMap<String, String> = descriptor(fields, "form fields")?;
+    let pairs: Vec<(&str, &str)> = fields.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+    let v = match base.with_fields(&pairs) {
+        Ok(p) => serde_json::json!({ "params": p, "problems": [] }),
+        Err(problems) => serde_json::json!({ "params": null, "problems": problems }),
+    };
+    to_js(&v)
 }
 
 /// The default fit parameters as a plain object (camelCase fields of `Params`), for the page's form.
@@ -590,6 +648,19 @@ impl FitModel {
         Ok(obj.into())
     }
 
+    /// Pose mode (issue 28): the rig of `opts` (rig options as for [`FitModel::rig`]; default fitted weights),
+    /// written and read back, its training poses solved onto it and their pose space.
+    pub fn poser(&self, opts: JsValue) -> Result<WasmPoser, JsValue> {
+        let mut req: crate::export::rig_report::RigRequest = from_js(opts.clone(), "pose options")?;
+        let given = !opts.is_undefined() && !opts.is_null() && js_sys::Reflect::has(&opts, &"weights".into()).unwrap_or(false);
+        if !given {
+            req.weights = crate::export::gltf::Weights::Fitted;
+        }
+        let g = req.options(&self.pop)?;
+        let p = crate::export::pose_glb::Poser::new(&*self.articulation()?, &self.pop, &g)?;
+        Ok(WasmPoser { inner: p, names: self.pop.names.clone() })
+    }
+
     /// Endpoint errors, volume and edge stretch at t of every interpolation method, poses i -> j (0-based).
     #[wasm_bindgen(js_name = articulationReport)]
     pub fn articulation_report(&self, i: usize, j: usize, t: f64) -> Result<JsValue, JsValue> {
@@ -622,6 +693,48 @@ impl FitModel {
         let art = if matches!(what, Shown::Interpolation { .. }) { Some(self.articulation()?) } else { None };
         Ok(obj_in_original_units(&self.pop, &what.positions(&self.pop, Some(self.model()), art.as_deref())?, header))
     }
+
+    /// OBJ text of the meshes a view shows side by side, one object each (`posemfa::export::shown::obj_of_meshes`):
+    /// `meshes` is [{name, what, parts}], `what` as in [`FitModel::obj_text`], `parts` "final" | "coarse" |
+    /// "refined" (the faces in one group per part of that stage) or null.
+    #[wasm_bindgen(js_name = objScene)]
+    pub fn obj_scene(&self, meshes: JsValue, header: &str) -> Result<String, JsValue> {
+        obj_scene(&self.pop, Some(self), meshes, header)
+    }
+}
+
+/// One mesh of `objScene`.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneMesh {
+    name: String,
+    what: Shown,
+    #[serde(default)]
+    parts: Option<String>,
+}
+
+fn obj_scene(pop: &Population, fit: Option<&FitModel>, meshes: JsValue, header: &str) -> Result<String, JsValue> {
+    use crate::export::shown::{obj_of_meshes, NamedMesh};
+    let meshes: Vec<SceneMesh> = descriptor(meshes, "mesh list")?;
+    let mut named = Vec::with_capacity(meshes.len());
+    for m in &meshes {
+        let art = match (fit, &m.what) {
+            (Some(f), Shown::Interpolation { .. }) => Some(f.articulation()?),
+            _ => None,
+        };
+        let positions = m.what.positions(pop, fit.map(FitModel::model), art.as_deref())?;
+        let labels: Option<&[u32]> = match (fit, m.parts.as_deref()) {
+            (_, None) => None,
+            (None, Some(_)) => return Err(js_err(format!("mesh {}: parts need a fitted model", m.name))),
+            (Some(f), Some("final")) => Some(f.model().labels.as_slice()),
+            (Some(f), Some("coarse")) => Some(f.result.coarse_labels.as_slice()),
+            (Some(f), Some("refined")) => Some(f.result.refined_labels.as_slice()),
+            (_, Some(o)) => return Err(js_err(format!("mesh {}: parts '{o}': use final, coarse or refined", m.name))),
+        };
+        // a fit cancelled before a stage has no labels of it: that mesh is written without groups
+        named.push(NamedMesh { name: m.name.clone(), positions, labels: labels.filter(|l| !l.is_empty()) });
+    }
+    Ok(obj_of_meshes(pop, &named, header)?)
 }
 
 /// Test-only fault injection for the page's fault tests (reached only when the page is opened with
@@ -632,5 +745,153 @@ pub fn fault_injection(kind: &str) -> Result<(), JsValue> {
     match kind {
         "panic" => panic!("fault injection: a deliberate panic (page test)"),
         other => Err(js_err(format!("fault injection '{other}': the only kind is panic"))),
+    }
+}
+
+// ---------------------------------------------------------------- pose mode (issue 28)
+
+/// A rig being posed ([`crate::export::pose_glb::Poser`]); positions in the population's original units.
+#[wasm_bindgen(js_name = Poser)]
+pub struct WasmPoser {
+    inner: crate::export::pose_glb::Poser,
+    names: Vec<String>,
+}
+
+fn vec3(v: &[f64]) -> Result<[f64; 3], JsValue> {
+    match v {
+        [x, y, z] => Ok([*x, *y, *z]),
+        _ => Err(js_err(format!("expected 3 numbers, got {}", v.len()))),
+    }
+}
+
+#[wasm_bindgen(js_class = Poser)]
+impl WasmPoser {
+    /// The skeleton: {parent: [bone or -1], order, names, jointPoints (flat xyz, bind pose), boneOfVertex,
+    /// nModes, sd, range ([lo, hi] per mode), coords (per training pose), trainingNames, diagonal}.
+    pub fn skeleton(&self) -> Result<JsValue, JsValue> {
+        let r = &self.inner.rig.rig;
+        let obj = js_sys::Object::new();
+        let set = |k: &str, v: JsValue| js_sys::Reflect::set(&obj, &k.into(), &v).map(|_| ()).map_err(|_| js_err("reflect"));
+        let parent: Vec<i32> = r.parent.iter().map(|p| p.map_or(-1, |p| p as i32)).collect();
+        set("parent", to_js(&parent)?)?;
+        set("order", to_js(&r.order)?)?;
+        set("names", to_js(&self.inner.rig.names)?)?;
+        set("jointPoints", flat_f32(&self.inner.to_unit(&r.joint_points)).into())?;
+        set("boneOfVertex", Uint32Array::from(self.inner.bone_of_vertex.as_slice()).into())?;
+        set("nModes", JsValue::from(self.inner.space.n_modes() as u32))?;
+        set("sd", to_js(&self.inner.space.sd)?)?;
+        set("range", to_js(&self.inner.space.range)?)?;
+        set("coords", to_js(&self.inner.space.coords)?)?;
+        set("trainingNames", to_js(&self.names)?)?;
+        // unit box, as the positions
+        set("diagonal", JsValue::from(self.inner.diagonal * self.inner.normalization.scale))?;
+        Ok(obj.into())
+    }
+
+    /// The mesh of the current pose (flat xyz, unit box as the population's positions).
+    pub fn positions(&self) -> Float32Array {
+        flat_f32(&self.inner.to_unit(&self.inner.positions()))
+    }
+
+    /// Turns bone k's subtree by `angle` radians about `axis` (3 numbers, world) through its joint.
+    pub fn turn(&mut self, k: usize, axis: Vec<f64>, angle: f64) -> Result<(), JsValue> {
+        Ok(self.inner.turn(k, vec3(&axis)?, angle)?)
+    }
+
+    /// Every bone's angle from the rest pose, degrees.
+    pub fn angles(&self) -> Float64Array {
+        Float64Array::from(self.inner.angles().as_slice())
+    }
+
+    /// Bone k's joint in the current pose (3 numbers, unit box).
+    #[wasm_bindgen(js_name = jointPosition)]
+    pub fn joint_position(&self, k: usize) -> Result<Float64Array, JsValue> {
+        Ok(Float64Array::from(self.inner.to_unit(&[self.inner.joint_position(k)?])[0].as_slice()))
+    }
+
+    /// The pose of mode coefficients (the root stays where it is).
+    #[wasm_bindgen(js_name = setModes)]
+    pub fn set_modes(&mut self, coeffs: Vec<f64>) -> Result<(), JsValue> {
+        Ok(self.inner.set_modes(&coeffs)?)
+    }
+
+    /// The current pose vector (log maps) and its mode coordinates: {vector, coords, mean, training}.
+    #[wasm_bindgen(js_name = poseVector)]
+    pub fn pose_vector(&self) -> Result<JsValue, JsValue> {
+        let x = self.inner.vector();
+        let c = self.inner.space.project(&x);
+        to_js(&serde_json::json!({"vector": x, "coords": c, "mean": self.inner.space.mean, "training": self.inner.space.training}))
+    }
+
+    /// Coefficients of a random pose within the training range (seeded).
+    #[wasm_bindgen(js_name = randomCoords)]
+    pub fn random_coords(&self, seed: f64) -> Float64Array {
+        Float64Array::from(self.inner.space.random(seed as u64).as_slice())
+    }
+
+    /// Training pose i (0-based).
+    #[wasm_bindgen(js_name = setTraining)]
+    pub fn set_training(&mut self, i: usize) -> Result<(), JsValue> {
+        Ok(self.inner.set_training(i)?)
+    }
+
+    /// The bones (12 numbers each), for undo.
+    pub fn bones(&self) -> Float64Array {
+        Float64Array::from(self.inner.bones_flat().as_slice())
+    }
+
+    #[wasm_bindgen(js_name = setBones)]
+    pub fn set_bones(&mut self, flat: Vec<f64>) -> Result<(), JsValue> {
+        Ok(self.inner.set_bones_flat(&flat)?)
+    }
+
+    /// Back to the rest pose.
+    pub fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    /// Per vertex 1 when a turn of bone k may move it (a weight on k or below), else 0.
+    pub fn touches(&self, k: usize) -> Result<Uint8Array, JsValue> {
+        let t: Vec<u8> = self.inner.touches(k)?.into_iter().map(u8::from).collect();
+        Ok(Uint8Array::from(t.as_slice()))
+    }
+
+    /// The rig .glb with the current pose as a one-frame clip "pose".
+    #[wasm_bindgen(js_name = poseGlb)]
+    pub fn pose_glb(&self) -> Result<Uint8Array, JsValue> {
+        Ok(Uint8Array::from(self.inner.pose_glb()?.as_slice()))
+    }
+
+    /// The current pose as OBJ text (original units, the population's faces).
+    #[wasm_bindgen(js_name = objText)]
+    pub fn obj_text(&self, header: &str) -> String {
+        crate::export::obj::write_obj(&self.inner.positions(), &self.inner.rig.faces, header)
+    }
+
+    /// New frames of the same mesh (files as for a population) solved onto the rig: {names, eRms (per frame), eRmsAll,
+    /// positions: [flat xyz per frame, skinned, unit box], glb (the rig with clip "frames")}.
+    #[wasm_bindgen(js_name = addFrames)]
+    pub fn add_frames(&self, names: Vec<String>, files: Vec<Uint8Array>) -> Result<JsValue, JsValue> {
+        if names.len() != files.len() {
+            return Err(js_err("names and files differ in length"));
+        }
+        let mut pairs: Vec<(String, Vec<u8>)> = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
+        pairs.sort_by(|a, b| crate::mesh::population::natural_cmp(&a.0, &b.0));
+        let loaded = crate::mesh::load::load(pairs).map_err(|errors| thrown(&errors.iter().map(Error::problem).collect::<Vec<_>>()))?;
+        let frame_names: Vec<String> = loaded.poses.iter().map(|(n, _)| n.clone()).collect();
+        let frames: Vec<Vec<[f64; 3]>> = loaded.poses.into_iter().map(|(_, m)| m.positions).collect();
+        let (solved, e, glb) = self.inner.add_frames(&frames)?;
+        let obj = js_sys::Object::new();
+        let set = |k: &str, v: JsValue| js_sys::Reflect::set(&obj, &k.into(), &v).map(|_| ()).map_err(|_| js_err("reflect"));
+        set("names", to_js(&frame_names)?)?;
+        set("eRms", Float64Array::from(e.as_slice()).into())?;
+        set("eRmsAll", JsValue::from(crate::articulate::pose::overall_e_rms(&e)))?;
+        let positions = Array::new();
+        for b in &solved.bones {
+            positions.push(&flat_f32(&self.inner.to_unit(&self.inner.rig.rig.skin(b))).into());
+        }
+        set("positions", positions.into())?;
+        set("glb", Uint8Array::from(glb.as_slice()).into())?;
+        Ok(obj.into())
     }
 }

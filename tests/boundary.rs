@@ -73,7 +73,8 @@ dual_test! {
         // (it crossed as `sub_parts` and the page showed "m_k = undefined").
         let spec = Spec { preset: posemfa::synth::Preset::Arm, vertices: 800, poses: 5, ..Default::default() };
         let g = posemfa::synth::generate(&spec).unwrap();
-        let params = Params { parts: 3, ..Default::default() };
+        // Algorithm 1 (the refinement stage is its own)
+        let params = Params { parts: 3, part_rule: posemfa::model::PartRule::Distinct, ..Default::default() };
         let mut pipe = posemfa::model::hierarchy::Pipeline::new(&g.population, &params).unwrap();
         let mut values = vec![serde_json::to_value(pipe.stage()).unwrap()];
         while !pipe.is_done() {

@@ -30,7 +30,7 @@ const COMMANDS: &[(&str, &[&str])] = &[
         ],
     ),
     ("bench", &["--parts", "--json", "--repeat"]),
-    ("generate", &["--out", "--vertices", "--poses", "--seed", "--band", "--noise", "--max-angle"]),
+    ("generate", &["--out", "--format", "--vertices", "--poses", "--seed", "--band", "--noise", "--max-angle"]),
     (
         "interpolate",
         &[
@@ -48,77 +48,165 @@ const COMMANDS: &[(&str, &[&str])] = &[
             "--parts",
         ],
     ),
-    ("export-gltf", &["--out", "--weights", "--bind", "--samples", "--band", "--seed"]),
+    ("export-gltf", &["--out", "--weights", "--influences", "--joints", "--morphs", "--bind", "--samples", "--band", "--seed"]),
+    ("rig-report", &["--glb", "--out", "--weights", "--bind", "--band", "--parts"]),
+    ("pose", &["--out", "--json"]),
+    ("crossval", &["--json", "--weights", "--bones", "--parts"]),
     ("articulate-report", &["--from", "--to", "--t", "--glb", "--validate", "--band", "--tol"]),
+    ("completions", &[]),
 ];
 
+/// What the help says the inputs may be: every format read (the list in posemfa::mesh::load).
+fn formats_line() -> String {
+    format!("posemfa reads {}", posemfa::mesh::load::formats_read())
+}
+
 #[test]
-fn help_lists_every_subcommand_with_its_options() {
+fn help_lists_every_subcommand_and_each_its_options() {
     let all = posemfa(&["help"]);
     assert!(all.status.success(), "{}", text(&all.stderr));
     let all = text(&all.stdout);
+    // the inputs: every format read, not "a folder of OBJ files"
+    let flat = all.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(flat.contains(&formats_line()) && !all.contains("OBJ files"), "{all}");
     for (cmd, opts) in COMMANDS {
-        assert!(all.contains(&format!("posemfa {cmd} ")), "`posemfa help` misses {cmd}:\n{all}");
-        for opt in *opts {
-            assert!(all.contains(&format!("    {opt} ")), "`posemfa help` misses {opt}:\n{all}");
-        }
-        for asked in [posemfa(&["help", cmd]), posemfa(&[cmd, "--help"])] {
+        assert!(all.lines().any(|l| l.trim_start().starts_with(&format!("{cmd} "))), "`posemfa help` misses {cmd}:\n{all}");
+        for asked in [posemfa(&["help", cmd]), posemfa(&[cmd, "--help"]), posemfa(&[cmd, "-h"])] {
             assert!(asked.status.success(), "help {cmd}: {}", text(&asked.stderr));
+            assert!(asked.stderr.is_empty(), "help {cmd}: {}", text(&asked.stderr));
             let one = text(&asked.stdout);
-            assert!(one.contains(&format!("posemfa {cmd} ")), "help {cmd}:\n{one}");
+            assert!(one.contains(&format!("Usage: posemfa {cmd} ")), "help {cmd}:\n{one}");
             for opt in *opts {
-                assert!(one.contains(&format!("    {opt} ")), "help {cmd} misses {opt}:\n{one}");
+                assert!(one.contains(&format!("    {opt} ")) || one.contains(&format!("    {opt}\n")), "help {cmd} misses {opt}:\n{one}");
             }
         }
     }
     // one command's help lists only its own options
     let gen = text(&posemfa(&["help", "generate"]).stdout);
     assert!(!gen.contains("--literal-eq18") && !gen.contains("--from "), "{gen}");
+    // a fitting command's help says what the inputs may be
+    let fit = text(&posemfa(&["fit", "--help"]).stdout);
+    assert!(fit.split_whitespace().collect::<Vec<_>>().join(" ").contains(&formats_line()), "{fit}");
     assert_eq!(text(&posemfa(&["--help"]).stdout), all);
+    // no command: the help, on stderr, exit 1
+    let none = posemfa(&[]);
+    assert_eq!(none.status.code(), Some(1));
+    assert!(text(&none.stderr).contains("Commands:") && none.stdout.is_empty(), "{}", text(&none.stderr));
 }
 
 #[test]
 fn an_unknown_option_or_command_is_named() {
+    // a typo: clap names it and says which option was meant
     let r = posemfa(&["fit", "synth:arm", "--prats", "3"]);
     assert_eq!(r.status.code(), Some(1));
     let e = text(&r.stderr);
-    assert!(e.contains("unknown option --prats") && e.contains("posemfa help fit"), "{e}");
+    assert!(e.starts_with("error: unexpected argument '--prats' found"), "{e}");
+    assert!(e.contains("a similar argument exists: '--parts'"), "{e}");
     assert!(r.stdout.is_empty());
+
+    let r = posemfa(&["fit", "synth:arm", "--frobnicate"]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(text(&r.stderr).starts_with("error: unexpected argument '--frobnicate' found"), "{}", text(&r.stderr));
 
     let r = posemfa(&["generate", "arm", "-x"]);
     assert_eq!(r.status.code(), Some(1));
-    assert!(text(&r.stderr).contains("unknown option -x"), "{}", text(&r.stderr));
+    assert!(text(&r.stderr).contains("unexpected argument '-x'"), "{}", text(&r.stderr));
 
     // an option of another subcommand
     let r = posemfa(&["generate", "arm", "--parts", "3", "--out", "/nonexistent/x"]);
-    assert!(text(&r.stderr).contains("unknown option --parts"), "{}", text(&r.stderr));
+    assert_eq!(r.status.code(), Some(1));
+    assert!(text(&r.stderr).contains("unexpected argument '--parts'"), "{}", text(&r.stderr));
 
     let r = posemfa(&["fitt", "synth:arm"]);
     assert_eq!(r.status.code(), Some(1));
-    assert!(text(&r.stderr).contains("unknown command 'fitt'"), "{}", text(&r.stderr));
+    let e = text(&r.stderr);
+    assert!(e.contains("unrecognized subcommand 'fitt'") && e.contains("a similar subcommand exists: 'fit'"), "{e}");
+
+    let r = posemfa(&["help", "interpolat"]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(text(&r.stderr).contains("unrecognized subcommand 'interpolat'"), "{}", text(&r.stderr));
 }
 
 #[test]
 fn a_missing_or_bad_value_is_named() {
     for (args, want) in [
-        (&["fit", "synth:arm", "--parts"][..], "--parts needs a value"),
-        (&["fit", "synth:arm", "--json", "--quiet"][..], "--json needs a value"),
-        (&["fit", "synth:arm", "--tol", "fast"][..], "--tol: 'fast' is not a valid number"),
-        (&["fit", "synth:arm", "--quiet=yes"][..], "--quiet"),
-        (&["interpolate", "synth:arm", "--skin", "soft", "--out", "x.obj"][..], "--skin: 'soft': use rigid or smooth"),
-        (&["fit"][..], "no input"),
-        (&["generate", "arm", "--vertices", "500"][..], "generate needs --out DIR"),
-        (&["generate", "horse", "--out", "/nonexistent/x"][..], "unknown preset 'horse'"),
+        (&["fit", "synth:arm", "--parts"][..], "a value is required for '--parts <M>'"),
+        (&["fit", "synth:arm", "--json", "--quiet"][..], "a value is required for '--json <OUT>'"),
+        (&["fit", "synth:arm", "--tol", "fast"][..], "invalid value 'fast' for '--tol <T>': 'fast' is not a number: it must be a positive number (try 1e-3)"),
+        (&["fit", "synth:arm", "--quiet=yes"][..], "unexpected value 'yes' for '--quiet'"),
+        (&["interpolate", "synth:arm", "--skin", "soft", "--out", "x.obj"][..], "invalid value 'soft' for '--skin <rigid|smooth>'"),
+        (&["interpolate", "synth:arm", "--from", "0x", "--to", "2", "--t", "0.5", "--out", "x.obj"][..], "'0x' is not a pose number"),
+        (&["interpolate", "synth:arm", "--from", "1", "--to", "2", "--out", "x.obj"][..], "--t <T>"),
+        (&["fit"][..], "the following required arguments were not provided:\n  <DIR_OR_FILES>..."),
+        (&["generate", "arm", "--vertices", "500"][..], "the following required arguments were not provided:\n  --out <DIR>"),
+        (&["generate", "horse", "--out", "/nonexistent/x"][..], "invalid value 'horse' for '[PRESET]'"),
+        (&["generate", "arm", "--format", "stl", "--out", "/nonexistent/x"][..], "invalid value 'stl' for '--format <F>'"),
+        (&["fit", "synth:horse"][..], "unknown preset 'horse'"),
         (&["fit", "synth:arm", "--parts", "0"][..], "parts"),
         (&["fit", "synth:arm:600:6:1", "--bones", "0"][..], "target_parts = 0"),
-        (&["fit", "synth:arm:600:6:1", "--bones", "some"][..], "--bones: 'some' is not a valid number"),
+        (&["fit", "synth:arm:600:6:1", "--bones", "some"][..], "invalid value 'some' for '--bones <N>': 'some' is not a whole number: it must be a whole number of at least 1, or auto"),
+        (&["fit", "synth:arm:600:6:1", "--refine-threshold", "1e-4", "--part-rule", "distinct"][..], "--part-rule distinct"),
         (&["export-gltf", "synth:arm:600:6:1", "--out", "x.glb", "--bones", "100000"][..], "ask for at most"),
+        (&["completions", "tcsh"][..], "invalid value 'tcsh' for '<SHELL>'"),
     ] {
         let r = posemfa(args);
         assert_eq!(r.status.code(), Some(1), "{args:?}");
         let e = text(&r.stderr);
         assert!(e.starts_with("error: ") && e.contains(want), "{args:?}: expected '{want}' in:\n{e}");
+        assert!(r.stdout.is_empty(), "{args:?}: {}", text(&r.stdout));
     }
+    // the possible values of a choice are listed
+    let e = text(&posemfa(&["generate", "horse", "--out", "/nonexistent/x"]).stderr);
+    assert!(e.contains("[possible values: quadruped, arm, snake, blob, spider, giraffe, hand]"), "{e}");
+}
+
+/// A file of an extension posemfa does not read is refused by name with the list of what it reads (it used to
+/// be parsed as OBJ: "a NUL byte at column ..."); in a folder such files are left out, .mtl files included.
+#[test]
+fn a_file_of_another_extension_is_refused_by_name() {
+    let dir = std::env::temp_dir().join(format!("posemfa-cli-ext-{}", std::process::id()));
+    let dir_arg = dir.to_str().expect("utf-8 temp path");
+    let r = posemfa(&["generate", "arm", "--vertices", "300", "--poses", "3", "--out", dir_arg]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    std::fs::write(dir.join("scene.blend"), b"BLENDER-v300\0\0\0binary").unwrap();
+    std::fs::write(dir.join("arm.mtl"), b"newmtl skin\n").unwrap();
+    let blend = dir.join("scene.blend");
+    let r = posemfa(&["fit", blend.to_str().unwrap(), dir.join("pose01.obj").to_str().unwrap()]);
+    assert_eq!(r.status.code(), Some(1));
+    assert_eq!(
+        text(&r.stderr),
+        "error: file scene.blend: posemfa reads .obj, .ply, .glb/.gltf, .fbx, .usd/.usda/.usdc/.usdz, .pc2/.mdd with a base mesh; not .blend: \
+         export the poses as one of these (e.g. glTF from Blender), or leave the file out\n"
+    );
+    let r = posemfa(&["fit", dir_arg, "--parts", "2", "--quiet"]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    assert!(text(&r.stdout).contains("poses: 3 OBJ files"), "{}", text(&r.stdout));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `posemfa completions SHELL` writes a script that names every subcommand, and bash can read it.
+#[test]
+fn completions_for_bash_zsh_and_fish() {
+    for (shell, marker) in [("bash", "complete -F _posemfa"), ("zsh", "#compdef posemfa"), ("fish", "complete -c posemfa")] {
+        let r = posemfa(&["completions", shell]);
+        assert!(r.status.success(), "{shell}: {}", text(&r.stderr));
+        let script = text(&r.stdout);
+        assert!(script.contains(marker), "{shell}: no '{marker}'");
+        for (cmd, opts) in COMMANDS {
+            assert!(script.contains(cmd), "{shell}: misses {cmd}");
+            for opt in *opts {
+                assert!(script.contains(opt.trim_start_matches('-')), "{shell}: misses {opt}");
+            }
+        }
+        assert!(script.contains("morph-targets") && script.contains("ply-ascii"), "{shell}: the choices are completed");
+    }
+    // bash parses the script
+    let script = std::env::temp_dir().join(format!("posemfa-completion-{}.bash", std::process::id()));
+    std::fs::write(&script, posemfa(&["completions", "bash"]).stdout).unwrap();
+    if let Ok(check) = Command::new("bash").arg("-n").arg(&script).output() {
+        assert!(check.status.success(), "bash -n: {}", text(&check.stderr));
+    }
+    let _ = std::fs::remove_file(&script);
 }
 
 #[test]
@@ -193,4 +281,22 @@ fn generate_writes_every_format_and_fit_reads_it_back() {
         assert!(ari >= 0.99, "--format {format}: ARI {ari} against the OBJ files' fit");
     }
     let _ = std::fs::remove_dir_all(&root);
+}
+
+/// `--object NAME` picks the mesh of an FBX / USD (or glTF) file; a name the file does not hold is refused
+/// with the list of its meshes; `--mesh` is the same option.
+#[test]
+fn object_picks_the_mesh_of_an_fbx_or_usd_file() {
+    let fbx = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/blender/quadruped-shapekeys.fbx");
+    for flag in ["--object", "--mesh"] {
+        let r = posemfa(&["fit", fbx, flag, "Nope", "--quiet"]);
+        assert!(!r.status.success());
+        let err = text(&r.stderr);
+        assert!(err.contains("quadruped-shapekeys.fbx: no mesh is called or numbered `Nope`; the file has posed"), "{err}");
+    }
+    let usd = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/usd/arm-pointcache.usda");
+    let r = posemfa(&["fit", usd, "--object", "/World/Character/Body", "--parts", "2", "--max-iter", "5"]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let out = text(&r.stdout) + &text(&r.stderr);
+    assert!(out.contains("5 frames of Body in arm-pointcache.usda"), "{out}");
 }

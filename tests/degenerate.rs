@@ -287,7 +287,8 @@ dual_test! {
             .map(|i| (0..n).map(|j| [(j % 200) as f64 / 200.0, (j / 200) as f64 / 200.0, 0.01 * i as f64 * (j % 7) as f64]).collect())
             .collect();
         let pop = Population::from_unit_shapes(names(2), fan(4), shapes).unwrap();
-        let params = Params { parts: 512, max_subparts: 64, ..Params::default() };
+        // (Algorithm 1's working set: the merge tree's start does not grow with `parts`)
+        let params = Params { parts: 512, max_subparts: 64, part_rule: posemfa::model::PartRule::Distinct, ..Params::default() };
         let need = memory::estimate_bytes(n, 2, 512 * 64);
         assert!(need > 8 << 30 && need > budget, "{need}");
         let e = fit(&pop, &params, &mut |_| true).err().expect("must be refused");

@@ -1,14 +1,15 @@
 // Opening files: the file and folder pickers and drops anywhere on the page. Turns what a person drops or
 // picks (mesh files, folders, .zip archives) into [{ name, bytes }] for the worker. Nothing is parsed here:
 // the Rust readers pick themselves by extension (mesh::load: OBJ and PLY per pose, a .glb / .gltf with its
-// .bin buffers, a .pc2 / .mdd point cache with its base mesh) and validate the files.
+// .bin buffers, a .pc2 / .mdd point cache with its base mesh, an .fbx, a .usd / .usda / .usdc / .usdz) and
+// validate the files.
 import { unzipSync } from 'fflate';
 
 const collator = new Intl.Collator(undefined, { numeric: true, sensitivity: 'base' });
 export const naturalSort = (items) => items.sort((a, b) => collator.compare(a.name, b.name));
 
 // Files the core reads (src/mesh/load.rs, FileKind::is_known_extension); images and .mtl files are not read.
-export const isMeshFile = (name) => /\.(obj|ply|glb|gltf|vrm|bin|pc2|mdd)$/i.test(name);
+export const isMeshFile = (name) => /\.(obj|ply|glb|gltf|vrm|bin|pc2|mdd|fbx|usd|usda|usdc|usdz)$/i.test(name);
 const isZip = (name) => /\.zip$/i.test(name);
 const skip = (name) => /(^|\/)(__MACOSX\/|\.)/.test(name); // resource forks and hidden files
 

@@ -9,7 +9,7 @@
 import './worker-client.js'; // first: the wasm module loads while three.js evaluates
 import { installUrlState } from './urlstate.js'; // second: an embedded page hides its controls at once
 import { state, update, subscribe } from './state.js';
-import { faultInjection, injectFault, onReady, generate, runExample, loadFiles, startFit, cancelFit } from './session.js';
+import { faultInjection, injectFault, onReady, generate, runExample, loadFiles, startFit, cancelFit, query } from './session.js';
 import { viewer } from './views/viewer-instance.js';
 import { installViews, renderView } from './views/render.js';
 import { installInspect } from './views/inspect.js';
@@ -17,6 +17,8 @@ import { installResult } from './views/result.js';
 import { installForm, fillParams, readParams, showExamples } from './controls/form.js';
 import { installPoses } from './controls/poses.js';
 import { installInterp } from './controls/interp.js';
+import { installPose } from './controls/pose.js';
+import { installTree } from './controls/tree.js';
 import { installToolbar } from './controls/toolbar.js';
 import { installExports } from './controls/exports.js';
 import { installDrop } from './drop.js';
@@ -45,6 +47,10 @@ window.posemfa = {
   mode: () => state.mode,
   /** Workers replaced after a crash since the page opened. */
   restartCount: () => state.restartCount,
+  /** The fitted parts: the part of every vertex and the palette colour of every part (null before a fit). */
+  fittedParts: () => (state.model ? { labels: Array.from(state.model.labels), colours: Array.from(state.model.colours.final) } : null),
+  /** The merge tree ({most, fewest, decided}, null without one) and the count its slider shows (null: the fit). */
+  tree: () => (state.model?.tree ? { ...state.model.tree, shown: state.treeParts } : null),
 };
 if (faultInjection) {
   /** Page tests only (?faultInjection=1): the next `times` fits make the wasm instance trap (a Rust panic). */
@@ -52,11 +58,12 @@ if (faultInjection) {
 }
 
 // body[data-state] (test contract), the marks scripts/bench-page.mjs reads, and the Cancel button.
+// A teaching fit is 'fitting' while it runs and 'paused' between steps (nothing runs then).
 subscribe((s, changed) => {
-  if (!changed.has('phase')) return;
-  document.body.dataset.state = s.phase === 'teaching' ? 'fitting' : s.phase;
+  if (!changed.has('phase') && !(changed.has('teach') && s.phase === 'teaching')) return;
+  document.body.dataset.state = s.phase === 'teaching' ? (s.teach?.running ? 'fitting' : 'paused') : s.phase;
   document.body.dataset.teaching = s.phase === 'teaching' ? '1' : '';
-  performance.mark(`posemfa:${s.phase}`); // times since navigation
+  if (changed.has('phase')) performance.mark(`posemfa:${s.phase}`); // times since navigation
   $('cancel').disabled = s.phase !== 'fitting';
 });
 
@@ -67,8 +74,10 @@ installPoses(); // before the views: a new population's pose lists are filled be
 installViews();
 installResult();
 installInspect();
-installForm({ startFit, cancelFit, runExample });
+installForm({ startFit, cancelFit, runExample, check: (base, fields) => query('formParams', base, fields) });
 installInterp();
+installPose();
+installTree();
 installToolbar();
 installExports();
 installDrop(loadFiles);

@@ -5,7 +5,7 @@ import { startWorker, worker as firstWorker } from './worker-client.js';
 import { WorkerClient, MAX_RESTARTS } from './protocol.js';
 import { state, update, subscribe } from './state.js';
 import { paletteColours } from './colors.js';
-import { readParams, fillParams } from './controls/form.js';
+import { checkedParams, fillParams } from './controls/form.js';
 import { showProblems, note } from './problems.js';
 
 const GREY = 0.78;
@@ -70,7 +70,7 @@ export async function loadFiles(got) {
   const { files, ignored, problems } = await got;
   const notes = ignored.length ? [{ file: null, line: null, message: `ignored (not a mesh, point cache, glTF buffer or .zip): ${ignored.join(', ')}` }] : [];
   if (problems.length || files.length === 0) {
-    if (!files.length) problems.push({ file: null, line: null, message: 'no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh) in what was dropped or picked' });
+    if (!files.length) problems.push({ file: null, line: null, message: 'no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh, .fbx, .usd / .usda / .usdc / .usdz) in what was dropped or picked' });
     showProblems([...problems, ...notes]);
     update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
     return;
@@ -81,9 +81,11 @@ export async function loadFiles(got) {
   startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes);
 }
 
-// Loading and fitting go in one message: the worker starts the fit as soon as the population is in.
-function startLoad(source, notes, { fit: fitting = true } = {}) {
-  const fit = fitting ? { id: client.id(), params: readParams(), fault: takeFault() } : undefined;
+// Loading and fitting go in one message: the worker starts the fit as soon as the population is in. With a
+// form field the core refuses (shown at the field), the population is loaded and not fitted.
+async function startLoad(source, notes, { fit: fitting = true } = {}) {
+  const params = fitting ? await checkedParams() : null;
+  const fit = params ? { id: client.id(), params, fault: takeFault() } : undefined;
   const job = jobKey(source, fit?.params);
   let req;
   if (source.spec) {
@@ -126,10 +128,11 @@ function onLoaded(pop, fitId) {
 }
 
 /** A fit of the population shown, with the form's parameters. */
-export function startFit() {
+export async function startFit() {
   if (!state.pop) return;
+  const params = await checkedParams();
+  if (!params || !state.pop) return; // the form says which field, and what it allows
   showProblems([]);
-  const params = readParams();
   const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });
   update({ fitId: id, lastStep: null, phase: 'fitting' });
   liveLabels = null;

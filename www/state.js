@@ -45,6 +45,8 @@ const data = {
   fitCount: 0,
   loadErrorCount: 0,
   restartCount: 0,
+  // the merge tree's part count shown by its slider (controls/tree.js); null: the fitted parts
+  treeParts: null,
 };
 
 export const state = new Proxy(data, {

@@ -49,7 +49,8 @@ export class Teacher {
     this.drop();
     if (!population) throw new Error('no population loaded');
     if (!(await this.claim())) return false;
-    this.fitter = new this.wasm.Fitter(population, params);
+    // step by step shows the paper's Algorithm 1 (coarse, refinement, final), whatever the page's part rule
+    this.fitter = new this.wasm.Fitter(population, { ...params, partRule: 'distinct' });
     this.id = id;
     this.t0 = performance.now();
     this.report('reset', []);

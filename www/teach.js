@@ -7,7 +7,7 @@
 import { PALETTE_RGB, gammaColours } from './colors.js';
 import { state, update, subscribe } from './state.js';
 import { client, watchFit, jobKey } from './session.js';
-import { readParams } from './controls/form.js';
+import { checkedParams } from './controls/form.js';
 import { renderView } from './views/render.js';
 import { plot } from './views/viewer-instance.js';
 import { showStep, stageText } from './views/result.js';
@@ -29,16 +29,20 @@ function buttons() {
   $('teach-run').setAttribute('aria-pressed', String(running));
 }
 
-/** Step / Run / Reset: a step of the teaching fit in hand, or a new one (count: steps at once). */
-export function teach(type, { count = 1 } = {}) {
+/** Step / Run / Reset: a step of the teaching fit in hand, or a new one (count: steps at once). Reset asks
+ * before it drops a finished fit (a dismissed question changes nothing). */
+export async function teach(type, { count = 1 } = {}) {
   if (!state.pop) return;
   if (type !== 'teach-reset' && active()) {
     setTeach({ running: type === 'teach-run' });
     client.post({ type, id: state.teach.id, count });
     return;
   }
+  if (type === 'teach-reset' && state.model && !state.fitId
+    && !window.confirm(`Reset starts a new step-by-step fit and drops the finished one (${state.model.summary.parts} parts, its exports and views). Drop it?`)) return;
   // A new teaching fit: the current model (and any fit in progress) gives way to it.
-  const params = readParams();
+  const params = await checkedParams();
+  if (!params || !state.pop) return; // the form names the field it cannot use
   const { id, done } = client.request({ type, params, count }, { onEvent: onTeach, job: jobKey(state.source, params) });
   update({
     teach: { id, running: type === 'teach-run', values: [], runs: [], iteration: 0, stage: null, soft: null },
@@ -107,6 +111,7 @@ function showStage(stage) {
     else li.removeAttribute('aria-current');
     li.classList.toggle('past', STAGES.indexOf(li.dataset.stage) < STAGES.indexOf(kind));
   }
+  // the same stage object as the Stage field (stageText): where the fit is now, which the next Step continues
   const note = {
     coarse: 'Coarse stage: AECM with m parts on all vertices, started from k-means++.',
     refine: stage?.kind === 'refine'
@@ -150,7 +155,7 @@ function onTeach(m) {
     const s = steps[steps.length - 1];
     Object.assign(t, { values, runs, iteration: s.totalIterations });
     update({ lastStep: s });
-    showStep(s);
+    showStep(s, m.stage); // the Stage field says where the fit is now, as the note and the stage list do
     plot.set(values, `${stageText(s.stage)}: log-likelihood per step`, runs);
   }
   setTeach(t);

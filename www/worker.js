@@ -42,6 +42,7 @@
 import init, * as wasm from './pkg/posemfa.js';
 import wasmUrl from './pkg/posemfa_bg.wasm?url';
 import { Teacher } from './teach-worker.js';
+import { poseQueries } from './pose-queries.js';
 
 const SLICE_MS = 40; // one fitter.run(budget) call; the worker reads its messages between slices
 const PALETTE_SIZE = 12; // colors.js PALETTE.length
@@ -49,6 +50,9 @@ const PALETTE_SIZE = 12; // colors.js PALETTE.length
 let population = null; // wasm Population
 let fitter = null; // wasm Fitter of the fit in progress
 let model = null; // wasm FitModel of the last fit (final or best so far)
+// The last finished fit's parts and colours on this population: a new fit keeps the colour of every part that
+// is the same (posemfa::articulate::graph::colour_parts_like), so two fits compare by eye.
+let lastFinal = null; // { labels, colours }
 let truth = null; // wasm Synthetic of a generated population (its ground truth), else null
 let fitToken = 0; // bumped by every new fit and population: a fit whose token is stale was superseded
 let cancelRequested = false;
@@ -81,6 +85,15 @@ const problemsOf = (e) => e?.problems ?? [{ kind: 'internal', file: null, line: 
 // Palette index of every part of `labels` (one per vertex): neighbouring parts differ (Rust's part graph). A
 // fit cancelled early has no coarse or refined labels yet (empty): no colours either.
 const coloursOf = (labels) => (labels.length ? population.partColours(labels, PALETTE_SIZE) : new Uint32Array(0));
+// colours like the last finished fit's where a part is the same; a finished fit becomes the one to follow
+function finalColours(labels, complete) {
+  if (!labels.length) return new Uint32Array(0);
+  const colours = lastFinal
+    ? population.partColoursLike(labels, PALETTE_SIZE, lastFinal.labels, lastFinal.colours)
+    : population.partColours(labels, PALETTE_SIZE);
+  if (complete) lastFinal = { labels: labels.slice(), colours: colours.slice() };
+  return colours;
+}
 
 function describe(pop, truth = null) {
   const positions = [];
@@ -104,6 +117,7 @@ function replacePopulation(pop, synth = null) {
   model = null;
   population?.free();
   population = pop;
+  lastFinal = null;
   truth?.free();
   truth = synth;
 }
@@ -160,7 +174,8 @@ function modelMessage(m) {
     labels,
     coarseLabels,
     refinedLabels,
-    colours: { final: coloursOf(labels), coarse: coloursOf(coarseLabels), refined: coloursOf(refinedLabels) },
+    colours: { final: finalColours(labels, summary.complete), coarse: coloursOf(coarseLabels), refined: coloursOf(refinedLabels) },
+    tree: m.treeCounts(), // {most, fewest, decided} of the merge tree, or null
     latent: m.latent(),
   };
 }
@@ -254,10 +269,12 @@ async function teach(data) {
 const POPULATION_QUERIES = {
   linearInterpolate: (i, j, t) => (model ?? population).linearInterpolate(i, j, t),
   objText: (shown, header) => (model ?? population).objText(shown, header),
+  objScene: (meshes, header) => (model ?? population).objScene(meshes, header),
   originalLengths: (values) => population.originalLengths(Float64Array.from(values)),
 };
 const QUERIES = {
   reconstruct: (i) => model.reconstruct(i),
+  latentPlaced: (i) => model.latentPlaced(i),
   vertexErrors: (i) => model.vertexErrors(i),
   responsibilities: (v) => model.responsibilities(v),
   rotationAngles: (part, ref) => model.rotationAngles(part, ref),
@@ -265,14 +282,28 @@ const QUERIES = {
   interpolate: (i, j, t, opts) => model.interpolate(i, j, t, opts ?? {}),
   rig: (opts) => model.rig(opts ?? {}),
   articulationReport: (i, j, t) => model.articulationReport(i, j, t),
+  // the merge tree's partition with n parts, coloured like the fitted parts where a part is the same
+  treePartition: (n) => {
+    const labels = model.treeLabels(n);
+    const colours = lastFinal
+      ? population.partColoursLike(labels, PALETTE_SIZE, lastFinal.labels, lastFinal.colours)
+      : population.partColours(labels, PALETTE_SIZE);
+    return { labels, colours };
+  },
+  ...poseQueries(() => model), // pose mode (issue 28): www/pose-queries.js
+};
+
+// Questions that need no population: the fit form's fields checked by the core.
+const FREE_QUERIES = {
+  formParams: (base, fields) => wasm.formParams(base, fields),
 };
 
 function query({ id, method, args }) {
   try {
-    const q = POPULATION_QUERIES[method] ?? QUERIES[method];
+    const q = FREE_QUERIES[method] ?? POPULATION_QUERIES[method] ?? QUERIES[method];
     if (!q) throw new Error(`unknown query ${method}`);
-    if (!population) throw new Error('no population loaded');
-    if (!model && !POPULATION_QUERIES[method]) throw new Error('no fitted model yet');
+    if (!population && !FREE_QUERIES[method]) throw new Error('no population loaded');
+    if (!model && !POPULATION_QUERIES[method] && !FREE_QUERIES[method]) throw new Error('no fitted model yet');
     const result = q(...(args ?? []));
     post({ type: 'reply', id, result }, ArrayBuffer.isView(result) ? [result.buffer] : []);
   } catch (e) {

@@ -318,5 +318,33 @@ fn format_seeds(root: &Path) {
             n_gltf += 1;
         }
     }
-    println!("gen_corpus: {n_ply} ply_parse, {n_cache} point_cache, {n_gltf} gltf_read seeds in {}", root.display());
+    // FBX: the hand-built blend shape scene (plain and zlib arrays) and Blender's small files; USD: usd-core's
+    // small point caches (fuzz/seeds/, scripts/fixtures/make-fuzz-seeds.sh), each under a few option bytes
+    let (fbx_dir, usd_dir) = (dir("fbx_read"), dir("usd_read"));
+    let (mut n_fbx, mut n_usd) = (0, 0);
+    let mut fbx_files = vec![
+        ("tiny-plain.fbx".to_string(), posemfa::fuzzing::tiny_fbx(false)),
+        ("tiny-zlib.fbx".to_string(), posemfa::fuzzing::tiny_fbx(true)),
+    ];
+    fbx_files.extend(files_in(&seeds, &[".fbx"]));
+    for (name, bytes) in fbx_files {
+        for cfg in [0u8, 0x02, 0x05, 0x20] {
+            let mut b = vec![cfg];
+            b.extend_from_slice(&bytes);
+            write(&fbx_dir, &format!("{cfg:02x}-{name}"), &b);
+            n_fbx += 1;
+        }
+    }
+    for (name, bytes) in files_in(&seeds, &[".usda", ".usdc", ".usdz"]) {
+        for cfg in [0u8, 0x05, 0x20] {
+            let mut b = vec![cfg];
+            b.extend_from_slice(&bytes);
+            write(&usd_dir, &format!("{cfg:02x}-{name}"), &b);
+            n_usd += 1;
+        }
+    }
+    println!(
+        "gen_corpus: {n_ply} ply_parse, {n_cache} point_cache, {n_gltf} gltf_read, {n_fbx} fbx_read, {n_usd} usd_read seeds in {}",
+        root.display()
+    );
 }

@@ -365,6 +365,15 @@ pub fn part_neighbours(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> Ve
 /// Welsh-Powell order: most neighbours first, then the larger part, then the lower index. Parts are
 /// 0..=max(label); a part with more neighbours than colours takes the least used colour.
 pub fn colour_parts(labels: &[u32], faces: &[[u32; 3]], n_colours: usize) -> Vec<u32> {
+    colour_parts_like(labels, faces, n_colours, None)
+}
+
+/// [`colour_parts`], keeping the colours of an earlier partition of the same vertices (`previous`: its labels and
+/// its colours) where a part is the same: a part that shares more than half of its vertices with an earlier part,
+/// and that earlier part more than half of its vertices with it, takes its colour; the others are coloured as
+/// [`colour_parts`] does around them. So two fits of one population can be compared by eye. Without `previous`,
+/// or when its vertex count differs, the same as [`colour_parts`].
+pub fn colour_parts_like(labels: &[u32], faces: &[[u32; 3]], n_colours: usize, previous: Option<(&[u32], &[u32])>) -> Vec<u32> {
     let n_parts = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
     if n_colours == 0 {
         return vec![0; n_parts];
@@ -374,10 +383,27 @@ pub fn colour_parts(labels: &[u32], faces: &[[u32; 3]], n_colours: usize) -> Vec
     for &l in labels {
         size[l as usize] += 1;
     }
-    let mut order: Vec<usize> = (0..n_parts).collect();
-    order.sort_by(|&a, &b| adj[b].len().cmp(&adj[a].len()).then(size[b].cmp(&size[a])).then(a.cmp(&b)));
     let mut colour: Vec<Option<usize>> = vec![None; n_parts];
     let mut used = vec![0usize; n_colours];
+    if let Some((before, before_colours)) = previous.filter(|(b, _)| b.len() == labels.len()) {
+        let mut overlap: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
+        let mut before_size: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+        for (&l, &b) in labels.iter().zip(before) {
+            *overlap.entry((l, b)).or_insert(0) += 1;
+            *before_size.entry(b).or_insert(0) += 1;
+        }
+        let mut same: Vec<((u32, u32), usize)> = overlap.into_iter().collect();
+        same.sort_unstable();
+        for ((l, b), n) in same {
+            let c = before_colours.get(b as usize).map(|&c| c as usize).filter(|&c| c < n_colours);
+            if let Some(c) = c.filter(|_| 2 * n > size[l as usize] && 2 * n > before_size[&b]) {
+                colour[l as usize] = Some(c);
+                used[c] += 1;
+            }
+        }
+    }
+    let mut order: Vec<usize> = (0..n_parts).filter(|&p| colour[p].is_none()).collect();
+    order.sort_by(|&a, &b| adj[b].len().cmp(&adj[a].len()).then(size[b].cmp(&size[a])).then(a.cmp(&b)));
     for p in order {
         let taken: Vec<usize> = adj[p].iter().filter_map(|&q| colour[q]).collect();
         let least = |ok: &dyn Fn(usize) -> bool| (0..n_colours).filter(|&c| ok(c)).min_by_key(|&c| (used[c], c));
@@ -401,6 +427,29 @@ mod tests {
             faces.push([b, d, e]);
         }
         (faces, 2 * columns + 2)
+    }
+
+    #[test]
+    fn a_refit_keeps_the_colours_of_unchanged_parts() {
+        let (faces, n) = quad_strip(8);
+        // four parts of two columns each; then the last two merged and the first split
+        let before: Vec<u32> = (0..n as u32).map(|v| (v / 2).min(7) / 2).collect();
+        let first = colour_parts(&before, &faces, 12);
+        let after: Vec<u32> = before.iter().map(|&l| if l == 3 { 2 } else { l }).collect();
+        let kept = colour_parts_like(&after, &faces, 12, Some((&before, &first)));
+        assert_eq!(kept[0], first[0]);
+        assert_eq!(kept[1], first[1]);
+        // part 2 of `after` holds all of the old part 2 but is twice its size: not the same part
+        assert!(kept.len() == 3);
+        // without a previous partition, or with another vertex count: plain colour_parts
+        assert_eq!(colour_parts_like(&after, &faces, 12, None), colour_parts(&after, &faces, 12));
+        assert_eq!(colour_parts_like(&after, &faces, 12, Some((&before[1..], &first))), colour_parts(&after, &faces, 12));
+        // a relabelled copy of the same partition keeps every colour
+        let relabelled: Vec<u32> = before.iter().map(|&l| 3 - l).collect();
+        let again = colour_parts_like(&relabelled, &faces, 12, Some((&before, &first)));
+        for k in 0..4 {
+            assert_eq!(again[3 - k], first[k]);
+        }
     }
 
     #[test]

@@ -7,6 +7,7 @@
 //!   offsets so both ends are exact), vertex positions (eq 22/24 rigid, or skinned), keyframe sequences.
 //! - [`skin`]: rigid and smooth per-vertex weights, linear and dual-quaternion blending.
 //! - [`rig`]: a skinned rig for glTF: rigid, smooth or fitted (SSDR) weights, free or fixed joints.
+//! - [`pose`]: new frames onto a finished rig, poses of one's own, the space of poses the population spans.
 //! - [`report`]: the figures that check all this on a population (endpoint errors, volume, edge stretch).
 //!
 //! Everything is in unit-box coordinates, like [`Model`]; [`Articulation::to_original`] converts back.
@@ -39,6 +40,7 @@
 pub mod graph;
 pub mod interpolate;
 pub mod joints;
+pub mod pose;
 pub mod report;
 pub mod rig;
 pub mod skin;

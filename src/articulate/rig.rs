@@ -583,14 +583,52 @@ impl<'a> Solver<'a> {
         scratch.new = new;
     }
 
-    /// One pass of the bone solve over every pose (module doc).
+    /// One pass of the bone solve over every pose (module doc); the bind pose's bones stay the identity.
     fn bones(&self, rig: &mut Rig) {
-        let nv = rig.rest.len();
-        let n_parts = rig.bones[0].len();
+        bone_pass(&self.by_vertex, self.targets.len(), Some(self.bind), &rig.rest, &rig.weights, &rig.tree.order, &mut rig.bones);
+    }
+}
+
+/// One pass of the rig's bone step (module doc, *bones*) over the poses of `by_vertex` (vertex-major: vertex v in
+/// pose i at `v * ns + i`): pose by pose, bone by bone in `order`, the weighted Procrustes step with the weights
+/// and bind positions fixed; pose `skip` (the bind pose of a fit) is left as it is. Used by the fit and by
+/// [`super::pose::solve_frames`] (new frames onto a finished rig).
+pub(crate) fn bone_pass(
+    by_vertex: &[Vec3],
+    ns: usize,
+    skip: Option<usize>,
+    rest: &[Vec3],
+    weights: &SkinWeights,
+    order: &[usize],
+    bones: &mut [Vec<RigidMotion>],
+) {
+    let sums = BoneSums::new(by_vertex, ns, rest, weights, order, bones[0].len());
+    for i in 0..ns {
+        if Some(i) == skip {
+            continue;
+        }
+        sums.step(i, order, &mut bones[i]);
+    }
+}
+
+/// The sums the bone step needs (see [`bone_pass`]): they depend on the weights, the bind positions and the targets,
+/// not on the bones, so repeated steps with the weights fixed ([`super::pose::solve_frames`]) compute them once.
+pub(crate) struct BoneSums {
+    ns: usize,
+    /// ū and Σ w² per bone.
+    stats: Vec<(Vec3, f64)>,
+    pairs: Vec<Vec<(usize, PairSums)>>,
+    /// Target sums per bone and pose: [C | Σ w y] row-major (3 x 4), bone k pose i at k ns + i.
+    sums: Vec<[f64; 12]>,
+}
+
+impl BoneSums {
+    pub(crate) fn new(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], weights: &SkinWeights, order: &[usize], n_parts: usize) -> BoneSums {
+        let nv = rest.len();
         // supports: (vertex, weight) per part, and ū, Σ w² per part
         let mut support: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n_parts];
         for v in 0..nv {
-            for (k, w) in rig.weights.influences(v) {
+            for (k, w) in weights.influences(v) {
                 support[k].push((v as u32, w));
             }
         }
@@ -600,13 +638,11 @@ impl<'a> Solver<'a> {
                 let w2: f64 = s.iter().map(|x| x.1 * x.1).sum();
                 let mut m = [0.0; 3];
                 for &(v, w) in s {
-                    m = add(m, scale(rig.rest[v as usize], w * w));
+                    m = add(m, scale(rest[v as usize], w * w));
                 }
                 (if w2 > 0.0 { scale(m, 1.0 / w2) } else { m }, w2)
             })
             .collect();
-        let order = rig.tree.order.clone();
-        let ns = self.targets.len();
         // The step of bone k in pose i needs C = Σ_v w_k r_v (u_v - ū_k)ᵀ and Σ_v w_k r_v with
         // r_v = y_v - Σ_{l≠k} w_l (R_l u_v + t_l) (the target minus the other bones' share), so
         //   C = Σ_v w_k y_v (u_v - ū_k)ᵀ - Σ_{l≠k} (R_l S_kl + t_l s_klᵀ),
@@ -617,8 +653,8 @@ impl<'a> Solver<'a> {
         let mut pair_of = vec![usize::MAX; n_parts * n_parts];
         let mut pairs: Vec<Vec<(usize, PairSums)>> = vec![Vec::new(); n_parts];
         for v in 0..nv {
-            let u = rig.rest[v];
-            let infl = &rig.weights.influences[v];
+            let u = rest[v];
+            let infl = &weights.influences[v];
             for &(k, wk) in infl {
                 let k = k as usize;
                 let ubar = stats[k].0;
@@ -648,23 +684,22 @@ impl<'a> Solver<'a> {
         }
         // target sums per bone and pose: [C | Σ w y] row-major (3 x 4)
         let mut sums = vec![[0.0; 12]; n_parts * ns];
-        for &k in &order {
+        for &k in order {
             if stats[k].1 > 0.0 {
-                bone_target_sums(&self.by_vertex, ns, &rig.rest, &support[k], stats[k].0, &mut sums[k * ns..(k + 1) * ns]);
+                bone_target_sums(by_vertex, ns, rest, &support[k], stats[k].0, &mut sums[k * ns..(k + 1) * ns]);
             }
         }
-        for i in 0..ns {
-            if i == self.bind {
+        BoneSums { ns, stats, pairs, sums }
+    }
+
+    /// One bone step for pose i: every bone of `order` in turn, the others at their current motions in `bones`.
+    pub(crate) fn step(&self, i: usize, order: &[usize], bones: &mut [RigidMotion]) {
+        for &k in order {
+            let (ubar, w2) = self.stats[k];
+            if w2 <= 0.0 {
                 continue;
             }
-            for &k in &order {
-                let (ubar, w2) = stats[k];
-                if w2 <= 0.0 {
-                    continue;
-                }
-                let new = bone_step(&sums[k * ns + i], &pairs[k], &rig.bones[i], ubar, w2);
-                rig.bones[i][k] = new;
-            }
+            bones[k] = bone_step(&self.sums[k * self.ns + i], &self.pairs[k], bones, ubar, w2);
         }
     }
 }

@@ -100,10 +100,10 @@ fn mat4(a: &Mat3, c: Vec3) -> [f64; 16] {
     ]
 }
 
-struct Bin {
-    data: Vec<u8>,
-    views: Vec<json::buffer::View>,
-    accessors: Vec<json::Accessor>,
+pub(crate) struct Bin {
+    pub(crate) data: Vec<u8>,
+    pub(crate) views: Vec<json::buffer::View>,
+    pub(crate) accessors: Vec<json::Accessor>,
 }
 
 impl Bin {
@@ -159,7 +159,7 @@ impl Bin {
         json::Index::new(self.accessors.len() as u32 - 1)
     }
 
-    fn floats(&mut self, values: &[f32], type_: json::accessor::Type, per: usize, bounds: bool, target: Option<json::buffer::Target>, name: &str) -> json::Index<json::Accessor> {
+    pub(crate) fn floats(&mut self, values: &[f32], type_: json::accessor::Type, per: usize, bounds: bool, target: Option<json::buffer::Target>, name: &str) -> json::Index<json::Accessor> {
         let b = bounds.then(|| {
             let mut lo = vec![f32::INFINITY; per];
             let mut hi = vec![f32::NEG_INFINITY; per];
@@ -527,7 +527,7 @@ fn solve3(l: &crate::geometry::Mat3, b: Vec3) -> Option<Vec3> {
 }
 
 /// GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
-fn glb_container(mut text: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
+pub(crate) fn glb_container(mut text: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
     while text.len() % 4 != 0 {
         text.push(b' ');
     }
@@ -577,7 +577,7 @@ pub fn parse_glb(glb: &[u8]) -> Result<(json::Root, Vec<u8>)> {
     Ok((root, bin))
 }
 
-fn read_floats(root: &json::Root, bin: &[u8], acc: json::Index<json::Accessor>) -> Result<Vec<f64>> {
+pub(crate) fn read_floats(root: &json::Root, bin: &[u8], acc: json::Index<json::Accessor>) -> Result<Vec<f64>> {
     let a = root.get(acc).ok_or_else(|| Error::Data("accessor out of range".into()))?;
     let view = root.get(a.buffer_view.ok_or_else(|| Error::Data("accessor without view".into()))?).ok_or_else(|| Error::Data("view".into()))?;
     let start = view.byte_offset.map_or(0, |o| o.0 as usize) + a.byte_offset.map_or(0, |o| o.0 as usize);
@@ -645,6 +645,12 @@ pub struct GlbPlayback {
 
 /// Plays the `training poses` clip of a .glb (see [`GlbPlayback`]).
 pub fn play_glb(glb: &[u8]) -> Result<GlbPlayback> {
+    play_glb_clip(glb, "training poses")
+}
+
+/// Plays the clip named `clip` of a .glb at every keyframe, as [`play_glb`] does (e.g. `frames`,
+/// [`super::pose_glb`]).
+pub fn play_glb_clip(glb: &[u8], clip: &str) -> Result<GlbPlayback> {
     let (root, bin) = parse_glb(glb)?;
     let err = |m: &str| Error::Data(format!("glb playback: {m}"));
     let skin = root.skins.first().ok_or_else(|| err("no skin"))?;
@@ -687,8 +693,8 @@ pub fn play_glb(glb: &[u8]) -> Result<GlbPlayback> {
     let anim = root
         .animations
         .iter()
-        .find(|a| a.name.as_deref() == Some("training poses"))
-        .ok_or_else(|| err("no clip 'training poses'"))?;
+        .find(|a| a.name.as_deref() == Some(clip))
+        .ok_or_else(|| err(&format!("no clip '{clip}'")))?;
     let first_times = read_floats(&root, &bin, anim.samplers.first().ok_or_else(|| err("empty clip"))?.input)?;
     let n_keys = first_times.len();
     let mut channels = Vec::new();

@@ -42,11 +42,19 @@ pub struct FitJson {
     pub islands: usize,
     pub timings_ms: std::collections::BTreeMap<String, f64>,
     pub stage_stats: Vec<StageStats>,
-    /// Whether the population looks articulated, and why ([`crate::model::diagnosis`]).
-    pub diagnosis: Diagnosis,
+    /// Whether the population looks articulated, and why ([`crate::model::diagnosis`]); null for a fit stopped
+    /// early (cancelled in the page): the verdict needs a finished fit.
+    pub diagnosis: Option<Diagnosis>,
     /// The part rule's merge decisions, most parts first: why the fit stopped at its part count
     /// ([`crate::model::distinct::CurvePoint`]; empty with the paper's threshold rule).
     pub part_curve: Vec<CurvePoint>,
+    /// The default part rule's merge tree of the fitted parts (`leaves`: the part of every vertex in the first
+    /// final AECM; `merges` [{a, b, parts, rise, score, variance}] in order, merge m making node leaves + m) and
+    /// the count the rule read off it (`tree_count`); absent with Algorithm 1's rules.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub merge_tree: Option<crate::model::merge_tree::MergeTree>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tree_count: Option<usize>,
 }
 
 impl FitJson {
@@ -92,8 +100,10 @@ impl FitJson {
             islands: crate::model::islands::island_count(&m.labels, &pop.faces),
             timings_ms,
             stage_stats: result.stats.clone(),
-            diagnosis: crate::model::diagnosis::diagnose_fit(pop, result),
+            diagnosis: crate::model::diagnosis::diagnose_finished(pop, result),
             part_curve: result.part_curve.clone(),
+            merge_tree: result.merge_tree.clone(),
+            tree_count: result.tree_count,
         }
     }
 }

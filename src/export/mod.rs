@@ -8,5 +8,6 @@ pub mod json;
 pub mod morph_glb;
 pub mod obj;
 pub mod ply;
+pub mod pose_glb;
 pub mod rig_report;
 pub mod shown;

@@ -19,6 +19,9 @@ pub enum Shown {
     Pose { pose: usize },
     Reconstruction { pose: usize },
     Latent,
+    /// The latent shape with every part moved by its translation b of pose `pose` but not turned
+    /// ([`Model::latent_placed`]).
+    LatentMoved { pose: usize },
     Interpolation { from: usize, to: usize, t: f64, #[serde(default)] options: Options },
     Linear { from: usize, to: usize, t: f64 },
 }
@@ -43,6 +46,10 @@ impl Shown {
                 Ok(need_model()?.reconstruct(pose))
             }
             Shown::Latent => Ok(need_model()?.latent.clone()),
+            Shown::LatentMoved { pose } => {
+                shape(pose)?;
+                Ok(need_model()?.latent_placed(pose))
+            }
             Shown::Interpolation { from, to, t, options } => {
                 let art = articulation.ok_or_else(|| Error::Request("the interpolation needs a fitted model".into()))?;
                 art.interpolate(from, to, t, &options)
@@ -56,6 +63,53 @@ impl Shown {
 pub fn obj_in_original_units(pop: &Population, positions: &[Vec3], header: &str) -> String {
     let original: Vec<Vec3> = positions.iter().map(|&p| pop.normalization.to_original(p)).collect();
     write_obj(&original, &pop.faces, header)
+}
+
+/// One mesh of an OBJ file of several ([`obj_of_meshes`]): its object name, unit-box positions, and optionally a
+/// part per vertex (its faces then go in one group per part).
+pub struct NamedMesh<'a> {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    pub labels: Option<&'a [u32]>,
+}
+
+/// OBJ text of the meshes shown side by side, each an object (`o NAME`) with the population's triangles,
+/// positions written back in the original units (exact round-trip floats). With labels, a mesh's faces are in
+/// one group per part (`g NAME_part_1`, ...; a face goes to the part of at least two of its corners, else of its
+/// first): the parts as separate pieces in a modelling program.
+pub fn obj_of_meshes(pop: &Population, meshes: &[NamedMesh], header: &str) -> Result<String> {
+    let mut out = write_obj(&[], &[], header);
+    let mut offset = 0u64;
+    for m in meshes {
+        if m.positions.len() != pop.n_vertices() || m.labels.is_some_and(|l| l.len() != m.positions.len()) {
+            return Err(Error::Request(format!("mesh {}: {} positions for {} vertices", m.name, m.positions.len(), pop.n_vertices())));
+        }
+        let name: String = m.name.chars().map(|c| if c.is_whitespace() { '_' } else { c }).collect();
+        out.push_str(&format!("o {name}\n"));
+        let original: Vec<Vec3> = m.positions.iter().map(|&p| pop.normalization.to_original(p)).collect();
+        out.push_str(&write_obj(&original, &[], ""));
+        let part = |f: &[u32; 3]| {
+            m.labels.map(|l| {
+                let [a, b, c] = f.map(|v| l[v as usize]);
+                if b == c { b } else { a }
+            })
+        };
+        let mut order: Vec<usize> = (0..pop.faces.len()).collect();
+        order.sort_by_key(|&i| part(&pop.faces[i]));
+        let mut current = None;
+        for i in order {
+            let f = pop.faces[i];
+            if let Some(k) = part(&f) {
+                if current != Some(k) {
+                    out.push_str(&format!("g {name}_part_{}\n", k + 1));
+                    current = Some(k);
+                }
+            }
+            out.push_str(&format!("f {} {} {}\n", offset + u64::from(f[0]) + 1, offset + u64::from(f[1]) + 1, offset + u64::from(f[2]) + 1));
+        }
+        offset += m.positions.len() as u64;
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -85,12 +139,45 @@ mod tests {
     }
 
     #[test]
+    fn meshes_are_objects_and_parts_are_groups_with_every_face_once() {
+        let mut pop = population();
+        pop.faces = vec![[0, 1, 2], [2, 1, 0], [1, 2, 0]];
+        let p0 = Shown::Pose { pose: 0 }.positions(&pop, None, None).unwrap();
+        let p1 = Shown::Pose { pose: 1 }.positions(&pop, None, None).unwrap();
+        let labels = [1u32, 1, 0];
+        let meshes = [
+            NamedMesh { name: "original".into(), positions: p0.clone(), labels: None },
+            NamedMesh { name: "coarse parts".into(), positions: p1.clone(), labels: Some(&labels) },
+        ];
+        let text = obj_of_meshes(&pop, &meshes, "two meshes").unwrap();
+        let v = |t: &str| t.lines().filter(|l| l.starts_with("v ")).map(str::to_owned).collect::<Vec<_>>();
+        let plain = [obj_in_original_units(&pop, &p0, ""), obj_in_original_units(&pop, &p1, "")];
+        assert_eq!(v(&text), [v(&plain[0]), v(&plain[1])].concat(), "both meshes' vertices, exact");
+        let lines: Vec<&str> = text.lines().filter(|l| !l.starts_with("v ")).collect();
+        // every face has two corners in part 1 (group part_2); faces keep their order within a part
+        assert_eq!(
+            lines,
+            ["# two meshes", "o original", "f 1 2 3", "f 3 2 1", "f 2 3 1", "o coarse_parts", "g coarse_parts_part_2", "f 4 5 6", "f 6 5 4", "f 5 6 4"]
+        );
+        // three corners in three parts: the first corner's part
+        let labels = [0u32, 1, 2];
+        let one = [NamedMesh { name: "final".into(), positions: p0.clone(), labels: Some(&labels) }];
+        let lines: Vec<String> = obj_of_meshes(&pop, &one, "").unwrap().lines().filter(|l| !l.starts_with("v ")).map(str::to_owned).collect();
+        assert_eq!(lines, ["o final", "g final_part_1", "f 1 2 3", "g final_part_2", "f 2 3 1", "g final_part_3", "f 3 2 1"]);
+        let short = [NamedMesh { name: "x".into(), positions: p0[..2].to_vec(), labels: None }];
+        assert!(obj_of_meshes(&pop, &short, "").is_err());
+    }
+
+    #[test]
     fn linear_blend_and_errors() {
         let pop = population();
         let p = Shown::Linear { from: 0, to: 1, t: 0.5 }.positions(&pop, None, None).unwrap();
         assert_eq!(p[2], [0.0, 1.0, 0.25]);
         assert!(Shown::Pose { pose: 2 }.positions(&pop, None, None).unwrap_err().to_string().contains("no pose 2"));
         assert!(Shown::Latent.positions(&pop, None, None).unwrap_err().to_string().contains("fitted model"));
+        assert!(Shown::LatentMoved { pose: 0 }.positions(&pop, None, None).unwrap_err().to_string().contains("fitted model"));
+        let s: Shown = serde_json::from_str(r#"{"kind":"latent-moved","pose":1}"#).unwrap();
+        assert_eq!(s, Shown::LatentMoved { pose: 1 });
         assert!(Shown::Latent.needs_model() && !Shown::Pose { pose: 0 }.needs_model());
     }
 

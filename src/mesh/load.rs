@@ -6,12 +6,18 @@
 //!   `.glb`, `.gltf`) that gives the faces.
 //! - `.glb`, `.gltf` (with the `.bin` and image files it names): the poses of one of its meshes, see
 //!   [`super::gltf`].
-//! - `.mtl` files (OBJ materials) are ignored; a file with any other extension is read as OBJ.
+//! - `.fbx` (binary FBX 7.x): the poses of one of its meshes, see [`super::fbx`].
+//! - `.usd`, `.usda`, `.usdc`, `.usdz`: the poses of one point-cached mesh, see [`super::usd`].
+//! - `.mtl` files (OBJ materials) are ignored; a file with any other extension (or none) is refused by name,
+//!   with the list of what posemfa reads ([`formats_read`]), rather than read as OBJ.
+//!
+//! [`FORMATS`] is the one list of extensions: the readers ([`FileKind::of`]), the folder listing
+//! ([`FileKind::is_known_extension`]), the refusal of other files and the command line's help all come from it.
 //!
 //! Every path says where the poses came from ([`Loaded::source`]), e.g. "11 OBJ files",
 //! "48 frames of the point cache gallop.pc2 (frames 0 to 47), faces from reference.obj".
 
-use super::{cache, gltf, obj, ply, Mesh};
+use super::{cache, fbx, gltf, obj, ply, usd, Mesh};
 use crate::error::{Error, Result};
 
 /// What a file is, by its extension.
@@ -23,31 +29,107 @@ pub enum FileKind {
     Glb,
     Pc2,
     Mdd,
+    Fbx,
+    Usd,
     /// Files a glTF may refer to (`.bin` buffers, images).
     Resource,
     /// Files that come with meshes and are not read (`.mtl`).
     Ignored,
+    /// Any other extension, or none: refused by name ([`unknown_format`]).
+    Unknown,
+}
+
+/// One format posemfa reads: its extensions (lower case) and what each file is.
+#[derive(Debug, Clone, Copy)]
+pub struct Format {
+    /// Shown in [`formats_read`] (".glb/.gltf") and picked up from a folder; the first extension is the
+    /// format's usual one.
+    pub extensions: &'static [(&'static str, FileKind)],
+    /// What [`formats_read`] says after the extensions (" with a base mesh"), or "".
+    pub note: &'static str,
+}
+
+/// Every format posemfa reads, in the order [`formats_read`] lists them. A new reader adds its row here (and
+/// its [`FileKind`] to [`load_with`]).
+pub const FORMATS: &[Format] = &[
+    Format { extensions: &[("obj", FileKind::Obj)], note: "" },
+    Format { extensions: &[("ply", FileKind::Ply)], note: "" },
+    Format { extensions: &[("glb", FileKind::Glb), ("gltf", FileKind::Gltf)], note: "" },
+    Format { extensions: &[("fbx", FileKind::Fbx)], note: "" },
+    Format {
+        extensions: &[("usd", FileKind::Usd), ("usda", FileKind::Usd), ("usdc", FileKind::Usd), ("usdz", FileKind::Usd)],
+        note: "",
+    },
+    Format { extensions: &[("pc2", FileKind::Pc2), ("mdd", FileKind::Mdd)], note: " with a base mesh" },
+];
+
+/// Files read although [`formats_read`] does not list them: a VRM avatar is a .glb; a .gltf's buffers and
+/// images; OBJ materials (ignored). `listed`: picked up from a folder (images are not: posemfa reads no
+/// texture).
+const OTHER_EXTENSIONS: &[(&str, FileKind, bool)] = &[
+    ("vrm", FileKind::Glb, true),
+    ("bin", FileKind::Resource, true),
+    ("png", FileKind::Resource, false),
+    ("jpg", FileKind::Resource, false),
+    ("jpeg", FileKind::Resource, false),
+    ("webp", FileKind::Resource, false),
+    ("ktx2", FileKind::Resource, false),
+    ("mtl", FileKind::Ignored, false),
+];
+
+/// What posemfa reads, for people: ".obj, .ply, .glb/.gltf, .fbx, .usd/.usda/.usdc/.usdz, .pc2/.mdd with a base mesh" (from [`FORMATS`]).
+pub fn formats_read() -> String {
+    let shown: Vec<String> = FORMATS
+        .iter()
+        .map(|f| {
+            let exts: Vec<String> = f.extensions.iter().map(|(e, _)| format!(".{e}")).collect();
+            format!("{}{}", exts.join("/"), f.note)
+        })
+        .collect();
+    shown.join(", ")
+}
+
+/// The error for a file whose extension is none of [`FORMATS`]: names the file, lists what posemfa reads and
+/// says what to do. E.g. "file cat.blend: posemfa reads .obj, .ply, ...; not .blend: export the poses as one of
+/// these".
+pub fn unknown_format(name: &str) -> Error {
+    let what = match extension(name) {
+        Some(ext) => format!("not .{ext}"),
+        None => "this file has no extension".to_string(),
+    };
+    Error::Population {
+        file: name.to_string(),
+        message: format!(
+            "posemfa reads {}; {what}: export the poses as one of these (e.g. glTF from Blender), or leave the \
+             file out",
+            formats_read()
+        ),
+    }
+}
+
+/// The extension of a file name, lower case, if it has one ("a.OBJ" -> "obj"; "pose1", ".hidden" -> None).
+fn extension(name: &str) -> Option<String> {
+    let file = name.rsplit(['/', '\\']).next().unwrap_or(name);
+    match file.rsplit_once('.') {
+        Some((stem, ext)) if !stem.is_empty() && !ext.is_empty() => Some(ext.to_ascii_lowercase()),
+        _ => None,
+    }
 }
 
 impl FileKind {
+    /// What a file is, by its extension (any case).
     pub fn of(name: &str) -> FileKind {
-        let ext = name.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase()).unwrap_or_default();
-        match ext.as_str() {
-            "ply" => FileKind::Ply,
-            "gltf" => FileKind::Gltf,
-            "glb" | "vrm" => FileKind::Glb,
-            "pc2" => FileKind::Pc2,
-            "mdd" => FileKind::Mdd,
-            "bin" | "png" | "jpg" | "jpeg" | "webp" | "ktx2" => FileKind::Resource,
-            "mtl" => FileKind::Ignored,
-            _ => FileKind::Obj,
-        }
+        let Some(ext) = extension(name) else { return FileKind::Unknown };
+        let read = FORMATS.iter().flat_map(|f| f.extensions).map(|&(e, k)| (e, k));
+        let other = OTHER_EXTENSIONS.iter().map(|&(e, k, _)| (e, k));
+        read.chain(other).find(|(e, _)| *e == ext).map_or(FileKind::Unknown, |(_, k)| k)
     }
 
-    /// Whether a folder listing should pick the file up.
+    /// Whether a folder listing should pick the file up: the formats read, .vrm and a .gltf's .bin buffers.
     pub fn is_known_extension(name: &str) -> bool {
-        let ext = name.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase()).unwrap_or_default();
-        matches!(ext.as_str(), "obj" | "ply" | "gltf" | "glb" | "pc2" | "mdd" | "bin")
+        let Some(ext) = extension(name) else { return false };
+        FORMATS.iter().flat_map(|f| f.extensions).any(|(e, _)| *e == ext)
+            || OTHER_EXTENSIONS.iter().any(|(e, _, listed)| *listed && *e == ext)
     }
 }
 
@@ -60,11 +142,12 @@ pub struct Loaded {
     pub source: String,
 }
 
-/// Reads one per-pose mesh file by its extension.
+/// Reads one per-pose mesh file by its extension (.obj or .ply; any other is refused by name).
 pub fn read_mesh(name: &str, bytes: &[u8]) -> Result<Mesh> {
     match FileKind::of(name) {
         FileKind::Ply => ply::parse_ply(name, bytes),
-        _ => obj::parse_obj(name, bytes),
+        FileKind::Obj => obj::parse_obj(name, bytes),
+        _ => Err(unknown_format(name)),
     }
 }
 
@@ -81,6 +164,11 @@ pub fn load(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Loaded, Vec<Er
 /// [`load`] with choices for glTF files (which mesh, which animation, how many frames, which poses).
 pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std::result::Result<Loaded, Vec<Error>> {
     let kinds: Vec<FileKind> = files.iter().map(|(n, _)| FileKind::of(n)).collect();
+    let unknown: Vec<Error> =
+        files.iter().zip(&kinds).filter(|(_, k)| **k == FileKind::Unknown).map(|((n, _), _)| unknown_format(n)).collect();
+    if !unknown.is_empty() {
+        return Err(unknown);
+    }
     let count = |k: &[FileKind]| kinds.iter().filter(|x| k.contains(x)).count();
     let n_cache = count(&[FileKind::Pc2, FileKind::Mdd]);
     let n_gltf = count(&[FileKind::Gltf, FileKind::Glb]);
@@ -141,6 +229,9 @@ pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std:
             .collect();
         return Ok(Loaded { poses, source });
     }
+    if let Some(l) = load_scene(&files, &kinds, n_gltf + n_mesh, options)? {
+        return Ok(l);
+    }
     if n_gltf > 0 {
         if n_mesh > 0 {
             let name = first_of(&[FileKind::Obj, FileKind::Ply]).map(|f| f.0.as_str()).unwrap_or("");
@@ -174,6 +265,29 @@ pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std:
     Ok(Loaded { poses, source: mesh_files_source(n_obj, n_ply) })
 }
 
+/// An FBX or USD file (alone): its poses. None when no such file was given.
+fn load_scene(
+    files: &[(String, Vec<u8>)],
+    kinds: &[FileKind],
+    n_other_meshes: usize,
+    options: &gltf::Options,
+) -> std::result::Result<Option<Loaded>, Vec<Error>> {
+    let scenes: Vec<&(String, Vec<u8>)> = files.iter().zip(kinds).filter(|(_, k)| matches!(k, FileKind::Fbx | FileKind::Usd)).map(|(f, _)| f).collect();
+    let Some((name, bytes)) = scenes.first().copied() else { return Ok(None) };
+    if scenes.len() > 1 || n_other_meshes > 0 {
+        return Err(set_error(
+            name,
+            format!(
+                "was given with {} other mesh file(s): the poses come from one FBX or USD file alone; load it by itself",
+                scenes.len() - 1 + n_other_meshes
+            ),
+        ));
+    }
+    let g = if FileKind::of(name) == FileKind::Usd { usd::read(name, bytes, options) } else { fbx::read(name, bytes, options) };
+    let g = g.map_err(|e| vec![e])?;
+    Ok(Some(Loaded { poses: g.poses, source: g.source }))
+}
+
 /// Where poses read from one mesh file each came from: "11 OBJ files", "1 OBJ and 2 PLY files".
 pub(super) fn mesh_files_source(n_obj: usize, n_ply: usize) -> String {
     let plural = |n: usize, what: &str| format!("{n} {what} file{}", if n == 1 { "" } else { "s" });
@@ -181,5 +295,64 @@ pub(super) fn mesh_files_source(n_obj: usize, n_ply: usize) -> String {
         (o, 0) => plural(o, "OBJ"),
         (0, p) => plural(p, "PLY"),
         (o, p) => format!("{o} OBJ and {}", plural(p, "PLY")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TRI: &[u8] = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+    #[test]
+    fn the_formats_read_come_from_one_table() {
+        assert_eq!(formats_read(), ".obj, .ply, .glb/.gltf, .fbx, .usd/.usda/.usdc/.usdz, .pc2/.mdd with a base mesh");
+        for f in FORMATS {
+            for (ext, kind) in f.extensions {
+                assert_eq!(FileKind::of(&format!("pose.{}", ext.to_ascii_uppercase())), *kind, ".{ext}");
+                assert!(FileKind::is_known_extension(&format!("dir/pose.{ext}")), ".{ext}");
+            }
+        }
+        assert_eq!(FileKind::of("avatar.vrm"), FileKind::Glb);
+        assert_eq!(FileKind::of("body.mtl"), FileKind::Ignored);
+        assert_eq!(FileKind::of("texture.png"), FileKind::Resource);
+        for name in ["notes.txt", "pose1", ".hidden", "scene.blend", "a.obj/readme"] {
+            assert_eq!(FileKind::of(name), FileKind::Unknown, "{name}");
+            assert!(!FileKind::is_known_extension(name), "{name}");
+        }
+        assert!(!FileKind::is_known_extension("texture.png") && !FileKind::is_known_extension("body.mtl"));
+    }
+
+    /// A file of an extension posemfa does not read is refused by name with the list of what it reads, not
+    /// parsed as OBJ; .mtl files next to OBJ files stay ignored.
+    #[test]
+    fn a_file_of_another_extension_is_refused_by_name() {
+        let files = vec![
+            ("a.obj".to_string(), TRI.to_vec()),
+            ("scene.blend".to_string(), b"BLENDER-v300\0\0binary".to_vec()),
+            ("b.obj".to_string(), TRI.to_vec()),
+            ("README".to_string(), b"v 0 0 0\n".to_vec()),
+        ];
+        let errors = load(files).unwrap_err();
+        let text: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+        assert_eq!(
+            text,
+            [
+                "file scene.blend: posemfa reads .obj, .ply, .glb/.gltf, .fbx, .usd/.usda/.usdc/.usdz, .pc2/.mdd with a base mesh; not .blend: \
+                 export the poses as one of these (e.g. glTF from Blender), or leave the file out",
+                "file README: posemfa reads .obj, .ply, .glb/.gltf, .fbx, .usd/.usda/.usdc/.usdz, .pc2/.mdd with a base mesh; this file has no \
+                 extension: export the poses as one of these (e.g. glTF from Blender), or leave the file out",
+            ]
+        );
+        assert_eq!(read_mesh("x.txt", TRI).unwrap_err().to_string(), unknown_format("x.txt").to_string());
+
+        let with_mtl = vec![
+            ("a.obj".to_string(), TRI.to_vec()),
+            ("a.mtl".to_string(), b"newmtl skin\n".to_vec()),
+            ("b.OBJ".to_string(), TRI.to_vec()),
+        ];
+        let l = load(with_mtl).unwrap();
+        assert_eq!(l.poses.len(), 2);
+        assert_eq!(l.source, "2 OBJ files");
     }
 }

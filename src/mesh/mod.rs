@@ -1,10 +1,13 @@
 //! Triangle meshes and populations of registered meshes.
 
 pub mod cache;
+pub mod fbx;
+pub mod fbx_tree;
 pub mod gltf;
 pub mod load;
 pub mod obj;
 pub mod ply;
+pub mod usd;
 pub mod population;
 
 pub use population::{Normalization, Population};

@@ -255,8 +255,8 @@ impl Population {
         Population::from_meshes(named)
     }
 
-    /// Loads the mesh files of a directory (every `.obj`, `.ply`, `.glb`, `.gltf`, `.bin`, `.pc2`, `.mdd`, any
-    /// case) or an explicit list of files.
+    /// Loads the mesh files of a directory (every file of an extension [`super::load::FORMATS`] lists, and
+    /// `.vrm` and `.bin`, any case) or an explicit list of files (one of another extension is refused by name).
     // (compiles on wasm32 too, where std::fs reports "unsupported" at run time)
     pub fn from_paths<P: AsRef<std::path::Path>>(paths: &[P]) -> Result<Population> {
         Population::from_paths_with(paths, &super::gltf::Options::default())
@@ -282,11 +282,11 @@ impl Population {
             }
         }
         if files.is_empty() {
-            return Err(Error::Io(
-                "no mesh files (.obj .ply .glb .gltf .pc2 .mdd) found in the given paths; pass a folder of them or the \
-                 files themselves"
-                    .into(),
-            ));
+            return Err(Error::Io(format!(
+                "no mesh files found in the given paths (posemfa reads {}); pass a folder of them or the files \
+                 themselves",
+                super::load::formats_read()
+            )));
         }
         let kind = |f: &std::path::PathBuf| {
             super::load::FileKind::of(&f.file_name().map(|n| n.to_string_lossy()).unwrap_or_default())

@@ -85,14 +85,7 @@ impl Fit {
     pub fn new(data: Data, params: &Params) -> Result<Fit> {
         params.validate()?;
         let most = memory::max_components(params.parts, params.refine, params.max_subparts, data.n_vertices);
-        if data.n_vertices < 3 {
-            return Err(Error::Data(format!(
-                "{} vertices; at least 3 are needed; use a mesh with more vertices",
-                data.n_vertices
-            )));
-        }
-        check_data(&data, params.parts, most)?;
-        check_motion(&data)?;
+        check_population(&data, params.parts, most)?;
         let labels = init::kmeans(&data, params.parts, params.seed, params.restarts);
         Fit::from_labels(data, &labels, params)
     }
@@ -429,6 +422,17 @@ pub fn labels_from_gamma(gamma: &[f64], m: usize) -> Vec<u32> {
 /// Refuses data that cannot be fitted, before anything is allocated for the fit: fewer than 2 shapes, no
 /// vertex, more `parts` than vertices, non-finite coordinates, or a working set for `most_components`
 /// components beyond the memory budget ([`memory`]).
+/// What a whole population must be for a fit that may hold up to `most_components` components: at least 3
+/// vertices and 2 poses, no more than `parts` asked for than vertices, finite coordinates, the memory budget,
+/// and some motion ([`check_motion`]).
+pub fn check_population(data: &Data, parts: usize, most_components: usize) -> Result<()> {
+    if data.n_vertices < 3 {
+        return Err(Error::Data(format!("{} vertices; at least 3 are needed; use a mesh with more vertices", data.n_vertices)));
+    }
+    check_data(data, parts, most_components)?;
+    check_motion(data)
+}
+
 fn check_data(data: &Data, parts: usize, most_components: usize) -> Result<()> {
     if data.n_shapes < 2 {
         return Err(Error::Data(format!(

@@ -85,6 +85,16 @@ pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     Diagnosis { articulated: true, reason, ..asked }
 }
 
+/// The verdict for a fit of `pop` that ran to its end ([`diagnose_fit`]); None for a fit stopped early (cancelled):
+/// its best state so far may still be the coarse stage's few parts, and a verdict on it would contradict the
+/// finished fit's.
+pub fn diagnose_finished(pop: &Population, result: &FitResult) -> Option<Diagnosis> {
+    result.complete.then(|| diagnose_fit(pop, result))
+}
+
+/// What the page and the CLI say instead of a verdict for a fit stopped early.
+pub const UNFINISHED: &str = "cancelled: the diagnosis needs a finished fit";
+
 /// The verdict for a fitted model of `pop`.
 pub fn diagnose(pop: &Population, model: &Model) -> Diagnosis {
     let data = Data::from_population(pop);
@@ -163,6 +173,23 @@ mod tests {
         let r = fit(&g.population, &Params { target_parts: Some(6), ..Params::default() }, &mut |_| true).unwrap();
         let d = diagnose_fit(&g.population, &r);
         assert!(!d.articulated && d.reason.contains("deformation model"), "{d:?}");
+    }
+
+    #[test]
+    fn a_fit_stopped_early_gets_no_verdict() {
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
+        let mut calls = 0;
+        // stopped after the first few iterations of the coarse stage, as the page's Cancel does
+        let r = fit(&g.population, &Params::default(), &mut |_| {
+            calls += 1;
+            calls < 3
+        })
+        .unwrap();
+        assert!(!r.complete);
+        assert_eq!(diagnose_finished(&g.population, &r), None);
+        let done = fit(&g.population, &Params::default(), &mut |_| true).unwrap();
+        assert!(done.complete);
+        assert_eq!(diagnose_finished(&g.population, &done), Some(diagnose_fit(&g.population, &done)));
     }
 
     #[test]

@@ -65,20 +65,41 @@ pub(crate) fn adjacency(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> (
     (adjacent, members)
 }
 
-/// Motion of a part relative to the first pose, per pose: R^i (R^0)^T (free of the part's latent frame).
-fn relative_motion(rotations: &[Mat3]) -> Vec<Mat3> {
-    let r0t = rotations[0].transpose();
-    rotations.iter().map(|r| r * r0t).collect()
+/// Motion of a part relative to pose r, per pose: R^i (R^r)^T (free of the part's latent frame).
+fn relative_motion(rotations: &[Mat3], r: usize) -> Vec<Mat3> {
+    let rt = rotations[r].transpose();
+    rotations.iter().map(|m| m * rt).collect()
+}
+
+/// Most reference poses [`blend_ratio`] tries (with more poses, a spread subset of them).
+pub const BLEND_REFERENCES: usize = 24;
+
+/// The poses [`blend_ratio`] takes as the bind pose in turn: every pose, or up to [`BLEND_REFERENCES`] spread
+/// ones ([`super::merge_tree::spread_poses`]). Independent of the poses' order.
+pub fn blend_references(pop: &Population) -> Vec<usize> {
+    super::merge_tree::spread_poses(pop, BLEND_REFERENCES)
 }
 
 /// How far part k's motion is from a fixed in-between of two of its neighbours' motions, as a fraction of how far
-/// those two are apart: the minimum over neighbour pairs (a, b) and t in [0, 1] (steps of 1/20) of
-/// RMS_i ∠(M_k^i, slerp(M_a^i, M_b^i, t)) / RMS_i ∠(M_a^i, M_b^i), with M^i = R^i (R^0)^T. A slice of a blend band
-/// moves as one fixed blend of its two sides: near 0. A part with a joint of its own turns independently: large.
-/// Infinity without two neighbours that move apart (more than 1e-3 rad RMS).
-pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize]) -> f64 {
-    let mk = relative_motion(&model.parts[k].rotations);
-    let ms: Vec<Vec<Mat3>> = adjacent.iter().map(|&a| relative_motion(&model.parts[a].rotations)).collect();
+/// those two are apart: the minimum over neighbour pairs (a, b), t in [0, 1] (steps of 1/20) and reference poses
+/// r in `refs` of RMS_i ∠(M_k^i, slerp(M_a^i, M_b^i, t)) / RMS_i ∠(M_a^i, M_b^i), with M^i = R^i (R^r)^T. Skinned
+/// flesh is a fixed blend of its sides' motions relative to the bind pose, which is not known: each reference
+/// pose is tried as the bind pose (so the ratio does not depend on which pose comes first). A slice of a blend
+/// band moves as one fixed blend of its two sides: near 0. A part with a joint of its own turns independently:
+/// large. Infinity without two neighbours that move apart (more than 1e-3 rad RMS).
+pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize], refs: &[usize]) -> f64 {
+    let mut ratios: Vec<f64> = refs.iter().map(|&r| blend_ratio_from(model, k, adjacent, r)).collect();
+    if ratios.is_empty() {
+        return f64::INFINITY;
+    }
+    ratios.sort_by(f64::total_cmp);
+    ratios[(ratios.len() - 1) / 2]
+}
+
+/// [`blend_ratio`] with pose `r` as the bind pose.
+fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize) -> f64 {
+    let mk = relative_motion(&model.parts[k].rotations, r);
+    let ms: Vec<Vec<Mat3>> = adjacent.iter().map(|&a| relative_motion(&model.parts[a].rotations, r)).collect();
     // the neighbours' motions as quaternions once (slerp converts both ends at every t otherwise)
     let qs: Vec<Vec<Quat>> = ms.iter().map(|m| m.iter().map(to_quat).collect()).collect();
     let rms = |f: &dyn Fn(usize) -> f64| ((0..mk.len()).map(|i| f(i).powi(2)).sum::<f64>() / mk.len() as f64).sqrt();
@@ -173,6 +194,7 @@ pub fn blend_fit_ratio(model: &Model, pop: &Population, k: usize, members: &[usi
 pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize {
     let mut dissolved = 0;
     let mut h = vec![[0.0; 3]; pop.n_shapes()];
+    let refs = blend_references(pop);
     loop {
         if model.n_parts() < 3 {
             return dissolved;
@@ -181,20 +203,39 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
         // the sides a slice of flesh lies between: its neighbours at least its own size (a band slice is thinner
         // than the bodies it joins; a small part of its own, whose rotation a few vertices barely fix, must not
         // make a whole limb look like a blend of it and the next limb)
+        // and, through a smaller neighbour, that neighbour's own neighbours at least k's size: a band cut into two
+        // slices (a start from small patches leaves such chains; the generated spider's hips at 12 k vertices)
+        // has one big side beyond each slice
         let sides: Vec<Vec<usize>> = (0..model.n_parts())
-            .map(|k| adjacent[k].iter().copied().filter(|&a| members[a].len() >= members[k].len()).collect())
+            .map(|k| {
+                let big = |a: &usize| members[*a].len() >= members[k].len();
+                let mut s: Vec<usize> = adjacent[k].iter().copied().filter(big).collect();
+                for &a in adjacent[k].iter().filter(|a| !big(a)) {
+                    s.extend(adjacent[a].iter().copied().filter(|&b| b != k && big(&b)));
+                }
+                s.sort_unstable();
+                s.dedup();
+                s
+            })
             .collect();
         let mut order: Vec<usize> = (0..model.n_parts()).filter(|&k| sides[k].len() >= 2).collect();
         order.sort_by_key(|&k| members[k].len());
         let flesh = |k: usize| {
-            let r = blend_ratio(model, k, &sides[k]);
+            let r = blend_ratio(model, k, &sides[k], &refs);
             if r < ratio {
                 return Some((r, f64::NAN));
             }
             let f = blend_fit_ratio(model, pop, k, &members[k], &sides[k]);
             (f < 1.0).then_some((r, f))
         };
-        let Some((k, (r, f))) = order.into_iter().find_map(|k| flesh(k).map(|x| (k, x))) else {
+        let Some((k, (r, f))) = order.clone().into_iter().find_map(|k| flesh(k).map(|x| (k, x))) else {
+            if std::env::var_os("POSEMFA_DEBUG").is_some() {
+                for k in (0..model.n_parts()).filter(|&k| members[k].len() < 60) {
+                    let r = blend_ratio(model, k, &sides[k], &refs);
+                    let f = blend_fit_ratio(model, pop, k, &members[k], &sides[k]);
+                    eprintln!("kept: part {k} ({} vertices) adjacent {:?} sides {:?} blend {r:.3} fit {f:.3}", members[k].len(), adjacent[k], sides[k]);
+                }
+            }
             return dissolved;
         };
         if std::env::var_os("POSEMFA_DEBUG").is_some() {
@@ -372,15 +413,15 @@ mod tests {
         // 35 % of the way from a to b in every pose
         let flesh: Vec<f64> = b.iter().map(|x| 0.35 * x).collect();
         let m = model(vec![part(&a, [0.0, 0.0, 1.0]), part(&b, [0.0, 0.0, 1.0]), part(&flesh, [0.0, 0.0, 1.0])]);
-        assert!(blend_ratio(&m, 2, &[0, 1]) < 0.01, "{}", blend_ratio(&m, 2, &[0, 1]));
+        assert!(blend_ratio(&m, 2, &[0, 1], &[0]) < 0.01, "{}", blend_ratio(&m, 2, &[0, 1], &[0]));
         // the same angles in another order: a joint of its own, not a blend
         let own: Vec<f64> = [0.2, -0.3, 0.1, 0.4, -0.1, 0.0].to_vec();
         let m = model(vec![part(&a, [0.0, 0.0, 1.0]), part(&b, [0.0, 0.0, 1.0]), part(&own, [1.0, 0.0, 0.0])]);
-        assert!(blend_ratio(&m, 2, &[0, 1]) > 0.5, "{}", blend_ratio(&m, 2, &[0, 1]));
+        assert!(blend_ratio(&m, 2, &[0, 1], &[0]) > 0.5, "{}", blend_ratio(&m, 2, &[0, 1], &[0]));
         // neighbours that move together give no in-between to test
         let m = model(vec![part(&a, [0.0, 0.0, 1.0]), part(&a, [0.0, 0.0, 1.0]), part(&own, [1.0, 0.0, 0.0])]);
-        assert_eq!(blend_ratio(&m, 2, &[0, 1]), f64::INFINITY);
-        assert_eq!(blend_ratio(&m, 2, &[0]), f64::INFINITY);
+        assert_eq!(blend_ratio(&m, 2, &[0, 1], &[0]), f64::INFINITY);
+        assert_eq!(blend_ratio(&m, 2, &[0], &[0]), f64::INFINITY);
     }
 
     #[test]

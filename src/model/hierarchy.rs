@@ -96,6 +96,11 @@ pub struct FitResult {
     /// With `target_parts` and [`PartRule::Distinct`]: the labels the part rule decided, before the count was made
     /// exact (what auto would have kept), for the diagnosis ([`super::diagnosis::diagnose_fit`]).
     pub decided_labels: Option<Vec<u32>>,
+    /// [`PartRule::Tree`]: the merge tree of the fitted parts the part rule read its count from (its leaves are
+    /// the parts of the first final AECM, its merges go down to one part): a partition for every count.
+    pub merge_tree: Option<super::merge_tree::MergeTree>,
+    /// [`PartRule::Tree`]: the count the part rule read off `merge_tree`.
+    pub tree_count: Option<usize>,
 }
 
 struct Refinement {
@@ -233,10 +238,26 @@ pub struct Pipeline {
     part_curve: Vec<super::distinct::CurvePoint>,
     /// See [`FitResult::decided_labels`].
     decided_labels: Option<Vec<u32>>,
+    /// See [`FitResult::merge_tree`] and [`FitResult::tree_count`].
+    merge_tree: Option<super::merge_tree::MergeTree>,
+    tree_count: Option<usize>,
+    /// [`PartRule::Tree`]: the current final-stage run is the first, at the refinement's loose tolerance (its
+    /// parts are decided on, then the AECM runs again at `tol` whatever the decision).
+    loose_start: bool,
     /// The whole population's data and their E-step layout, built once: a run on all vertices takes them and
     /// hands them back when it finishes (no second copy), the label fits read them.
     full: Option<(Data, Blocked)>,
 }
+
+/// [`PartRule::Tree`]'s start: the patches' tree is cut where a merge first costs the smaller side, per vertex,
+/// this many times the patches' typical variance (a generous over-segmentation: the part rule decides after the
+/// final AECM). 64 = `distinct_ratio`² x 4 at the default; the count it gives moved by at most 8 over the nuisance
+/// variants of horse-poses, horse-gallop and lion-poses where 16 moved it by 10-17 (`examples/tree_probe.rs`).
+pub const TREE_START_RATIO: f64 = 64.0;
+
+/// The least typical variance of the patches (unit-box units²; the data are in the unit box), against 0 on
+/// exactly rigid data.
+const PATCH_VARIANCE_FLOOR: f64 = 1e-14;
 
 /// Most times [`Pipeline`] makes the part count exact and refits.
 const COUNT_ROUNDS: usize = 3;
@@ -253,6 +274,9 @@ impl Pipeline {
             super::part_count::check_target(n, pop.n_vertices(), params.min_part_vertices)?;
         }
         let t0 = crate::clock::now_ms();
+        if params.part_rule == PartRule::Tree && params.refine {
+            return Pipeline::from_tree(pop, params, t0);
+        }
         // the coarse and refinement runs stop at a loose tolerance and only pass labels on: they run plain AECM
         // (SQUAREM would move where they stop); the final run is accelerated
         let coarse = if params.refine {
@@ -288,8 +312,58 @@ impl Pipeline {
             decide_rounds: 0,
             part_curve: Vec::new(),
             decided_labels: None,
+            merge_tree: None,
+            tree_count: None,
+            loose_start: false,
             full: None,
         })
+    }
+
+    /// [`PartRule::Tree`]: the patches' merge tree gives the start ([`super::merge_tree`]: no random draw), cut
+    /// where a merge first costs the smaller side [`TREE_START_RATIO`] times the patches' typical variance; the
+    /// final AECM runs from that partition.
+    fn from_tree(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
+        let data = Data::from_population(pop);
+        // (the memory for the start's count is checked once the tree gives it)
+        super::aecm::check_population(&data, params.parts, 1)?;
+        // the patches' own typical variance, not the variance floor: on clean data the patches fit far below the
+        // floor, and the floor as the yardstick merged the generated hand's fingertips before the AECM
+        let tree = super::merge_tree::MergeTree::build(pop, PATCH_VARIANCE_FLOOR);
+        let start = tree.decided_count(TREE_START_RATIO).max(params.target_parts.unwrap_or(1));
+        let labels = tree.labels_at(start);
+        let most = start.max(params.target_parts.unwrap_or(0));
+        super::memory::check(pop.n_vertices(), pop.n_shapes(), most, super::memory::budget_bytes()?)?;
+        if std::env::var_os("POSEMFA_DEBUG").is_some() {
+            eprintln!("tree: {} patches, start at {start} parts", tree.n_leaves);
+        }
+        let mut p = Pipeline {
+            pop: pop.clone(),
+            params: params.clone(),
+            state: State::Done,
+            coarse: None,
+            coarse_labels: labels.clone(),
+            refined_labels: labels.clone(),
+            final_model: None,
+            stats: vec![StageStats { name: "tree".into(), ..Default::default() }],
+            stage_started_ms: t0,
+            total_iterations: 0,
+            subset: None,
+            count_rounds: 0,
+            decide_rounds: 0,
+            part_curve: Vec::new(),
+            decided_labels: None,
+            merge_tree: None,
+            tree_count: None,
+            loose_start: true,
+            full: None,
+        };
+        p.close_stage(Some("final"));
+        // the first run only feeds the part rule's decisions: at the refinement's loose tolerance (from a
+        // generous over-segmentation a converged run took 64 iterations on the 12 k hand, the loose one 10)
+        let loose = Params { tol: params.refine_tol.max(params.tol), ..params.clone() };
+        let (data, layout) = lay_out(data);
+        p.state = State::Final(Fit::from_labels_laid_out(data, layout, &labels, &loose)?);
+        Ok(p)
     }
 
     pub fn population(&self) -> &Population {
@@ -431,7 +505,7 @@ impl Pipeline {
         let rounds = self.count_rounds;
         // (not once the count is forced: parts split to meet it can share one motion, and would empty each other)
         // the part rule decides after Algorithm 1's refinement (a run without it is the coarse AECM as it is)
-        let distinct = self.params.part_rule == PartRule::Distinct && self.params.refine;
+        let distinct = matches!(self.params.part_rule, PartRule::Distinct | PartRule::Tree) && self.params.refine;
         if distinct && rounds == 0 {
             super::motion_labels::label_by_motion(&mut model, &self.pop);
             super::motion_labels::drop_empty_parts(&mut model);
@@ -459,7 +533,11 @@ impl Pipeline {
                 super::islands::connect_parts(&mut model, &self.pop, false, self.params.min_part_vertices);
             }
             let before = model.n_parts();
-            let (merged, curve) = super::distinct::merge_indistinct(&self.pop, &model.labels, &self.params);
+            let (merged, curve) = if self.params.part_rule == PartRule::Tree {
+                self.decide_on_tree(&model.labels)
+            } else {
+                super::distinct::merge_indistinct(&self.pop, &model.labels, &self.params)
+            };
             self.part_curve = curve;
             if self.params.target_parts.is_some() {
                 self.decided_labels = Some(merged.clone());
@@ -473,10 +551,19 @@ impl Pipeline {
                 if let Some(n) = self.params.target_parts.filter(|&n| n != after) {
                     // the count is made exact on the decided labels at once (a refit first would be changed anyway)
                     self.count_rounds += 1;
-                    let (labels, _) = super::part_count::labels_with_count(&self.pop, &merged, n, &self.params)?;
+                    // more parts than decided: the tree's finer partition; fewer: merged from the decided parts
+                    // (the tree's own 10-part cut of horse-gallop rigged at E_RMS 3.40, the merges at 3.27)
+                    let labels = match self.tree_partition(n).filter(|_| n > after) {
+                        Some(l) => l,
+                        None => super::part_count::labels_with_count(&self.pop, &merged, n, &self.params)?.0,
+                    };
                     return self.refit("parts", &labels);
                 }
                 return self.refit("distinct", &merged);
+            }
+            if self.loose_start {
+                // nothing to remove: the decided parts fitted again at the fit's own tolerance
+                return self.refit("final", &merged);
             }
         }
         let n = match self.params.target_parts {
@@ -502,8 +589,39 @@ impl Pipeline {
         self.refit("parts", &labels)
     }
 
+    /// [`PartRule::Tree`]'s rule 2: the merge tree of the fitted parts ([`super::merge_tree::MergeTree::from_leaves`],
+    /// every merge down to one part), cut where a merge first scores `distinct_ratio`. The first round's tree is
+    /// the one kept in the result (its leaves are the parts of the first final AECM). Returns the labels at the
+    /// count read off the tree and the curve of decisions (as [`super::distinct::merge_indistinct`]'s).
+    fn decide_on_tree(&mut self, labels: &[u32]) -> (Vec<u32>, Vec<super::distinct::CurvePoint>) {
+        let leaves = compact(labels);
+        let mut tree = super::merge_tree::MergeTree::from_leaves(&self.pop, leaves, self.params.variance_floor);
+        if let Some(first) = &self.merge_tree {
+            // the first round's typical variance stays the yardstick: a refit's larger parts have larger variances,
+            // and with its own yardstick every round would merge a few more (lion-poses: 43 -> 40 -> 36 -> 34)
+            tree.rescore(first.typical);
+        }
+        let count = tree.decided_count(self.params.distinct_ratio);
+        let merged = tree.labels_at(count);
+        let curve = tree.curve(count);
+        if self.merge_tree.is_none() {
+            self.merge_tree = Some(tree);
+            self.tree_count = Some(count);
+        }
+        (merged, curve)
+    }
+
+    /// [`PartRule::Tree`] with `target_parts`: the merge tree's partition with `n` parts, when the tree holds that
+    /// count (the fitted parts' tree: from the first final AECM's parts down to one).
+    fn tree_partition(&self, n: usize) -> Option<Vec<u32>> {
+        let t = self.merge_tree.as_ref()?;
+        let (most, fewest) = t.counts();
+        (fewest..=most).contains(&n).then(|| t.labels_at(n))
+    }
+
     /// A new stage `stage`: the final AECM again on all vertices, from `labels`.
     fn refit(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
+        self.loose_start = false;
         self.stats.push(StageStats { name: stage.into(), ..Default::default() });
         self.stage_started_ms = crate::clock::now_ms();
         Ok(State::Final(self.fit_all(labels)?))
@@ -632,7 +750,7 @@ impl Pipeline {
         };
         self.refined_labels = match self.params.part_rule {
             // parts are merged after the final AECM has cleaned the boundaries ([`Pipeline::finish`])
-            PartRule::Distinct => compact(&refined),
+            PartRule::Distinct | PartRule::Tree => compact(&refined),
             PartRule::Threshold => merge_rigid_neighbours(&self.pop, &refined, &self.params),
         };
         self.close_stage(Some("final"));
@@ -711,6 +829,8 @@ impl Pipeline {
             complete: self.is_done(),
             part_curve: self.part_curve.clone(),
             decided_labels: self.decided_labels.clone(),
+            merge_tree: self.merge_tree.clone(),
+            tree_count: self.tree_count,
         }
     }
 

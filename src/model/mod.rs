@@ -31,12 +31,14 @@ pub mod init;
 pub mod islands;
 pub mod label_fit;
 pub mod limit;
+pub mod merge_tree;
 pub mod memory;
 pub mod motion_labels;
 pub mod multires;
 pub mod params;
 pub mod part_count;
 pub mod result;
+pub mod robustness;
 pub mod squarem;
 
 pub use params::{LambdaRule, Params, PartRule};

@@ -16,14 +16,19 @@ pub enum LambdaRule {
     PaperEq18,
 }
 
-/// How Algorithm 1 decides how many parts there are.
+/// How the parts are found and how many there are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum PartRule {
-    /// Scale-free ([`super::distinct`]): the refinement splits freely; then flesh between parts (a part moving
-    /// as a fixed blend of two neighbours) is dissolved, and adjacent parts whose motions are not distinct are
-    /// merged. Uses `distinct_ratio` and `blend_ratio`, both dimensionless. Default.
+    /// A function of the population, not of a random start ([`super::merge_tree`]): small patches merged
+    /// greedily by the part rule's score into one merge tree; AECM from its partition; then the scale-free rule
+    /// (flesh dissolved, parts without a distinct motion merged, read off a tree of the fitted parts). Default.
     #[default]
+    Tree,
+    /// Algorithm 1 (coarse k-means++ start, refinement) with the scale-free rule ([`super::distinct`]): the
+    /// refinement splits freely; then flesh between parts (a part moving as a fixed blend of two neighbours) is
+    /// dissolved, and adjacent parts whose motions are not distinct are merged. Uses `distinct_ratio` and
+    /// `blend_ratio`, both dimensionless. Depends on the seed.
     Distinct,
     /// The paper's: stop splitting when a part's mean variance falls below `refine_threshold` (absolute, unit-box
     /// units²), and merge neighbours below `merge_ratio * refine_threshold`. Depends on the shape's size.
@@ -60,7 +65,7 @@ pub struct Params {
     /// well-spread vertices and only the final AECM on all of them; 0 runs every stage on all vertices (the full
     /// hierarchy). Only with `refine`. Default 2000.
     pub subset_vertices: usize,
-    /// How the part count is decided. Default [`PartRule::Distinct`].
+    /// How the parts are found and counted. Default [`PartRule::Tree`].
     pub part_rule: PartRule,
     /// [`PartRule::Distinct`]: two adjacent parts stay apart only if moving both by one rigid motion raises the
     /// squared error of the smaller one, per vertex, to at least this many times a typical part's variance; and
@@ -107,7 +112,7 @@ impl Default for Params {
             restarts: 4,
             refine: true,
             subset_vertices: 2000,
-            part_rule: PartRule::Distinct,
+            part_rule: PartRule::Tree,
             distinct_ratio: 4.0,
             blend_ratio: 0.1,
             refine_threshold: 1e-5,
@@ -122,64 +127,174 @@ impl Default for Params {
     }
 }
 
+/// What each field of the page's fit form (and the same CLI flags) allows, in words: the one text the page, the
+/// CLI and [`Params::validate`] give.
+pub const ALLOWED_PARTS: &str = "a whole number from 1 to 512 (try 11)";
+pub const ALLOWED_SEED: &str = "a whole number from 0 to 18446744073709551615 (try 0)";
+pub const ALLOWED_TOL: &str = "a positive number (try 1e-3)";
+pub const ALLOWED_VARIANCE_FLOOR: &str = "a number in (0, 1) unit-box units² (try 1e-7)";
+pub const ALLOWED_TARGET_PARTS: &str = "a whole number of at least 1, or auto (Algorithm 1's own count)";
+
+/// A field of the fit form that cannot be used: its name (camelCase, as in [`Params`]'s JSON and the page's
+/// form) and why, with what is allowed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FieldProblem {
+    pub field: &'static str,
+    pub message: String,
+}
+
 impl Params {
-    /// Checks every field; the message names the field, the value, and the valid range.
-    pub fn validate(&self) -> Result<()> {
-        let bad = |m: String| Err(Error::Params(m));
-        if self.parts == 0 || self.parts > 512 {
-            return bad(format!("parts = {} must be between 1 and 512", self.parts));
-        }
-        if !(self.tol > 0.0 && self.tol.is_finite()) {
-            return bad(format!("tol = {} must be a positive number (try 1e-3)", self.tol));
-        }
-        if self.max_iter == 0 || self.max_iter > 100_000 {
-            return bad(format!("max_iter = {} must be between 1 and 100000", self.max_iter));
-        }
-        if !(self.variance_floor > 0.0 && self.variance_floor < 1.0) {
-            return bad(format!("variance_floor = {} must be in (0, 1) unit-box units² (try 1e-7)", self.variance_floor));
-        }
-        if self.restarts == 0 || self.restarts > 100 {
-            return bad(format!("restarts = {} must be between 1 and 100", self.restarts));
-        }
-        if !(self.refine_threshold >= 0.0 && self.refine_threshold.is_finite()) {
-            return bad(format!("refine_threshold = {} must be >= 0", self.refine_threshold));
-        }
-        if !(self.distinct_ratio > 0.0 && self.distinct_ratio.is_finite()) {
-            return bad(format!("distinct_ratio = {} must be a positive number (try 4)", self.distinct_ratio));
-        }
-        if !(0.0..1.0).contains(&self.blend_ratio) {
-            return bad(format!("blend_ratio = {} must be in [0, 1) (try 0.1; 0 keeps every part)", self.blend_ratio));
-        }
-        if !(0.0..=1.0).contains(&self.merge_ratio) {
-            return bad(format!("merge_ratio = {} must be in [0, 1]", self.merge_ratio));
-        }
-        if self.max_subparts == 0 || self.max_subparts > 64 {
-            return bad(format!("max_subparts = {} must be between 1 and 64", self.max_subparts));
-        }
-        if !(0.0..1.0).contains(&self.refine_min_gain) {
-            return bad(format!("refine_min_gain = {} must be in [0, 1)", self.refine_min_gain));
-        }
-        if self.min_part_vertices == 0 {
-            return bad("min_part_vertices must be at least 1".into());
-        }
-        if !(self.refine_tol > 0.0 && self.refine_tol.is_finite()) {
-            return bad(format!("refine_tol = {} must be a positive number (try 1e-2)", self.refine_tol));
-        }
-        if self.subset_vertices > 0 && self.subset_vertices < 64 {
-            return bad(format!(
-                "subset_vertices = {} must be 0 (every stage on all vertices) or at least 64 (try 2000)",
-                self.subset_vertices
-            ));
-        }
-        if self.target_parts == Some(0) {
-            return bad("target_parts = 0 must be at least 1 (or none: Algorithm 1's own count)".into());
-        }
-        if self.refine_max_iter == 0 {
-            return bad("refine_max_iter must be at least 1".into());
+    /// Sets one field from text as typed in the page's form or on the command line: `parts`, `seed`, `tol`,
+    /// `varianceFloor` or `targetParts` (empty or "auto": none). The value is checked against what the field
+    /// allows; the error says what was typed and what is allowed.
+    pub fn set_field(&mut self, field: &str, text: &str) -> std::result::Result<(), String> {
+        let t = text.trim();
+        let whole = |allowed: &str| -> std::result::Result<u64, String> {
+            if t.is_empty() {
+                return Err(format!("is empty: it must be {allowed}"));
+            }
+            t.parse::<u64>().map_err(|_| format!("'{t}' is not a whole number: it must be {allowed}"))
+        };
+        let number = |allowed: &str| -> std::result::Result<f64, String> {
+            if t.is_empty() {
+                return Err(format!("is empty: it must be {allowed}"));
+            }
+            match t.parse::<f64>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                _ => Err(format!("'{t}' is not a number: it must be {allowed}")),
+            }
+        };
+        match field {
+            "parts" => self.parts = whole(ALLOWED_PARTS)?.min(usize::MAX as u64) as usize,
+            "seed" => self.seed = whole(ALLOWED_SEED)?,
+            "tol" => self.tol = number(ALLOWED_TOL)?,
+            "varianceFloor" => self.variance_floor = number(ALLOWED_VARIANCE_FLOOR)?,
+            "targetParts" => {
+                self.target_parts = if t.is_empty() || t.eq_ignore_ascii_case("auto") {
+                    None
+                } else {
+                    Some(whole(ALLOWED_TARGET_PARTS)?.min(usize::MAX as u64) as usize)
+                }
+            }
+            other => return Err(format!("no field {other} (parts, seed, tol, varianceFloor, targetParts)")),
         }
         Ok(())
     }
+
+    /// These parameters with the form's fields (name, text) set over them, every field checked: the
+    /// parameters, or one problem per field that cannot be used (each field's text first, then its range).
+    pub fn with_fields(&self, fields: &[(&str, &str)]) -> std::result::Result<Params, Vec<FieldProblem>> {
+        let mut p = self.clone();
+        let mut problems = Vec::new();
+        for &(name, text) in fields {
+            if let Err(m) = p.set_field(name, text) {
+                let field = FIELDS.iter().find(|f| f.0 == name).map_or("unknown", |f| f.0);
+                problems.push(FieldProblem { field, message: m });
+            }
+        }
+        for (field, message) in p.problems() {
+            if !problems.iter().any(|q| q.field == field) {
+                // "= 0 must be ..." after the field's name in validate(); here the value leads
+                problems.push(FieldProblem { field, message: message.trim_start_matches("= ").to_string() });
+            }
+        }
+        if problems.is_empty() {
+            Ok(p)
+        } else {
+            Err(problems)
+        }
+    }
+
+    /// Checks every field; the message names the field, the value, and the valid range.
+    pub fn validate(&self) -> Result<()> {
+        match self.problems().into_iter().next() {
+            Some((field, m)) => {
+                let snake = FIELDS.iter().find(|f| f.0 == field).map_or(field, |f| f.1);
+                Err(Error::Params(format!("{snake} {m}")))
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// Every field that is out of its range: (camelCase name, "= value must be ...").
+    pub fn problems(&self) -> Vec<(&'static str, String)> {
+        let mut out: Vec<(&'static str, String)> = Vec::new();
+        let mut bad = |f: &'static str, m: String| out.push((f, m));
+        if self.parts == 0 || self.parts > 512 {
+            bad("parts", format!("= {} must be {ALLOWED_PARTS}", self.parts));
+        }
+        if !(self.tol > 0.0 && self.tol.is_finite()) {
+            bad("tol", format!("= {} must be {ALLOWED_TOL}", self.tol));
+        }
+        if self.max_iter == 0 || self.max_iter > 100_000 {
+            bad("maxIter", format!("= {} must be between 1 and 100000", self.max_iter));
+        }
+        if !(self.variance_floor > 0.0 && self.variance_floor < 1.0) {
+            bad("varianceFloor", format!("= {} must be {ALLOWED_VARIANCE_FLOOR}", self.variance_floor));
+        }
+        if self.restarts == 0 || self.restarts > 100 {
+            bad("restarts", format!("= {} must be between 1 and 100", self.restarts));
+        }
+        if !(self.refine_threshold >= 0.0 && self.refine_threshold.is_finite()) {
+            bad("refineThreshold", format!("= {} must be >= 0", self.refine_threshold));
+        }
+        if !(self.distinct_ratio > 0.0 && self.distinct_ratio.is_finite()) {
+            bad("distinctRatio", format!("= {} must be a positive number (try 4)", self.distinct_ratio));
+        }
+        if !(0.0..1.0).contains(&self.blend_ratio) {
+            bad("blendRatio", format!("= {} must be in [0, 1) (try 0.1; 0 keeps every part)", self.blend_ratio));
+        }
+        if !(0.0..=1.0).contains(&self.merge_ratio) {
+            bad("mergeRatio", format!("= {} must be in [0, 1]", self.merge_ratio));
+        }
+        if self.max_subparts == 0 || self.max_subparts > 64 {
+            bad("maxSubparts", format!("= {} must be between 1 and 64", self.max_subparts));
+        }
+        if !(0.0..1.0).contains(&self.refine_min_gain) {
+            bad("refineMinGain", format!("= {} must be in [0, 1)", self.refine_min_gain));
+        }
+        if self.min_part_vertices == 0 {
+            bad("minPartVertices", "= 0 must be at least 1".into());
+        }
+        if !(self.refine_tol > 0.0 && self.refine_tol.is_finite()) {
+            bad("refineTol", format!("= {} must be a positive number (try 1e-2)", self.refine_tol));
+        }
+        if self.subset_vertices > 0 && self.subset_vertices < 64 {
+            bad(
+                "subsetVertices",
+                format!("= {} must be 0 (every stage on all vertices) or at least 64 (try 2000)", self.subset_vertices),
+            );
+        }
+        if self.target_parts == Some(0) {
+            bad("targetParts", format!("= 0 must be {ALLOWED_TARGET_PARTS}"));
+        }
+        if self.refine_max_iter == 0 {
+            bad("refineMaxIter", "= 0 must be at least 1".into());
+        }
+        out
+    }
 }
+
+/// (camelCase, snake_case) names of the fields [`Params::problems`] and [`Params::set_field`] know.
+const FIELDS: &[(&str, &str)] = &[
+    ("parts", "parts"),
+    ("seed", "seed"),
+    ("tol", "tol"),
+    ("maxIter", "max_iter"),
+    ("varianceFloor", "variance_floor"),
+    ("restarts", "restarts"),
+    ("refineThreshold", "refine_threshold"),
+    ("distinctRatio", "distinct_ratio"),
+    ("blendRatio", "blend_ratio"),
+    ("mergeRatio", "merge_ratio"),
+    ("maxSubparts", "max_subparts"),
+    ("refineMinGain", "refine_min_gain"),
+    ("minPartVertices", "min_part_vertices"),
+    ("refineTol", "refine_tol"),
+    ("subsetVertices", "subset_vertices"),
+    ("targetParts", "target_parts"),
+    ("refineMaxIter", "refine_max_iter"),
+];
 
 #[cfg(test)]
 mod tests {
@@ -203,5 +318,30 @@ mod tests {
                 other => panic!("{field}: {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn form_fields_are_read_and_each_bad_one_is_named_with_what_is_allowed() {
+        let base = Params { refine: false, ..Params::default() };
+        let p = base.with_fields(&[("parts", " 7 "), ("targetParts", "auto"), ("seed", "3"), ("tol", "1e-4"), ("varianceFloor", "1e-6")]).unwrap();
+        assert_eq!((p.parts, p.target_parts, p.seed, p.tol, p.variance_floor, p.refine), (7, None, 3, 1e-4, 1e-6, false));
+        assert_eq!(base.with_fields(&[("targetParts", "12")]).unwrap().target_parts, Some(12));
+        let e = base.with_fields(&[("tol", "abc"), ("targetParts", "seven"), ("parts", "0"), ("varianceFloor", "")]).unwrap_err();
+        let by = |f: &str| e.iter().find(|q| q.field == f).map(|q| q.message.clone()).unwrap_or_default();
+        assert_eq!(e.len(), 4, "{e:?}");
+        assert_eq!(by("tol"), format!("'abc' is not a number: it must be {ALLOWED_TOL}"));
+        assert_eq!(by("targetParts"), format!("'seven' is not a whole number: it must be {ALLOWED_TARGET_PARTS}"));
+        assert_eq!(by("parts"), format!("0 must be {ALLOWED_PARTS}"));
+        assert!(by("varianceFloor").starts_with("is empty"), "{e:?}");
+        for bad in ["-1", "1.5", "NaN", "inf"] {
+            assert!(base.with_fields(&[("parts", bad)]).is_err(), "parts {bad}");
+        }
+        assert!(base.with_fields(&[("tol", "NaN")]).is_err() && base.with_fields(&[("tol", "-1e-3")]).is_err());
+        assert!(base.with_fields(&[("varianceFloor", "2")]).unwrap_err()[0].message.contains("(0, 1)"));
+        assert!(base.with_fields(&[("targetParts", "0")]).unwrap_err()[0].field == "targetParts");
+        // the CLI's words for the same value are the same (its flags call set_field)
+        let mut q = Params::default();
+        assert_eq!(q.set_field("tol", "abc").unwrap_err(), by("tol"));
+        assert!(q.set_field("nope", "1").is_err());
     }
 }

@@ -1,6 +1,7 @@
 // The wasm boundary, through the Node build of the bindings (pkg-node/, built with the page): errors cross as
 // data ({kind, file, line, message} and `problems`), objects passed in refuse unknown fields naming them,
-// everything that comes out is camelCase, and the OBJ of a shown mesh comes back in the original units.
+// everything that comes out is camelCase, the OBJ of a shown mesh comes back in the original units, and a file
+// of an extension the core does not read is refused by name.
 // Run: npm run build && node --test tests/e2e/boundary.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -41,6 +42,18 @@ function fitted() {
   while (!fitter.isDone()) fitter.run(1000);
   return { files, pop, model: fitter.result() };
 }
+
+test('a file of an extension the core does not read is refused by name with what it reads; .mtl files are ignored', () => {
+  const tri = (x) => bytes(`v ${x} 0 0\nv 1 0 0\nv 0 1 0.5\nf 1 2 3\n`);
+  const e = thrown(() => new w.Population(['a.obj', 'scene.blend', 'b.obj'], [tri(0), bytes('BLENDER-v300\0\0\0binary'), tri(0.2)]));
+  assert.equal(e.problems.length, 1, JSON.stringify(e.problems));
+  const [p] = e.problems;
+  assert.deepEqual([p.kind, p.file, p.line], ['population', 'scene.blend', null]);
+  assert.equal(p.message, 'posemfa reads .obj, .ply, .glb/.gltf, .fbx, .usd/.usda/.usdc/.usdz, .pc2/.mdd with a base mesh; not .blend: export the poses as one of these (e.g. glTF from Blender), or leave the file out');
+  const pop = new w.Population(['a.obj', 'a.mtl', 'b.obj'], [tri(0), bytes('newmtl skin\n'), tri(0.2)]);
+  assert.equal(pop.nShapes, 2);
+  assert.equal(pop.source, '2 OBJ files');
+});
 
 test('OBJ problems cross as data: every file, its line, kind and message', () => {
   const e = thrown(() => new w.Population(['a.obj', 'b.obj', 'c.obj'], [
@@ -139,7 +152,7 @@ test('what comes out is camelCase: summary, examples, articulation report, groun
   while (!f.isDone()) f.run(1000);
   const g = synth.groundTruth(f.result());
   // a teaching fit's progress objects and stages, step by step through Algorithm 1 (the refinement's subParts)
-  const t = new w.Fitter(sp, { ...w.defaultParams(), parts: 3 });
+  const t = new w.Fitter(sp, { ...w.defaultParams(), parts: 3, partRule: 'distinct' });
   const seen = [t.stage()];
   while (!t.isDone()) seen.push(t.step(), t.stage(), t.currentResponsibilities());
   assert.deepEqual(notCamel(seen), []);

@@ -1,5 +1,6 @@
 // Mesh formats on the page: files written by Blender (tests/fixtures/blender: a shape-key .glb, a skinned .glb
-// split at every face corner), PLY (ASCII and binary) and a .pc2 point cache with its base mesh, picked through
+// split at every face corner, FBX with shape-key animation and with an armature), USD point caches written by
+// usd-core (tests/fixtures/usd), PLY (ASCII and binary) and a .pc2 point cache with its base mesh, picked through
 // the file input, are read by the core (mesh::load), fitted, and the population panel says where the poses came
 // from; a damaged .glb is refused with its name and what to do, and the population and model shown are kept.
 // Run: npm run build && node --test tests/e2e/formats.test.mjs
@@ -108,6 +109,32 @@ test('a skinned .glb split at every face corner by Blender welds back to the mes
   assert.equal(s.vertices, 1198);
   assert.ok(s.shapes >= 2, `${s.shapes} poses`);
   assert.match(await shownSource(page), /frames of animation .* in quadruped-skinned-seams\.glb; 7176 vertices welded to 1198 \(seams split by the exporter\)/);
+  await context.close();
+});
+
+test('FBX files written by Blender (shape-key animation, skinned character) are read and fitted', async () => {
+  const { page, context } = await fresh();
+  assert.equal(await fitBinary(page, [fixture('quadruped-shapekeys.fbx')]), 'fitted');
+  let s = await summary(page);
+  assert.deepEqual([s.shapes, s.vertices], [6, 1198]);
+  assert.match(await shownSource(page), /^Poses: 6 frames of posed in quadruped-shapekeys\.fbx \(animation 'Scene', 24 fps, .*5 blend shapes\); Y up, centimetres \(UnitScaleFactor 1\) turned to metres; 1198 vertices$/);
+  assert.equal(await fitBinary(page, [fixture('quadruped-skinned.fbx')]), 'fitted');
+  s = await summary(page);
+  assert.deepEqual([s.shapes, s.vertices], [121, 1198]);
+  assert.match(await shownSource(page), /^Poses: 121 frames of mesh in quadruped-skinned\.fbx \(animation 'Scene', 24 fps, .*skinned by 18 bones\)/);
+  await context.close();
+});
+
+test('USD point caches written by usd-core (.usda, .usdc, .usdz) are read and fitted', async () => {
+  const { page, context } = await fresh();
+  for (const ext of ['usda', 'usdc', 'usdz']) {
+    const name = `arm-pointcache.${ext}`;
+    const buffer = readFileSync(join(ROOT, 'tests/fixtures/usd', name));
+    assert.equal(await fitBinary(page, [{ name, buffer }], { parts: 3 }), 'fitted', name);
+    const s = await summary(page);
+    assert.deepEqual([s.shapes, s.vertices], [5, 408], name);
+    assert.equal(await shownSource(page), `Poses: 5 frames of Body in ${name} (time-sampled points of /World/Character/Body, one per time sample, times 1 to 5 at 24 per second); upAxis Z turned to Y up, metersPerUnit 0.01 turned to metres; 408 vertices`);
+  }
   await context.close();
 });
 

@@ -6,7 +6,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readdirSync, readFileSync } from 'node:fs';
-import { join, relative, resolve } from 'node:path';
+import { dirname, join, relative, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
 const ROOT = resolve(fileURLToPath(new URL('../..', import.meta.url)));
@@ -51,4 +51,59 @@ test('no geometry in www/: no trigonometry or vector lengths outside the camera 
   }
   assert.ok(read >= 20, `read only ${read} files`);
   assert.deepEqual(found, []);
+});
+
+// Issue 25: imports in www/ go one way. Every static `import ... from './x.js'` (and `import './x.js'`) of a
+// www/ JS file to another www/ file is an edge; a cycle (a module that, through its imports, imports itself)
+// fails with the cycle's files in order.
+export function importGraph(files = sources().filter((f) => /\.(js|mjs)$/.test(f))) {
+  const graph = new Map();
+  for (const f of files) {
+    const text = readFileSync(f, 'utf8');
+    const deps = [];
+    for (const m of text.matchAll(/^\s*(?:import|export)\s+(?:[^'";]*?\s+from\s+)?['"](\.{1,2}\/[^'"]+)['"]/gm)) {
+      const target = resolve(dirname(f), m[1].replace(/\?.*$/, ''));
+      if (target.startsWith(WWW) && !relative(WWW, target).startsWith('pkg')) deps.push(target);
+    }
+    graph.set(f, deps);
+  }
+  return graph;
+}
+
+export function findCycle(graph) {
+  const state = new Map(); // 1: on the path, 2: done
+  const path = [];
+  const visit = (f) => {
+    state.set(f, 1);
+    path.push(f);
+    for (const d of graph.get(f) ?? []) {
+      if (state.get(d) === 1) return [...path.slice(path.indexOf(d)), d];
+      if (!state.has(d)) {
+        const c = visit(d);
+        if (c) return c;
+      }
+    }
+    path.pop();
+    state.set(f, 2);
+    return null;
+  };
+  for (const f of graph.keys()) {
+    if (!state.has(f)) {
+      const c = visit(f);
+      if (c) return c.map((x) => `www/${relative(WWW, x)}`);
+    }
+  }
+  return null;
+}
+
+test('www/ has no import cycle (issue 25)', () => {
+  const graph = importGraph();
+  const edges = [...graph.values()].reduce((a, d) => a + d.length, 0);
+  assert.ok(graph.size >= 20 && edges >= 40, `read ${graph.size} files, ${edges} imports`);
+  // the check itself finds a cycle where there is one
+  const a = join(WWW, 'a.js');
+  const b = join(WWW, 'b.js');
+  assert.deepEqual(findCycle(new Map([[a, [b]], [b, [a]]])), ['www/a.js', 'www/b.js', 'www/a.js']);
+  assert.equal(findCycle(new Map([[a, [b]], [b, []]])), null);
+  assert.equal(findCycle(graph), null);
 });

@@ -1,9 +1,9 @@
-// The export buttons: the model as JSON, the shown mesh as OBJ in the population's original units, and the
+// The export buttons: the model as JSON, the shown meshes as OBJ in the population's original units, and the
 // rigged model as binary glTF. Each file comes from the worker (the Rust exporters: src/export/).
 import { state, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { poseName } from '../views/render.js';
-import { interpValues } from './interp.js';
+import { interpValues } from './interp-values.js';
 import { showProblems } from '../problems.js';
 
 const $ = (id) => document.getElementById(id);
@@ -22,6 +22,8 @@ const safeName = (s) => s.replace(/\.obj$/i, '').replace(/[^A-Za-z0-9._-]+/g, '_
 function showButtons() {
   $('export-json').disabled = !state.model;
   $('export-obj').disabled = !state.pop;
+  const n = state.shown.length;
+  $('export-obj').textContent = n > 1 ? `OBJ of the ${n} shown meshes` : 'OBJ of the shown mesh';
   $('export-gltf').disabled = !state.model;
 }
 
@@ -50,14 +52,18 @@ const orReport = (f) => async () => {
 
 export function installExports() {
   $('export-json').addEventListener('click', orReport(async () => download('posemfa-model.json', await query('toJson'), 'application/json')));
-  // The core writes the shown mesh (the left one) in the population's original units, exact floats.
+  // The core writes what the view shows, in the population's original units, exact floats: every mesh shown
+  // side by side as one OBJ object named for what it is (original | reconstruction, coarse | refined | final...),
+  // a mesh coloured by parts with one group per part of that stage.
   $('export-obj').addEventListener('click', orReport(async () => {
-    const slot = state.shown[0];
-    if (!slot) return;
-    const what = state.mode === 'interp' ? `${slot.name} interpolation t=${interpValues().t}` : `${slot.name}`;
-    const name = `posemfa-${safeName(poseName(state.pose))}-${safeName(what)}.obj`;
-    const header = `${what}\nposemfa, ${state.pop.nVertices} vertices, ${state.pop.faces.length / 3} triangles`;
-    download(name, await query('objText', slot.what, header), 'model/obj');
+    const slots = state.shown;
+    if (!slots.length) return;
+    const names = slots.map((x) => x.name);
+    const t = state.mode === 'interp' ? `-t${interpValues().t.toFixed(2)}` : '';
+    const name = `posemfa-${safeName(poseName(state.pose))}-${safeName(names.join('+'))}${t}.obj`;
+    const header = `${$('caption').textContent}\nobjects: ${names.join(', ')}\nposemfa, ${state.pop.nVertices} vertices and ${state.pop.faces.length / 3} triangles per object`;
+    const meshes = slots.map((x) => ({ name: x.name, what: x.what, parts: state.model ? x.parts ?? null : null }));
+    download(name, await query('objScene', meshes, header), 'model/obj');
   }));
   // The rig as chosen in the panel, built, written and measured by the core (the same as `posemfa export-gltf` and
   // `posemfa rig-report`); its E_RMS is shown with the file.
@@ -73,7 +79,7 @@ export function installExports() {
     delete $('rig-erms').dataset.erms;
   });
   subscribe((s, changed) => {
-    if (changed.has('pop') || changed.has('model') || changed.has('phase')) showButtons();
+    if (changed.has('pop') || changed.has('model') || changed.has('phase') || changed.has('shown')) showButtons();
     if (changed.has('model')) {
       $('rig-erms').textContent = '–';
       delete $('rig-erms').dataset.erms;

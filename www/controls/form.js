@@ -1,11 +1,17 @@
 // The fit form: parameters in and out (the core's defaults fill it), Fit, Cancel, Defaults, and the example
-// picker in the header (Generate & fit).
+// picker in the header (Generate & fit). The core checks the form's fields (wasm formParams, the same words as
+// the CLI's): a field it cannot use is outlined and named with what it allows, and no fit starts until it is
+// fixed; the message goes as soon as the value is fixed or Defaults is pressed.
 import { state } from '../state.js';
 
 const $ = (id) => document.getElementById(id);
 const form = () => $('params').elements;
+const TEXT_FIELDS = ['parts', 'targetParts', 'seed', 'tol', 'varianceFloor'];
 
-/** Shows fit parameters in the form. */
+let checker = null; // (base, fields) => Promise<{ params, problems: [{ field, message }] }> (the core's check)
+let checking = Promise.resolve(null);
+
+/** Shows fit parameters in the form (and clears the marks of fields the core refused). */
 export function fillParams(p) {
   const f = form();
   f.parts.value = p.parts;
@@ -15,36 +21,82 @@ export function fillParams(p) {
   f.varianceFloor.value = p.varianceFloor;
   f.paperLambda.checked = p.lambdaRule === 'paper-eq18';
   f.refine.checked = p.refine;
+  checking = Promise.resolve(null); // a check still in flight is of the old values
+  showFieldProblems([]);
 }
 
 // "Parts in the end": empty or auto = Algorithm 1's own count (null); a whole number as a number; anything else
-// goes as typed, and the core refuses it with a message naming targetParts.
+// goes as typed (checkedParams refuses it before a fit).
 const bones = (v) => {
   const t = v.trim();
   if (t === '' || t.toLowerCase() === 'auto') return null;
   return /^\d+$/.test(t) ? Number(t) : t;
 };
 
-/** The fit parameters: the form's over the hidden ones (state.baseParams). */
+// The form's check boxes over the hidden parameters (state.baseParams).
+const base = () => ({
+  ...state.baseParams,
+  lambdaRule: form().paperLambda.checked ? 'paper-eq18' : 'exact',
+  refine: form().refine.checked,
+});
+
+/** The fit parameters as the form shows them, unchecked (for the link; a fit uses checkedParams). */
 export function readParams() {
   const f = form();
   return {
-    ...state.baseParams,
+    ...base(),
     parts: Number(f.parts.value),
     targetParts: bones(f.targetParts.value),
     seed: Number(f.seed.value),
     tol: Number(f.tol.value),
     varianceFloor: Number(f.varianceFloor.value),
-    lambdaRule: f.paperLambda.checked ? 'paper-eq18' : 'exact',
-    refine: f.refine.checked,
   };
 }
 
-/** actions: { startFit, cancelFit, runExample }. */
-export function installForm({ startFit, cancelFit, runExample }) {
+const labelOf = (name) => form()[name].closest('label').firstChild.textContent.trim();
+
+// Every field the core refused: outlined (aria-invalid), and one line under the form naming it.
+function showFieldProblems(problems) {
+  const f = form();
+  for (const name of TEXT_FIELDS) {
+    const bad = problems.some((p) => p.field === name);
+    f[name].classList.toggle('invalid', bad);
+    if (bad) f[name].setAttribute('aria-invalid', 'true');
+    else f[name].removeAttribute('aria-invalid');
+  }
+  const box = $('param-errors');
+  box.replaceChildren(...problems.map((p) => {
+    const li = document.createElement('li');
+    li.dataset.field = p.field;
+    li.textContent = `${TEXT_FIELDS.includes(p.field) ? labelOf(p.field) : p.field}: ${p.message}`;
+    return li;
+  }));
+  $('params').dataset.invalid = problems.length ? '1' : '';
+}
+
+/** The core's check of the form (the latest one asked); shows what it refuses. Resolves to the parameters, or
+ * null when a field cannot be used. */
+export function checkedParams() {
+  if (!checker) return Promise.resolve(readParams());
+  const fields = Object.fromEntries(TEXT_FIELDS.map((n) => [n, String(form()[n].value)]));
+  const mine = checker(base(), fields).then((r) => {
+    if (mine === checking) showFieldProblems(r.problems);
+    return r.params;
+  });
+  checking = mine;
+  return mine;
+}
+
+/** actions: { startFit, cancelFit, runExample, check }. */
+export function installForm({ startFit, cancelFit, runExample, check }) {
+  checker = check;
   $('params').addEventListener('submit', (e) => {
     e.preventDefault();
     startFit();
+  });
+  // a refused field is checked again as it is typed: its mark goes as soon as it is fixed
+  $('params').addEventListener('input', (e) => {
+    if (TEXT_FIELDS.includes(e.target.name) && $('params').dataset.invalid) checkedParams();
   });
   $('cancel').addEventListener('click', cancelFit);
   $('reset-params').addEventListener('click', () => state.baseParams && fillParams(state.baseParams));

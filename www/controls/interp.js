@@ -3,20 +3,10 @@
 import { state, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { renderView, poseName } from '../views/render.js';
+import { interpValues } from './interp-values.js';
 
 const $ = (id) => document.getElementById(id);
 const play = { playing: false, last: 0, dir: 1 };
-
-/** The interpolation asked for: poses a -> b at t, side by side or not, and the core's options. */
-export function interpValues() {
-  return {
-    a: Number($('pose-a').value),
-    b: Number($('pose-b').value),
-    t: Number($('interp-t').value),
-    side: $('side-by-side').checked,
-    opts: { skin: $('interp-skin').value, residual: $('interp-residual').checked },
-  };
-}
 
 function onInput() {
   $('report').replaceChildren();

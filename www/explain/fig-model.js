@@ -3,6 +3,8 @@
 import { Figure, PoseFigure, Ticker, GREY, QUAD, SNAKE, SYNTH } from './figure.js';
 import { hexToRgb, paletteColours, errorColours } from '../colors.js';
 
+const FULL_SCALE = 180; // degrees: the rotation-angle bars' full width
+
 /** Per-vertex colours: the chosen part in its colour, the rest grey. */
 function highlight(labels, part, colour) {
   const out = new Float32Array(labels.length * 3);
@@ -109,6 +111,7 @@ export class Model extends PoseFigure {
     this.part = k;
     this.partSel.value = String(k);
     this.draw(frame);
+    this.refreshState(); // the status names the part shown
     try {
       const angles = await this.v.handle.query('rotationAngles', k, 0);
       this.angles = angles;
@@ -128,14 +131,18 @@ export class Model extends PoseFigure {
     this.drawBars();
   }
 
+  // One fixed scale for every part: the full width is 180°, the largest angle a rotation can have, so a part
+  // that barely turns gets short bars (not bars scaled to its own largest angle).
   drawBars() {
     const box = this.$('[data-out=angles]');
     if (!this.angles) return;
-    const max = Math.max(...this.angles, 1);
-    box.replaceChildren(...Array.from(this.angles, (a, i) => {
+    const scale = document.createElement('div');
+    scale.className = 'bars-title';
+    scale.textContent = `Rotation of part ${this.part + 1} relative to pose 1; bar width: angle, full width = ${FULL_SCALE}°`;
+    box.replaceChildren(scale, ...Array.from(this.angles, (a, i) => {
       const bar = document.createElement('div');
       bar.className = `bar${i === this.pose ? ' current' : ''}`;
-      bar.innerHTML = `<span class="lbl">pose ${i + 1}</span><span class="fill" style="width:${(100 * a) / max}%;background:${this.partColour[this.part]}"></span><span class="val">${a.toFixed(1)}°</span>`;
+      bar.innerHTML = `<span class="lbl">pose ${i + 1}</span><span class="fill" style="width:${(100 * Math.min(a, FULL_SCALE)) / FULL_SCALE}%;background:${this.partColour[this.part]}"></span><span class="val">${a.toFixed(1)}°</span>`;
       return bar;
     }));
   }

@@ -8,6 +8,7 @@ import { Responsibilities, Aecm } from './fig-aecm.js';
 import { Eq18, Ends } from './fig-paper.js';
 import { Hierarchy, Reconstruction } from './fig-hierarchy.js';
 import { Interpolation, Limit } from './fig-interp.js';
+import { PoseSpace } from './fig-pose.js';
 
 export const FIGURES = {
   poses: (ctx) => new Poses(ctx),
@@ -19,7 +20,8 @@ export const FIGURES = {
   hierarchy: (ctx) => new Hierarchy(ctx),
   reconstruction: (ctx) => new Reconstruction(ctx),
   interpolation: (ctx) => new Interpolation(ctx),
-  // the app's "two limbs that never move apart" example (its tied front legs), on a smaller mesh
+  posespace: (ctx) => new PoseSpace(ctx),
+  // the app's "two legs that always move together" example (its tied front legs), on a smaller mesh
   tied: (ctx) => new Limit(ctx, ({ examples }) => ({ ...examples.find((e) => e.id === 'too-few-poses').spec, vertices: QUAD.vertices }), { ...SYNTH }),
   blob: (ctx) => new Limit(ctx, BLOB, { ...SYNTH, parts: 4 }),
 };

@@ -17,6 +17,7 @@
 import init, * as wasm from '../pkg/posemfa.js';
 import wasmUrl from '../pkg/posemfa_bg.wasm?url';
 import { Teacher } from '../teach-worker.js';
+import { poseQueries } from '../pose-queries.js';
 
 const SLICE_MS = 25;
 const PALETTE_SIZE = 12; // colors.js PALETTE.length
@@ -123,7 +124,7 @@ class Session {
     const t0 = performance.now();
     let f;
     try {
-      f = new wasm.Fitter(this.population, params);
+      f = new wasm.Fitter(this.population, { ...params, partRule: 'distinct' }); // the article explains Algorithm 1
     } catch (e) {
       this.post({ type: 'fit-error', id, message: String(e.message ?? e) });
       return;
@@ -179,6 +180,7 @@ class Session {
       distancesToLinear: (i, j, t, opts) => this.model.distancesToLinear(i, j, t, opts ?? {}),
       latentPlaced: (i) => this.model.latentPlaced(i),
       alongLongestAxis: (i) => this.population.alongLongestAxis(i),
+      ...(this.poseQ ??= poseQueries(() => this.model)), // the pose-space figure (issue 28)
     };
     try {
       if (!Q[method]) throw new Error(`unknown query ${method}`);

@@ -30,7 +30,16 @@ export class Stepper {
     this.waiting = false;
     this.started = true;
     clearTimeout(this.timer);
+    this.label();
     this.v.handle.post({ type: 'teach-reset', id: this.id, params: this.params });
+  }
+
+  // The view's label follows the run: its iteration while stepping, its parts once done (never a finished
+  // run's words over a new one).
+  label(parts = null) {
+    this.v.handle.caption.textContent = parts === null
+      ? `Iteration ${this.iteration}, one step at a time`
+      : `${parts} parts after ${this.iteration} iterations, one step at a time`;
   }
 
   stepOnce() {
@@ -54,7 +63,7 @@ export class Stepper {
   /** A 'fitted' message; true if it was this stepper's fit, now done (its view's caption says so). */
   onFitted(m) {
     if (m.type !== 'fitted' || m.id !== this.id) return false;
-    this.v.handle.caption.textContent = `${m.model.summary.parts} parts after ${this.iteration} iterations, one step at a time`;
+    this.label(m.model.summary.parts);
     this.running = false;
     this.done = true;
     return true;
@@ -67,6 +76,7 @@ export class Stepper {
     this.waiting = false;
     this.values.push(m.step.logLikelihood);
     this.iteration = m.step.totalIterations;
+    if (m.stage?.kind !== 'done') this.label();
     if (m.stage?.kind === 'done') {
       this.done = true;
       this.running = false;

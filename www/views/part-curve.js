@@ -8,10 +8,25 @@ export function drawPartCurve(canvas, curve) {
   const surface = clearedCanvas(canvas);
   if (!surface || curve.length === 0) return;
   const { g, w, h, style } = surface;
+  // every label is drawn whole: the title goes on two lines when one is too narrow; canvas.dataset.clipped
+  // counts labels that still do not fit (the page tests read it)
+  let clipped = 0;
+  const label = (t, x, y) => {
+    if (x < 0 || x + g.measureText(t).width > w + 0.5 || y > h) clipped++;
+    g.fillText(t, x, y);
+  };
   const stop = curve[curve.length - 1];
   const kept = stop.parts;
   const next = Number.isFinite(stop.score) ? `the next pair scored ${stop.score.toFixed(1)}` : 'no pair left';
-  g.fillText(`part rule: ${curve.length - 1} merges, ${curve[0].parts} → ${kept} parts (${next})`, 4, 12);
+  const title = `part rule: ${curve.length - 1} merges, ${curve[0].parts} → ${kept} parts`;
+  let top = 20;
+  if (g.measureText(`${title} (${next})`).width + 4 <= w) label(`${title} (${next})`, 4, 12);
+  else {
+    label(title, 4, 12);
+    label(`(${next})`, 4, 25);
+    top = 33;
+  }
+  canvas.dataset.clipped = String(clipped);
   const pts = curve.filter((p) => Number.isFinite(p.score) && p.score > 0);
   if (pts.length === 0) return;
   const ys = pts.map((p) => Math.log10(p.score));
@@ -20,7 +35,7 @@ export function drawPartCurve(canvas, curve) {
   const xs = curve.map((p) => p.parts);
   const x0 = Math.min(...xs) - 0.5;
   const x1 = Math.max(...xs) + 0.5;
-  const left = 28, right = w - 6, top = 20, bottom = h - 14;
+  const left = 32, right = w - 6, bottom = h - 14;
   const x = (n) => left + ((right - left) * (n - x0)) / (x1 - x0);
   const y = (v) => bottom - ((bottom - top) * (v - lo)) / (hi - lo || 1);
   g.strokeStyle = style.color;
@@ -30,9 +45,10 @@ export function drawPartCurve(canvas, curve) {
   g.lineTo(right, bottom);
   g.stroke();
   g.globalAlpha = 1;
-  g.fillText(`10^${hi.toFixed(0)}`, 0, top + 4);
-  g.fillText(`10^${lo.toFixed(0)}`, 0, bottom);
-  g.fillText('parts →', right - 40, h - 2);
+  label(`10^${hi.toFixed(0)}`, 0, top + 4);
+  label(`10^${lo.toFixed(0)}`, 0, bottom);
+  label('parts →', w - g.measureText('parts →').width - 2, h - 2);
+  canvas.dataset.clipped = String(clipped);
   for (const p of pts) {
     g.beginPath();
     g.arc(x(p.parts), y(Math.log10(p.score)), 3, 0, 2 * Math.PI);

@@ -6,7 +6,7 @@ import { state, update, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { errorColours, RAMP_CSS } from '../colors.js';
 import { viewer } from './viewer-instance.js';
-import { interpValues } from '../controls/interp.js';
+import { interpValues } from '../controls/interp-values.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -18,13 +18,19 @@ export function partColours() {
 
 export const poseName = (i) => state.pop.names[i];
 
-const single = (positions, name, what) => [{ positions, colours: partColours(), name, what }];
+// `parts`: the fit stage whose parts colour the mesh (its OBJ export groups the faces by them), when fitted.
+const single = (positions, name, what) => [{ positions, colours: partColours(), name, what, parts: 'final' }];
 const pose = (p) => ({ kind: 'pose', pose: p });
 
 // One builder per mode: (pose positions, pose) -> { slots, caption, legend? } (async when it asks the worker).
 const VIEWS = {
   parts(P, pose) {
     const { model } = state;
+    if (model && state.treeParts !== null && state.colours.tree) {
+      // the merge tree's partition the slider asks for (controls/tree.js); its export groups by the fitted parts
+      const slots = [{ positions: P, colours: state.colours.tree, name: `pose ${poseName(pose)}`, what: { kind: 'pose', pose } }];
+      return { slots, caption: `Pose “${poseName(pose)}”, coloured by the merge tree's ${state.treeParts} parts (fitted: ${model.summary.parts})` };
+    }
     const by = model ? `part (${model.summary.parts} parts)` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
     return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, coloured by ${by}` };
   },
@@ -33,9 +39,9 @@ const VIEWS = {
     const c = state.colours;
     return {
       slots: [
-        { positions: P, colours: c.coarse.vertexColours, name: 'coarse', what: pose(p) },
-        { positions: P, colours: c.refined.vertexColours, name: 'refined', what: pose(p) },
-        { positions: P, colours: c.final.vertexColours, name: 'final', what: pose(p) },
+        { positions: P, colours: c.coarse.vertexColours, name: 'coarse', what: pose(p), parts: 'coarse' },
+        { positions: P, colours: c.refined.vertexColours, name: 'refined', what: pose(p), parts: 'refined' },
+        { positions: P, colours: c.final.vertexColours, name: 'final', what: pose(p), parts: 'final' },
       ],
       caption: `Algorithm 1 on pose “${poseName(p)}”: coarse (${s.coarseParts} parts) | refined (${s.refinedParts}) | final (${s.parts})`,
     };
@@ -47,8 +53,8 @@ const VIEWS = {
     const [maxOriginal] = await query('originalLengths', [max]);
     return {
       slots: [
-        { positions: P, colours: partColours(), name: 'original', what: pose(p) },
-        { positions: recon, colours: errorColours(errors, max), name: 'reconstruction', what: { kind: 'reconstruction', pose: p } },
+        { positions: P, colours: partColours(), name: 'original', what: pose(p), parts: 'final' },
+        { positions: recon, colours: errorColours(errors, max), name: 'reconstruction', what: { kind: 'reconstruction', pose: p }, parts: 'final' },
       ],
       caption: `Pose “${poseName(p)}”: original (parts) | reconstruction from the latent shape, coloured by per-vertex error`,
       legend: `${max.toExponential(2)} unit box (${maxOriginal.toExponential(2)} original)`,
@@ -58,13 +64,32 @@ const VIEWS = {
     return {
       slots: [
         { positions: P, colours: state.colours.truth, name: 'ground truth', what: pose(p) },
-        { positions: P, colours: state.colours.final.vertexColours, name: 'final', what: pose(p) },
+        { positions: P, colours: state.colours.final.vertexColours, name: 'final', what: pose(p), parts: 'final' },
       ],
       caption: `Pose “${poseName(p)}”: ground truth of the generator (${state.pop.truth.partNames.length} parts) | fitted (${state.model.summary.parts} parts)`,
     };
   },
-  latent() {
-    return { slots: single(state.model.latent, 'latent', { kind: 'latent' }), caption: 'The latent reference shape (eq 21): every part in its own latent frame' };
+  // The latent shape (eq 21) keeps every part in its own frame, centred on the origin: drawn as it is, the parts
+  // lie on top of each other. By default each part is placed where it is in the pose shown (its R and b).
+  async latent(P, p) {
+    const how = $('latent-place').value;
+    const name = `“${poseName(p)}”`;
+    if (how === 'frames') {
+      return {
+        slots: single(state.model.latent, 'latent-own-frames', { kind: 'latent' }),
+        caption: `The latent shape (eq 21) as the model keeps it: every part in its own frame, centred on the origin, so the ${state.model.summary.parts} parts lie on top of each other and the largest hides the rest`,
+      };
+    }
+    if (how === 'moved') {
+      return {
+        slots: single(await query('latentPlaced', p), `latent-moved-pose-${p + 1}`, { kind: 'latent-moved', pose: p }),
+        caption: `The latent shape (eq 21), every part moved by its b of pose ${name} but not turned: where the parts sit, each still facing its own frame's way`,
+      };
+    }
+    return {
+      slots: single(await query('reconstruct', p), `latent-posed-pose-${p + 1}`, { kind: 'reconstruction', pose: p }),
+      caption: `The latent shape (eq 21), every part turned by its R and moved by its b of pose ${name} (eq 22 without the residual): the parts as the model places them; pick a pose below`,
+    };
   },
   async interp() {
     const { a, b, t, side, opts } = interpValues();
@@ -72,10 +97,15 @@ const VIEWS = {
     const head = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}`;
     if (!state.model) return { slots: single(await query('linearInterpolate', a, b, t), 'linear', linear), caption: `${head}: linear vertex blending` };
     const slots = single(await query('interpolate', a, b, t, opts), 'part-wise', { kind: 'interpolation', from: a, to: b, t, options: opts });
-    if (side) slots.push({ positions: await query('linearInterpolate', a, b, t), colours: partColours(), name: 'linear', what: linear });
+    if (side) slots.push({ positions: await query('linearInterpolate', a, b, t), colours: partColours(), name: 'linear', what: linear, parts: 'final' });
     return { slots, caption: `${head}: part-wise (${opts.skin === 'smooth' ? 'smooth joints' : 'rigid parts'})${side ? ' | linear vertex blending' : ''}` };
   },
 };
+
+/** Adds a view mode built elsewhere (controls/pose.js adds `pose`), so that render.js imports none of them. */
+export function registerView(mode, build) {
+  VIEWS[mode] = build;
+}
 
 let renderToken = 0;
 

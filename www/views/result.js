@@ -34,25 +34,29 @@ function showPopulation(pop, source) {
 function showResult() {
   const s = state.model?.summary;
   $('parts-count').textContent = s ? s.parts : '–';
-  $('stage-parts').textContent = s ? `(coarse ${s.coarseParts}, refined ${s.refinedParts}${s.cancelled ? ', cancelled' : ''})` : '';
+  // the merge tree (the default part rule) starts from its own cut, not from Algorithm 1's coarse and refined stages
+  const stages = state.model?.tree ? `started from the merge tree's ${s?.coarseParts} parts` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
+  $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${s.rmseOriginal.toExponential(3)} original units` : '–';
   $('iterations').textContent = s ? `${s.iterations} in the final stage${s.converged ? ', converged' : ''}` : '–';
   $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
   $('truth-acc').textContent = accuracyText(s?.groundTruth);
   $('truth-acc').classList.toggle('good', s?.groundTruth?.ari >= 0.95);
   // the core's verdict (model::diagnosis), in its own words, next to the result
+  // a fit stopped early gets no verdict (the core's words say why)
   const d = s?.diagnosis;
-  $('diagnosis').hidden = !d;
+  $('diagnosis').hidden = !d && !s?.unfinished;
   $('diagnosis').classList.toggle('fails', d ? !d.articulated : false);
-  $('diagnosis').textContent = d ? `${d.articulated ? 'Articulated' : 'Not articulated'}: ${d.reason}.` : '';
+  $('diagnosis').classList.toggle('unfinished', !d && !!s?.unfinished);
+  $('diagnosis').textContent = d ? `${d.articulated ? 'Articulated' : 'Not articulated'}: ${d.reason}.` : s?.unfinished ? `${s.unfinished[0].toUpperCase()}${s.unfinished.slice(1)}.` : '';
   const curve = s?.partCurve ?? [];
   $('part-curve').hidden = curve.length === 0;
   drawPartCurve($('part-curve'), curve);
 }
 
-/** Shows one AECM iteration's progress object. */
-export function showStep(step) {
-  $('stage').textContent = stageText(step.stage);
+/** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since). */
+export function showStep(step, stage = step.stage) {
+  $('stage').textContent = stageText(stage);
   $('iteration').textContent = `${step.iteration} (total ${step.totalIterations})`;
   $('loglik').textContent = step.logLikelihood.toFixed(2);
 }
@@ -64,10 +68,12 @@ function fitStarted() {
 }
 
 function fitEnded(model) {
-  const { cancelled, fitMs } = model.summary;
+  const { cancelled, fitMs, logLikelihood } = model.summary;
   $('stage').textContent = cancelled ? 'cancelled: best state so far' : 'done';
   if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
   $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
+  // the model's own final value (the plot's last point), not the last progress message seen
+  $('loglik').textContent = logLikelihood?.length ? logLikelihood[logLikelihood.length - 1].toFixed(2) : '–';
   plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'best model so far' : 'final stage'}: log-likelihood`);
 }
 
@@ -84,6 +90,8 @@ export function installResult() {
     if (changed.has('pop')) showPopulation(s.pop, s.source);
     if (changed.has('fitId') && s.fitId !== null && s.phase === 'fitting') fitStarted();
     if (changed.has('model') && s.model) fitEnded(s.model);
+    // a fit that failed or was superseded without a model: the Stage field does not stay at 'starting'
+    if (changed.has('fitId') && s.fitId === null && !changed.has('model')) $('stage').textContent = s.model ? 'done' : 'idle';
     if (changed.has('pop') || changed.has('model')) showResult();
   });
 }

@@ -1,0 +1,531 @@
+//! A rig .glb this project wrote ([`super::gltf::write_glb`]), read back for posing, and written again with a
+//! clip of new poses (issue 28: `posemfa pose`, the page's pose export).
+//!
+//! Reading ([`read_rig`]): the first mesh's first primitive (POSITION, JOINTS_n / WEIGHTS_n), the first skin
+//! (joints, inverse bind matrices) and the node tree. Bone k is skin joint k; its motion in a pose is its skin
+//! matrix S_k = W_k · IBM_k (W_k the joint node's world matrix), the map from the bind positions (POSITION) to the
+//! posed mesh in scene coordinates, so the rig's skinning is v = Σ_k w_k S_k u exactly as a glTF player does it.
+//! Bone k's parent is the nearest ancestor node that is a joint; its joint point is the joint node's origin in
+//! the rest state, taken back to bind coordinates.
+//!
+//! Writing ([`GlbRig::with_clip`]): the whole document is kept (mesh, skin, other clips) and one animation is
+//! added (replacing one of the same name): per joint a translation and a rotation channel, keyframe f at f s,
+//! linear, with W_k = M_k · IBM_k⁻¹ and the local transform W_parent⁻¹ W_k (the parent node's rest world when it
+//! is not a joint); morph weights 0 when the mesh has morph targets (no residual for a new pose).
+//! Everything is in scene coordinates (the population's original units for this project's rigs).
+
+use super::gltf::{glb_container, parse_glb, read_floats, Bin};
+use crate::articulate::pose::{PoseSpace, SkinnedRig};
+use crate::articulate::skin::SkinWeights;
+use crate::articulate::RigidMotion;
+use crate::error::{Error, Result};
+use crate::geometry::procrustes::best_rotation;
+use crate::geometry::rotation::{from_quat, to_quat};
+use crate::geometry::{add, mat_mul, mat_vec, sub, Mat3, Vec3};
+use gltf_json as json;
+use json::validation::{Checked::Valid, USize64};
+
+/// x -> A x + c.
+type Affine = (Mat3, Vec3);
+
+fn compose(a: &Affine, b: &Affine) -> Affine {
+    (mat_mul(&a.0, &b.0), add(mat_vec(&a.0, b.1), a.1))
+}
+
+fn invert(a: &Affine) -> Option<Affine> {
+    let inv = a.0.try_inverse()?;
+    Some((inv, mat_vec(&inv, a.1).map(|x| -x)))
+}
+
+/// A rig read from a .glb (module doc).
+#[derive(Debug, Clone)]
+pub struct GlbRig {
+    root: json::Root,
+    bin: Vec<u8>,
+    /// Bind positions, weights, skeleton, joint points: scene coordinates.
+    pub rig: SkinnedRig,
+    /// Node of every bone (skin joint).
+    pub joint_nodes: Vec<usize>,
+    /// Name of every bone's node.
+    pub names: Vec<String>,
+    /// Names of the clips in the file.
+    pub clips: Vec<String>,
+    /// The mesh's triangles.
+    pub faces: Vec<[u32; 3]>,
+    ibm: Vec<Affine>,
+    node_parent: Vec<Option<usize>>,
+    /// Rest-state world matrix of every node.
+    rest_world: Vec<Affine>,
+}
+
+/// Reads a rig .glb (module doc); `file` names it in errors ("file F: what is wrong").
+pub fn read_rig(file: &str, glb: &[u8]) -> Result<GlbRig> {
+    read_rig_bytes(glb).map_err(|e| Error::Population {
+        file: file.to_string(),
+        message: match e {
+            Error::Data(m) | Error::Request(m) | Error::Io(m) => m,
+            other => other.to_string(),
+        },
+    })
+}
+
+fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
+    let bad = Error::Data;
+    let (root, bin) = parse_glb(glb).map_err(|e| {
+        let m = match e {
+            Error::Data(m) => m,
+            other => other.to_string(),
+        };
+        bad(format!("{m} (posemfa pose reads the binary .glb rigs posemfa writes)"))
+    })?;
+    let skin = root.skins.first().ok_or_else(|| bad("no skin: this is not a rig (write one with `posemfa export-gltf`)".into()))?;
+    let mesh = root.meshes.first().ok_or_else(|| bad("no mesh".into()))?;
+    if mesh.primitives.len() != 1 {
+        return Err(bad(format!("mesh 0 has {} primitives; a posemfa rig has one", mesh.primitives.len())));
+    }
+    let prim = &mesh.primitives[0];
+    let attr = |s: json::mesh::Semantic| prim.attributes.get(&Valid(s)).copied();
+    let pos = read_floats(&root, &bin, attr(json::mesh::Semantic::Positions).ok_or_else(|| bad("the mesh has no POSITION".into()))?)?;
+    let nv = pos.len() / 3;
+    let rest: Vec<Vec3> = (0..nv).map(|v| [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]]).collect();
+    let idx = read_floats(&root, &bin, prim.indices.ok_or_else(|| bad("the mesh has no indices".into()))?)?;
+    if idx.len() % 3 != 0 || idx.iter().any(|&i| !(i >= 0.0 && (i as usize) < nv)) {
+        return Err(bad(format!("the mesh's indices are not triangles of its {nv} vertices")));
+    }
+    let faces: Vec<[u32; 3]> = idx.chunks_exact(3).map(|t| [t[0] as u32, t[1] as u32, t[2] as u32]).collect();
+    let n_joints = skin.joints.len();
+    let mut influences: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nv];
+    let mut sets = 0;
+    for set in 0.. {
+        let (Some(j), Some(w)) = (attr(json::mesh::Semantic::Joints(set)), attr(json::mesh::Semantic::Weights(set))) else { break };
+        let (j, w) = (read_floats(&root, &bin, j)?, read_floats(&root, &bin, w)?);
+        if j.len() != 4 * nv || w.len() != 4 * nv {
+            return Err(bad(format!("JOINTS_{set} / WEIGHTS_{set} do not have one VEC4 per vertex ({nv})")));
+        }
+        for v in 0..nv {
+            for s in 0..4 {
+                let (k, x) = (j[4 * v + s], w[4 * v + s]);
+                if x == 0.0 {
+                    continue;
+                }
+                if !(x > 0.0 && x.is_finite()) || !(k >= 0.0 && (k as usize) < n_joints) {
+                    return Err(bad(format!("vertex {v}: joint {k} weight {x} in JOINTS_{set} / WEIGHTS_{set} ({n_joints} joints)")));
+                }
+                influences[v].push((k as u32, x));
+            }
+        }
+        sets += 1;
+    }
+    if sets == 0 {
+        return Err(bad("the mesh has no JOINTS_0 / WEIGHTS_0: it is not skinned".into()));
+    }
+    for (v, inf) in influences.iter_mut().enumerate() {
+        let sum: f64 = inf.iter().map(|x| x.1).sum();
+        if !(sum > 0.0) {
+            return Err(bad(format!("vertex {v} has no joint weight")));
+        }
+        inf.iter_mut().for_each(|x| x.1 /= sum);
+        inf.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    }
+    let ibm_values = read_floats(&root, &bin, skin.inverse_bind_matrices.ok_or_else(|| bad("the skin has no inverse bind matrices".into()))?)?;
+    if ibm_values.len() != 16 * n_joints {
+        return Err(bad(format!("{} inverse bind matrices for {n_joints} joints", ibm_values.len() / 16)));
+    }
+    let ibm: Vec<Affine> = (0..n_joints)
+        .map(|s| {
+            let m = &ibm_values[16 * s..16 * s + 16];
+            (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]])
+        })
+        .collect();
+    let n_nodes = root.nodes.len();
+    let mut node_parent = vec![None; n_nodes];
+    for (i, n) in root.nodes.iter().enumerate() {
+        for c in n.children.iter().flatten() {
+            if c.value() >= n_nodes {
+                return Err(bad(format!("node {i} has child {} but there are {n_nodes} nodes", c.value())));
+            }
+            node_parent[c.value()] = Some(i);
+        }
+    }
+    let local_of = |n: &json::Node| -> Affine {
+        if let Some(m) = n.matrix {
+            let m = m.map(|x| x as f64);
+            return (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]]);
+        }
+        let t = n.translation.map_or([0.0; 3], |t| t.map(|c| c as f64));
+        let q = n.rotation.map_or([0.0, 0.0, 0.0, 1.0], |q| q.0.map(|c| c as f64));
+        let s = n.scale.map_or([1.0; 3], |s| s.map(|c| c as f64));
+        let r = from_quat(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]));
+        (Mat3::from_fn(|a, b| r[(a, b)] * s[b]), t)
+    };
+    let mut rest_world: Vec<Option<Affine>> = vec![None; n_nodes];
+    for start in 0..n_nodes {
+        // walk up to a known ancestor, then down (no recursion: deep skeletons)
+        let mut chain = vec![start];
+        let mut guard = 0;
+        while let Some(p) = node_parent[*chain.last().expect("non-empty")] {
+            if rest_world[p].is_some() {
+                break;
+            }
+            chain.push(p);
+            guard += 1;
+            if guard > n_nodes {
+                return Err(bad("the node hierarchy has a cycle".into()));
+            }
+        }
+        for &n in chain.iter().rev() {
+            if rest_world[n].is_some() {
+                continue;
+            }
+            let l = local_of(&root.nodes[n]);
+            rest_world[n] = Some(match node_parent[n] {
+                Some(p) => compose(&rest_world[p].expect("parents first"), &l),
+                None => l,
+            });
+        }
+    }
+    let rest_world: Vec<Affine> = rest_world.into_iter().map(|w| w.expect("every node visited")).collect();
+    let joint_nodes: Vec<usize> = skin.joints.iter().map(|j| j.value()).collect();
+    if let Some(&n) = joint_nodes.iter().find(|&&n| n >= n_nodes) {
+        return Err(bad(format!("the skin lists node {n} but there are {n_nodes} nodes")));
+    }
+    if let Some(&n) = joint_nodes.iter().find(|&&n| root.nodes[n].matrix.is_some()) {
+        return Err(bad(format!("joint node {n} has a matrix: animated nodes need translation / rotation / scale")));
+    }
+    let slot_of_node: std::collections::HashMap<usize, usize> = joint_nodes.iter().enumerate().map(|(s, &n)| (n, s)).collect();
+    let parent: Vec<Option<usize>> = joint_nodes
+        .iter()
+        .map(|&n| {
+            let mut p = node_parent[n];
+            while let Some(q) = p {
+                if let Some(&s) = slot_of_node.get(&q) {
+                    return Some(s);
+                }
+                p = node_parent[q];
+            }
+            None
+        })
+        .collect();
+    // skeleton order: parents first (depth, then skin order)
+    let depth = |mut k: usize| {
+        let mut d = 0;
+        while let Some(p) = parent[k] {
+            k = p;
+            d += 1;
+            if d > n_joints {
+                break;
+            }
+        }
+        d
+    };
+    let mut order: Vec<usize> = (0..n_joints).collect();
+    order.sort_by_key(|&k| (depth(k), k));
+    let joint_points: Vec<Vec3> = (0..n_joints)
+        .map(|k| {
+            let w = rest_world[joint_nodes[k]];
+            let s = compose(&w, &ibm[k]);
+            invert(&s).map_or(w.1, |si| add(mat_vec(&si.0, w.1), si.1))
+        })
+        .collect();
+    let names = joint_nodes.iter().map(|&n| root.nodes[n].name.clone().unwrap_or_else(|| format!("node {n}"))).collect();
+    let clips = root.animations.iter().map(|a| a.name.clone().unwrap_or_default()).collect();
+    let rig = SkinnedRig { rest, weights: SkinWeights { influences }, parent, order, joint_points };
+    rig.validate()?;
+    Ok(GlbRig { root, bin, rig, joint_nodes, names, clips, faces, ibm, node_parent, rest_world })
+}
+
+impl GlbRig {
+    /// The motions of the rest state (the skin matrices W_k · IBM_k; the identity for this project's rigs).
+    pub fn rest_bones(&self) -> Vec<RigidMotion> {
+        (0..self.joint_nodes.len())
+            .map(|k| {
+                let s = compose(&self.rest_world[self.joint_nodes[k]], &self.ibm[k]);
+                RigidMotion { rotation: best_rotation(&s.0), translation: s.1 }
+            })
+            .collect()
+    }
+
+    /// The .glb with clip `name` added (module doc): keyframe f at f seconds is `frames[f]` (one motion per bone).
+    pub fn with_clip(&self, name: &str, frames: &[Vec<RigidMotion>]) -> Result<Vec<u8>> {
+        let nb = self.joint_nodes.len();
+        if frames.is_empty() {
+            return Err(Error::Request("no frames to write".into()));
+        }
+        if let Some(f) = frames.iter().position(|f| f.len() != nb) {
+            return Err(Error::Request(format!("frame {} has {} bone motions for {nb} bones", f + 1, frames[f].len())));
+        }
+        let ibm_inv: Vec<Affine> = self
+            .ibm
+            .iter()
+            .enumerate()
+            .map(|(k, m)| invert(m).ok_or_else(|| Error::Data(format!("joint {k}: its inverse bind matrix is singular"))))
+            .collect::<Result<_>>()?;
+        let slot_of_node: std::collections::HashMap<usize, usize> = self.joint_nodes.iter().enumerate().map(|(s, &n)| (n, s)).collect();
+        let mut root = self.root.clone();
+        root.animations.retain(|a| a.name.as_deref() != Some(name));
+        let mut bin = Bin { data: self.bin.clone(), views: std::mem::take(&mut root.buffer_views), accessors: std::mem::take(&mut root.accessors) };
+        let n = frames.len();
+        let times: Vec<f32> = (0..n).map(|f| f as f32).collect();
+        let input = bin.floats(&times, json::accessor::Type::Scalar, 1, true, None, &format!("{name}: time"));
+        // per bone and frame: the local (translation, rotation xyzw)
+        let mut tr = vec![Vec::with_capacity(3 * n); nb];
+        let mut rot = vec![Vec::with_capacity(4 * n); nb];
+        let mut prev: Vec<Option<[f64; 4]>> = vec![None; nb];
+        for (f, bones) in frames.iter().enumerate() {
+            let world: Vec<Affine> =
+                (0..nb).map(|k| compose(&(bones[k].rotation, bones[k].translation), &ibm_inv[k])).collect();
+            for k in 0..nb {
+                let node = self.joint_nodes[k];
+                let parent_world = match self.node_parent[node] {
+                    None => None,
+                    Some(p) => Some(match slot_of_node.get(&p) {
+                        Some(&s) => world[s],
+                        None => self.rest_world[p],
+                    }),
+                };
+                let local = match parent_world {
+                    None => world[k],
+                    Some(pw) => compose(&invert(&pw).ok_or_else(|| Error::Data(format!("the parent of joint {k} has a singular transform")))?, &world[k]),
+                };
+                let det = local.0.determinant();
+                let s = det.cbrt();
+                let r = best_rotation(&local.0);
+                let off = (local.0 - r * s).norm();
+                if !(det > 0.0) || (s - 1.0).abs() > 1e-3 || off > 1e-3 {
+                    return Err(Error::Data(format!(
+                        "frame {}, joint {k} ({}): its local transform is not a rotation (scale {s:.6}, off by {off:.2e}); \
+                         posemfa writes translation and rotation channels only",
+                        f + 1,
+                        self.names[k]
+                    )));
+                }
+                let q = to_quat(&r);
+                let mut q = [q.i, q.j, q.k, q.w];
+                if let Some(p) = prev[k] {
+                    if p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3] < 0.0 {
+                        q = q.map(|c| -c);
+                    }
+                }
+                prev[k] = Some(q);
+                tr[k].extend(local.1.map(|c| c as f32));
+                rot[k].extend(q.map(|c| c as f32));
+            }
+        }
+        let mut samplers = Vec::new();
+        let mut channels = Vec::new();
+        let mut channel = |out: json::Index<json::Accessor>, node: usize, path: json::animation::Property| {
+            samplers.push(json::animation::Sampler {
+                extensions: Default::default(),
+                extras: Default::default(),
+                input,
+                interpolation: Valid(json::animation::Interpolation::Linear),
+                output: out,
+            });
+            channels.push(json::animation::Channel {
+                sampler: json::Index::new(samplers.len() as u32 - 1),
+                target: json::animation::Target {
+                    extensions: Default::default(),
+                    extras: Default::default(),
+                    node: json::Index::new(node as u32),
+                    path: Valid(path),
+                },
+                extensions: Default::default(),
+                extras: Default::default(),
+            });
+        };
+        for k in 0..nb {
+            let t = bin.floats(&tr[k], json::accessor::Type::Vec3, 3, false, None, &format!("{name}: {} translation", self.names[k]));
+            channel(t, self.joint_nodes[k], json::animation::Property::Translation);
+            let r = bin.floats(&rot[k], json::accessor::Type::Vec4, 4, false, None, &format!("{name}: {} rotation", self.names[k]));
+            channel(r, self.joint_nodes[k], json::animation::Property::Rotation);
+        }
+        // morph targets: weights 0 (a new pose has no residual); on every node that shows the mesh
+        let n_targets = root.meshes.first().and_then(|m| m.primitives.first()).and_then(|p| p.targets.as_ref()).map_or(0, |t| t.len());
+        if n_targets > 0 {
+            let zeros = vec![0f32; n_targets * n];
+            let w = bin.floats(&zeros, json::accessor::Type::Scalar, 1, false, None, &format!("{name}: morph weights"));
+            let mesh_nodes: Vec<usize> = root.nodes.iter().enumerate().filter(|(_, nd)| nd.mesh.map(|m| m.value()) == Some(0)).map(|(i, _)| i).collect();
+            for node in mesh_nodes {
+                channel(w, node, json::animation::Property::MorphTargetWeights);
+            }
+        }
+        root.animations.push(json::Animation {
+            extensions: Default::default(),
+            extras: Default::default(),
+            channels,
+            name: Some(name.to_string()),
+            samplers,
+        });
+        while bin.data.len() % 4 != 0 {
+            bin.data.push(0);
+        }
+        root.buffer_views = bin.views;
+        root.accessors = bin.accessors;
+        match root.buffers.first_mut() {
+            Some(b) if b.uri.is_none() => b.byte_length = USize64(bin.data.len() as u64),
+            _ => return Err(Error::Data("the rig's first buffer is not the GLB's BIN chunk".into())),
+        }
+        let text = json::serialize::to_vec(&root).map_err(|e| Error::Data(format!("glTF JSON: {e}")))?;
+        Ok(glb_container(text, bin.data))
+    }
+}
+
+/// The rig's skinning of one pose, scene coordinates (shorthand for [`SkinnedRig::skin`]).
+pub fn posed(rig: &GlbRig, bones: &[RigidMotion]) -> Vec<Vec3> {
+    rig.rig.skin(bones)
+}
+
+/// Distance between two point lists, largest.
+pub fn max_distance(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| crate::geometry::norm(sub(*x, *y))).fold(0.0, f64::max)
+}
+
+/// Pose mode (the page): a fitted model's rig written as a .glb and read back ([`read_rig`], so everything is in
+/// the population's original units, as in the file people take away), its training poses solved onto it
+/// ([`crate::articulate::pose::solve_frames`]), their [`PoseSpace`], and the pose being made.
+#[derive(Debug, Clone)]
+pub struct Poser {
+    pub rig: GlbRig,
+    /// Bind -> pose motions of every training pose (original units).
+    pub training: Vec<Vec<RigidMotion>>,
+    pub space: PoseSpace,
+    /// The pose being made (starts at the rest pose: every bone the identity).
+    pub current: Vec<RigidMotion>,
+    /// Each vertex's heaviest bone (what a click on it picks).
+    pub bone_of_vertex: Vec<u32>,
+    /// The diagonal of the bind positions' bounding box (original units).
+    pub diagonal: f64,
+    /// The population's unit box (the page shows unit-box coordinates): [`Poser::to_unit`].
+    pub normalization: crate::mesh::Normalization,
+}
+
+impl Poser {
+    /// From a fitted model's articulation: the rig of `opts` ([`super::gltf::write_glb`]) and the population.
+    pub fn new(art: &crate::articulate::Articulation, pop: &crate::mesh::Population, opts: &super::gltf::GltfOptions) -> Result<Poser> {
+        let rig = crate::articulate::rig::build(art, &opts.rig_options())?;
+        let glb = super::gltf::write_glb(art, &rig, opts)?;
+        let mut p = Poser::from_glb("rig.glb", &glb, &pop.shapes.iter().map(|s| art.to_original(s)).collect::<Vec<_>>())?;
+        p.normalization = pop.normalization;
+        Ok(p)
+    }
+
+    /// Original units -> the population's unit box.
+    pub fn to_unit(&self, points: &[Vec3]) -> Vec<Vec3> {
+        points.iter().map(|&p| self.normalization.to_unit(p)).collect()
+    }
+
+    /// From a rig .glb and the training poses (original units).
+    pub fn from_glb(file: &str, glb: &[u8], poses: &[Vec<Vec3>]) -> Result<Poser> {
+        let rig = read_rig(file, glb)?;
+        let solved = crate::articulate::pose::solve_frames(&rig.rig, poses)?;
+        let space = PoseSpace::new(&rig.rig, &solved.bones)?;
+        let current = rig.rest_bones();
+        let bone_of_vertex = rig.rig.weights.influences.iter().map(|inf| inf[0].0).collect();
+        let diagonal = rig.rig.diagonal();
+        Ok(Poser { rig, training: solved.bones, space, current, bone_of_vertex, diagonal, normalization: crate::mesh::Normalization::IDENTITY })
+    }
+
+    /// The mesh of the current pose.
+    pub fn positions(&self) -> Vec<Vec3> {
+        self.rig.rig.skin(&self.current)
+    }
+
+    /// Turns bone k's subtree ([`crate::articulate::pose::turn`]).
+    pub fn turn(&mut self, k: usize, axis: Vec3, angle: f64) -> Result<()> {
+        self.current = crate::articulate::pose::turn(&self.rig.rig, &self.current, k, axis, angle)?;
+        Ok(())
+    }
+
+    /// Every bone's angle from the rest pose (degrees): of its rotation relative to its parent's (the root's own).
+    pub fn angles(&self) -> Vec<f64> {
+        crate::articulate::pose::local_rotations(&self.rig.rig, &self.current)
+            .iter()
+            .map(|q| crate::geometry::rotation::angle(q).to_degrees())
+            .collect()
+    }
+
+    /// Where bone k's joint is in the current pose (its parent carries it; the root's: itself).
+    pub fn joint_position(&self, k: usize) -> Result<Vec3> {
+        let r = &self.rig.rig;
+        if k >= r.n_bones() {
+            return Err(Error::Request(format!("no bone {k} ({} bones)", r.n_bones())));
+        }
+        Ok(self.current[r.parent[k].unwrap_or(k)].apply(r.joint_points[k]))
+    }
+
+    /// The pose of mode coefficients ([`PoseSpace::pose`]), the root where it is now.
+    pub fn set_modes(&mut self, coeffs: &[f64]) -> Result<()> {
+        if coeffs.len() > self.space.n_modes() || !coeffs.iter().all(|c| c.is_finite()) {
+            return Err(Error::Request(format!("{} mode coefficients for {} modes (numbers)", coeffs.len(), self.space.n_modes())));
+        }
+        let root = self.rig.rig.order[0];
+        let locals = self.space.locals(self.rig.rig.n_bones(), &self.space.vector(coeffs));
+        self.current = crate::articulate::pose::pose_from_locals(&self.rig.rig, self.current[root], &locals);
+        Ok(())
+    }
+
+    /// The current pose's pose vector and its coordinates along the modes.
+    pub fn vector(&self) -> Vec<f64> {
+        let q = crate::articulate::pose::local_rotations(&self.rig.rig, &self.current);
+        self.space.bones.iter().flat_map(|&k| crate::articulate::pose::log_map(&q[k])).collect()
+    }
+
+    /// Sets training pose i (its solved bones).
+    pub fn set_training(&mut self, i: usize) -> Result<()> {
+        self.current = self.training.get(i).cloned().ok_or_else(|| Error::Request(format!("no training pose {i}")))?;
+        Ok(())
+    }
+
+    /// The rig .glb with the current pose as a one-frame clip `pose`.
+    pub fn pose_glb(&self) -> Result<Vec<u8>> {
+        self.rig.with_clip("pose", std::slice::from_ref(&self.current))
+    }
+
+    /// New frames of the same mesh (original units) solved onto the rig: the solve, each frame's E_RMS (diagonal:
+    /// the bind positions'), and the rig .glb with clip `frames`.
+    pub fn add_frames(&self, frames: &[Vec<Vec3>]) -> Result<(crate::articulate::pose::FrameSolve, Vec<f64>, Vec<u8>)> {
+        let solved = crate::articulate::pose::solve_frames(&self.rig.rig, frames)?;
+        let nv = self.rig.rig.n_vertices();
+        let e = solved.sse.iter().map(|&s| crate::articulate::pose::e_rms(s, nv, self.diagonal)).collect();
+        let glb = self.rig.with_clip("frames", &solved.bones)?;
+        Ok((solved, e, glb))
+    }
+
+    /// The bones as 12 numbers each ([R row-major | t]), for undo.
+    pub fn bones_flat(&self) -> Vec<f64> {
+        self.current
+            .iter()
+            .flat_map(|m| {
+                let r = &m.rotation;
+                [r[(0, 0)], r[(0, 1)], r[(0, 2)], r[(1, 0)], r[(1, 1)], r[(1, 2)], r[(2, 0)], r[(2, 1)], r[(2, 2)], m.translation[0], m.translation[1], m.translation[2]]
+            })
+            .collect()
+    }
+
+    /// Restores bones from [`Poser::bones_flat`] (rotations re-orthonormalised).
+    pub fn set_bones_flat(&mut self, flat: &[f64]) -> Result<()> {
+        let nb = self.rig.rig.n_bones();
+        if flat.len() != 12 * nb || !flat.iter().all(|x| x.is_finite()) {
+            return Err(Error::Request(format!("{} numbers for {nb} bones (12 each)", flat.len())));
+        }
+        self.current = flat
+            .chunks_exact(12)
+            .map(|c| RigidMotion { rotation: best_rotation(&Mat3::from_row_slice(&c[..9])), translation: [c[9], c[10], c[11]] })
+            .collect();
+        Ok(())
+    }
+
+    /// Per vertex: whether any of its weights is on bone k or below it (what a turn of k may move).
+    pub fn touches(&self, k: usize) -> Result<Vec<bool>> {
+        let r = &self.rig.rig;
+        if k >= r.n_bones() {
+            return Err(Error::Request(format!("no bone {k} ({} bones)", r.n_bones())));
+        }
+        Ok((0..r.n_vertices()).map(|v| r.weights.influences(v).any(|(b, _)| r.in_subtree(k, b))).collect())
+    }
+
+    /// Back to the rest pose.
+    pub fn reset(&mut self) {
+        self.current = self.rig.rest_bones();
+    }
+}

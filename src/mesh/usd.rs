@@ -1,0 +1,396 @@
+//! USD import (`.usda` text, `.usdc` binary crate files, `.usdz` packages, `.usd` either): the poses of one
+//! point-cached mesh. The layer is parsed by the `openusd` crate (pure Rust, all three encodings; its
+//! layer-level data only: no composition, so a mesh brought in by a reference or payload from another file is
+//! not seen); this module reads the prims.
+//!
+//! Which mesh: the UsdGeomMesh whose `points` are time-sampled with the most points, or the one named by
+//! [`Options::mesh`] (`--object NAME`: the prim's name or path, or its index in the layer's path order). One pose per time sample of its `points`
+//! (or [`Options::frames`] of them, evenly spread). Each pose has the mesh's and its ancestors' xformOps
+//! applied at that time (translate, scale, rotateX/Y/Z, rotateXYZ and the other orders, orient, transform,
+//! `!invert!`, `!resetXformStack!`; time-sampled ops interpolated linearly, held beyond their ends).
+//! `faceVertexCounts` / `faceVertexIndices` are fan-triangulated as the OBJ reader does.
+//!
+//! The stage's `upAxis` Z is turned to Y up (as glTF), and an authored `metersPerUnit` to metres; the source
+//! says which. Skinned UsdSkel meshes (points not time-sampled) are refused with a message saying that only
+//! point-cached meshes are read. Points that are exact duplicates in the first pose are welded.
+
+use super::fbx::weld;
+use super::gltf::{Gltf, Options};
+use crate::error::{Error, Result};
+use nalgebra::{Matrix4, Point3, Rotation3, UnitQuaternion, Vector3};
+use openusd::sdf::{self, AbstractData, Value};
+use std::io::Cursor;
+
+type DVec3 = Vector3<f64>;
+type DMat4 = Matrix4<f64>;
+
+fn err(file: &str, message: String) -> Error {
+    Error::Obj { file: file.to_string(), line: 0, message }
+}
+
+/// Which encoding the bytes are in.
+fn layer(file: &str, bytes: &[u8]) -> Result<Box<dyn AbstractData>> {
+    fn damaged(file: &str, what: &str, e: impl std::fmt::Display) -> Error {
+        err(file, format!("cannot read the {what}: {e:#}; the file is cut or damaged: export it again"))
+    }
+    if bytes.starts_with(b"PXR-USDC") {
+        let data = openusd::usdc::CrateData::open(Cursor::new(bytes.to_vec()), true).map_err(|e| damaged(file, "USD crate file (usdc)", e))?;
+        return Ok(Box::new(data));
+    }
+    if bytes.starts_with(b"PK\x03\x04") {
+        let mut archive =
+            openusd::usdz::Archive::from_reader(Cursor::new(bytes.to_vec())).map_err(|e| damaged(file, "USDZ package (zip)", e))?;
+        if archive.first_layer_name().is_none() {
+            return Err(err(file, "the USDZ package holds no .usda, .usdc or .usd layer; package the stage again (usdzip)".into()));
+        }
+        return archive.read_first_layer().map_err(|e| damaged(file, "first layer of the USDZ package", e));
+    }
+    if bytes.starts_with(b"#usda") {
+        let text = std::str::from_utf8(bytes)
+            .map_err(|e| err(file, format!("the USDA text is not UTF-8 (byte {}); the file is damaged: export it again", e.valid_up_to())))?;
+        let data = openusd::usda::parse(text).map_err(|e| damaged(file, "USDA text", e))?;
+        return Ok(Box::new(data));
+    }
+    Err(err(
+        file,
+        "is not a USD file (it starts with neither \"#usda\", \"PXR-USDC\" nor a zip header); the file is damaged or has \
+         the wrong extension: export it again as .usda, .usdc or .usdz"
+            .into(),
+    ))
+}
+
+fn field(data: &dyn AbstractData, path: &sdf::Path, name: &str) -> Option<Value> {
+    data.try_field(path, name).ok().flatten().map(|c| c.into_owned())
+}
+
+fn prop(path: &sdf::Path, name: &str) -> Option<sdf::Path> {
+    path.append_property(name).ok()
+}
+
+/// A value as f64 numbers (scalars, vectors, matrices, quaternions as w x y z).
+fn numbers(v: &Value) -> Option<Vec<f64>> {
+    Some(match v {
+        Value::Float(x) => vec![f64::from(*x)],
+        Value::Double(x) => vec![*x],
+        Value::Half(x) => vec![f64::from(x.to_f32())],
+        Value::Int(x) => vec![f64::from(*x)],
+        Value::Vec3f(v) => vec![v.x.into(), v.y.into(), v.z.into()],
+        Value::Vec3d(v) => vec![v.x, v.y, v.z],
+        Value::Vec3h(v) => vec![v.x.to_f32().into(), v.y.to_f32().into(), v.z.to_f32().into()],
+        Value::Quatf(q) => vec![q.w.into(), q.x.into(), q.y.into(), q.z.into()],
+        Value::Quatd(q) => vec![q.w, q.x, q.y, q.z],
+        Value::Quath(q) => vec![q.w.to_f32().into(), q.x.to_f32().into(), q.y.to_f32().into(), q.z.to_f32().into()],
+        Value::Matrix4d(m) => m.0.to_vec(),
+        _ => return None,
+    })
+}
+
+/// Points of a `points` value.
+fn points(v: &Value) -> Option<Vec<DVec3>> {
+    Some(match v {
+        Value::Vec3fVec(p) => p.iter().map(|v| DVec3::new(v.x.into(), v.y.into(), v.z.into())).collect(),
+        Value::Vec3dVec(p) => p.iter().map(|v| DVec3::new(v.x, v.y, v.z)).collect(),
+        Value::Vec3hVec(p) => p.iter().map(|v| DVec3::new(v.x.to_f32().into(), v.y.to_f32().into(), v.z.to_f32().into())).collect(),
+        _ => return None,
+    })
+}
+
+fn ints(v: &Value) -> Option<Vec<i64>> {
+    Some(match v {
+        Value::IntVec(p) => p.iter().map(|&x| i64::from(x)).collect(),
+        Value::Int64Vec(p) => p.clone(),
+        Value::UintVec(p) => p.iter().map(|&x| i64::from(x)).collect(),
+        _ => return None,
+    })
+}
+
+/// An attribute: its default and its time samples (sorted by time).
+struct Attr {
+    default: Option<Value>,
+    samples: Vec<(f64, Value)>,
+}
+
+fn attr(data: &dyn AbstractData, prim: &sdf::Path, name: &str) -> Option<Attr> {
+    let p = prop(prim, name)?;
+    if !data.has_spec(&p) {
+        return None;
+    }
+    let default = field(data, &p, "default").filter(|v| !matches!(v, Value::ValueBlock | Value::None));
+    let mut samples = match field(data, &p, "timeSamples") {
+        Some(Value::TimeSamples(s)) => s.into_iter().filter(|(t, v)| t.is_finite() && !matches!(v, Value::ValueBlock)).collect(),
+        _ => Vec::new(),
+    };
+    samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Some(Attr { default, samples })
+}
+
+impl Attr {
+    /// Numbers at time `t`: linear between samples, held beyond the ends; the default without samples.
+    fn numbers_at(&self, t: f64) -> Option<Vec<f64>> {
+        if self.samples.is_empty() {
+            return self.default.as_ref().and_then(numbers);
+        }
+        let k = self.samples.partition_point(|(x, _)| *x <= t);
+        if k == 0 {
+            return numbers(&self.samples[0].1);
+        }
+        if k >= self.samples.len() {
+            return numbers(&self.samples[k - 1].1);
+        }
+        let (t0, v0) = (&self.samples[k - 1].0, numbers(&self.samples[k - 1].1)?);
+        let (t1, v1) = (&self.samples[k].0, numbers(&self.samples[k].1)?);
+        if v0.len() != v1.len() || t1 <= t0 {
+            return Some(v0);
+        }
+        let u = (t - t0) / (t1 - t0);
+        if v0.len() == 4 && matches!(self.samples[k].1, Value::Quatf(_) | Value::Quatd(_) | Value::Quath(_)) {
+            let q0 = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(v0[0], v0[1], v0[2], v0[3]));
+            let q1 = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(v1[0], v1[1], v1[2], v1[3]));
+            let q = q0.try_slerp(&q1, u, 1e-12).unwrap_or(q0);
+            return Some(vec![q.w, q.i, q.j, q.k]);
+        }
+        Some(v0.iter().zip(&v1).map(|(a, b)| a + (b - a) * u).collect())
+    }
+}
+
+fn axis_rotation(axis: char, deg: f64) -> Rotation3<f64> {
+    let a = match axis {
+        'X' => Vector3::x_axis(),
+        'Y' => Vector3::y_axis(),
+        _ => Vector3::z_axis(),
+    };
+    Rotation3::from_axis_angle(&a, deg.to_radians())
+}
+
+/// The local transform of a prim at time `t` (its xformOpOrder), and whether it resets the parent's.
+fn local_transform(file: &str, data: &dyn AbstractData, prim: &sdf::Path, t: f64) -> Result<(DMat4, bool)> {
+    let order = match attr(data, prim, "xformOpOrder").and_then(|a| a.default) {
+        Some(Value::TokenVec(v)) => v.iter().map(|t| t.as_str().to_string()).collect::<Vec<_>>(),
+        _ => return Ok((DMat4::identity(), false)),
+    };
+    let mut m = DMat4::identity();
+    let mut reset = false;
+    for op in &order {
+        if op == "!resetXformStack!" {
+            reset = true;
+            m = DMat4::identity();
+            continue;
+        }
+        let (invert, name) = match op.strip_prefix("!invert!") {
+            Some(n) => (true, n),
+            None => (false, op.as_str()),
+        };
+        let kind = name.strip_prefix("xformOp:").unwrap_or(name).split(':').next().unwrap_or("");
+        let values = attr(data, prim, name).and_then(|a| a.numbers_at(t)).ok_or_else(|| {
+            err(file, format!("prim {prim}: xformOpOrder names {name}, which has no value; the file is damaged: export it again"))
+        })?;
+        let bad = || err(file, format!("prim {prim}: {name} holds {} numbers, not what a {kind} op takes; the file is damaged: export it again", values.len()));
+        let v3 = || -> Result<DVec3> { if values.len() == 3 { Ok(DVec3::new(values[0], values[1], values[2])) } else { Err(bad()) } };
+        let one = || -> Result<f64> { if values.len() == 1 { Ok(values[0]) } else { Err(bad()) } };
+        let op_m = match kind {
+            "translate" => Matrix4::new_translation(&v3()?),
+            "scale" => {
+                if values.len() == 1 {
+                    Matrix4::new_scaling(values[0])
+                } else {
+                    Matrix4::new_nonuniform_scaling(&v3()?)
+                }
+            }
+            "rotateX" | "rotateY" | "rotateZ" => axis_rotation(kind.chars().last().unwrap_or('Z'), one()?).to_homogeneous(),
+            "orient" => {
+                if values.len() != 4 {
+                    return Err(bad());
+                }
+                UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(values[0], values[1], values[2], values[3])).to_homogeneous()
+            }
+            "transform" => {
+                if values.len() != 16 {
+                    return Err(bad());
+                }
+                // USD matrices are row-major for row vectors: the transpose of the column-vector matrix.
+                DMat4::from_row_slice(&values).transpose()
+            }
+            k if k.len() == 9 && k.starts_with("rotate") => {
+                let v = v3()?;
+                // rotateXYZ: X applied first, so the column-vector matrix is Rz * Ry * Rx.
+                let mut r = Rotation3::identity();
+                for axis in k[6..].chars() {
+                    let deg = match axis {
+                        'X' => v.x,
+                        'Y' => v.y,
+                        _ => v.z,
+                    };
+                    r = axis_rotation(axis, deg) * r;
+                }
+                r.to_homogeneous()
+            }
+            other => {
+                return Err(err(
+                    file,
+                    format!("prim {prim}: xformOp {name} is of the unknown kind `{other}`; export the transforms as translate / rotate / scale / orient / transform ops"),
+                ))
+            }
+        };
+        let op_m = if invert { op_m.try_inverse().unwrap_or_else(DMat4::identity) } else { op_m };
+        m *= op_m;
+    }
+    Ok((m, reset))
+}
+
+/// The world transform of a prim at time `t`: its ancestors' local transforms, then its own.
+fn world_transform(file: &str, data: &dyn AbstractData, prim: &sdf::Path, t: f64) -> Result<DMat4> {
+    let mut chain: Vec<sdf::Path> = Vec::new();
+    let mut cur = Some(prim.clone());
+    while let Some(p) = cur {
+        if p.is_abs_root() || p.is_empty() {
+            break;
+        }
+        cur = p.parent();
+        chain.push(p);
+        if chain.len() > 4096 {
+            break;
+        }
+    }
+    let mut m = DMat4::identity();
+    for p in chain.iter().rev() {
+        let (l, reset) = local_transform(file, data, p, t)?;
+        m = if reset { l } else { m * l };
+    }
+    Ok(m)
+}
+
+/// Reads the poses of one point-cached mesh of a USD file.
+pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
+    let data = layer(file, bytes)?;
+    let data: &dyn AbstractData = data.as_ref();
+    let root = sdf::Path::abs_root();
+    let meshes: Vec<sdf::Path> = data
+        .spec_paths()
+        .into_iter()
+        .filter(|p| data.spec_type(p) == Some(sdf::SpecType::Prim))
+        .filter(|p| field(data, p, "typeName").as_ref().and_then(Value::as_str) == Some("Mesh"))
+        .collect();
+    if meshes.is_empty() {
+        return Err(err(file, "the stage holds no Mesh prim (UsdGeomMesh); export the character's mesh (with its points time-sampled)".into()));
+    }
+    let name_of = |p: &sdf::Path| p.name().unwrap_or("").to_string();
+    let samples_of = |p: &sdf::Path| attr(data, p, "points").map_or(0, |a| a.samples.len());
+    let mesh = match &options.mesh {
+        Some(w) => meshes.iter().enumerate().find(|(i, p)| name_of(p) == *w || p.to_string() == *w || i.to_string() == *w).map(|(_, p)| p.clone()).ok_or_else(|| {
+            let names: Vec<String> = meshes.iter().map(|p| p.to_string()).collect();
+            err(file, format!("no mesh is called or numbered `{w}`; the stage has {}", names.join(", ")))
+        })?,
+        None => {
+            let count = |p: &sdf::Path| {
+                let a = attr(data, p, "points");
+                a.and_then(|a| a.samples.first().map(|s| s.1.clone()).or(a.default)).and_then(|v| points(&v)).map_or(0, |v| v.len())
+            };
+            let animated: Vec<&sdf::Path> = meshes.iter().filter(|p| samples_of(p) >= 2).collect();
+            let pool: Vec<&sdf::Path> = if animated.is_empty() { meshes.iter().collect() } else { animated };
+            let mut best = pool[0];
+            for p in &pool {
+                if count(p) > count(best) {
+                    best = p;
+                }
+            }
+            best.clone()
+        }
+    };
+    let mname = name_of(&mesh);
+    let pts = attr(data, &mesh, "points").ok_or_else(|| err(file, format!("mesh {mesh} has no points; export the mesh with its points")))?;
+    if pts.samples.len() < 2 {
+        let skinned = data.has_spec(&prop(&mesh, "skel:skeleton").unwrap_or_else(|| root.clone()))
+            || data.has_spec(&prop(&mesh, "primvars:skel:jointIndices").unwrap_or_else(|| root.clone()));
+        let what = if skinned { "is a skinned UsdSkel mesh" } else { "has no time-sampled points" };
+        return Err(err(
+            file,
+            format!(
+                "mesh {mesh} {what}; posemfa reads only point-cached meshes from USD (a UsdGeomMesh whose points are \
+                 time-sampled, one pose per sample): bake the animation to points (e.g. Blender's USD export of the \
+                 evaluated mesh), or export the character as FBX or glTF"
+            ),
+        ));
+    }
+    let counts = attr(data, &mesh, "faceVertexCounts").and_then(|a| a.default.or(a.samples.into_iter().next().map(|s| s.1)));
+    let indices = attr(data, &mesh, "faceVertexIndices").and_then(|a| a.default.or(a.samples.into_iter().next().map(|s| s.1)));
+    let (Some(counts), Some(indices)) = (counts.as_ref().and_then(ints), indices.as_ref().and_then(ints)) else {
+        return Err(err(file, format!("mesh {mesh} has no faceVertexCounts / faceVertexIndices (as int arrays); export the mesh with its faces")));
+    };
+    let first = points(&pts.samples[0].1).ok_or_else(|| err(file, format!("mesh {mesh}: points at time {} are not an array of 3-vectors; the file is damaged: export it again", pts.samples[0].0)))?;
+    let n = first.len();
+    let total: i64 = counts.iter().map(|&c| c.max(0)).sum();
+    if counts.iter().any(|&c| c < 0) || total as u64 != indices.len() as u64 {
+        return Err(err(
+            file,
+            format!("mesh {mesh}: faceVertexCounts add up to {total} corners but faceVertexIndices has {}; the file is damaged: export it again", indices.len()),
+        ));
+    }
+    let mut faces = Vec::with_capacity(indices.len());
+    let mut at = 0usize;
+    for &c in &counts {
+        let corners = &indices[at..at + c as usize];
+        at += c as usize;
+        if let Some((k, &bad)) = corners.iter().enumerate().find(|(_, &i)| i < 0 || i as u64 >= n as u64) {
+            return Err(err(
+                file,
+                format!("mesh {mesh}: faceVertexIndices[{}] names point {bad}, but the mesh has {n}; the file is damaged: export it again", at - c as usize + k),
+            ));
+        }
+        if let Some((&f0, rest)) = corners.split_first() {
+            for w in rest.windows(2) {
+                faces.push([f0 as u32, w[0] as u32, w[1] as u32]);
+            }
+        }
+    }
+    if faces.is_empty() {
+        return Err(err(file, format!("mesh {mesh} has no faces with 3 or more corners; posemfa needs a polygon mesh")));
+    }
+
+    // Stage metadata: up axis, metres per unit, time codes per second.
+    let up = field(data, &root, "upAxis").as_ref().and_then(Value::as_str).map(str::to_string).unwrap_or_else(|| "Y".into());
+    let mpu = field(data, &root, "metersPerUnit").as_ref().and_then(numbers).and_then(|v| v.first().copied()).filter(|m| m.is_finite() && *m > 0.0);
+    let tcps = field(data, &root, "timeCodesPerSecond").as_ref().and_then(numbers).and_then(|v| v.first().copied()).filter(|f| f.is_finite() && *f > 0.0).unwrap_or(24.0);
+    let up_m = if up == "Z" { Rotation3::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2).to_homogeneous() } else { DMat4::identity() };
+    let stage_m = Matrix4::new_scaling(mpu.unwrap_or(1.0)) * up_m;
+    let units = match mpu {
+        Some(m) if m == 1.0 => "metersPerUnit 1".to_string(),
+        Some(m) => format!("metersPerUnit {m} turned to metres"),
+        None => "metersPerUnit not stated: lengths as in the file".to_string(),
+    };
+    let axes = if up == "Z" { "upAxis Z turned to Y up" } else { "upAxis Y" };
+
+    let times: Vec<usize> = match options.frames {
+        Some(0) => return Err(err(file, "--frames must be at least 1".into())),
+        Some(f) => {
+            let last = pts.samples.len() - 1;
+            (0..f).map(|i| if f == 1 { 0 } else { (i * last + (f - 1) / 2) / (f - 1) }).collect()
+        }
+        None => (0..pts.samples.len()).collect(),
+    };
+    crate::model::memory::check(n, times.len(), 1, crate::model::memory::budget_bytes()?)
+        .map_err(|e| err(file, format!("mesh {mesh} at {} time samples: {e}; read fewer (--frames N)", times.len())))?;
+    let w = times.len().to_string().len();
+    let mut poses_raw = Vec::with_capacity(times.len());
+    for (i, &k) in times.iter().enumerate() {
+        let (t, v) = &pts.samples[k];
+        let p = points(v).ok_or_else(|| err(file, format!("mesh {mesh}: points at time {t} are not an array of 3-vectors; the file is damaged: export it again")))?;
+        if p.len() != n {
+            return Err(err(file, format!("mesh {mesh}: points at time {t} has {} points but {n} at time {}; a point cache keeps its points: export it again", p.len(), pts.samples[0].0)));
+        }
+        let m = stage_m * world_transform(file, data, &mesh, *t)?;
+        let posed: Vec<DVec3> = p.iter().map(|v| m.transform_point(&Point3::from(*v)).coords).collect();
+        if posed.iter().any(|v| !v.iter().all(|x| x.is_finite())) {
+            return Err(err(file, format!("mesh {mesh} at time {t}: coordinates are not finite numbers (a point or transform holds NaN or infinity); the file is damaged: export it again")));
+        }
+        poses_raw.push((format!("time {:0w$} ({t})", i + 1), posed));
+    }
+    let (t0, t1) = (pts.samples[0].0, pts.samples[pts.samples.len() - 1].0);
+    let how = match options.frames {
+        Some(f) => format!("{f} of its {} time samples", pts.samples.len()),
+        None => format!("one per time sample, times {t0} to {t1} at {tcps} per second"),
+    };
+    let others: Vec<String> = meshes.iter().filter(|p| **p != mesh).map(|p| p.to_string()).collect();
+    let more = if others.is_empty() { String::new() } else { format!(" (other meshes: {}; --object NAME picks one)", others.join(", ")) };
+    let description = format!("{} frames of {mname} in {file} (time-sampled points of {mesh}, {how}){more}; {axes}, {units}", times.len());
+    Ok(weld(file, &first, &faces, poses_raw, description))
+}

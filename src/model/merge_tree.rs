@@ -1,0 +1,648 @@
+//! The parts as one merge tree, a function of the population alone: no random start, so the same creature
+//! comes out of any seed, any pose order and any rigid placement or scale of the whole population.
+//!
+//! 1. **Patches** ([`patches`]): the mesh is cut into many small, compact pieces by farthest-point sampling
+//!    with geodesic distances along the mesh's edges (each edge's length averaged over the poses), every vertex
+//!    to its nearest seed. Only the connectivity and the poses' edge lengths enter, so the patches do not depend
+//!    on the order of the poses nor on where the population stands.
+//! 2. **Merges** ([`MergeTree::build`]): adjacent nodes are merged greedily, cheapest first, by the part rule's
+//!    score: the rise in squared error when one rigid motion moves both (generalised Procrustes over the poses),
+//!    per vertex of the smaller side. Each node keeps additive sufficient statistics (its vertex count, per pose
+//!    the sum of its points and, per pair of poses, Σ_j x_j^i x_j^kᵀ), so the rigid fit of a union is solved on
+//!    3x3 blocks without touching the vertices again. Every merge is recorded: the tree gives a partition for
+//!    every count, at once ([`MergeTree::labels_at`]).
+//! 3. **The count** ([`MergeTree::decided_count`]): read off the tree by the part rule: merges go on while the
+//!    next one costs the smaller side, per vertex, less than `distinct_ratio` times the variance of a typical
+//!    part of that partition (the vertex-weighted median of its nodes' rigid-fit variances).
+//!
+//! The model's AECM then runs from that partition ([`super::hierarchy`]) and the part rule's flesh test and
+//! merges ([`super::distinct`]) judge the fitted parts.
+
+use crate::geometry::procrustes::best_rotation;
+use crate::geometry::{Mat3, IDENTITY};
+use crate::mesh::Population;
+use serde::Serialize;
+use std::cmp::Ordering;
+use std::collections::{BTreeSet, BinaryHeap};
+
+/// Most poses the tree's rigid fits look at: with more, a well-spread subset ([`spread_poses`]). The statistics
+/// grow with the square of the poses.
+pub const TREE_POSES: usize = 16;
+
+/// Most patches ([`patches`]); a patch has about [`PATCH_VERTICES`] vertices below that.
+pub const MAX_PATCHES: usize = 400;
+/// Vertices per patch on small meshes.
+pub const PATCH_VERTICES: usize = 6;
+
+/// One merge: nodes `a` and `b` became node `n_leaves + index`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Merge {
+    pub a: u32,
+    pub b: u32,
+    /// Parts before this merge.
+    pub parts: usize,
+    /// The rise in squared error of one rigid motion for both, per vertex of the smaller side, per coordinate
+    /// and pose (unit-box units²).
+    pub rise: f64,
+    /// `rise / typical` with `typical` the tree's ([`MergeTree::typical`]): the part rule's score.
+    pub score: f64,
+    /// The vertex-weighted mean variance of the rigid fits of the `parts` nodes before the merge.
+    pub variance: f64,
+}
+
+/// The merge tree of a population.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MergeTree {
+    /// The patch (leaf) of every vertex.
+    pub leaves: Vec<u32>,
+    pub n_leaves: usize,
+    /// In order; merge m makes node `n_leaves + m`.
+    pub merges: Vec<Merge>,
+    /// The vertex-weighted median variance of the leaves' rigid fits (at least the variance floor), fixed
+    /// before any merge (a merge's larger variance must not make the next merge look cheap).
+    pub typical: f64,
+}
+
+/// Additive statistics of a node over the tree's poses.
+#[derive(Clone)]
+struct Stats {
+    n: f64,
+    /// Per pose: Σ_j x_j^i.
+    sum: Vec<[f64; 3]>,
+    /// Per pair of poses i <= k (row-major upper triangle): Σ_j x_j^i x_j^kᵀ, row-major 3x3.
+    cross: Vec<[f64; 9]>,
+}
+
+fn upper_index(q: usize, i: usize, k: usize) -> usize {
+    debug_assert!(i <= k && k < q);
+    i * (2 * q - i + 1) / 2 + (k - i)
+}
+
+impl Stats {
+    fn empty(q: usize) -> Stats {
+        Stats { n: 0.0, sum: vec![[0.0; 3]; q], cross: vec![[0.0; 9]; q * (q + 1) / 2] }
+    }
+
+    fn add_point(&mut self, x: &[[f64; 3]]) {
+        let q = x.len();
+        self.n += 1.0;
+        for i in 0..q {
+            for c in 0..3 {
+                self.sum[i][c] += x[i][c];
+            }
+            let base = upper_index(q, i, i);
+            for k in i..q {
+                let m = &mut self.cross[base + k - i];
+                for r in 0..3 {
+                    for c in 0..3 {
+                        m[3 * r + c] += x[i][r] * x[k][c];
+                    }
+                }
+            }
+        }
+    }
+
+    fn plus(&self, o: &Stats) -> Stats {
+        let mut s = self.clone();
+        s.n += o.n;
+        for (a, b) in s.sum.iter_mut().zip(&o.sum) {
+            for c in 0..3 {
+                a[c] += b[c];
+            }
+        }
+        for (a, b) in s.cross.iter_mut().zip(&o.cross) {
+            for c in 0..9 {
+                a[c] += b[c];
+            }
+        }
+        s
+    }
+
+    /// The centred cross-covariances C_ik = Σ_j (x_j^i - x̄^i)(x_j^k - x̄^k)ᵀ for all i, k (q x q blocks).
+    fn centred(&self) -> Vec<Mat3> {
+        let q = self.sum.len();
+        let mut c = vec![Mat3::zeros(); q * q];
+        let inv = if self.n > 0.0 { 1.0 / self.n } else { 0.0 };
+        for i in 0..q {
+            for k in i..q {
+                let m = &self.cross[upper_index(q, i, k)];
+                let mut b = Mat3::zeros();
+                for r in 0..3 {
+                    for col in 0..3 {
+                        b[(r, col)] = m[3 * r + col] - self.sum[i][r] * self.sum[k][col] * inv;
+                    }
+                }
+                c[i * q + k] = b;
+                c[k * q + i] = b.transpose();
+            }
+        }
+        c
+    }
+}
+
+/// Generalised Procrustes on the statistics: rotations R_i (warm-started from `rot`) maximising
+/// Σ_{i,k} tr(R_iᵀ C_ik R_k); returns the squared error Σ_i Σ_j |R_iᵀ (x_j^i - x̄^i) - y_j|² about the mean
+/// shape y, and leaves the rotations in `rot`.
+fn rigid_sse(st: &Stats, rot: &mut [Mat3]) -> f64 {
+    let q = st.sum.len();
+    let c = st.centred();
+    let total: f64 = (0..q).map(|i| c[i * q + i].trace()).sum();
+    if total <= 0.0 || q < 2 {
+        return 0.0;
+    }
+    let objective = |rot: &[Mat3]| {
+        let mut g = 0.0;
+        for i in 0..q {
+            for k in 0..q {
+                g += (rot[i].transpose() * c[i * q + k] * rot[k]).trace();
+            }
+        }
+        g
+    };
+    let mut last = objective(rot);
+    for _ in 0..50 {
+        for i in 0..q {
+            let mut m = Mat3::zeros();
+            for k in (0..q).filter(|&k| k != i) {
+                m += c[i * q + k] * rot[k];
+            }
+            rot[i] = best_rotation(&m);
+        }
+        let g = objective(rot);
+        let done = (g - last).abs() <= 1e-12 * total;
+        last = g;
+        if done {
+            break;
+        }
+    }
+    (total - last / q as f64).max(0.0)
+}
+
+/// Up to `most` poses spread over the population: the pose farthest from the mean shape first, then each next
+/// the one farthest (RMS vertex distance) from those chosen. Independent of the poses' order (up to exact ties).
+pub fn spread_poses(pop: &Population, most: usize) -> Vec<usize> {
+    let ns = pop.n_shapes();
+    if ns <= most {
+        return (0..ns).collect();
+    }
+    // distances on at most 2 000 evenly spaced vertices
+    let nv = pop.n_vertices();
+    let stride = nv.div_ceil(2000).max(1);
+    let sample: Vec<usize> = (0..nv).step_by(stride).collect();
+    let dist = |a: &dyn Fn(usize) -> [f64; 3], i: usize| -> f64 {
+        sample.iter().map(|&j| {
+            let (p, r) = (pop.shapes[i][j], a(j));
+            (p[0] - r[0]).powi(2) + (p[1] - r[1]).powi(2) + (p[2] - r[2]).powi(2)
+        }).sum()
+    };
+    let mean = |j: usize| {
+        let mut m = [0.0; 3];
+        for s in &pop.shapes {
+            for c in 0..3 {
+                m[c] += s[j][c] / ns as f64;
+            }
+        }
+        m
+    };
+    let first = (0..ns).map(|i| (dist(&mean, i), i)).max_by(|x, y| x.0.total_cmp(&y.0)).expect("poses").1;
+    let mut chosen = vec![first];
+    let mut near: Vec<f64> = (0..ns).map(|i| dist(&|j| pop.shapes[first][j], i)).collect();
+    while chosen.len() < most {
+        let next = (0..ns).filter(|i| !chosen.contains(i)).max_by(|&x, &y| near[x].total_cmp(&near[y]).then(y.cmp(&x))).expect("poses left");
+        chosen.push(next);
+        for i in 0..ns {
+            near[i] = near[i].min(dist(&|j| pop.shapes[next][j], i));
+        }
+    }
+    chosen.sort_unstable();
+    chosen
+}
+
+/// The mesh's edges (i < j, sorted, unique) with their length averaged over the poses.
+fn edges(pop: &Population) -> Vec<(u32, u32, f64)> {
+    let mut e: Vec<(u32, u32)> = Vec::with_capacity(pop.faces.len() * 3);
+    for f in &pop.faces {
+        for s in 0..3 {
+            let (a, b) = (f[s], f[(s + 1) % 3]);
+            if a != b {
+                e.push((a.min(b), a.max(b)));
+            }
+        }
+    }
+    e.sort_unstable();
+    e.dedup();
+    let ns = pop.n_shapes() as f64;
+    e.into_iter()
+        .map(|(a, b)| {
+            let len: f64 = pop.shapes.iter().map(|s| crate::geometry::norm(crate::geometry::sub(s[a as usize], s[b as usize]))).sum();
+            (a, b, len / ns)
+        })
+        .collect()
+}
+
+#[derive(PartialEq)]
+struct Near(f64, u32);
+impl Eq for Near {}
+impl PartialOrd for Near {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Near {
+    // a min-heap on distance, then vertex id
+    fn cmp(&self, o: &Self) -> Ordering {
+        o.0.total_cmp(&self.0).then(o.1.cmp(&self.1))
+    }
+}
+
+/// How many patches for `n_vertices` vertices.
+pub fn patch_count(n_vertices: usize) -> usize {
+    (n_vertices / PATCH_VERTICES).clamp(1, MAX_PATCHES).min(n_vertices)
+}
+
+/// Cuts the mesh into `count` compact patches: geodesic farthest-point seeds (edge lengths averaged over the
+/// poses; the first seed is vertex 0, every connected piece of the mesh gets one), each vertex to its nearest
+/// seed. A vertex on no triangle goes to the patch of the nearest vertex on one (mean shape).
+pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
+    let nv = pop.n_vertices();
+    let mut adj: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nv];
+    for (a, b, w) in edges(pop) {
+        adj[a as usize].push((b, w));
+        adj[b as usize].push((a, w));
+    }
+    let on_mesh: Vec<bool> = adj.iter().map(|a| !a.is_empty()).collect();
+    let mut dist = vec![f64::INFINITY; nv];
+    let mut owner = vec![u32::MAX; nv];
+    let mut heap = BinaryHeap::new();
+    let mut seeds = 0u32;
+    let mut next = (0..nv).find(|&j| on_mesh[j]);
+    while let Some(s) = next {
+        dist[s] = 0.0;
+        owner[s] = seeds;
+        heap.push(Near(0.0, s as u32));
+        while let Some(Near(d, v)) = heap.pop() {
+            if d > dist[v as usize] {
+                continue;
+            }
+            for &(u, w) in &adj[v as usize] {
+                let nd = d + w;
+                if nd < dist[u as usize] {
+                    dist[u as usize] = nd;
+                    owner[u as usize] = seeds;
+                    heap.push(Near(nd, u));
+                }
+            }
+        }
+        seeds += 1;
+        if seeds as usize >= count {
+            break;
+        }
+        // the farthest vertex on the mesh (an unreached piece first); ties to the lowest id
+        let far = (0..nv).filter(|&j| on_mesh[j]).fold(None::<(f64, usize)>, |best, j| match best {
+            Some((d, _)) if dist[j] <= d => best,
+            _ => Some((dist[j], j)),
+        });
+        next = far.filter(|&(d, _)| d > 0.0).map(|(_, j)| j);
+    }
+    // vertices on no triangle: the patch of the nearest vertex on one, in the mean shape
+    if on_mesh.iter().any(|&m| !m) {
+        let ns = pop.n_shapes() as f64;
+        let mean = |j: usize| {
+            let mut m = [0.0; 3];
+            for s in &pop.shapes {
+                for c in 0..3 {
+                    m[c] += s[j][c] / ns;
+                }
+            }
+            m
+        };
+        let placed: Vec<(usize, [f64; 3])> = (0..nv).filter(|&j| on_mesh[j]).map(|j| (j, mean(j))).collect();
+        for j in (0..nv).filter(|&j| !on_mesh[j]) {
+            let p = mean(j);
+            let d2 = |q: &[f64; 3]| (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>();
+            if let Some(&(k, _)) = placed.iter().min_by(|x, y| d2(&x.1).total_cmp(&d2(&y.1))) {
+                owner[j] = owner[k];
+            } else {
+                owner[j] = 0;
+            }
+        }
+    }
+    owner
+}
+
+#[derive(PartialEq)]
+struct Candidate {
+    score: f64,
+    a: u32,
+    b: u32,
+}
+impl Eq for Candidate {}
+impl PartialOrd for Candidate {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Candidate {
+    // a min-heap on the score, then the node ids
+    fn cmp(&self, o: &Self) -> Ordering {
+        o.score.total_cmp(&self.score).then(o.a.cmp(&self.a)).then(o.b.cmp(&self.b))
+    }
+}
+
+struct Node {
+    stats: Stats,
+    rot: Vec<Mat3>,
+    sse: f64,
+    size: usize,
+}
+
+impl Node {
+    fn variance(&self) -> f64 {
+        self.sse / (3.0 * self.stats.n.max(1.0) * self.rot.len().max(1) as f64)
+    }
+}
+
+/// The vertex-weighted median of the nodes' variances.
+fn typical_variance(nodes: &[Option<Node>]) -> f64 {
+    let mut by: Vec<(f64, usize)> = nodes.iter().flatten().map(|n| (n.variance(), n.size)).collect();
+    by.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let half = by.iter().map(|x| x.1).sum::<usize>().div_ceil(2);
+    let mut acc = 0;
+    for (v, w) in &by {
+        acc += w;
+        if acc >= half {
+            return *v;
+        }
+    }
+    by.last().map_or(0.0, |x| x.0)
+}
+
+impl MergeTree {
+    /// Builds the tree of `pop` from [`patches`] of [`patch_count`] pieces. `floor` (the variance floor) keeps
+    /// the typical variance of exactly rigid data away from 0.
+    pub fn build(pop: &Population, floor: f64) -> MergeTree {
+        let leaves = patches(pop, patch_count(pop.n_vertices()));
+        MergeTree::from_leaves(pop, leaves, floor)
+    }
+
+    /// Builds the tree from given leaves (compact labels: 0..n_leaves).
+    pub fn from_leaves(pop: &Population, leaves: Vec<u32>, floor: f64) -> MergeTree {
+        let poses = spread_poses(pop, TREE_POSES);
+        let q = poses.len();
+        let n_leaves = leaves.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+        let mut stats = vec![Stats::empty(q); n_leaves];
+        let mut size = vec![0usize; n_leaves];
+        let mut x = vec![[0.0; 3]; q];
+        for (j, &l) in leaves.iter().enumerate() {
+            for (t, &i) in poses.iter().enumerate() {
+                x[t] = pop.shapes[i][j];
+            }
+            stats[l as usize].add_point(&x);
+            size[l as usize] += 1;
+        }
+        let mut nodes: Vec<Option<Node>> = stats
+            .into_iter()
+            .zip(size)
+            .map(|(st, size)| {
+                // start: each pose onto the first
+                let c = st.centred();
+                let mut rot: Vec<Mat3> = (0..q).map(|i| if i == 0 { IDENTITY } else { best_rotation(&c[i * q]) }).collect();
+                let sse = rigid_sse(&st, &mut rot);
+                Some(Node { stats: st, rot, sse, size })
+            })
+            .collect();
+        // node adjacency: mesh edges between patches, and every other connected piece of the mesh linked to
+        // its nearest one (so the tree ends in one node)
+        let mut adjacent: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); n_leaves];
+        for f in &pop.faces {
+            for s in 0..3 {
+                let (a, b) = (leaves[f[s] as usize], leaves[f[(s + 1) % 3] as usize]);
+                if a != b {
+                    adjacent[a as usize].insert(b);
+                    adjacent[b as usize].insert(a);
+                }
+            }
+        }
+        link_pieces(pop, &leaves, &mut adjacent);
+        let pair = |nodes: &[Option<Node>], a: u32, b: u32| -> (f64, Node) {
+            let (na, nb) = (nodes[a as usize].as_ref().expect("live"), nodes[b as usize].as_ref().expect("live"));
+            let (big, small) = if na.size >= nb.size { (na, nb) } else { (nb, na) };
+            let st = big.stats.plus(&small.stats);
+            let mut rot = big.rot.clone();
+            let sse = rigid_sse(&st, &mut rot);
+            let rise = (sse - na.sse - nb.sse).max(0.0) / (3.0 * q as f64 * small.size.max(1) as f64);
+            (rise, Node { stats: st, rot, sse, size: na.size + nb.size })
+        };
+        let typical = typical_variance(&nodes).max(floor);
+        let mut heap = BinaryHeap::new();
+        for a in 0..n_leaves {
+            for &b in adjacent[a].iter().filter(|&&b| b as usize > a) {
+                heap.push(Candidate { score: pair(&nodes, a as u32, b).0, a: a as u32, b });
+            }
+        }
+        let mut merges = Vec::with_capacity(n_leaves.saturating_sub(1));
+        let mut live = n_leaves;
+        let mut total_sse: f64 = nodes.iter().flatten().map(|n| n.sse).sum();
+        let per_variance = 1.0 / (3.0 * q.max(1) as f64 * leaves.len().max(1) as f64);
+        while let Some(Candidate { a, b, .. }) = heap.pop() {
+            if nodes[a as usize].is_none() || nodes[b as usize].is_none() {
+                continue;
+            }
+            let (rise, node) = pair(&nodes, a, b);
+            let id = nodes.len() as u32;
+            let variance = total_sse * per_variance;
+            total_sse += node.sse - nodes[a as usize].as_ref().map_or(0.0, |n| n.sse) - nodes[b as usize].as_ref().map_or(0.0, |n| n.sse);
+            merges.push(Merge { a, b, parts: live, rise, score: rise / typical, variance });
+            nodes[a as usize] = None;
+            nodes[b as usize] = None;
+            nodes.push(Some(node));
+            live -= 1;
+            let mut around: BTreeSet<u32> = adjacent[a as usize].union(&adjacent[b as usize]).copied().collect();
+            around.remove(&a);
+            around.remove(&b);
+            for &c in &around {
+                adjacent[c as usize].remove(&a);
+                adjacent[c as usize].remove(&b);
+                adjacent[c as usize].insert(id);
+            }
+            adjacent.push(around.clone());
+            adjacent[a as usize].clear();
+            adjacent[b as usize].clear();
+            for &c in &around {
+                heap.push(Candidate { score: pair(&nodes, c, id).0, a: c, b: id });
+            }
+        }
+        MergeTree { leaves, n_leaves, merges, typical }
+    }
+
+    /// Scores the merges against another typical variance.
+    pub fn rescore(&mut self, typical: f64) {
+        self.typical = typical;
+        for m in self.merges.iter_mut() {
+            m.score = m.rise / typical;
+        }
+    }
+
+    /// The most parts the tree has (its leaves) and the fewest (after every merge).
+    pub fn counts(&self) -> (usize, usize) {
+        (self.n_leaves, self.n_leaves - self.merges.len())
+    }
+
+    /// Compact labels of the partition with `count` parts (clamped to the tree's counts), numbered in the order
+    /// of their first vertex.
+    pub fn labels_at(&self, count: usize) -> Vec<u32> {
+        let (most, fewest) = self.counts();
+        let count = count.clamp(fewest, most);
+        let done = most - count;
+        // the node every leaf ends in after `done` merges
+        let mut up: Vec<u32> = (0..(self.n_leaves + done) as u32).collect();
+        for (m, mg) in self.merges[..done].iter().enumerate() {
+            let id = (self.n_leaves + m) as u32;
+            up[mg.a as usize] = id;
+            up[mg.b as usize] = id;
+        }
+        let root = |mut x: u32| {
+            while up[x as usize] != x {
+                x = up[x as usize];
+            }
+            x
+        };
+        let mut number = std::collections::HashMap::new();
+        self.leaves
+            .iter()
+            .map(|&l| {
+                let r = root(l);
+                let next = number.len() as u32;
+                *number.entry(r).or_insert(next)
+            })
+            .collect()
+    }
+
+    /// The merges as the part rule's curve of decisions, from the most parts down to `count` and the first merge
+    /// that was not made (as [`super::distinct::merge_indistinct`] reports them).
+    pub fn curve(&self, count: usize) -> Vec<super::distinct::CurvePoint> {
+        self.merges
+            .iter()
+            .take_while(|m| m.parts > count)
+            .map(|m| super::distinct::CurvePoint { parts: m.parts, score: m.score, variance: m.variance, merged: true })
+            .chain(self.merges.iter().find(|m| m.parts == count).map(|m| super::distinct::CurvePoint {
+                parts: m.parts,
+                score: m.score,
+                variance: m.variance,
+                merged: false,
+            }))
+            .collect()
+    }
+
+    /// The count the part rule reads off the tree: merges go on while they score below `ratio` (the rise per
+    /// vertex of the smaller side over the leaves' typical variance); the count before the first merge that
+    /// does not.
+    pub fn decided_count(&self, ratio: f64) -> usize {
+        self.merges.iter().find(|m| m.score >= ratio).map_or(self.counts().1, |m| m.parts)
+    }
+}
+
+/// Links every connected piece of the patch graph but the largest to the piece holding the vertex nearest to it
+/// (mean shape, on at most 64 of its vertices), so that merges can reach every node.
+fn link_pieces(pop: &Population, leaves: &[u32], adjacent: &mut [BTreeSet<u32>]) {
+    let n = adjacent.len();
+    let mut piece = vec![u32::MAX; n];
+    let mut pieces = 0u32;
+    for s in 0..n {
+        if piece[s] != u32::MAX {
+            continue;
+        }
+        let mut stack = vec![s as u32];
+        piece[s] = pieces;
+        while let Some(v) = stack.pop() {
+            for &u in &adjacent[v as usize] {
+                if piece[u as usize] == u32::MAX {
+                    piece[u as usize] = pieces;
+                    stack.push(u);
+                }
+            }
+        }
+        pieces += 1;
+    }
+    if pieces <= 1 {
+        return;
+    }
+    let ns = pop.n_shapes() as f64;
+    let mean: Vec<[f64; 3]> = (0..pop.n_vertices())
+        .map(|j| {
+            let mut m = [0.0; 3];
+            for s in &pop.shapes {
+                for c in 0..3 {
+                    m[c] += s[j][c] / ns;
+                }
+            }
+            m
+        })
+        .collect();
+    let piece_of = |j: usize| piece[leaves[j] as usize];
+    let mut size = vec![0usize; pieces as usize];
+    for j in 0..leaves.len() {
+        size[piece_of(j) as usize] += 1;
+    }
+    let largest = (0..pieces as usize).max_by(|&x, &y| size[x].cmp(&size[y]).then(y.cmp(&x))).expect("pieces");
+    for p in (0..pieces).filter(|&p| p as usize != largest) {
+        let inside: Vec<usize> = (0..leaves.len()).filter(|&j| piece_of(j) == p).collect();
+        let stride = inside.len().div_ceil(64).max(1);
+        let mut best: Option<(f64, usize, usize)> = None;
+        for &j in inside.iter().step_by(stride) {
+            for k in (0..leaves.len()).filter(|&k| piece_of(k) != p) {
+                let d: f64 = (0..3).map(|c| (mean[j][c] - mean[k][c]).powi(2)).sum();
+                if best.is_none_or(|b| d < b.0) {
+                    best = Some((d, j, k));
+                }
+            }
+        }
+        if let Some((_, j, k)) = best {
+            let (a, b) = (leaves[j], leaves[k]);
+            adjacent[a as usize].insert(b);
+            adjacent[b as usize].insert(a);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::{generate, Preset, Spec};
+
+    #[test]
+    fn upper_triangle_indices_are_dense() {
+        let q = 5;
+        let mut seen = vec![false; q * (q + 1) / 2];
+        for i in 0..q {
+            for k in i..q {
+                let x = upper_index(q, i, k);
+                assert!(!seen[x]);
+                seen[x] = true;
+            }
+        }
+        assert!(seen.iter().all(|&s| s));
+    }
+
+    #[test]
+    fn the_tree_finds_the_arm_and_ignores_pose_order() {
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
+        let pop = &g.population;
+        let tree = MergeTree::build(pop, 1e-14);
+        let (most, fewest) = tree.counts();
+        assert!(most > 3 && fewest == 1, "{most} {fewest}");
+        // every count's partition has that many parts
+        for n in [1, 2, 3, most / 2, most] {
+            let l = tree.labels_at(n);
+            assert_eq!(l.iter().copied().collect::<std::collections::BTreeSet<u32>>().len(), n);
+        }
+        // the last two merges join the three bones: the 3-part cut is the arm's parts (up to the blend bands)
+        let ari = crate::metrics::adjusted_rand_index(&tree.labels_at(3), &g.part_of_vertex);
+        assert!(ari > 0.9, "ari {ari}");
+        // the same population with its poses in reverse order gives the same tree
+        let rev = super::super::robustness::Variant::Reversed.apply(pop).unwrap();
+        let again = MergeTree::build(&rev, 1e-14);
+        assert_eq!(again.leaves, tree.leaves);
+        assert_eq!(again.labels_at(3), tree.labels_at(3));
+    }
+}

@@ -1,0 +1,200 @@
+//! Does the answer depend on the start? The same population fitted at several seeds and as four nuisance
+//! variants of itself (poses in reverse order; the first pose dropped; the middle pose dropped; every pose moved
+//! by one rigid motion and scaled by 7.3), with the part counts, the pairwise adjusted Rand index of the labels
+//! and the times (`posemfa robustness`).
+
+use crate::geometry::rotation::axis_angle;
+use crate::mesh::Population;
+use crate::metrics::adjusted_rand_index;
+use serde::Serialize;
+
+/// One way of presenting the population again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub enum Variant {
+    /// The population as given, fitted with this seed.
+    Seed(u64),
+    /// The poses in reverse order.
+    Reversed,
+    /// Without its first pose.
+    DropFirst,
+    /// Without its middle pose (index n_s / 2).
+    DropMiddle,
+    /// Every pose turned by one rotation (0.7 rad about (1, 2, 3)), scaled by 7.3 and shifted by (5, -2, 11).
+    Moved,
+}
+
+impl Variant {
+    /// Seeds `0..seeds`, then the four nuisance variants.
+    pub fn standard(seeds: u64) -> Vec<Variant> {
+        let mut v: Vec<Variant> = (0..seeds).map(Variant::Seed).collect();
+        v.extend([Variant::Reversed, Variant::DropFirst, Variant::DropMiddle, Variant::Moved]);
+        v
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            Variant::Seed(s) => format!("seed {s}"),
+            Variant::Reversed => "reversed".into(),
+            Variant::DropFirst => "first dropped".into(),
+            Variant::DropMiddle => "middle dropped".into(),
+            Variant::Moved => "moved x7.3".into(),
+        }
+    }
+
+    /// The seed of the fit (the nuisance variants use seed 0).
+    pub fn seed(&self) -> u64 {
+        match self {
+            Variant::Seed(s) => *s,
+            _ => 0,
+        }
+    }
+
+    /// The population presented this way (the vertices stay the same, so labels compare vertex by vertex).
+    pub fn apply(&self, pop: &Population) -> crate::Result<Population> {
+        let ns = pop.n_shapes();
+        let mut order: Vec<usize> = (0..ns).collect();
+        match self {
+            Variant::Reversed => order.reverse(),
+            Variant::DropFirst if ns > 2 => {
+                order.remove(0);
+            }
+            Variant::DropMiddle if ns > 2 => {
+                order.remove(ns / 2);
+            }
+            _ => {}
+        }
+        let moved = matches!(self, Variant::Moved);
+        let turn = axis_angle([1.0, 2.0, 3.0], 0.7);
+        let shapes: Vec<Vec<[f64; 3]>> = order
+            .iter()
+            .map(|&i| {
+                pop.shapes[i]
+                    .iter()
+                    .map(|&p| {
+                        let p = pop.normalization.to_original(p);
+                        if moved {
+                            let r = crate::geometry::mat_vec(&turn, p);
+                            [7.3 * r[0] + 5.0, 7.3 * r[1] - 2.0, 7.3 * r[2] + 11.0]
+                        } else {
+                            p
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        // names that keep this order under the natural sort
+        let names = (0..shapes.len()).map(|k| format!("pose{k:04}")).collect();
+        Population::from_unit_shapes(names, pop.faces.clone(), shapes)
+    }
+}
+
+/// One fit of one variant.
+#[derive(Debug, Clone, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Run {
+    pub variant: String,
+    pub parts: usize,
+    pub rmse: f64,
+    pub seconds: f64,
+    #[serde(skip)]
+    pub labels: Vec<u32>,
+}
+
+/// Pairwise agreement of several runs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Agreement {
+    pub median_ari: f64,
+    pub min_ari: f64,
+    pub fewest_parts: usize,
+    pub most_parts: usize,
+}
+
+/// Adjusted Rand index over every pair of runs (median, min) and the spread of their part counts.
+pub fn agreement(runs: &[Run]) -> Agreement {
+    let mut aris = Vec::new();
+    for a in 0..runs.len() {
+        for b in a + 1..runs.len() {
+            aris.push(adjusted_rand_index(&runs[a].labels, &runs[b].labels));
+        }
+    }
+    aris.sort_by(f64::total_cmp);
+    let median = if aris.is_empty() {
+        1.0
+    } else if aris.len() % 2 == 1 {
+        aris[aris.len() / 2]
+    } else {
+        0.5 * (aris[aris.len() / 2 - 1] + aris[aris.len() / 2])
+    };
+    Agreement {
+        median_ari: median,
+        min_ari: aris.first().copied().unwrap_or(1.0),
+        fewest_parts: runs.iter().map(|r| r.parts).min().unwrap_or(0),
+        most_parts: runs.iter().map(|r| r.parts).max().unwrap_or(0),
+    }
+}
+
+/// Fits every variant with `params` (the seed set per variant) and returns the runs.
+pub fn run_variants(
+    pop: &Population,
+    params: &super::Params,
+    variants: &[Variant],
+    mut each: impl FnMut(&Run),
+) -> crate::Result<Vec<Run>> {
+    let mut runs = Vec::new();
+    for v in variants {
+        let p = v.apply(pop)?;
+        let params = super::Params { seed: v.seed(), ..params.clone() };
+        let t0 = crate::clock::now_ms();
+        let fit = super::hierarchy::fit(&p, &params, &mut |_| true)?;
+        let seconds = (crate::clock::now_ms() - t0) / 1000.0;
+        let run = Run {
+            variant: v.name(),
+            parts: fit.model.n_parts(),
+            rmse: fit.model.rmse(&p),
+            seconds,
+            labels: fit.model.labels.clone(),
+        };
+        each(&run);
+        runs.push(run);
+    }
+    Ok(runs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::{generate, Preset, Spec};
+
+    #[test]
+    fn variants_keep_the_vertices_and_change_what_they_say() {
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 600, poses: 5, ..Spec::default() }).unwrap();
+        let pop = &g.population;
+        let rev = Variant::Reversed.apply(pop).unwrap();
+        assert_eq!(rev.n_vertices(), pop.n_vertices());
+        let d = |a: [f64; 3], b: [f64; 3]| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f64::max);
+        assert!(d(rev.shapes[0][7], pop.shapes[4][7]) < 1e-9);
+        assert_eq!(Variant::DropFirst.apply(pop).unwrap().n_shapes(), 4);
+        let mid = Variant::DropMiddle.apply(pop).unwrap();
+        let orig = |p: &Population, i: usize, j: usize| p.normalization.to_original(p.shapes[i][j]);
+        assert!(d(orig(&mid, 2, 3), orig(pop, 3, 3)) < 1e-9);
+        // moved and scaled, then mapped into the unit box again: the same shape up to a rigid motion
+        let moved = Variant::Moved.apply(pop).unwrap();
+        let len = |s: &[[f64; 3]], a: usize, b: usize| crate::geometry::norm(crate::geometry::sub(s[a], s[b]));
+        let ratio = len(&moved.shapes[1], 0, 50) / len(&pop.shapes[1], 0, 50);
+        let ratio2 = len(&moved.shapes[3], 10, 400) / len(&pop.shapes[3], 10, 400);
+        assert!((ratio - ratio2).abs() < 1e-9, "{ratio} {ratio2}");
+        assert!(d(moved.shapes[1][0], pop.shapes[1][0]) > 1e-3, "the placement changed");
+    }
+
+    #[test]
+    fn agreement_counts_pairs() {
+        let run = |labels: Vec<u32>, parts| Run { variant: String::new(), parts, rmse: 0.0, seconds: 0.0, labels };
+        let a = agreement(&[run(vec![0, 0, 1, 1], 2), run(vec![1, 1, 0, 0], 2), run(vec![0, 0, 0, 1], 2)]);
+        assert_eq!(a.median_ari, 0.0);
+        assert_eq!(a.min_ari, 0.0);
+        let b = agreement(&[run(vec![0, 0, 1, 1], 2), run(vec![1, 1, 0, 0], 3)]);
+        assert_eq!((b.median_ari, b.min_ari, b.fewest_parts, b.most_parts), (1.0, 1.0, 2, 3));
+    }
+}

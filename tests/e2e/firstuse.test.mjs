@@ -1,0 +1,338 @@
+// Issue 30 on the built page (dist/): the page as a first-time user meets it. One test per finding: the latent
+// view, the tied-legs example, a cancelled fit's verdict, bad parameters, the log-likelihood field, the
+// article's captions, the OBJ export of what is shown, Reset in step mode, and the layout at 1280x800 / 390x844.
+// Run: npm run build && node --test tests/e2e/firstuse.test.mjs
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFile } from 'node:fs/promises';
+import { pageSession, waitState } from './helpers.mjs';
+
+const session = pageSession();
+const summary = (page) => page.evaluate(() => window.posemfa.summary());
+const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+const text = (page, sel) => page.locator(sel).innerText();
+
+async function fitted(path = '', opts) {
+  const p = await session.open(path, opts);
+  const state = await waitState(p.page, ['fitted', 'error'], 90000);
+  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
+  await frames(p.page);
+  return p;
+}
+
+async function mode(page, m) {
+  await page.check(`#modes input[value=${m}]`, { force: true });
+  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
+}
+
+// The OBJ the export button writes now: { text, objects: [{ name, v: [[x, y, z]...], groups: [names] }] }.
+async function exportObj(page) {
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-obj')]);
+  const t = await readFile(await download.path(), 'utf8');
+  const objects = [];
+  let cur = null;
+  for (const line of t.split('\n')) {
+    if (line.startsWith('o ')) objects.push((cur = { name: line.slice(2), v: [], groups: [] }));
+    else if (line.startsWith('v ')) {
+      if (!cur) objects.push((cur = { name: null, v: [], groups: [] }));
+      cur.v.push(line.slice(2).split(' ').map(Number));
+    } else if (line.startsWith('g ')) cur.groups.push(line.slice(2));
+  }
+  return { text: t, name: download.suggestedFilename(), objects };
+}
+
+// RMS distance between two vertex lists, over the diagonal of the first one's bounding box.
+function relativeRms(a, b) {
+  assert.equal(a.length, b.length);
+  let s = 0;
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  a.forEach((p, i) => {
+    for (let k = 0; k < 3; k++) {
+      s += (p[k] - b[i][k]) ** 2;
+      lo[k] = Math.min(lo[k], p[k]);
+      hi[k] = Math.max(hi[k], p[k]);
+    }
+  });
+  const diag = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  return Math.sqrt(s / a.length) / diag;
+}
+
+test('latent view: the parts placed by the pose\'s R and b by default, readable; "each in its own frame" is a choice with its own caption', async () => {
+  const { page, context, log } = await fitted();
+  const pose = (await exportObj(page)).objects[0].v; // the Parts view: pose 1
+  await mode(page, 'latent');
+  await page.waitForFunction(() => /latent shape/i.test(document.querySelector('#caption').textContent));
+  assert.match(await text(page, '#caption'), /turned by its R and moved by its b of pose/);
+  assert.equal(await page.locator('[data-testid=latent-place]').isVisible(), true);
+  const posed = await exportObj(page);
+  assert.equal(posed.objects.length, 1);
+  // where the parts are in the pose: within a few per cent of the pose itself (the model's residual)
+  const r = relativeRms(pose, posed.objects[0].v);
+  assert.ok(r < 0.03, `latent view vs the pose: RMS ${r} of the diagonal`);
+  assert.match(posed.name, /latent-posed/);
+  // the teaching choice: the parts in their own frames, on top of each other, and a caption saying so
+  await page.selectOption('[data-testid=latent-place]', 'frames');
+  await page.waitForFunction(() => /own frame/.test(document.querySelector('#caption').textContent));
+  assert.match(await text(page, '#caption'), /on top of each other/);
+  const frames_ = await exportObj(page);
+  assert.ok(relativeRms(pose, frames_.objects[0].v) > 0.1, 'the latent frames are not the pose');
+  await page.selectOption('[data-testid=latent-place]', 'moved');
+  await page.waitForFunction(() => /not turned/.test(document.querySelector('#caption').textContent));
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('the tied-legs example says what it shows: one motion, two parts kept apart by connectivity (app and article)', async () => {
+  const { page, context, log } = await fitted('#ex=too-few-poses');
+  const note = await text(page, '#example-note');
+  assert.doesNotMatch(note, /Fails on purpose/);
+  assert.match(note, /same motion/);
+  assert.match(note, /do not touch/);
+  const title = await page.locator('[data-testid=presets] button[data-id=too-few-poses]').innerText();
+  assert.doesNotMatch(title, /fails|never move apart/i);
+  const s = await summary(page);
+  assert.ok(s.groundTruth.ari > 0.95, `the legs are two parts each, as the note says: ARI ${s.groundTruth.ari}`);
+  await context.close();
+
+  const art = await session.open('explain.html');
+  await art.page.locator('[data-figure=tied]').scrollIntoViewIfNeeded();
+  await art.page.waitForFunction(() => /agree within/.test(document.querySelector('[data-figure=tied] .fig-status')?.textContent ?? ''), null, { timeout: 60000, polling: 100 });
+  const cap = await art.page.locator('[data-figure=tied] figcaption').innerText();
+  assert.doesNotMatch(cap, /can only give them one motion/);
+  assert.match(cap, /do not touch/);
+  const status = await art.page.locator('[data-figure=tied] .fig-status').innerText();
+  const within = Number(status.match(/agree within ([\d.]+)°/)[1]);
+  assert.ok(within < 1, status);
+  assert.deepEqual([...log.errors, ...art.log.errors], []);
+  await art.context.close();
+});
+
+test('a cancelled fit gets no verdict: "cancelled: the diagnosis needs a finished fit"', async () => {
+  const { page, context, log } = await fitted();
+  assert.match(await text(page, '[data-testid=diagnosis]'), /^Articulated/);
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  // Cancel as soon as the fit runs: its first slice (40 ms) is in the coarse stage or just after it
+  await page.evaluate(() => new Promise((done) => {
+    const seen = new MutationObserver(() => {
+      if (document.body.dataset.state !== 'fitting') return;
+      seen.disconnect();
+      document.getElementById('cancel').click();
+      done();
+    });
+    seen.observe(document.body, { attributes: true, attributeFilter: ['data-state'] });
+    document.getElementById('fit').click();
+  }));
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 60000 });
+  const s = await summary(page);
+  assert.equal(s.cancelled, true, 'the fit was cancelled before it ended');
+  assert.equal(s.diagnosis, null);
+  assert.equal(await text(page, '[data-testid=diagnosis]'), 'Cancelled: the diagnosis needs a finished fit.');
+  assert.equal(await page.locator('[data-testid=diagnosis].fails').count(), 0);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('bad parameters: each field named and outlined with what it allows, no fit, cleared when fixed or by Defaults', async () => {
+  const { page, context, log } = await fitted();
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  const stage = await text(page, '#stage');
+  await page.fill('#params [name=tol]', 'abc');
+  await page.fill('#params [name=targetParts]', 'seven');
+  await page.click('#fit');
+  await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 2, null, { timeout: 10000 });
+  const lines = await page.locator('[data-testid=param-errors] li').allInnerTexts();
+  assert.deepEqual(lines.sort(), [
+    "Parts in the end: 'seven' is not a whole number: it must be a whole number of at least 1, or auto (Algorithm 1's own count)",
+    "Tolerance (nats / vertex): 'abc' is not a number: it must be a positive number (try 1e-3)",
+  ]);
+  assert.equal(await page.getAttribute('#params [name=tol]', 'aria-invalid'), 'true');
+  assert.equal(await page.getAttribute('#params [name=targetParts]', 'aria-invalid'), 'true');
+  const outline = await page.$eval('#params [name=tol]', (e) => getComputedStyle(e).outlineStyle);
+  assert.notEqual(outline, 'none');
+  await page.waitForTimeout(500);
+  assert.equal(await page.evaluate(() => window.posemfa.fitCount()), n, 'no fit started');
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  assert.equal(await text(page, '#stage'), stage, 'the Stage field did not move to "starting"');
+  assert.equal(await text(page, '[data-testid=errors]'), '', 'no deserialiser words');
+  // fixed: its line goes as it is typed
+  await page.fill('#params [name=tol]', '1e-3');
+  await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 1);
+  assert.equal(await page.getAttribute('#params [name=tol]', 'aria-invalid'), null);
+  // Defaults: every mark goes
+  await page.click('#reset-params');
+  assert.equal(await page.locator('[data-testid=param-errors] li').count(), 0);
+  assert.equal(await page.locator('#params [aria-invalid]').count(), 0);
+  // a number out of range is named too (the core's range, as the CLI says it)
+  await page.fill('#params [name=parts]', '0');
+  await page.click('#fit');
+  await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 1);
+  assert.match(await text(page, '[data-testid=param-errors]'), /^Initial parts: 0 must be a whole number from 1 to 512/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('the Log-likelihood field is the shown model\'s final value (the plot\'s last point), on every example tried', async () => {
+  const { page, context, log } = await fitted();
+  for (const id of ['quadruped', 'arm', 'snake', 'blob']) {
+    if (id !== 'quadruped') {
+      const n = await page.evaluate(() => window.posemfa.fitCount());
+      await page.click(`[data-testid=presets] button[data-id=${id}]`);
+      await page.waitForFunction((c) => window.posemfa.fitCount() > c && document.body.dataset.state === 'fitted', n, { timeout: 90000 })
+        .catch(async (e) => { throw new Error(`${id}: ${e.message}; state ${await page.evaluate(() => [document.body.dataset.state, window.posemfa.fitCount()])}`); });
+      await frames(page);
+    }
+    const ll = (await summary(page)).logLikelihood;
+    assert.equal(await text(page, '#loglik'), ll[ll.length - 1].toFixed(2), id);
+  }
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('article: the model figure\'s status names the part shown, its bars are on one stated scale; the responsibilities label follows the run', async () => {
+  const { page, context, log } = await session.open('explain.html');
+  const fig = page.locator('[data-figure=model]');
+  await fig.scrollIntoViewIfNeeded();
+  await page.waitForFunction(() => document.querySelector('[data-figure=model]').dataset.state === 'fitted' && document.querySelectorAll('[data-figure=model] .bar').length > 0, null, { timeout: 60000 });
+  const options = await fig.locator('[data-ctl=part] option').count();
+  for (const k of [1, options - 1]) {
+    await fig.locator('[data-ctl=part]').selectOption(String(k));
+    await page.waitForFunction((p) => document.querySelector('[data-figure=model] .fig-status').textContent.includes(`showing part ${p}.`)
+      && document.querySelector('[data-figure=model] .bars-title')?.textContent.includes(`part ${p} `), k + 1, { timeout: 10000 });
+    assert.match(await fig.locator('.bars-title').innerText(), /full width = 180°/);
+    const bars = await fig.locator('.bar').evaluateAll((els) => els.map((e) => ({
+      angle: parseFloat(e.querySelector('.val').textContent), width: parseFloat(e.querySelector('.fill').style.width),
+    })));
+    for (const b of bars) assert.ok(Math.abs(b.width - (100 * b.angle) / 180) < 0.1, `bar ${JSON.stringify(b)} is not on the 180° scale`);
+  }
+  // responsibilities: the view's label and the status give the same iteration, after a Reset too
+  const resp = page.locator('[data-figure=responsibilities]');
+  await resp.scrollIntoViewIfNeeded();
+  await page.waitForFunction(() => window.explain.detail('responsibilities').steps >= 2, null, { timeout: 60000 });
+  await resp.locator('[data-act=reset]').click();
+  await page.waitForFunction(() => window.explain.detail('responsibilities').steps >= 3, null, { timeout: 60000 });
+  await resp.locator('[data-act=pause]').click();
+  await page.waitForTimeout(800);
+  const label = await resp.locator('.posemfa-caption').innerText();
+  const status = await resp.locator('.fig-status').innerText();
+  const it = (await page.evaluate(() => window.explain.detail('responsibilities'))).iteration;
+  assert.match(status, new RegExp(`Iteration ${it}\\b`));
+  assert.match(label, new RegExp(`^Iteration ${it}\\b`), `label "${label}" beside status "${status}"`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('OBJ export: both meshes where two are shown, named for what they are; Stages: each stage\'s parts as groups', async () => {
+  const { page, context, log } = await fitted();
+  const s = await summary(page);
+  await mode(page, 'recon');
+  await page.waitForFunction(() => window.posemfa.shown().join() === 'original,reconstruction');
+  assert.equal(await text(page, '#export-obj'), 'OBJ of the 2 shown meshes');
+  const recon = await exportObj(page);
+  assert.deepEqual(recon.objects.map((o) => o.name), ['original', 'reconstruction']);
+  assert.equal(recon.objects[0].v.length, s.vertices);
+  assert.equal(recon.objects[1].v.length, s.vertices);
+  const r = relativeRms(recon.objects[0].v, recon.objects[1].v);
+  assert.ok(r > 0 && r < 0.03, `the reconstruction is its own mesh, close to the original: ${r}`);
+  assert.match(recon.name, /original_reconstruction/);
+  const faces = [...recon.text.matchAll(/^f /gm)].length;
+  assert.ok(faces > 0 && faces % 2 === 0, `${faces} faces: each mesh its own triangles`);
+  await mode(page, 'stages');
+  await page.waitForFunction(() => window.posemfa.shown().join() === 'coarse,refined,final');
+  const st = await exportObj(page);
+  assert.deepEqual(st.objects.map((o) => o.name), ['coarse', 'refined', 'final']);
+  const groups = st.objects.map((o) => o.groups.length);
+  assert.equal(groups[0], s.coarseParts);
+  assert.equal(groups[2], s.parts);
+  assert.ok(st.objects[2].groups.every((g) => /^final_part_\d+$/.test(g)), st.objects[2].groups.join());
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('step by step: Reset asks before it drops a finished fit; the state follows; the Stage field and the note say the same part', async () => {
+  const { page, context, log } = await fitted('#ex=arm');
+  const parts = await text(page, '[data-testid=parts-count]');
+  await page.click('#teach-reset'); // the test's dialog handler dismisses the question
+  await page.waitForTimeout(300);
+  assert.equal(log.dialogs.length, 1, 'Reset asked');
+  assert.match(log.dialogs[0], /drops the finished one/);
+  assert.equal(await text(page, '[data-testid=parts-count]'), parts, 'dismissed: the fit is kept');
+  assert.equal(await page.isDisabled('#export-json'), false);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  // accepted: a new step-by-step fit, paused at iteration 0, and the page says it is paused, not fitting
+  await page.evaluate(() => { window.confirm = () => true; });
+  await page.click('#teach-reset');
+  await page.waitForFunction(() => window.posemfa.teaching().active);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'paused');
+  assert.equal(await page.evaluate(() => document.body.dataset.teaching), '1');
+  // run into the refinement, then step through it: after every step the Stage field and the note name the
+  // same coarse part, including at the steps that move from one part to the next
+  await page.click('#teach-run');
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitting');
+  await page.waitForFunction(() => window.posemfa.teaching().stage?.kind === 'refine', null, { timeout: 60000, polling: 5 });
+  await page.click('#teach-pause');
+  await page.waitForFunction(() => !window.posemfa.teaching().running);
+  await page.waitForFunction(() => document.body.dataset.state === 'paused');
+  const seen = new Set();
+  for (let k = 0; k < 160 && seen.size < 3; k++) {
+    const before = (await page.evaluate(() => window.posemfa.teaching())).iteration;
+    await page.click('[data-testid=teach-step]');
+    await page.waitForFunction((b) => window.posemfa.teaching().iteration > b, before, { timeout: 10000 });
+    await frames(page);
+    const t = await page.evaluate(() => window.posemfa.teaching());
+    if (t.stage?.kind !== 'refine') break;
+    const field = await text(page, '#stage');
+    const note = await text(page, '#teach-stage-note');
+    const a = field.match(/part (\d+) of (\d+)/);
+    const b = note.match(/part (\d+) of (\d+)/);
+    assert.ok(a && b, `${field} | ${note}`);
+    assert.deepEqual(a.slice(1), b.slice(1), `Stage field "${field}" and note "${note}"`);
+    seen.add(a[1]);
+  }
+  assert.ok(seen.size >= 2, `stepped through the refinement of ${seen.size} part(s) only`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+// Whether an element lies fully inside the window (not cut by its bottom or right edge, nor scrolled away).
+const inWindow = (page, sel) => page.$eval(sel, (e) => {
+  const r = e.getBoundingClientRect();
+  return r.width > 0 && r.top >= 0 && r.left >= 0 && r.bottom <= innerHeight + 0.5 && r.right <= innerWidth + 0.5;
+});
+
+test('layout at 1280x800: nothing below the window, the running fit\'s progress in view; at 390x844 every label whole', async () => {
+  const { page, context, log } = await fitted();
+  assert.ok(await page.evaluate(() => document.documentElement.scrollHeight <= innerHeight), `page height ${await page.evaluate(() => document.documentElement.scrollHeight)}`);
+  for (const sel of ['#pose-strip', '#view-wrap']) assert.ok(await inWindow(page, sel), `${sel} is cut off`);
+  const thumbs = await page.$$eval('#pose-strip button', (bs) => bs.map((b) => b.getBoundingClientRect().bottom));
+  assert.ok(thumbs.every((y) => y <= 800), `thumbnail bottoms ${thumbs}`);
+  // a fit running: its Stage, Iteration and plot are in view
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  await page.click('#fit');
+  await page.waitForFunction(() => document.body.dataset.state === 'fitting');
+  for (const sel of ['#stage', '#iteration', '#plot']) assert.ok(await inWindow(page, sel), `${sel} is out of view while the fit runs`);
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 90000 });
+  // the part-rule chart: its text inside its canvas (the chart says where it drew its labels)
+  const clipped = await page.$eval('#part-curve', (c) => c.dataset.clipped);
+  assert.equal(clipped, '0', 'the part-rule chart clipped a label');
+  await context.close();
+
+  // a phone: no text cut mid-line in the app's panel, nor in the eq 18 figure's view labels
+  const phone = await fitted('', { width: 390, height: 844 });
+  const wide = await phone.page.evaluate(() => document.documentElement.scrollWidth);
+  assert.ok(wide <= 390, `the page is ${wide} px wide`);
+  phone.context.close();
+  const art = await session.open('explain.html', { width: 390, height: 844 });
+  await art.page.locator('[data-figure=eq18]').scrollIntoViewIfNeeded();
+  await art.page.waitForFunction(() => document.querySelectorAll('[data-figure=eq18] .posemfa-caption').length === 2, null, { timeout: 30000 });
+  await art.page.waitForFunction(() => document.querySelector('[data-figure=eq18]').dataset.state !== 'loading', null, { timeout: 60000 });
+  // each label lies inside its view box (which hides what overflows it)
+  const cut = await art.page.$$eval('[data-figure=eq18] .posemfa-caption', (els) => els.filter((e) => {
+    const r = e.getBoundingClientRect();
+    const box = e.closest('.fig-view').getBoundingClientRect();
+    return r.bottom > box.bottom + 0.5 || r.right > box.right + 0.5 || e.scrollWidth > e.clientWidth + 1;
+  }).map((e) => e.textContent));
+  assert.deepEqual(cut, [], 'eq 18 view labels cut');
+  assert.deepEqual([...log.errors, ...art.log.errors], []);
+  await art.context.close();
+});

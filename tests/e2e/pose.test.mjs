@@ -1,0 +1,133 @@
+// Pose mode (issue 28) on the built page: a generated quadruped dropped and fitted, then the Pose view. A mouse drag
+// on the mesh turns the part under the pointer and only its subtree: every vertex with no weight on that subtree
+// moves by less than 1e-6 of the bounding-box diagonal, and the part's joint stays in place (1e-4); the angle from
+// the rest pose is shown and Undo brings the mesh back. The pose-space sliders at 0 give the mean pose vector, and
+// each training pose's coordinates give that pose back. Frames of the same mesh added with "Add frames" are solved
+// onto the rig and play. No console errors. Runs the CLI (debug build, built here if needed) for the files.
+// Run: npm run build && node --test tests/e2e/pose.test.mjs
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import path from 'node:path';
+import { pageSession, waitState, asPayload, ROOT } from './helpers.mjs';
+
+const session = pageSession();
+let dir;
+
+const objFiles = (folder) => readdirSync(folder).filter((f) => f.endsWith('.obj')).sort((a, b) => a.localeCompare(b, 'en', { numeric: true }))
+  .map((name) => ({ name, text: readFileSync(path.join(folder, name), 'utf8') }));
+
+before(() => {
+  execFileSync('cargo', ['build', '--quiet', '--bin', 'posemfa'], { cwd: ROOT, stdio: 'inherit' });
+  const bin = path.join(ROOT, 'target', 'debug', 'posemfa');
+  dir = mkdtempSync(path.join(tmpdir(), 'posemfa-pose-page-'));
+  // the same mesh (the design and the vertex count make it), other poses (the seed draws the angles)
+  execFileSync(bin, ['generate', 'quadruped', '--vertices', '1500', '--poses', '6', '--seed', '4', '--out', path.join(dir, 'pop')]);
+  execFileSync(bin, ['generate', 'quadruped', '--vertices', '1500', '--poses', '4', '--seed', '11', '--out', path.join(dir, 'new')]);
+});
+
+after(() => {
+  if (dir) rmSync(dir, { recursive: true, force: true });
+});
+
+const maxAbs = (a, b) => a.reduce((m, x, i) => Math.max(m, Math.abs(x - b[i])), 0);
+
+test('pose mode: a drag turns only the subtree about its joint; sliders give the mean and the training poses; added frames play', async () => {
+  const { page, log } = await session.open();
+  await waitState(page, ['fitted', 'idle', 'error'], 60000);
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.setInputFiles('[data-testid=file-input]', asPayload(objFiles(path.join(dir, 'pop'))));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000, polling: 50 });
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+
+  await page.click('[data-testid=mode-pose]');
+  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
+  assert.ok(sk.order.length >= 3 && sk.nModes >= 1, JSON.stringify({ bones: sk.order.length, modes: sk.nModes }));
+  const diag = sk.diagonal;
+
+  // a real drag: press on the mesh, move, release; find a press point on a non-root part
+  const box = await page.locator('#view canvas').boundingBox();
+  let bone = -1;
+  let start = null;
+  let before = null;
+  let joint = null;
+  for (const [fx, fy] of [[0.5, 0.62], [0.4, 0.65], [0.6, 0.65], [0.35, 0.5], [0.65, 0.5], [0.5, 0.5], [0.45, 0.7], [0.55, 0.7]]) {
+    const x = box.x + fx * box.width;
+    const y = box.y + fy * box.height;
+    before = await page.evaluate(() => window.posemfa.pose.positions());
+    await page.mouse.move(x, y);
+    await page.mouse.down();
+    await page.waitForTimeout(100);
+    const picked = await page.evaluate(() => window.posemfa.pose.selected());
+    if (picked >= 0 && sk.parent[picked] >= 0) {
+      bone = picked;
+      start = { x, y };
+      joint = await page.evaluate((b) => window.posemfa.pose.joint(b), bone);
+      break;
+    }
+    await page.mouse.up();
+  }
+  assert.ok(bone >= 0, 'a press on some non-root part of the mesh');
+  const angleBefore = (await page.evaluate(() => window.posemfa.pose.angles()))[bone];
+  for (let s = 1; s <= 8; s++) {
+    await page.mouse.move(start.x + 6 * s, start.y);
+    await page.waitForTimeout(60);
+  }
+  await page.mouse.up();
+  await page.waitForFunction(([b, a]) => Math.abs(window.posemfa.pose.angles()[b] - a) > 1, [bone, angleBefore], { timeout: 20000, polling: 50 });
+  await page.waitForTimeout(300); // the last move's answer
+  const after = await page.evaluate(() => window.posemfa.pose.positions());
+  const touches = await page.evaluate((b) => window.posemfa.pose.touches(b), bone);
+  let outside = 0;
+  let inside = 0;
+  for (let v = 0; v < touches.length; v++) {
+    const d = Math.hypot(after[3 * v] - before[3 * v], after[3 * v + 1] - before[3 * v + 1], after[3 * v + 2] - before[3 * v + 2]);
+    if (touches[v]) inside = Math.max(inside, d);
+    else outside = Math.max(outside, d);
+  }
+  assert.ok(outside < 1e-6 * diag, `a vertex outside the subtree of ${sk.names[bone]} moved by ${outside / diag} of the diagonal`);
+  assert.ok(inside > 1e-3 * diag, `the subtree moved by ${inside / diag} of the diagonal`);
+  const jointAfter = await page.evaluate((b) => window.posemfa.pose.joint(b), bone);
+  assert.ok(Math.hypot(...jointAfter.map((c, i) => c - joint[i])) < 1e-4 * diag, `the joint moved: ${joint} -> ${jointAfter}`);
+  const angle = await page.locator('[data-testid=pose-angle]').innerText();
+  assert.match(angle, /^[0-9.]+°$/);
+  assert.ok(Number(angle.replace('°', '')) > 1, angle);
+  // Undo: the mesh as before the drag
+  await page.click('#pose-undo');
+  await page.waitForFunction(([b, a]) => Math.abs(window.posemfa.pose.angles()[b] - a) < 1e-3, [bone, angleBefore], { timeout: 20000, polling: 50 });
+  const undone = await page.evaluate(() => window.posemfa.pose.positions());
+  assert.ok(maxAbs(undone, before) < 1e-5 * diag, `undo: ${maxAbs(undone, before)}`);
+  // the buttons (keyboard): +10 degrees then -10 degrees on the selected part, back where it was
+  assert.equal(await page.locator('#pose-part').inputValue(), String(bone));
+  await page.click('#pose-plus');
+  await page.waitForFunction(([b, a]) => Math.abs(window.posemfa.pose.angles()[b] - a) > 5, [bone, angleBefore], { timeout: 20000, polling: 50 });
+  await page.click('#pose-minus');
+  await page.waitForFunction(([b, a]) => Math.abs(window.posemfa.pose.angles()[b] - a) < 0.01, [bone, angleBefore], { timeout: 20000, polling: 50 });
+
+  // the pose space: sliders at 0 give the mean; each training pose's coordinates give it back
+  await page.evaluate((n) => window.posemfa.pose.modes(new Array(n).fill(0)), sk.nModes);
+  const v0 = await page.evaluate(() => window.posemfa.pose.vector());
+  assert.ok(maxAbs(v0.vector, v0.mean) < 1e-9, `sliders at 0: ${maxAbs(v0.vector, v0.mean)} from the mean`);
+  for (let i = 0; i < sk.coords.length; i++) {
+    await page.evaluate((c) => window.posemfa.pose.modes(c), sk.coords[i]);
+    const v = await page.evaluate(() => window.posemfa.pose.vector());
+    assert.ok(maxAbs(v.vector, v.training[i]) < 1e-6, `training pose ${i}: ${maxAbs(v.vector, v.training[i])}`);
+  }
+  assert.equal(await page.locator('#pose-modes input').count(), Math.min(sk.nModes, 6));
+  await page.click('[data-testid=pose-random]');
+
+  // new frames of the same mesh: solved onto the rig and played
+  await page.setInputFiles('[data-testid=pose-frames]', asPayload(objFiles(path.join(dir, 'new'))));
+  await page.waitForFunction(() => document.body.dataset.poseFrames === '4', null, { timeout: 60000, polling: 50 });
+  const frames = await page.evaluate(() => window.posemfa.pose.frames());
+  assert.deepEqual(frames.names, ['pose01.obj', 'pose02.obj', 'pose03.obj', 'pose04.obj']);
+  assert.ok(frames.eRms.every((e) => e > 0 && e < 20), JSON.stringify(frames.eRms));
+  const f0 = await page.evaluate(() => document.body.dataset.poseFrame);
+  await page.waitForFunction((f) => document.body.dataset.poseFrame !== f, f0, { timeout: 10000, polling: 50 });
+  assert.match(await page.locator('#caption').innerText(), /Added frame/);
+  assert.match(await page.locator('[data-testid=pose-status]').innerText(), /4 frames solved onto the rig: E_RMS [0-9.]+/);
+  assert.deepEqual(log.errors, []);
+});

@@ -1,0 +1,105 @@
+// Issue 26 on the built page (dist/): the merge tree's slider shows every part count of the tree, each from the
+// core at once (no fit), and a new fit of the same population keeps the colour of every part that stayed the
+// same. Prints the time of the slowest move (a figure, not a bar: speed goals are benchmarks).
+// Run: npm run build && node --test tests/e2e/tree.test.mjs
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { existsSync, readdirSync } from 'node:fs';
+import path from 'node:path';
+import { pageSession, waitState, ROOT } from './helpers.mjs';
+
+const session = pageSession();
+
+async function fitted(page) {
+  assert.equal(await waitState(page, ['fitted', 'error'], 90000), 'fitted');
+}
+
+async function move(page, n) {
+  await page.evaluate((v) => {
+    const s = document.getElementById('tree-slider');
+    s.value = String(v);
+    s.dispatchEvent(new Event('input'));
+  }, n);
+  await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), n);
+  return page.evaluate(() => ({ ...document.getElementById('tree-slider').dataset }));
+}
+
+test('the slider shows every count of the merge tree, each partition with that many parts', async () => {
+  const { page, log } = await session.open();
+  await fitted(page);
+  const tree = await page.evaluate(() => window.posemfa.tree());
+  assert.ok(tree && tree.most > tree.fewest, JSON.stringify(tree));
+  assert.ok(tree.decided >= tree.fewest && tree.decided <= tree.most, JSON.stringify(tree));
+  assert.equal(await page.locator('#tree').isHidden(), false);
+  let slowest = 0;
+  for (let n = tree.most; n >= tree.fewest; n--) {
+    const d = await move(page, n);
+    assert.equal(Number(d.parts), n, `count ${n}`);
+    slowest = Math.max(slowest, Number(d.ms));
+    assert.match(await page.locator('#tree-count').innerText(), new RegExp(`^${n} parts`));
+  }
+  console.log(`# merge tree slider: ${tree.most - tree.fewest + 1} counts, slowest move ${slowest.toFixed(1)} ms`);
+  // no fit ran for any of it
+  assert.equal(await page.evaluate(() => window.posemfa.fitCount()), 1);
+  assert.deepEqual(log.errors, []);
+});
+
+test('Refine fits the chosen count, and parts that stay keep their colours', async () => {
+  const { page, log } = await session.open();
+  await fitted(page);
+  const before = await page.evaluate(() => window.posemfa.fittedParts());
+  const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
+  const want = parts - 2;
+  await move(page, want);
+  await page.click('[data-testid=tree-refine]');
+  await page.waitForFunction(() => window.posemfa.fitCount() >= 2, null, { timeout: 90000 });
+  await fitted(page);
+  assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, want);
+  const after = await page.evaluate(() => window.posemfa.fittedParts());
+  // parts that are the same (more than half of each in the other) keep their colour
+  const overlap = new Map();
+  const sizeA = new Map();
+  const sizeB = new Map();
+  after.labels.forEach((l, v) => {
+    const b = before.labels[v];
+    overlap.set(`${l},${b}`, (overlap.get(`${l},${b}`) ?? 0) + 1);
+    sizeA.set(l, (sizeA.get(l) ?? 0) + 1);
+    sizeB.set(b, (sizeB.get(b) ?? 0) + 1);
+  });
+  let same = 0;
+  for (const [key, n] of overlap) {
+    const [l, b] = key.split(',').map(Number);
+    if (2 * n > sizeA.get(l) && 2 * n > sizeB.get(b)) {
+      same++;
+      assert.equal(after.colours[l], before.colours[b], `part ${l} (was ${b}) changed colour`);
+    }
+  }
+  assert.ok(same >= want - 4, `only ${same} of ${want} parts matched an earlier part`);
+  assert.deepEqual(log.errors, []);
+});
+
+test('on horse-poses every count of the tree shows at once (needs ../shared)', async (t) => {
+  const horse = path.join(process.env.POSEMFA_SHARED ?? path.join(ROOT, '../shared'), 'data/horse-poses');
+  if (!existsSync(horse)) {
+    if (process.env.CI === 'true') assert.fail(`${horse} is absent, and CI=true`);
+    t.skip(`${horse} is absent`);
+    return;
+  }
+  const { page, log } = await session.open();
+  await fitted(page);
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  const names = readdirSync(horse).filter((f) => f.endsWith('.obj'));
+  await page.setInputFiles('[data-testid=file-input]', names.map((n) => path.join(horse, n)));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 300000, polling: 50 });
+  await fitted(page);
+  const tree = await page.evaluate(() => window.posemfa.tree());
+  const times = [];
+  for (let n = tree.most; n >= tree.fewest; n--) {
+    const d = await move(page, n);
+    assert.equal(Number(d.parts), n, `count ${n}`);
+    times.push(Number(d.ms));
+  }
+  times.sort((a, b) => a - b);
+  t.diagnostic(`horse-poses: ${times.length} counts, median move ${times[times.length >> 1].toFixed(1)} ms, slowest ${times.at(-1).toFixed(1)} ms`);
+  assert.deepEqual(log.errors, []);
+});

@@ -1,0 +1,306 @@
+// Pose mode (issue 28): make a pose of one's own from the fitted rig. Click a part and drag to turn it (and the
+// parts it carries) about its joint, around the view direction; or pick the part in the list and turn it with the
+// buttons (keyboard). The angle from the rest pose is shown; Undo and Reset. The pose space: sliders along the
+// principal modes of the training poses' joint rotations (0 = the mean pose), "Random pose" within the training
+// range. Export the posed mesh (OBJ) and the pose (.glb with a one-frame clip). "Add frames": frames of the same
+// mesh solved onto the rig (the bones with the weights fixed) and played. Everything is computed by the core
+// (src/export/pose_glb.rs, through the worker's pose queries); this file only shows and asks.
+import { state, subscribe } from '../state.js';
+import { query } from '../session.js';
+import { viewer } from '../views/viewer-instance.js';
+import { renderView, registerView } from '../views/render.js';
+import { showProblems } from '../problems.js';
+
+const $ = (id) => document.getElementById(id);
+const STEP = (10 * Math.PI) / 180; // a button press: 10 degrees
+const DRAG = 0.01; // radians per pixel
+
+// What pose mode shows: the skeleton of the poser, the current mesh and angles, the undo stack, added frames.
+const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, undo: [], frames: null, frame: 0, playing: false };
+
+/** The mesh pose mode shows (for views/render.js), or null before the poser is ready. */
+export async function poseView() {
+  await ensureStarted();
+  const frames = pose.frames && pose.playing !== null && pose.showFrames;
+  const positions = frames ? pose.frames.positions[pose.frame] : pose.positions;
+  const name = frames ? `frame ${pose.frames.names[pose.frame]}` : 'posed';
+  const caption = frames
+    ? `Added frame “${pose.frames.names[pose.frame]}” (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${pose.frames.eRms[pose.frame].toFixed(3)}`
+    : pose.bone >= 0
+      ? `Pose mode: ${pose.skeleton.names[pose.bone]} turned ${pose.angles[pose.bone].toFixed(1)}° from the rest pose (drag a part to turn it about its joint)`
+      : 'Pose mode: click a part and drag to turn it about its joint, or use the pose-space sliders';
+  return { slots: [{ positions, colours: state.colours.final.vertexColours, name }], caption };
+}
+
+async function ensureStarted() {
+  if (pose.gen === state.gen && pose.skeleton) return;
+  if (pose.starting && pose.startGen === state.gen) return pose.starting;
+  pose.startGen = state.gen;
+  $('pose-status').textContent = 'building the rig…';
+  pose.starting = (async () => {
+    const r = await query('poseStart', {});
+    pose.gen = state.gen;
+    pose.skeleton = r.skeleton;
+    pose.positions = r.positions;
+    pose.angles = r.angles;
+    pose.bone = -1;
+    pose.undo = [];
+    pose.frames = null;
+    pose.showFrames = false;
+    fillControls();
+    $('pose-status').textContent = `${r.skeleton.order.length} bones, ${r.skeleton.nModes} pose modes`;
+    document.body.dataset.pose = 'ready';
+  })();
+  try {
+    await pose.starting;
+  } finally {
+    pose.starting = null;
+  }
+}
+
+function fillControls() {
+  const sel = $('pose-part');
+  sel.replaceChildren(...pose.skeleton.order.map((k) => Object.assign(document.createElement('option'), { value: String(k), textContent: pose.skeleton.names[k] })));
+  const box = $('pose-modes');
+  box.replaceChildren();
+  const shown = Math.min(pose.skeleton.nModes, 6);
+  for (let m = 0; m < shown; m++) {
+    const [lo, hi] = pose.skeleton.range[m];
+    const pad = 0.25 * (hi - lo);
+    const label = document.createElement('label');
+    const input = Object.assign(document.createElement('input'), { type: 'range', min: String(lo - pad), max: String(hi + pad), step: String((hi - lo) / 200 || 0.001), value: '0' });
+    input.dataset.mode = String(m);
+    input.dataset.testid = `pose-mode-${m}`;
+    input.setAttribute('aria-label', `pose mode ${m + 1}`);
+    input.addEventListener('input', () => applyModes());
+    label.append(`mode ${m + 1} (sd ${(pose.skeleton.sd[m] * 180 / Math.PI).toFixed(1)}°) `, input);
+    box.append(label);
+  }
+  showAngle();
+}
+
+function modeValues() {
+  return [...document.querySelectorAll('#pose-modes input')].map((i) => Number(i.value));
+}
+
+function setModeSliders(coeffs) {
+  for (const i of document.querySelectorAll('#pose-modes input')) i.value = String(coeffs[Number(i.dataset.mode)] ?? 0);
+}
+
+function showAngle() {
+  const k = Number($('pose-part').value);
+  $('pose-angle').textContent = pose.angles && k >= 0 ? `${pose.angles[k].toFixed(1)}°` : '–';
+  $('pose-undo').disabled = pose.undo.length === 0;
+}
+
+function took(r) {
+  pose.positions = r.positions;
+  pose.angles = r.angles;
+  pose.showFrames = false;
+  if (pose.playing) playFrames(); // a pose made while frames play: pause them, show the pose
+  showAngle();
+  renderView();
+}
+
+async function remember() {
+  pose.undo.push(await query('poseBones'));
+  if (pose.undo.length > 100) pose.undo.shift();
+}
+
+// The user's pose actions run one after another in the order they were asked for: a Random pose clicked just
+// before Add frames must not land after the frames and hide them. A queued action must never call another
+// queued one (it would wait for itself): inside them, call the plain functions (turnPart, not turn).
+let queue = Promise.resolve();
+const orReport = (f) => (...a) => {
+  const run = queue.then(async () => {
+    try {
+      await f(...a);
+    } catch (e) {
+      $('pose-status').textContent = e.message ?? String(e);
+      if (e.problems) showProblems(e.problems, 'Pose mode');
+    }
+  });
+  queue = run;
+  return run;
+};
+
+// The view direction (camera -> scene): turns are about it, so a part turns in the plane of the screen.
+function viewAxis() {
+  const v = viewer.camera.getWorldDirection(new viewer.camera.position.constructor());
+  return [v.x, v.y, v.z];
+}
+
+// Turns `bone` by `angle` about the view direction (inside a queued action; the drag queues it with `turn`).
+async function turnPart(bone, angle) {
+  pose.bone = bone;
+  $('pose-part').value = String(bone);
+  took(await query('poseTurn', bone, viewAxis(), angle));
+}
+const turn = orReport(turnPart);
+
+async function applyModes() {
+  if (!pose.skeleton) return;
+  took(await query('poseModes', modeValues()));
+}
+
+function download(name, data, type) {
+  const url = URL.createObjectURL(new Blob([data], { type }));
+  const a = Object.assign(document.createElement('a'), { href: url, download: name });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10000);
+}
+
+// Drag: pointer down on a part (capture phase, before the orbit controls) selects it; moving turns it.
+function installDrag() {
+  const view = $('view');
+  let drag = null;
+  let busy = false;
+  let pending = 0;
+  view.addEventListener('pointerdown', (e) => {
+    if (state.mode !== 'pose' || !pose.skeleton || e.button !== 0) return;
+    const hit = viewer.pick(e.clientX, e.clientY);
+    if (!hit) return;
+    e.stopPropagation();
+    e.preventDefault();
+    const bone = pose.skeleton.boneOfVertex[hit.vertex];
+    drag = { x: e.clientX, bone };
+    pose.bone = bone;
+    $('pose-part').value = String(bone);
+    remember().then(showAngle);
+  }, { capture: true });
+  window.addEventListener('pointermove', async (e) => {
+    if (!drag) return;
+    pending += (e.clientX - drag.x) * DRAG;
+    drag.x = e.clientX;
+    if (busy || pending === 0) return;
+    busy = true;
+    const angle = pending;
+    pending = 0;
+    try {
+      await turn(drag.bone, angle);
+    } finally {
+      busy = false;
+    }
+  });
+  window.addEventListener('pointerup', () => {
+    drag = null;
+  });
+}
+
+// Play the added frames: one frame per half second, looping, until Pause.
+function playFrames() {
+  if (!pose.frames) return;
+  if (pose.playing) {
+    pose.playing = false;
+    $('pose-play').textContent = 'Play frames';
+    return;
+  }
+  pose.playing = true;
+  pose.showFrames = true;
+  $('pose-play').textContent = 'Pause';
+  let last = 0;
+  const tick = (now) => {
+    if (!pose.playing) return;
+    if (now - last > 500) {
+      last = now;
+      pose.frame = (pose.frame + 1) % pose.frames.names.length;
+      document.body.dataset.poseFrame = String(pose.frame);
+      renderView();
+    }
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+}
+
+export function installPose() {
+  registerView('pose', poseView);
+  installDrag();
+  $('pose-part').addEventListener('change', () => {
+    pose.bone = Number($('pose-part').value);
+    showAngle();
+    renderView();
+  });
+  $('pose-minus').addEventListener('click', orReport(async () => {
+    await remember();
+    await turnPart(Number($('pose-part').value), -STEP);
+  }));
+  $('pose-plus').addEventListener('click', orReport(async () => {
+    await remember();
+    await turnPart(Number($('pose-part').value), STEP);
+  }));
+  $('pose-undo').addEventListener('click', orReport(async () => {
+    const last = pose.undo.pop();
+    if (last) took(await query('poseSetBones', Array.from(last)));
+  }));
+  $('pose-reset').addEventListener('click', orReport(async () => {
+    await remember();
+    setModeSliders([]);
+    took(await query('poseReset'));
+  }));
+  $('pose-mean').addEventListener('click', orReport(async () => {
+    await remember();
+    setModeSliders([]);
+    await applyModes();
+  }));
+  $('pose-random').addEventListener('click', orReport(async () => {
+    await remember();
+    const c = await query('poseRandom', Math.floor(Math.random() * 2 ** 31));
+    setModeSliders(Array.from(c));
+    took(await query('poseModes', Array.from(c)));
+  }));
+  $('pose-export-obj').addEventListener('click', orReport(async () => {
+    download('posemfa-pose.obj', await query('poseObj', 'a pose made in posemfa pose mode'), 'model/obj');
+  }));
+  $('pose-export-glb').addEventListener('click', orReport(async () => {
+    download('posemfa-pose.glb', await query('poseGlb'), 'model/gltf-binary');
+  }));
+  $('pose-frames').addEventListener('change', orReport(async (e) => {
+    const files = [...e.target.files];
+    if (!files.length) return;
+    $('pose-status').textContent = `solving ${files.length} files onto the rig…`;
+    const bytes = await Promise.all(files.map((f) => f.arrayBuffer()));
+    const r = await query('poseAddFrames', files.map((f) => f.name), bytes);
+    pose.frames = r;
+    pose.frame = 0;
+    const mean = r.eRmsAll; // over all the frames, from the core
+    $('pose-status').textContent = `${r.names.length} frames solved onto the rig: E_RMS ${mean.toFixed(3)}`;
+    $('pose-status').dataset.erms = String(mean);
+    $('pose-play').disabled = false;
+    $('pose-export-frames').disabled = false;
+    document.body.dataset.poseFrames = String(r.names.length);
+    playFrames();
+  }));
+  $('pose-play').addEventListener('click', playFrames);
+  $('pose-export-frames').addEventListener('click', () => pose.frames && download('posemfa-frames.glb', pose.frames.glb, 'model/gltf-binary'));
+  subscribe((s, changed) => {
+    if (changed.has('mode')) {
+      $('pose-panel').hidden = s.mode !== 'pose';
+      if (s.mode !== 'pose' && pose.playing) playFrames();
+    }
+    if (changed.has('gen')) {
+      pose.skeleton = null;
+      pose.frames = null;
+      pose.playing = false;
+      document.body.dataset.pose = '';
+    }
+  });
+  // the test contract (window.posemfa.pose): what pose mode shows, and its questions to the core
+  window.posemfa = Object.assign(window.posemfa ?? {}, {
+    pose: {
+      ready: () => !!pose.skeleton && pose.gen === state.gen,
+      skeleton: () => pose.skeleton,
+      positions: () => pose.positions && Array.from(pose.positions),
+      angles: () => pose.angles && Array.from(pose.angles),
+      turn: (bone, axis, angle) => query('poseTurn', bone, axis, angle).then((r) => { took(r); return Array.from(r.positions); }),
+      joint: (bone) => query('poseJoint', bone).then((j) => Array.from(j)),
+      touches: (bone) => query('poseTouches', bone).then((t) => Array.from(t)),
+      selected: () => pose.bone,
+      modes: (c) => query('poseModes', c).then((r) => { took(r); return Array.from(r.positions); }),
+      training: (i) => query('poseTraining', i).then((r) => { took(r); return Array.from(r.positions); }),
+      vector: () => query('poseVector'),
+      frames: () => pose.frames && { names: pose.frames.names, eRms: Array.from(pose.frames.eRms), frame: pose.frame },
+    },
+  });
+}

@@ -1,0 +1,72 @@
+// The merge tree's slider (issue 26): the default part rule records every merge of the fitted parts
+// (posemfa::model::merge_tree), so every part count has its partition at once. Moving the slider shows that
+// count's parts (asked of the core: labels and colours, the fitted parts' colours kept where a part is the same);
+// "Refine N parts" fits again with exactly N parts (the form's "Parts in the end").
+import { state, update, subscribe } from '../state.js';
+import { query } from '../session.js';
+import { paletteColours } from '../colors.js';
+import { renderView } from '../views/render.js';
+
+const $ = (id) => document.getElementById(id);
+let token = 0;
+
+/** Shows the tree's partition with n parts in the parts view. */
+async function show(n) {
+  const tree = state.model?.tree;
+  if (!tree) return;
+  const mine = ++token;
+  const fit = state.model.summary.parts;
+  if (n === fit) {
+    // the fit's own parts (the tree's cut at that count can differ: the fit was refitted after the cut)
+    update({ treeParts: null });
+    $('tree-count').textContent = `${n} parts (the fit)`;
+    $('tree-refine').disabled = true;
+    $('tree-refine').textContent = `Refine ${n} parts`;
+    const slider = $('tree-slider');
+    slider.dataset.parts = String(new Set(state.model.labels).size);
+    await renderView();
+    slider.dataset.count = String(n);
+    return;
+  }
+  const t0 = performance.now();
+  const { labels, colours } = await query('treePartition', n);
+  if (mine !== token) return;
+  const shown = paletteColours(labels, colours);
+  update({ colours: { ...state.colours, tree: shown.vertexColours }, treeParts: n });
+  $('tree-count').textContent = `${n} parts of the merge tree${n > fit ? ' (finer than the fit)' : ''}`;
+  $('tree-refine').disabled = n === state.model.summary.parts;
+  $('tree-refine').textContent = `Refine ${n} parts`;
+  if (state.mode !== 'parts') update({ mode: 'parts' });
+  await renderView();
+  const slider = $('tree-slider');
+  slider.dataset.ms = (performance.now() - t0).toFixed(1);
+  slider.dataset.parts = String(new Set(labels).size);
+  slider.dataset.count = String(n);
+}
+
+export function installTree() {
+  const slider = $('tree-slider');
+  slider.addEventListener('input', () => {
+    delete slider.dataset.count; // set again once the count asked for is shown
+    show(Number(slider.value));
+  });
+  $('tree-refine').addEventListener('click', () => {
+    const form = $('params');
+    form.targetParts.value = String(slider.value);
+    form.requestSubmit();
+  });
+  subscribe((s, changed) => {
+    if (!changed.has('model')) return;
+    const tree = s.model?.tree;
+    $('tree').hidden = !tree;
+    token++;
+    if (!tree) return;
+    slider.min = String(tree.fewest);
+    slider.max = String(tree.most);
+    slider.value = String(s.model.summary.parts);
+    $('tree-count').textContent = `${s.model.summary.parts} parts (the fit)`;
+    $('tree-refine').disabled = true;
+    $('tree-refine').textContent = `Refine ${slider.value} parts`;
+    if (s.treeParts !== null) update({ treeParts: null });
+  });
+}
