@@ -19,8 +19,8 @@
 //! vertices 3000,12000,50000, poses 10,20, one thread (other builds share the machine's two cores).
 
 use posemfa::metrics::{ground_truth_accuracy, median};
-use posemfa::model::hierarchy::fit;
-use posemfa::model::Params;
+use posemfa::parts::hierarchy::fit;
+use posemfa::mfa::Params;
 use posemfa::synth::{generate, Preset, Spec};
 use std::sync::Mutex;
 use std::time::Instant;

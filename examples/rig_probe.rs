@@ -1,14 +1,14 @@
 //! The rig stage alone: `cargo run --release --example rig_probe -- DIR [--bones 10,20,30] [--builds R] [--out F]`.
 //! Fits DIR once per bone count (`target_parts`, fitted weights, 4 influences, bind pose as the CLI's), then times
-//! R builds of the rig (`articulate::rig::build`) and R runs of the part count (`model::part_count::labels_with_count`
+//! R builds of the rig (`articulate::rig::build`) and R runs of the part count (`parts::part_count::labels_with_count`
 //! on the labels the part rule decided) and prints JSON: per count the wall-clock and CPU milliseconds of each
 //! (CPU: this thread's, from Linux's /proc/thread-self/schedstat; 0 elsewhere). With `--out F` it also writes every result in full precision (the count's labels, the rig's trace, weights, bind
 //! positions, bones and f64 E_RMS / max error over the training poses), to compare two builds of the code.
 use posemfa::articulate::rig::{build, RigOptions, RigWeights};
 use posemfa::articulate::Articulation;
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::Pipeline;
-use posemfa::model::Params;
+use posemfa::parts::hierarchy::Pipeline;
+use posemfa::mfa::Params;
 use std::time::Instant;
 
 /// CPU milliseconds this thread has run (Linux: /proc/thread-self/schedstat, nanoseconds), else 0.
@@ -54,7 +54,7 @@ fn main() -> Result<(), String> {
             for _ in 0..builds {
                 let t = Instant::now();
                 let c = cpu_ms();
-                let (labels, _) = posemfa::model::part_count::labels_with_count(&pop, decided, n, &params).map_err(|e| e.to_string())?;
+                let (labels, _) = posemfa::parts::part_count::labels_with_count(&pop, decided, n, &params).map_err(|e| e.to_string())?;
                 count_ms.push(t.elapsed().as_secs_f64() * 1e3);
                 count_cpu_ms.push(cpu_ms() - c);
                 counted = Some(labels);

@@ -11,8 +11,8 @@
 //! part-count difference and RMSE ratio over the seeds.
 
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::fit;
-use posemfa::model::Params;
+use posemfa::parts::hierarchy::fit;
+use posemfa::mfa::Params;
 use posemfa::synth::{self, Generated};
 
 struct Input {

@@ -2,8 +2,8 @@
 //! `cargo run --release --example tree_probe -- INPUT [--ratio 4] [--count N]`
 //! INPUT: a folder of mesh files or synth:PRESET:VERTICES:POSES:SEED.
 use posemfa::metrics::adjusted_rand_index;
-use posemfa::model::merge_tree::MergeTree;
-use posemfa::model::robustness::Variant;
+use posemfa::parts::merge_tree::MergeTree;
+use posemfa::parts::robustness::Variant;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -25,7 +25,7 @@ fn main() {
     } else {
         posemfa::mesh::Population::from_paths(&[input.clone()]).unwrap()
     };
-    let floor = posemfa::model::Params::default().variance_floor;
+    let floor = posemfa::mfa::Params::default().variance_floor;
     let mut labels = Vec::new();
     for v in [Variant::Seed(0), Variant::Reversed, Variant::DropFirst, Variant::DropMiddle, Variant::Moved] {
         let p = v.apply(&pop).unwrap();
@@ -42,11 +42,10 @@ fn main() {
         }
         let l = tree.labels_at(shown);
         let s0 = tree.typical;
-        let mut height = 0.0f64;
         let mut cuts = Vec::new();
         for c in [4.0, 8.0, 16.0, 32.0, 64.0] {
             let mut cut = tree.counts().1;
-            height = 0.0;
+            let mut height = 0.0f64;
             for m in &tree.merges {
                 height = height.max(m.rise);
                 if height >= c * s0 { cut = m.parts; break; }

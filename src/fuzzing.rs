@@ -2,7 +2,7 @@
 //! targets and the crash inputs kept as plain tests (`tests/fuzz_regressions.rs`) decode an input the same way.
 
 use crate::geometry::Vec3;
-use crate::model::Params;
+use crate::mfa::Params;
 
 /// Small, fast fit parameters chosen by a target's config byte (byte 0 of every input that fits).
 pub fn params_from(cfg: u8) -> Params {

@@ -3,8 +3,12 @@
 //! factor analyzers"), with the corrections listed in the README.
 //!
 //! Data flow: OBJ bytes -> [`mesh::obj`] -> [`mesh::Mesh`] -> [`mesh::population::Population`] ->
-//! [`model`] (init, AECM, hierarchy) -> [`model::Model`] -> [`articulate`] (part graph, joints,
+//! [`parts`] (which vertices form a part: the merge tree, Algorithm 1, the part rule), each fit by [`mfa`] (the
+//! constrained mixture: E-step, CM steps, AECM) -> [`mfa::Model`] -> [`articulate`] (part graph, joints,
 //! interpolation, skinning) -> [`export`] (JSON, OBJ, glTF).
+//!
+//! Two rooms: [`mfa`] is the model and its fit and never names [`parts`]; [`parts`] decides the partition and
+//! calls into [`mfa`]. [`mesh`] and [`geometry`] name neither (`tests/module_rooms.rs` checks all three).
 
 /// `fn NAME(ARGS) -> R { BODY }` whose body runs compiled for AVX2 when the CPU has it (x86_64; checked at run
 /// time, cached by std), else as it is. For the few hot loops (the E-step's kernel, the CM steps' sums): AVX2
@@ -37,7 +41,9 @@ pub mod error;
 pub mod geometry;
 pub mod mesh;
 pub mod metrics;
-pub mod model;
+pub mod memory;
+pub mod mfa;
+pub mod parts;
 pub mod articulate;
 pub mod export;
 pub mod fuzzing;

@@ -7,17 +7,11 @@ use crate::geometry::{mat_mul, transpose, Mat3};
 use serde::Serialize;
 use std::collections::HashMap;
 
-/// Maps arbitrary label values to 0..k in order of first appearance.
+/// Maps arbitrary label values to 0..k in order of first appearance, and k.
 fn compact(labels: &[u32]) -> (Vec<usize>, usize) {
-    let mut map: HashMap<u32, usize> = HashMap::new();
-    let out = labels
-        .iter()
-        .map(|&l| {
-            let k = map.len();
-            *map.entry(l).or_insert(k)
-        })
-        .collect();
-    (out, map.len())
+    let out: Vec<usize> = crate::parts::labels::compact(labels).into_iter().map(|l| l as usize).collect();
+    let k = out.iter().max().map_or(0, |&l| l + 1);
+    (out, k)
 }
 
 fn pairs(x: u64) -> u128 {
@@ -227,7 +221,7 @@ pub struct GroundTruthAccuracy {
 }
 
 /// [`GroundTruthAccuracy`] of a model fitted to a generated population.
-pub fn ground_truth_accuracy(model: &crate::model::Model, truth: &crate::synth::Generated) -> Result<GroundTruthAccuracy> {
+pub fn ground_truth_accuracy(model: &crate::mfa::Model, truth: &crate::synth::Generated) -> Result<GroundTruthAccuracy> {
     if model.labels.len() != truth.part_of_vertex.len() {
         return Err(Error::Request(format!(
             "the model has {} vertices, the ground truth {}",

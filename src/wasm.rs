@@ -8,8 +8,8 @@
 use crate::error::{Error, Problem};
 use crate::export::shown::{obj_in_original_units, Shown};
 use crate::mesh::Population;
-use crate::model::hierarchy::{FitResult, Pipeline};
-use crate::model::{Model, Params};
+use crate::parts::hierarchy::{FitResult, Pipeline};
+use crate::mfa::{Model, Params};
 use js_sys::{Array, Float32Array, Float64Array, Uint32Array, Uint8Array};
 use std::rc::Rc;
 use wasm_bindgen::prelude::*;
@@ -337,7 +337,7 @@ impl FitModel {
         Uint32Array::from(self.model().labels.as_slice())
     }
 
-    /// The merge tree of the default part rule (`posemfa::model::merge_tree`): {most, fewest, decided} part
+    /// The merge tree of the default part rule (`posemfa::parts::merge_tree`): {most, fewest, decided} part
     /// counts it holds and the count the rule read off it; null with Algorithm 1's rules.
     #[wasm_bindgen(js_name = treeCounts)]
     pub fn tree_counts(&self) -> Result<JsValue, JsValue> {
@@ -432,8 +432,8 @@ impl FitModel {
             "iterations": m.iterations, "converged": m.converged,
             "complete": self.result.complete, "logLikelihood": m.log_likelihood,
             "stageStats": self.result.stats,
-            "diagnosis": crate::model::diagnosis::diagnose_finished(&self.pop, &self.result),
-            "unfinished": (!self.result.complete).then_some(crate::model::diagnosis::UNFINISHED),
+            "diagnosis": crate::parts::diagnosis::diagnose_finished(&self.pop, &self.result),
+            "unfinished": (!self.result.complete).then_some(crate::parts::diagnosis::UNFINISHED),
             "partCurve": self.result.part_curve,
         });
         to_js(&v)
@@ -441,12 +441,12 @@ impl FitModel {
 
     /// The machine's limit for the E-step's arithmetic, measured for at least `min_ms` per kernel on this
     /// model's components and its population, against this fit's E-step figures
-    /// ([`crate::model::limit::limit_report`]): {f64: {gflop, ms, gflopsPerS}, f32: {...}, stageFractions,
+    /// ([`crate::mfa::limit::limit_report`]): {f64: {gflop, ms, gflopsPerS}, f32: {...}, stageFractions,
     /// fraction}.
     #[wasm_bindgen(js_name = kernelLimit)]
     pub fn kernel_limit(&self, min_ms: f64) -> Result<JsValue, JsValue> {
-        let data = crate::model::data::Data::from_population(&self.pop);
-        to_js(&crate::model::limit::limit_report(&data, &self.model().parts, &self.result.stats, min_ms))
+        let data = crate::mfa::data::Data::from_population(&self.pop);
+        to_js(&crate::mfa::limit::limit_report(&data, &self.model().parts, &self.result.stats, min_ms))
     }
 
     /// The full result as JSON text (same format as the CLI's --json).

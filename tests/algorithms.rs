@@ -12,11 +12,11 @@ use posemfa::geometry::rotation::{angle_between, axis_angle};
 use posemfa::geometry::{add, det, mat_mul, mat_vec, orthonormality_error, sub, transpose, Mat3, Vec3};
 use posemfa::mesh::Population;
 use posemfa::metrics::adjusted_rand_index;
-use posemfa::model::aecm::Fit;
-use posemfa::model::data::Data;
-use posemfa::model::estep::{e_step, e_step_pruned};
-use posemfa::model::hierarchy::Pipeline;
-use posemfa::model::{LambdaRule, Params};
+use posemfa::mfa::aecm::Fit;
+use posemfa::mfa::data::Data;
+use posemfa::mfa::estep::{e_step, e_step_pruned};
+use posemfa::parts::hierarchy::Pipeline;
+use posemfa::mfa::{LambdaRule, Params};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
@@ -101,7 +101,7 @@ fn chain(parts: usize, poses: usize, noise: f64, seed: u64) -> Chain {
 
 /// Worst angle (degrees) between fitted and true RELATIVE rotations R^i (R^0)^T, each fitted part matched
 /// to the true part holding most of its vertices (the latent frame of a fitted part is arbitrary).
-fn worst_rotation_error(c: &Chain, labels: &[u32], parts: &[posemfa::model::Component]) -> f64 {
+fn worst_rotation_error(c: &Chain, labels: &[u32], parts: &[posemfa::mfa::Component]) -> f64 {
     let n_true = c.rotations[0].len();
     let mut worst: f64 = 0.0;
     for (k, comp) in parts.iter().enumerate() {

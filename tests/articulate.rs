@@ -13,7 +13,7 @@ use posemfa::articulate::{Articulation, Blend, Options, RootRule, Skin};
 use posemfa::geometry::rotation::{angle_between, axis_angle};
 use posemfa::geometry::{mat_vec, norm, sub, Vec3};
 use posemfa::mesh::Population;
-use posemfa::model::{Component, Model, Params};
+use posemfa::mfa::{Component, Model, Params};
 use posemfa::synth::{generate, Generated, Preset, Spec};
 
 fn creature(vertices: usize, poses: usize, seed: u64, band: f64, max_angle: f64) -> Generated {
@@ -54,7 +54,7 @@ fn truth_model(g: &Generated) -> Model {
 }
 
 fn fitted(pop: &Population) -> Model {
-    posemfa::model::hierarchy::fit(pop, &Params::default(), &mut |_| true).expect("fit").model
+    posemfa::parts::hierarchy::fit(pop, &Params::default(), &mut |_| true).expect("fit").model
 }
 
 /// Every combination of the interpolation options.

@@ -8,7 +8,7 @@ mod common;
 
 use posemfa::articulate::Options;
 use posemfa::export::shown::Shown;
-use posemfa::model::Params;
+use posemfa::mfa::Params;
 use posemfa::synth::Spec;
 
 fn unknown_field<T: serde::de::DeserializeOwned + std::fmt::Debug>(json: &str, field: &str) {
@@ -46,7 +46,7 @@ dual_test! {
         let spec = Spec { preset: posemfa::synth::Preset::Arm, vertices: 800, poses: 5, ..Default::default() };
         let g = posemfa::synth::generate(&spec).unwrap();
         let params = Params { parts: 3, ..Default::default() };
-        let result = posemfa::model::hierarchy::fit(&g.population, &params, &mut |_| true).unwrap();
+        let result = posemfa::parts::hierarchy::fit(&g.population, &params, &mut |_| true).unwrap();
         let art = posemfa::articulate::Articulation::new(&result.model, &g.population).unwrap();
         let report = posemfa::articulate::report::report(&art, 0, 3, 0.5).unwrap();
         let accuracy = posemfa::metrics::ground_truth_accuracy(&result.model, &g).unwrap();
@@ -74,8 +74,8 @@ dual_test! {
         let spec = Spec { preset: posemfa::synth::Preset::Arm, vertices: 800, poses: 5, ..Default::default() };
         let g = posemfa::synth::generate(&spec).unwrap();
         // Algorithm 1 (the refinement stage is its own)
-        let params = Params { parts: 3, part_rule: posemfa::model::PartRule::Distinct, ..Default::default() };
-        let mut pipe = posemfa::model::hierarchy::Pipeline::new(&g.population, &params).unwrap();
+        let params = Params { parts: 3, part_rule: posemfa::mfa::PartRule::Distinct, ..Default::default() };
+        let mut pipe = posemfa::parts::hierarchy::Pipeline::new(&g.population, &params).unwrap();
         let mut values = vec![serde_json::to_value(pipe.stage()).unwrap()];
         while !pipe.is_done() {
             values.push(serde_json::to_value(pipe.step().unwrap()).unwrap());

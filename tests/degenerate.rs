@@ -23,7 +23,7 @@
 //!   into the unit box is refused by name too.
 //! - a population too large for the memory budget: `Error::Data` giving the estimated size, the budget
 //!   (1 GiB in wasm32, 8 GiB natively, `POSEMFA_MEMORY_BUDGET` to change it natively) and what to change,
-//!   before the fit allocates its working set (see posemfa::model::memory).
+//!   before the fit allocates its working set (see posemfa::memory).
 
 #[macro_use]
 mod common;
@@ -31,11 +31,11 @@ mod common;
 use posemfa::geometry::rotation::{angle_between, axis_angle};
 use posemfa::geometry::{add, det, mat_mul, mat_vec, orthonormality_error, transpose, Mat3, Vec3};
 use posemfa::mesh::{Mesh, Population};
-use posemfa::model::aecm::Fit;
-use posemfa::model::data::Data;
-use posemfa::model::hierarchy::{fit, FitResult};
-use posemfa::model::memory;
-use posemfa::model::{Model, Params};
+use posemfa::mfa::aecm::Fit;
+use posemfa::mfa::data::Data;
+use posemfa::parts::hierarchy::{fit, FitResult};
+use posemfa::memory;
+use posemfa::mfa::{Model, Params};
 use posemfa::Error;
 
 
@@ -288,7 +288,7 @@ dual_test! {
             .collect();
         let pop = Population::from_unit_shapes(names(2), fan(4), shapes).unwrap();
         // (Algorithm 1's working set: the merge tree's start does not grow with `parts`)
-        let params = Params { parts: 512, max_subparts: 64, part_rule: posemfa::model::PartRule::Distinct, ..Params::default() };
+        let params = Params { parts: 512, max_subparts: 64, part_rule: posemfa::mfa::PartRule::Distinct, ..Params::default() };
         let need = memory::estimate_bytes(n, 2, 512 * 64);
         assert!(need > 8 << 30 && need > budget, "{need}");
         let e = fit(&pop, &params, &mut |_| true).err().expect("must be refused");

@@ -313,7 +313,7 @@ fn anchors_follow_githubs_slug_rules() {
     assert_eq!(slug("A part count without tuning (`partRule: \"distinct\"`, the default)"),
         "a-part-count-without-tuning-partrule-distinct-the-default");
     assert_eq!(slug("The CLI (`cargo run --release -- help`)"), "the-cli-cargo-run---release----help");
-    assert_eq!(slug("Is it articulated? (`src/model/diagnosis.rs`)"), "is-it-articulated-srcmodeldiagnosisrs");
+    assert_eq!(slug("Is it articulated? (`src/parts/diagnosis.rs`)"), "is-it-articulated-srcpartsdiagnosisrs");
     assert_eq!(slug("Speed + Figures"), "speed--figures");
     assert_eq!(slug("part_count and [a link](x.md)"), "part_count-and-a-link");
     assert_eq!(anchors("# A\n## B\n```\n# not\n```\n## B\n#nospace\n### B"), vec!["a", "b", "b-1", "b-2"]);

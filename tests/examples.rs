@@ -6,7 +6,7 @@ mod common;
 use posemfa::geometry::rotation::angle_between;
 use posemfa::geometry::{mat_mul, transpose};
 use posemfa::metrics::{adjusted_rand_index, median, rotation_errors_deg};
-use posemfa::model::hierarchy::{fit, FitResult};
+use posemfa::parts::hierarchy::{fit, FitResult};
 use posemfa::synth::presets::{example, examples};
 use posemfa::synth::{generate, part_index, Generated, Preset};
 

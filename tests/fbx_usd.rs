@@ -23,7 +23,7 @@ fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 }
 
 fn fit_summary(pop: &Population) -> (usize, f64, Vec<u32>) {
-    let r = posemfa::model::hierarchy::fit(pop, &posemfa::model::Params::default(), &mut |_| true).unwrap();
+    let r = posemfa::parts::hierarchy::fit(pop, &posemfa::mfa::Params::default(), &mut |_| true).unwrap();
     let rmse = r.model.rmse(pop);
     (r.model.parts.len(), rmse, r.model.labels)
 }

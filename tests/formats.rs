@@ -106,7 +106,7 @@ dual_test! {
 #[test]
 fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
     use posemfa::metrics::adjusted_rand_index;
-    use posemfa::model::{hierarchy::fit, Params};
+    use posemfa::{mfa::Params, parts::hierarchy::fit};
     let Some(dir) = common::shared_dir("data/horse-poses", "horse_as_ply_and_pc2_fits_like_the_obj_folder") else { return };
     let obj = Population::from_paths(&[&dir]).unwrap();
     let original: Vec<Vec<[f64; 3]>> = obj.shapes.iter().map(|s| s.iter().map(|&p| obj.normalization.to_original(p)).collect()).collect();
@@ -171,7 +171,7 @@ fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 }
 
 fn fit_summary(pop: &Population) -> (usize, f64, Vec<u32>) {
-    let r = posemfa::model::hierarchy::fit(pop, &posemfa::model::Params::default(), &mut |_| true).unwrap();
+    let r = posemfa::parts::hierarchy::fit(pop, &posemfa::mfa::Params::default(), &mut |_| true).unwrap();
     let rmse = r.model.rmse(pop);
     (r.model.parts.len(), rmse, r.model.labels)
 }

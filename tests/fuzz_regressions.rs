@@ -10,7 +10,7 @@
 mod common;
 
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::fit;
+use posemfa::parts::hierarchy::fit;
 use posemfa::fuzzing::{decode_shapes, params_from, ShapesInput};
 use posemfa::Error;
 

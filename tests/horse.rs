@@ -4,8 +4,8 @@
 
 use posemfa::export::json::fit_to_json;
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::fit;
-use posemfa::model::Params;
+use posemfa::parts::hierarchy::fit;
+use posemfa::mfa::Params;
 use std::path::PathBuf;
 
 mod common;

@@ -7,9 +7,9 @@ mod common;
 
 use posemfa::export::json::fit_to_json;
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::fit;
-use posemfa::model::islands::island_count;
-use posemfa::model::Params;
+use posemfa::parts::hierarchy::fit;
+use posemfa::parts::islands::island_count;
+use posemfa::mfa::Params;
 use posemfa::synth::generate;
 use posemfa::synth::presets::examples;
 

@@ -17,7 +17,7 @@ use posemfa::export::pose_glb::{max_distance, read_rig};
 use posemfa::geometry::rotation::angle_between;
 use posemfa::geometry::{norm, sub, Vec3};
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::fit;
+use posemfa::parts::hierarchy::fit;
 use posemfa::synth::presets::example;
 use posemfa::synth::{generate, Generated, Spec};
 

@@ -13,7 +13,7 @@ use posemfa::export::gltf::{play_glb, to_glb, GltfOptions, Morphs, Weights};
 use posemfa::export::rig_report::{rig_error, RigError};
 use posemfa::geometry::{norm, sub};
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::fit;
+use posemfa::parts::hierarchy::fit;
 use posemfa::synth::generate;
 use posemfa::synth::presets::example;
 

@@ -11,8 +11,8 @@ use posemfa::geometry::procrustes::{best_rotation, needs_flip};
 use posemfa::geometry::{from_rows, rows};
 use posemfa::mesh::population::natural_cmp;
 use posemfa::mesh::{Mesh, Population};
-use posemfa::model::component::LN_2PI;
-use posemfa::model::Component;
+use posemfa::mfa::component::LN_2PI;
+use posemfa::mfa::Component;
 
 /// The test's own 3x3 matrices: rows, with its own products (the library's `Mat3` only at its API, through
 /// `from_rows` / `rows`).

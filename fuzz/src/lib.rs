@@ -2,9 +2,9 @@
 //! succeeds. A broken invariant panics, which libFuzzer reports as a crash (with the input saved).
 
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::fit;
+use posemfa::parts::hierarchy::fit;
 pub use posemfa::fuzzing::params_from;
-use posemfa::model::Model;
+use posemfa::mfa::Model;
 use posemfa::Error;
 
 /// Largest population that the targets fit (the fit is the slow part: keep executions fast).

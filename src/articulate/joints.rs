@@ -12,7 +12,7 @@
 
 use super::graph::{triangle_area, Contact, PartGraph};
 use crate::geometry::{add, mat_t_vec, scale, sub, Vec3};
-use crate::model::Model;
+use crate::mfa::Model;
 use std::collections::BTreeMap;
 
 /// One contact between parts `a` < `b`.

@@ -48,7 +48,7 @@ pub mod skin;
 use crate::error::{Error, Result};
 use crate::geometry::{add, mat_mul, mat_t_vec, mat_vec, scale, transpose, Mat3, Vec3};
 use crate::mesh::{Normalization, Population};
-use crate::model::Model;
+use crate::mfa::Model;
 use graph::{PartGraph, Tree, TreeRule};
 use joints::Joint;
 use serde::{Deserialize, Serialize};

@@ -480,7 +480,7 @@ pub struct Fold {
 /// pose. `progress(i, n)` is called before each fold.
 pub fn crossval(
     pop: &crate::mesh::Population,
-    params: &crate::model::Params,
+    params: &crate::mfa::Params,
     rig_opts: &super::rig::RigOptions,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<Fold>> {
@@ -496,7 +496,7 @@ pub fn crossval(
         let names: Vec<String> = keep.iter().map(|&i| pop.names[i].clone()).collect();
         let shapes: Vec<Vec<Vec3>> = keep.iter().map(|&i| pop.shapes[i].iter().map(|&p| pop.normalization.to_original(p)).collect()).collect();
         let train = crate::mesh::Population::from_unit_shapes(names, pop.faces.clone(), shapes)?;
-        let fit = crate::model::hierarchy::fit(&train, params, &mut |_| true)?;
+        let fit = crate::parts::hierarchy::fit(&train, params, &mut |_| true)?;
         let art = super::Articulation::new(&fit.model, &train)?;
         let bind = crate::export::rig_report::default_bind_pose(&train);
         let opts = super::rig::RigOptions { bind_pose: bind, ..*rig_opts };

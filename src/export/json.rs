@@ -2,9 +2,9 @@
 //! `normalization` maps them back: unit = (original - offset) * scale.
 
 use crate::mesh::{Normalization, Population};
-use crate::model::diagnosis::Diagnosis;
-use crate::model::distinct::CurvePoint;
-use crate::model::hierarchy::{FitResult, StageParts, StageStats};
+use crate::parts::diagnosis::Diagnosis;
+use crate::parts::distinct::CurvePoint;
+use crate::parts::hierarchy::{FitResult, StageParts, StageStats};
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -42,17 +42,17 @@ pub struct FitJson {
     pub islands: usize,
     pub timings_ms: std::collections::BTreeMap<String, f64>,
     pub stage_stats: Vec<StageStats>,
-    /// Whether the population looks articulated, and why ([`crate::model::diagnosis`]); null for a fit stopped
+    /// Whether the population looks articulated, and why ([`crate::parts::diagnosis`]); null for a fit stopped
     /// early (cancelled in the page): the verdict needs a finished fit.
     pub diagnosis: Option<Diagnosis>,
     /// The part rule's merge decisions, most parts first: why the fit stopped at its part count
-    /// ([`crate::model::distinct::CurvePoint`]; empty with the paper's threshold rule).
+    /// ([`crate::parts::distinct::CurvePoint`]; empty with the paper's threshold rule).
     pub part_curve: Vec<CurvePoint>,
     /// The default part rule's merge tree of the fitted parts (`leaves`: the part of every vertex in the first
     /// final AECM; `merges` [{a, b, parts, rise, score, variance}] in order, merge m making node leaves + m) and
     /// the count the rule read off it (`tree_count`); absent with Algorithm 1's rules.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub merge_tree: Option<crate::model::merge_tree::MergeTree>,
+    pub merge_tree: Option<crate::parts::merge_tree::MergeTree>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tree_count: Option<usize>,
 }
@@ -97,10 +97,10 @@ impl FitJson {
             converged: m.converged,
             complete: result.complete,
             rmse: m.rmse(pop),
-            islands: crate::model::islands::island_count(&m.labels, &pop.faces),
+            islands: crate::parts::islands::island_count(&m.labels, &pop.faces),
             timings_ms,
             stage_stats: result.stats.clone(),
-            diagnosis: crate::model::diagnosis::diagnose_finished(pop, result),
+            diagnosis: crate::parts::diagnosis::diagnose_finished(pop, result),
             part_curve: result.part_curve.clone(),
             merge_tree: result.merge_tree.clone(),
             tree_count: result.tree_count,

@@ -6,7 +6,7 @@ use crate::articulate::{Articulation, Options};
 use crate::error::{Error, Result};
 use crate::geometry::Vec3;
 use crate::mesh::Population;
-use crate::model::Model;
+use crate::mfa::Model;
 use serde::Deserialize;
 
 /// Which mesh: a training pose, its reconstruction (eq 22), the latent shape (eq 21), the part-wise

@@ -623,7 +623,7 @@ fn frame_rate(tree: &fbx_tree::Tree) -> f64 {
 
 /// Reads the poses of one mesh of a binary FBX file.
 pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
-    let budget = crate::model::memory::budget_bytes()?;
+    let budget = crate::memory::budget_bytes()?;
     let tree = fbx_tree::parse_skipping(file, bytes, budget, UNUSED_ARRAYS)?;
     let doc = Doc::new(file, &tree);
 
@@ -814,7 +814,7 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
                 n.max(1.0) as usize
             }
         };
-        crate::model::memory::check(n_file, n_times, 1, budget)
+        crate::memory::check(n_file, n_times, 1, budget)
             .map_err(|e| err(file, format!("animation '{}' at {n_times} frames: {e}; sample it at fewer times (--frames N)", stack.name)))?;
         let times: Vec<i64> = match options.frames {
             Some(f) => (0..f).map(|i| if f == 1 { start } else { start + ((stop - start) as f64 * i as f64 / (f - 1) as f64).round() as i64 }).collect(),
@@ -847,7 +847,7 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
                 ),
             ));
         }
-        crate::model::memory::check(n_file, channels.len() + 1, 1, budget)
+        crate::memory::check(n_file, channels.len() + 1, 1, budget)
             .map_err(|e| err(file, format!("{} blend shapes of {mname}, each one pose: {e}", channels.len())))?;
         description = format!("{} frames of {mname} in {file} (its {} blend shapes at 100 %, after the base)", channels.len() + 1, channels.len());
         let w = (channels.len() + 1).to_string().len();

@@ -481,7 +481,7 @@ fn check_read_size(data: &Data, mesh: &gltf::Mesh, mname: &str, budget: u64) -> 
     let per_vertex = 24u64.saturating_mul(targets.saturating_add(1)).saturating_add(304);
     let need = vertices.saturating_mul(per_vertex).saturating_add(indices.saturating_mul(20));
     if need > budget {
-        let show = crate::model::memory::show_bytes;
+        let show = crate::memory::show_bytes;
         return Err(err(
             file,
             format!(
@@ -828,7 +828,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     let mname = name_of(mesh.name(), "mesh", mesh.index());
     let others = meshes.len() - 1;
     let node = doc.nodes().find(|n| n.mesh().is_some_and(|m| m.index() == mesh.index()));
-    check_read_size(&data, &mesh, &mname, crate::model::memory::budget_bytes()?)?;
+    check_read_size(&data, &mesh, &mname, crate::memory::budget_bytes()?)?;
     let md = read_mesh(&data, &mesh)?;
     let n_file = md.positions.len();
 
@@ -930,7 +930,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             None => keys.len(),
         };
         // The poses must fit in the memory budget: refuse before computing them.
-        crate::model::memory::check(n_file, n_times, 1, crate::model::memory::budget_bytes()?)
+        crate::memory::check(n_file, n_times, 1, crate::memory::budget_bytes()?)
             .map_err(|e| err(file, format!("{aname} sampled at {n_times} times: {e}; sample it at fewer times (--frames N)")))?;
         let times: Vec<f64> = match options.frames {
             Some(f) => (0..f).map(|i| if f == 1 { lo } else { lo + (hi - lo) * i as f64 / (f - 1) as f64 }).collect(),
@@ -1009,7 +1009,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             .and_then(|v| v.get("targetNames").and_then(|t| t.as_array().cloned()))
             .map(|a| a.iter().map(|v| v.as_str().unwrap_or("").to_string()).collect())
             .unwrap_or_default();
-        crate::model::memory::check(n_file, md.targets.len() + 1, 1, crate::model::memory::budget_bytes()?).map_err(
+        crate::memory::check(n_file, md.targets.len() + 1, 1, crate::memory::budget_bytes()?).map_err(
             |e| err(file, format!("{} morph targets of {mname}, each one pose: {e}", md.targets.len())),
         )?;
         description = format!("{} morph targets of {mname}, plus the base (the first pose)", md.targets.len());

@@ -167,7 +167,7 @@ impl Population {
         }
         // The smallest fit (one part) of this population must fit in the memory budget: refuse now, before
         // the normalised copy is made.
-        crate::model::memory::check(first.positions.len(), named.len(), 1, crate::model::memory::budget_bytes()?)?;
+        crate::memory::check(first.positions.len(), named.len(), 1, crate::memory::budget_bytes()?)?;
         let (lo, hi) = crate::geometry::bounds(named.iter().flat_map(|(_, mesh)| &mesh.positions));
         let side = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
         if !(side > 0.0) {

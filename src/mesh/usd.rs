@@ -367,7 +367,7 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
         }
         None => (0..pts.samples.len()).collect(),
     };
-    crate::model::memory::check(n, times.len(), 1, crate::model::memory::budget_bytes()?)
+    crate::memory::check(n, times.len(), 1, crate::memory::budget_bytes()?)
         .map_err(|e| err(file, format!("mesh {mesh} at {} time samples: {e}; read fewer (--frames N)", times.len())))?;
     let w = times.len().to_string().len();
     let mut poses_raw = Vec::with_capacity(times.len());

@@ -2,7 +2,7 @@
 //! what to notice. Some fail on purpose, and say why.
 
 use super::{part_index, Preset, Spec};
-use crate::model::{LambdaRule, Params};
+use crate::mfa::{LambdaRule, Params};
 use serde::Serialize;
 
 #[derive(Debug, Clone, Serialize)]

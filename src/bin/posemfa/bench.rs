@@ -16,7 +16,7 @@ pub fn run(o: Args) -> Result<(), String> {
     let (params, pop, truth) = o.fit.load()?;
     let load_ms = posemfa::clock::now_ms() - t_load;
     // the kernels right after each fit, so that each fraction compares two measurements of one moment
-    let data = posemfa::model::data::Data::from_population(&pop);
+    let data = posemfa::mfa::data::Data::from_population(&pop);
     let mut totals = Vec::new();
     let mut limits = Vec::new();
     let mut result = None;
@@ -24,13 +24,13 @@ pub fn run(o: Args) -> Result<(), String> {
         let t0 = posemfa::clock::now_ms();
         let r = run_fit(&params, &pop, o.run.quiet)?;
         totals.push(posemfa::clock::now_ms() - t0);
-        limits.push(posemfa::model::limit::limit_report(&data, &r.model.parts, &r.stats, 200.0));
+        limits.push(posemfa::mfa::limit::limit_report(&data, &r.model.parts, &r.stats, 200.0));
         result = Some(r);
     }
     let (Some(result), Some(limit)) = (result, limits.last()) else { return Err("no fit ran".into()) };
     let m = &result.model;
     let mut fractions: Vec<f64> = limits.iter().map(|l| l.fraction).collect();
-    let vertex_major = posemfa::model::estep::kernel_rate_vertex_major(&data, &m.parts, 200.0);
+    let vertex_major = posemfa::mfa::estep::kernel_rate_vertex_major(&data, &m.parts, 200.0);
     let stages: Vec<_> = result
         .stats
         .iter()

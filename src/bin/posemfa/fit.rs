@@ -38,7 +38,7 @@ pub fn run(o: Args) -> Result<(), String> {
         median(&mut totals),
         load_ms
     );
-    let d = posemfa::model::diagnosis::diagnose_fit(&pop, &result);
+    let d = posemfa::parts::diagnosis::diagnose_fit(&pop, &result);
     out!("  {}: {}", if d.articulated { "articulated" } else { "NOT articulated" }, d.reason);
     if let Some(g) = &truth {
         out!("  ground truth: {}", ground_truth_json(g, m));

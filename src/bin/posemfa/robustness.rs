@@ -1,10 +1,10 @@
 //! `posemfa robustness DIR_OR_FILES...`: does the answer depend on the start? Fits at several seeds and on four
 //! nuisance variants of the same population, and prints the part counts, the pairwise adjusted Rand index and
-//! the times (`posemfa::model::robustness`).
+//! the times (`posemfa::parts::robustness`).
 
 use crate::shared::FitArgs;
 use clap::ValueHint;
-use posemfa::model::robustness::{agreement, run_variants, Variant};
+use posemfa::parts::robustness::{agreement, run_variants, Variant};
 
 /// Fit at seeds 0..N and on four nuisance variants (poses reversed, first or middle pose dropped, all poses moved
 /// and scaled); print part counts, pairwise adjusted Rand index (median, min) and times

@@ -6,8 +6,8 @@ use clap::ValueHint;
 use posemfa::export::gltf::{GltfOptions, Joints, Morphs, Weights};
 use posemfa::mesh::gltf::PoseSource;
 use posemfa::mesh::Population;
-use posemfa::model::hierarchy::{FitResult, Pipeline, Progress, Stage};
-use posemfa::model::{LambdaRule, Params, PartRule};
+use posemfa::parts::hierarchy::{FitResult, Pipeline, Progress, Stage};
+use posemfa::mfa::{LambdaRule, Params, PartRule};
 
 // ---------------------------------------------------------------- value parsers
 
@@ -331,7 +331,7 @@ pub fn median(v: &mut [f64]) -> f64 {
 
 /// Adjusted Rand index of the labels and rotation errors (degrees) against a generated population's truth
 /// (`posemfa::metrics::GroundTruthAccuracy`: the same payload as the page's).
-pub fn ground_truth_json(g: &posemfa::synth::Generated, m: &posemfa::model::Model) -> serde_json::Value {
+pub fn ground_truth_json(g: &posemfa::synth::Generated, m: &posemfa::mfa::Model) -> serde_json::Value {
     posemfa::metrics::ground_truth_accuracy(m, g)
         .and_then(|a| serde_json::to_value(a).map_err(|e| posemfa::Error::Io(e.to_string())))
         .unwrap_or_else(|e| serde_json::json!({ "error": e.to_string() }))

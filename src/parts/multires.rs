@@ -9,13 +9,13 @@
 //! density of samples, and two places that coincide in one shape but move apart in the other fall in different
 //! cells, so a small part that moves on its own is sampled too.
 
-use super::aecm::labels_from_gamma;
-use super::component::Component;
-use super::data::Data;
-use super::aecm::Fit;
-use super::estep::e_step_pruned;
-use super::params::Params;
-use super::result::Model;
+use crate::mfa::aecm::labels_from_gamma;
+use crate::mfa::component::Component;
+use crate::mfa::data::{to_frame, Data};
+use crate::mfa::aecm::Fit;
+use crate::mfa::estep::e_step_pruned;
+use crate::mfa::params::Params;
+use crate::mfa::result::Model;
 use crate::mesh::Population;
 
 /// Vertex ids (ascending) of about `target` well-spread vertices (see the module doc); all vertices when the
@@ -79,36 +79,12 @@ pub fn spread_subset(pop: &Population, target: usize) -> Vec<usize> {
 }
 
 /// The labels of every vertex of `full` (argmax of the E-step) under `comps`, whose translations are in
-/// unit-box coordinates (as in a [`super::Model`]).
+/// unit-box coordinates (as in a [`crate::mfa::Model`]).
 pub fn labels_everywhere(full: &Data, comps: &[Component]) -> Vec<u32> {
     let shifted = to_frame(full, comps);
     let mut gamma = Vec::new();
     e_step_pruned(full, &shifted, &mut gamma);
     labels_from_gamma(&gamma, shifted.len())
-}
-
-/// Components with unit-box translations moved into the centred frame of `data`.
-pub fn to_frame(data: &Data, comps: &[Component]) -> Vec<Component> {
-    shifted(comps, &data.offsets, -1.0)
-}
-
-/// Components in the centred frame of `data` moved back to unit-box translations (the inverse of [`to_frame`]).
-pub fn from_frame(data: &Data, comps: &[Component]) -> Vec<Component> {
-    shifted(comps, &data.offsets, 1.0)
-}
-
-/// Copies of `comps` with `sign` x the shape's offset added to every translation.
-fn shifted(comps: &[Component], offsets: &[crate::geometry::Vec3], sign: f64) -> Vec<Component> {
-    comps
-        .iter()
-        .map(|c| {
-            let mut c = c.clone();
-            for (t, o) in c.translations.iter_mut().zip(offsets) {
-                *t = [t[0] + sign * o[0], t[1] + sign * o[1], t[2] + sign * o[2]];
-            }
-            c
-        })
-        .collect()
 }
 
 /// A stage's model of a subset carried to every vertex: its components (unit-box translations) with the
@@ -138,7 +114,7 @@ pub fn extend_labels(pop: &Population, subset: &[usize], labels: &[u32], floor: 
         members[k].push(j);
     }
     let comps: Vec<Component> =
-        members.iter().map(|mem| super::init::component_from_points(&full, mem, subset.len(), floor)).collect();
+        members.iter().map(|mem| crate::mfa::init::component_from_points(&full, mem, subset.len(), floor)).collect();
     let mut gamma = Vec::new();
     e_step_pruned(&full, &comps, &mut gamma);
     labels_from_gamma(&gamma, comps.len())

@@ -13,11 +13,11 @@
 //! part k). Only the labels and the moved vertices' latent images (eq 21 under their new part) change; the
 //! parts' motions stay.
 
-use super::result::Model;
+use crate::mfa::result::Model;
 use crate::mesh::Population;
 
 /// The residual r_k(j) of vertex `h` (one point per shape) under a part's motion.
-pub fn motion_residual(part: &super::Component, h: &[[f64; 3]]) -> f64 {
+pub fn motion_residual(part: &crate::mfa::Component, h: &[[f64; 3]]) -> f64 {
     let ns = h.len();
     // the back-transformed points on the stack (no allocation per vertex and part) unless there are many shapes
     const ON_STACK: usize = 64;
@@ -47,7 +47,7 @@ pub fn label_by_motion(model: &mut Model, pop: &Population) -> usize {
     if m < 2 {
         return 0;
     }
-    let (adjacent, _) = super::distinct::adjacency(&model.labels, &pop.faces, m);
+    let (adjacent, _) = super::labels::adjacency(&model.labels, &pop.faces, m);
     let mut moved = 0;
     let mut h = vec![[0.0; 3]; pop.n_shapes()];
     for j in 0..model.n_vertices {
@@ -117,7 +117,7 @@ mod tests {
     fn residual_is_zero_for_a_point_that_moves_with_the_part_and_grows_with_the_mismatch() {
         let ns = 4;
         let rots: Vec<_> = (0..ns).map(|i| axis_angle([0.0, 0.0, 1.0], 0.3 * i as f64)).collect();
-        let part = super::super::Component {
+        let part = crate::mfa::Component {
             rotations: rots.clone(),
             translations: (0..ns).map(|i| [0.1 * i as f64, 0.0, -0.2]).collect(),
             lambda: [0.1; 3],

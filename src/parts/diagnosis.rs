@@ -9,9 +9,9 @@
 //! a smoothly bending blob 0.9 or less, however many parts it is cut into. The verdict is "articulated" from
 //! [`MIN_EXPLAINED`] up, with at least two parts.
 
-use super::data::Data;
+use crate::mfa::data::Data;
 use super::hierarchy::FitResult;
-use super::result::Model;
+use crate::mfa::result::Model;
 use crate::mesh::Population;
 use serde::Serialize;
 
@@ -46,7 +46,7 @@ fn rigid_rmse(data: &Data, labels: &[u32]) -> f64 {
         .iter()
         .filter(|v| !v.is_empty())
         .map(|v| {
-            let c = super::init::component_from_points(data, v, v.len(), f64::MIN_POSITIVE);
+            let c = crate::mfa::init::component_from_points(data, v, v.len(), f64::MIN_POSITIVE);
             v.iter().map(|&j| super::motion_labels::motion_residual(&c, data.vertex(j))).sum::<f64>()
         })
         .sum();
@@ -63,7 +63,7 @@ pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     let asked = diagnose(pop, &result.model);
     let Some(labels) = result.decided_labels.as_ref() else { return asked };
     let data = Data::from_population(pop);
-    let decided = super::hierarchy::compact(labels);
+    let decided = super::labels::compact(labels);
     let n = decided.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
     if n == asked.parts || asked.single_body_rmse < RIGID_RMSE {
         return asked;
@@ -133,8 +133,8 @@ pub fn diagnose(pop: &Population, model: &Model) -> Diagnosis {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::hierarchy::fit;
-    use crate::model::Params;
+    use crate::parts::hierarchy::fit;
+    use crate::mfa::Params;
     use crate::synth::{generate, Preset, Spec};
 
     fn verdict(preset: Preset, seed: u64) -> Diagnosis {

@@ -22,11 +22,13 @@
 //! subset of the vertices; the coarse and refined labels of all vertices come from the E-step of those stages'
 //! components on the whole population, and stage 3 runs on all vertices.
 
-use super::aecm::{Fit, StepInfo};
-use super::data::Data;
-use super::estep::Blocked;
-use super::params::{PartRule, Params};
-use super::result::Model;
+use crate::mfa::aecm::{Fit, StepInfo};
+pub use crate::mfa::aecm::StageStats;
+use super::labels::compact;
+use crate::mfa::data::Data;
+use crate::mfa::estep::Blocked;
+use crate::mfa::params::{PartRule, Params};
+use crate::mfa::result::Model;
 use crate::error::Result;
 use crate::mesh::Population;
 use serde::Serialize;
@@ -56,20 +58,6 @@ pub struct Progress {
     pub parts: usize,
     /// The current run's iteration was its last (converged or capped).
     pub run_finished: bool,
-}
-
-/// Time and work of one stage.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-#[serde(rename_all = "camelCase")]
-pub struct StageStats {
-    pub name: String,
-    pub iterations: usize,
-    pub aecm_runs: usize,
-    pub ms: f64,
-    pub estep_ms: f64,
-    pub estep_flops: f64,
-    /// The part of `estep_flops` done in f32.
-    pub estep_flops_f32: f64,
 }
 
 /// Part counts of the three stages.
@@ -153,7 +141,7 @@ struct Best {
 
 /// The residual h_j - (R Λ E[z|h_j] + b) of vertex `j` of `fit`'s data under component `c`, appended to `out`
 /// (3 n_s values).
-fn push_residual(fit: &Fit, c: &super::component::Component, wb: &super::component::Woodbury, j: usize, out: &mut Vec<f64>) {
+fn push_residual(fit: &Fit, c: &crate::mfa::component::Component, wb: &crate::mfa::component::Woodbury, j: usize, out: &mut Vec<f64>) {
     let h = fit.data().vertex(j);
     let e = c.posterior_mean(wb, h);
     let v = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
@@ -289,8 +277,8 @@ impl Pipeline {
         let data = match &subset {
             Some(s) => {
                 // the final stage runs on every vertex: the budget is checked for all of them first
-                let most = super::memory::max_components(params.parts, params.refine, params.max_subparts, pop.n_vertices());
-                super::memory::check(pop.n_vertices(), pop.n_shapes(), most, super::memory::budget_bytes()?)?;
+                let most = crate::memory::max_components(params.parts, params.refine, params.max_subparts, pop.n_vertices());
+                crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
                 Data::from_population_subset(pop, s)
             }
             None => Data::from_population(pop),
@@ -325,14 +313,14 @@ impl Pipeline {
     fn from_tree(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
         let data = Data::from_population(pop);
         // (the memory for the start's count is checked once the tree gives it)
-        super::aecm::check_population(&data, params.parts, 1)?;
+        crate::mfa::aecm::check_population(&data, params.parts, 1)?;
         // the patches' own typical variance, not the variance floor: on clean data the patches fit far below the
         // floor, and the floor as the yardstick merged the generated hand's fingertips before the AECM
         let tree = super::merge_tree::MergeTree::build(pop, PATCH_VARIANCE_FLOOR);
         let start = tree.decided_count(TREE_START_RATIO).max(params.target_parts.unwrap_or(1));
         let labels = tree.labels_at(start);
         let most = start.max(params.target_parts.unwrap_or(0));
-        super::memory::check(pop.n_vertices(), pop.n_shapes(), most, super::memory::budget_bytes()?)?;
+        crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
         if std::env::var_os("POSEMFA_DEBUG").is_some() {
             eprintln!("tree: {} patches, start at {start} parts", tree.n_leaves);
         }
@@ -780,7 +768,7 @@ impl Pipeline {
             data.h = residuals.clone();
         }
         let seed = self.params.seed.wrapping_add(1000 * r.part as u64 + r.sub_parts as u64);
-        let halves = super::init::kmeans(&data, 2, seed, self.params.restarts);
+        let halves = crate::mfa::init::kmeans(&data, 2, seed, self.params.restarts);
         for (&l, &half) in worst.iter().zip(&halves) {
             if half == 1 {
                 labels[l] = new_label;
@@ -843,18 +831,6 @@ impl Pipeline {
             _ => self.result().model,
         }
     }
-}
-
-/// Labels renumbered 0.. in order of first appearance of each used value.
-pub(crate) fn compact(labels: &[u32]) -> Vec<u32> {
-    let mut map = std::collections::HashMap::new();
-    labels
-        .iter()
-        .map(|&l| {
-            let n = map.len() as u32;
-            *map.entry(l).or_insert(n)
-        })
-        .collect()
 }
 
 /// An empty stand-in while a finished refinement fit is moved out (never stepped).

@@ -138,14 +138,14 @@ pub fn agreement(runs: &[Run]) -> Agreement {
 /// Fits every variant with `params` (the seed set per variant) and returns the runs.
 pub fn run_variants(
     pop: &Population,
-    params: &super::Params,
+    params: &crate::mfa::Params,
     variants: &[Variant],
     mut each: impl FnMut(&Run),
 ) -> crate::Result<Vec<Run>> {
     let mut runs = Vec::new();
     for v in variants {
         let p = v.apply(pop)?;
-        let params = super::Params { seed: v.seed(), ..params.clone() };
+        let params = crate::mfa::Params { seed: v.seed(), ..params.clone() };
         let t0 = crate::clock::now_ms();
         let fit = super::hierarchy::fit(&p, &params, &mut |_| true)?;
         let seconds = (crate::clock::now_ms() - t0) / 1000.0;

@@ -20,12 +20,12 @@ pub enum LambdaRule {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum PartRule {
-    /// A function of the population, not of a random start ([`super::merge_tree`]): small patches merged
+    /// A function of the population, not of a random start ([`crate::parts::merge_tree`]): small patches merged
     /// greedily by the part rule's score into one merge tree; AECM from its partition; then the scale-free rule
     /// (flesh dissolved, parts without a distinct motion merged, read off a tree of the fitted parts). Default.
     #[default]
     Tree,
-    /// Algorithm 1 (coarse k-means++ start, refinement) with the scale-free rule ([`super::distinct`]): the
+    /// Algorithm 1 (coarse k-means++ start, refinement) with the scale-free rule ([`crate::parts::distinct`]): the
     /// refinement splits freely; then flesh between parts (a part moving as a fixed blend of two neighbours) is
     /// dissolved, and adjacent parts whose motions are not distinct are merged. Uses `distinct_ratio` and
     /// `blend_ratio`, both dimensionless. Depends on the seed.
@@ -60,8 +60,8 @@ pub struct Params {
     pub restarts: usize,
     /// Run Algorithm 1's refinement and final stage; false stops after the coarse AECM. Default true.
     pub refine: bool,
-    /// Multi-resolution ([`super::multires`]): with at least 3 times this many vertices
-    /// ([`super::hierarchy::SUBSET_FACTOR`]), the coarse and refinement stages run on about this many
+    /// Multi-resolution ([`crate::parts::multires`]): with at least 3 times this many vertices
+    /// ([`crate::parts::hierarchy::SUBSET_FACTOR`]), the coarse and refinement stages run on about this many
     /// well-spread vertices and only the final AECM on all of them; 0 runs every stage on all vertices (the full
     /// hierarchy). Only with `refine`. Default 2000.
     pub subset_vertices: usize,
@@ -72,7 +72,7 @@ pub struct Params {
     /// a refinement split is kept only if it lowers the variance this many times. Default 4.
     pub distinct_ratio: f64,
     /// [`PartRule::Distinct`]: a part whose motion is a fixed in-between of two neighbours' motions to within
-    /// this fraction of their relative rotation is flesh, not a part ([`super::distinct::blend_ratio`]).
+    /// this fraction of their relative rotation is flesh, not a part ([`crate::parts::distinct::blend_ratio`]).
     /// Default 0.1.
     pub blend_ratio: f64,
     /// [`PartRule::Threshold`], Algorithm 1 step 5: stop splitting a part when its mean variance err falls below
@@ -94,7 +94,7 @@ pub struct Params {
     /// decide the labels that start the next stage; the final stage uses `tol`). Default 1e-2.
     pub refine_tol: f64,
     /// Exact part count: after Algorithm 1, parts are split or merged until there are exactly this many, then
-    /// the final AECM runs again ([`super::part_count`]). None (default) keeps Algorithm 1's own count.
+    /// the final AECM runs again ([`crate::parts::part_count`]). None (default) keeps Algorithm 1's own count.
     pub target_parts: Option<usize>,
 }
 

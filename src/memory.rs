@@ -18,7 +18,7 @@
 //! environment variable `POSEMFA_MEMORY_BUDGET` can change it (bytes, or a number with a K, M or G suffix, in
 //! units of 1024). A population whose smallest fit (1 part) does not fit is refused when it is assembled
 //! ([`crate::mesh::Population::from_meshes`]); a fit whose parts do not fit is refused when it starts
-//! ([`crate::model::aecm::Fit::new`]). Both errors say the size, the budget and what to do.
+//! ([`crate::mfa::aecm::Fit::new`]). Both errors say the size, the budget and what to do.
 
 use crate::error::{Error, Result};
 

@@ -17,15 +17,15 @@
 //! responsibilities (an ECM of that model: L_c never decreases), from the AECM's parameters, to the AECM's
 //! tolerance on |ΔL_c| / n_v.
 
-use super::cm::{self, Member, Members};
-use super::data::Data;
-use super::{Model, Params};
+use crate::mfa::cm::{self, Member, Members};
+use crate::mfa::data::Data;
+use crate::mfa::{Model, Params};
 
 avx2_fn! {
     /// The responsibilities of the labels (γ = 1 for each vertex's own part) with y under `comps`, written into
     /// `members` (emptied first, its lists' capacity kept), and L_c of the labels under `comps` from the same
-    /// projections (log N = log_norm - (Σ|x|²/s - Σ shrink y²) / 2, as [`super::Component::log_weighted_density`]).
-    fn label_members(data: &Data, labels: &[u32], comps: &[super::Component], members: &mut Members) -> f64 {
+    /// projections (log N = log_norm - (Σ|x|²/s - Σ shrink y²) / 2, as [`crate::mfa::Component::log_weighted_density`]).
+    fn label_members(data: &Data, labels: &[u32], comps: &[crate::mfa::Component], members: &mut Members) -> f64 {
         let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
         members.resize_with(comps.len(), Vec::new);
         members.iter_mut().for_each(|list| list.clear());
@@ -52,7 +52,7 @@ pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64
         return Vec::new();
     }
     // the model's translations are in unit-box coordinates, the data centred per shape
-    let mut comps = super::multires::to_frame(data, &model.parts);
+    let mut comps = crate::mfa::data::to_frame(data, &model.parts);
     let labels = model.labels.clone();
     let mut trace = Vec::new();
     // `members` always holds the projections under the current `comps`: the pass that gives L_c after cycle 2
@@ -85,7 +85,7 @@ pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64
             model.latent[mb.j as usize] = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
         }
     }
-    model.parts = super::multires::from_frame(data, &comps);
+    model.parts = crate::mfa::data::from_frame(data, &comps);
     trace
 }
 
@@ -107,7 +107,7 @@ mod tests {
         let (g, mut model) = fitted(&spec);
         let labels = model.labels.clone();
         let data = Data::from_population(&g.population);
-        let centred = crate::model::multires::to_frame(&data, &model.parts);
+        let centred = crate::mfa::data::to_frame(&data, &model.parts);
         let before = label_members(&data, &labels, &centred, &mut Members::new());
         let trace = fit_to_labels(&mut model, &data, &Params::default());
         assert!(!trace.is_empty());
@@ -126,7 +126,7 @@ mod tests {
         let spec = Spec { preset: Preset::Quadruped, vertices: 1500, poses: 6, seed: 4, ..Spec::default() };
         let (g, model) = fitted(&spec);
         let data = Data::from_population(&g.population);
-        let mut comps = crate::model::multires::to_frame(&data, &model.parts);
+        let mut comps = crate::mfa::data::to_frame(&data, &model.parts);
         let mut members = Members::new();
         label_members(&data, &model.labels, &comps, &mut members);
         cm::cycle1(&data, &members, &mut comps);
@@ -147,7 +147,7 @@ mod tests {
         let spec = Spec { preset: Preset::Quadruped, vertices: 6000, poses: 10, seed: 1, ..Spec::default() };
         let g = generate(&spec).unwrap();
         let params = Params::default();
-        let mut fit = super::super::aecm::Fit::from_labels(Data::from_population(&g.population), &g.part_of_vertex, &params).unwrap();
+        let mut fit = crate::mfa::aecm::Fit::from_labels(Data::from_population(&g.population), &g.part_of_vertex, &params).unwrap();
         fit.run(&mut |_| true);
         let mut model = fit.model();
         assert_eq!(model.n_parts(), g.n_parts());

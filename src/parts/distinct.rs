@@ -1,4 +1,4 @@
-//! The default part rule ([`super::params::PartRule::Distinct`]): how many parts, decided without any absolute
+//! The default part rule ([`crate::mfa::params::PartRule::Distinct`]): how many parts, decided without any absolute
 //! threshold. Two ratios, both dimensionless, so the rule is the same for a shape at any scale, mesh resolution
 //! or number of poses (README, "A part count without tuning"):
 //!
@@ -17,53 +17,14 @@
 //! `distinct_ratio` times); the final AECM runs on its labels, then 1 and 2, then the final AECM once more if any
 //! part went.
 
-use super::hierarchy::compact;
+use super::labels::{adjacency, compact};
+pub use super::merge_tree::CurvePoint;
 use super::motion_labels::motion_residual;
-use super::params::Params;
-use super::result::Model;
+use crate::mfa::params::Params;
+use crate::mfa::result::Model;
 use crate::geometry::rotation::{angle_between, to_quat, Quat, SlerpPath};
 use crate::geometry::Mat3;
 use crate::mesh::Population;
-use serde::Serialize;
-
-/// One merge decision of [`merge_indistinct`]: with `parts` parts, the cheapest adjacent pair scored `score`
-/// (merged when below `distinct_ratio`); `variance` is the vertex-weighted mean variance of the rigid fits of
-/// the `parts` parts (unit-box units²). The last entry is the first pair that was not merged (or the count
-/// reached 1): the reason the fit stopped where it did.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-#[serde(rename_all = "camelCase")]
-pub struct CurvePoint {
-    pub parts: usize,
-    pub score: f64,
-    pub variance: f64,
-    /// The pair was merged (score below `distinct_ratio`).
-    pub merged: bool,
-}
-
-/// The parts adjacent to each part (sharing a mesh edge), sorted, and each part's vertices, for at least
-/// `n_parts` parts (a part may have no vertex left).
-pub(crate) fn adjacency(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
-    let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0).max(n_parts);
-    let mut adjacent = vec![Vec::new(); m];
-    let mut members = vec![Vec::new(); m];
-    for (j, &l) in labels.iter().enumerate() {
-        members[l as usize].push(j);
-    }
-    for f in faces {
-        for e in 0..3 {
-            let (a, b) = (labels[f[e] as usize] as usize, labels[f[(e + 1) % 3] as usize] as usize);
-            if a != b {
-                adjacent[a].push(b);
-                adjacent[b].push(a);
-            }
-        }
-    }
-    for a in adjacent.iter_mut() {
-        a.sort_unstable();
-        a.dedup();
-    }
-    (adjacent, members)
-}
 
 /// Motion of a part relative to pose r, per pose: R^i (R^r)^T (free of the part's latent frame).
 fn relative_motion(rotations: &[Mat3], r: usize) -> Vec<Mat3> {
@@ -126,7 +87,7 @@ fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize) -> f6
 /// The best rigid trajectory of a vertex (`h`, one point per shape) under a part's motion: the mean of its points
 /// brought back by the part's inverse motions, placed again in every shape (what [`motion_residual`] measures
 /// against).
-fn rigid_trajectory(part: &super::Component, h: &[[f64; 3]], out: &mut [[f64; 3]]) {
+fn rigid_trajectory(part: &crate::mfa::Component, h: &[[f64; 3]], out: &mut [[f64; 3]]) {
     let ns = h.len();
     let mut mean = [0.0; 3];
     for (i, &p) in h.iter().enumerate() {
@@ -269,7 +230,7 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
     }
 }
 
-/// Mean variance of the best rigid fit (generalised Procrustes, [`super::init::component_from_points`]) of a set of
+/// Mean variance of the best rigid fit (generalised Procrustes, [`crate::mfa::init::component_from_points`]) of a set of
 /// vertices; with multi-resolution, estimated on at most `subset_vertices` evenly spaced ones.
 pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f64 {
     let thinned: Vec<usize>;
@@ -280,7 +241,7 @@ pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f
     } else {
         members
     };
-    super::init::component_from_population(pop, members, members.len(), params.variance_floor).mean_variance()
+    crate::mfa::init::component_from_population(pop, members, members.len(), params.variance_floor).mean_variance()
 }
 
 /// The vertex-weighted median of per-part values.
@@ -380,7 +341,7 @@ pub(crate) fn merge_pair<T>(
 mod tests {
     use super::*;
     use crate::geometry::rotation::axis_angle;
-    use crate::model::Component;
+    use crate::mfa::Component;
     use crate::synth::{generate, Preset, Spec};
 
     fn part(angles: &[f64], axis: [f64; 3]) -> Component {
@@ -484,8 +445,8 @@ mod tests {
         let parts = members
             .iter()
             .map(|m| {
-                let mut c = crate::model::init::component_from_population(pop, m, labels.len(), 1e-12);
-                let offsets = crate::model::data::Data::centroids(pop, m);
+                let mut c = crate::mfa::init::component_from_population(pop, m, labels.len(), 1e-12);
+                let offsets = crate::mfa::data::Data::centroids(pop, m);
                 for (t, o) in c.translations.iter_mut().zip(offsets) {
                     *t = crate::geometry::add(*t, o);
                 }

@@ -23,11 +23,12 @@ use super::component::Component;
 use super::data::Data;
 use super::estep::{e_step, Blocked, EStep};
 use super::init;
-use super::memory;
+use crate::memory;
 use super::params::{LambdaRule, Params};
 use super::result::Model;
 use super::squarem;
 use crate::error::{Error, Result};
+use serde::Serialize;
 use crate::geometry::Vec3;
 
 /// What one iteration did.
@@ -364,7 +365,7 @@ impl Fit {
                 [comps[k].lambda[0] * e[0], comps[k].lambda[1] * e[1], comps[k].lambda[2] * e[2]]
             })
             .collect();
-        let parts = super::multires::from_frame(&self.data, comps);
+        let parts = super::data::from_frame(&self.data, comps);
         Model {
             n_shapes: self.data.n_shapes,
             n_vertices: self.data.n_vertices,
@@ -479,4 +480,18 @@ fn check_motion(data: &Data) -> Result<()> {
          of the whole mesh), so there is no motion to learn; load poses in which the parts move",
         data.n_shapes
     )))
+}
+
+/// Time and work of one stage.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct StageStats {
+    pub name: String,
+    pub iterations: usize,
+    pub aecm_runs: usize,
+    pub ms: f64,
+    pub estep_ms: f64,
+    pub estep_flops: f64,
+    /// The part of `estep_flops` done in f32.
+    pub estep_flops_f32: f64,
 }

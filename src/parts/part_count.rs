@@ -5,7 +5,7 @@
 //! AECM then runs again from them ([`super::hierarchy`]):
 //!
 //! - **too few**: split the part whose split gains the most log-likelihood. Each part is cut in two the way
-//!   the refinement cuts a sub-part (2-means, [`super::init::kmeans`]), once on its vertices' positions over
+//!   the refinement cuts a sub-part (2-means, [`crate::mfa::init::kmeans`]), once on its vertices' positions over
 //!   all shapes and once on their residuals under the part's own rigid motion; the better of the two is
 //!   its candidate. Each half is made one connected piece inside the part (stray pieces join the half that
 //!   explains them best, [`super::islands::connect_labels`]).
@@ -13,7 +13,7 @@
 //!
 //! Both compare the classification log-likelihood Σ_j log(π_k N(h_j; θ_k)) (eq 6 weighted as in eq 12) of the
 //! vertices involved, every part's component fitted to its own vertices in closed form
-//! ([`super::init::component_from_points`], the start the AECM uses), so a split and a merge are scored the
+//! ([`crate::mfa::init::component_from_points`], the start the AECM uses), so a split and a merge are scored the
 //! same way and the N - 1 and N + 1 decisions agree. Every step keeps every part one connected piece: a merge
 //! joins two adjacent pieces, a split leaves two connected halves.
 //!
@@ -22,10 +22,10 @@
 //! or when the parts left touch no other part (a mesh of separate pieces): each gives an error that says
 //! what to ask for instead.
 
-use super::data::Data;
-use super::init::{component_from_points, kmeans};
+use crate::mfa::data::Data;
+use crate::mfa::init::{component_from_points, kmeans};
 use super::islands::connect_labels;
-use super::params::Params;
+use crate::mfa::params::Params;
 use crate::error::{Error, Result};
 use crate::mesh::Population;
 use std::collections::{BTreeSet, HashMap};

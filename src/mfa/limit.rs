@@ -5,7 +5,7 @@
 use super::component::Component;
 use super::data::Data;
 use super::estep::{kernel_limit, kernel_limit_f32, KernelRate};
-use super::hierarchy::StageStats;
+use super::aecm::StageStats;
 use serde::Serialize;
 
 #[derive(Debug, Clone, Serialize)]

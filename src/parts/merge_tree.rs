@@ -520,12 +520,12 @@ impl MergeTree {
 
     /// The merges as the part rule's curve of decisions, from the most parts down to `count` and the first merge
     /// that was not made (as [`super::distinct::merge_indistinct`] reports them).
-    pub fn curve(&self, count: usize) -> Vec<super::distinct::CurvePoint> {
+    pub fn curve(&self, count: usize) -> Vec<CurvePoint> {
         self.merges
             .iter()
             .take_while(|m| m.parts > count)
-            .map(|m| super::distinct::CurvePoint { parts: m.parts, score: m.score, variance: m.variance, merged: true })
-            .chain(self.merges.iter().find(|m| m.parts == count).map(|m| super::distinct::CurvePoint {
+            .map(|m| CurvePoint { parts: m.parts, score: m.score, variance: m.variance, merged: true })
+            .chain(self.merges.iter().find(|m| m.parts == count).map(|m| CurvePoint {
                 parts: m.parts,
                 score: m.score,
                 variance: m.variance,
@@ -645,4 +645,18 @@ mod tests {
         assert_eq!(again.leaves, tree.leaves);
         assert_eq!(again.labels_at(3), tree.labels_at(3));
     }
+}
+
+/// One merge decision of [`merge_indistinct`]: with `parts` parts, the cheapest adjacent pair scored `score`
+/// (merged when below `distinct_ratio`); `variance` is the vertex-weighted mean variance of the rigid fits of
+/// the `parts` parts (unit-box units²). The last entry is the first pair that was not merged (or the count
+/// reached 1): the reason the fit stopped where it did.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct CurvePoint {
+    pub parts: usize,
+    pub score: f64,
+    pub variance: f64,
+    /// The pair was merged (score below `distinct_ratio`).
+    pub merged: bool,
 }

@@ -6,6 +6,7 @@
 
 use crate::geometry::Vec3;
 use crate::mesh::Population;
+use super::component::Component;
 
 #[derive(Debug, Clone)]
 pub struct Data {
@@ -66,4 +67,28 @@ impl Data {
         debug_assert!(rest.is_empty());
         chunks
     }
+}
+
+/// Components with unit-box translations moved into the centred frame of `data`.
+pub fn to_frame(data: &Data, comps: &[Component]) -> Vec<Component> {
+    shifted(comps, &data.offsets, -1.0)
+}
+
+/// Components in the centred frame of `data` moved back to unit-box translations (the inverse of [`to_frame`]).
+pub fn from_frame(data: &Data, comps: &[Component]) -> Vec<Component> {
+    shifted(comps, &data.offsets, 1.0)
+}
+
+/// Copies of `comps` with `sign` x the shape's offset added to every translation.
+fn shifted(comps: &[Component], offsets: &[crate::geometry::Vec3], sign: f64) -> Vec<Component> {
+    comps
+        .iter()
+        .map(|c| {
+            let mut c = c.clone();
+            for (t, o) in c.translations.iter_mut().zip(offsets) {
+                *t = [t[0] + sign * o[0], t[1] + sign * o[1], t[2] + sign * o[2]];
+            }
+            c
+        })
+        .collect()
 }

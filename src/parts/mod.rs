@@ -1,0 +1,29 @@
+//! Which vertices form a part, and how many parts there are: the second room. It calls into [`crate::mfa`]
+//! (the model and its fit) and is never called from there.
+//!
+//! Listed in the order of their imports: each module uses only the ones above it (`tests/module_rooms.rs`).
+//!
+//! - [`labels`]: small operations on part labels (renumbering, which parts touch).
+//! - [`motion_labels`]: final labels by least-squares rigid motion (boundaries on the joints).
+//! - [`islands`]: every part one connected piece of the mesh (islands moved to the best adjacent part).
+//! - [`merge_tree`]: patches merged greedily by the part rule's score, every merge recorded (the default start
+//!   and the count read off the tree).
+//! - [`distinct`]: the default part rule: flesh between parts dissolved, parts without a distinct motion merged.
+//! - [`part_count`]: an exact part count asked for (`--bones N`).
+//! - [`label_fit`]: the mixture fitted to given labels.
+//! - [`multires`]: the coarse and refinement stages on a well-spread vertex subset, labels carried to all.
+//! - [`hierarchy`]: Algorithm 1 (coarse, refinement, final) and the tree pipeline, every stage kept.
+//! - [`diagnosis`]: whether the population looks articulated (how much of the motion rigid parts explain).
+//! - [`robustness`]: fits over seeds and nuisance variants, and how much they agree.
+
+pub mod labels;
+pub mod motion_labels;
+pub mod islands;
+pub mod merge_tree;
+pub mod distinct;
+pub mod part_count;
+pub mod label_fit;
+pub mod multires;
+pub mod hierarchy;
+pub mod diagnosis;
+pub mod robustness;
