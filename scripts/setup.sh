@@ -3,7 +3,7 @@
 #
 #   rustup target wasm32-unknown-unknown
 #   wasm-bindgen-cli (wasm-bindgen, wasm-bindgen-test-runner) of exactly the wasm-bindgen version in Cargo.lock
-#       (cargo install, about 11 minutes on 2 cores, only when `wasm-bindgen --version` differs)
+#       (cargo install, 2 minutes on a quiet 2-core machine, 11 under load; only when `wasm-bindgen --version` differs)
 #   Debian chromium + chromium-driver (headless browser tests; skipped with --no-browser)
 #   node_modules from package-lock.json (npm ci, only when missing or when package*.json changed)
 #
@@ -52,14 +52,14 @@ if wb_ok; then
   step "wasm-bindgen-cli $want_wb: present"
 else
   have="$(tool_version wasm-bindgen)"
-  step "wasm-bindgen-cli $want_wb: installing (cargo install, ~11 min on 2 cores; found '${have:-none}')"
+  step "wasm-bindgen-cli $want_wb: installing (cargo install, 2-11 min; found '${have:-none}')"
   mkdir -p "$HOME/.cargo"
   # One install at a time on a machine: a second setup waits for the first, then finds the tool there.
   (
     flock -w 3600 9 || die "timed out waiting for another wasm-bindgen-cli install"
     if ! wb_ok; then
       # Not --locked: its lock file asks for crate versions this registry mirror does not serve.
-      timeout 3000 cargo install wasm-bindgen-cli --version "$want_wb" --force \
+      timeout 1500 cargo install wasm-bindgen-cli --version "$want_wb" --force \
         || die "cargo install wasm-bindgen-cli --version $want_wb failed"
     fi
   ) 9>"$HOME/.cargo/.posemfa-wasm-bindgen-install.lock"

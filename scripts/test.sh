@@ -5,6 +5,9 @@
 #   3. wasm-chromium the same in headless Chromium (WASM_BINDGEN_USE_BROWSER=1, /usr/bin/chromedriver)
 #   4. page          build:wasm + vite build into dist/, then `node --test tests/e2e/*.test.mjs` (Playwright)
 # Needs what scripts/setup.sh installs.
+# Every stage has a time limit of about 3-4x what it takes on a quiet 2-core machine (native 6 min, wasm-node
+# 9, wasm-chromium 3, page build 3, page tests 7.5; each page test at most 4 min), so that a hang fails that
+# stage with its name well inside CI's 90 minutes instead of running out the clock.
 # Usage: scripts/test.sh [STAGE...]   (default: all four; e.g. `npm test -- wasm-chromium page` for a subset)
 #
 # For the page tests (stage 4) this script serves dist/ with `vite preview` and exports:
@@ -106,7 +109,7 @@ print_summary() {
 # ------------------------------------------------------------------ 1. native
 if want native; then
   run_stage native "cargo test (native: lib, bin, tests/)" \
-    timeout 3600 cargo test
+    timeout 1500 cargo test
 fi
 
 # ------------------------------------------------------------------ 2. wasm in Node
@@ -114,7 +117,7 @@ fi
 wasm_test=(cargo test --target wasm32-unknown-unknown --lib --test '*')
 if want wasm-node; then
   run_stage wasm-node "wasm32 tests in Node (wasm-bindgen-test-runner)" \
-    timeout 2400 "${wasm_test[@]}"
+    timeout 1500 "${wasm_test[@]}"
 fi
 
 # ------------------------------------------------------------------ 3. wasm in headless Chromium
@@ -134,7 +137,7 @@ if want wasm-chromium; then
     process.stdout.write(JSON.stringify({ "goog:chromeOptions": { binary: "/usr/bin/chromium", args } }, null, 2));
   ' -- "${chrome_args[@]}" >"$logdir/webdriver.json"
   run_stage wasm-chromium "wasm32 tests in headless Chromium (chromedriver)" \
-    timeout 2400 env WASM_BINDGEN_USE_BROWSER=1 CHROMEDRIVER=/usr/bin/chromedriver \
+    timeout 900 env WASM_BINDGEN_USE_BROWSER=1 CHROMEDRIVER=/usr/bin/chromedriver \
     WASM_BINDGEN_TEST_WEBDRIVER_JSON="$logdir/webdriver.json" \
     WASM_BINDGEN_TEST_DRIVER_TIMEOUT="${WASM_BINDGEN_TEST_DRIVER_TIMEOUT:-120}" \
     WASM_BINDGEN_TEST_TIMEOUT="${WASM_BINDGEN_TEST_TIMEOUT:-1200}" \
@@ -145,7 +148,7 @@ fi
 if want page; then
   banner page "build:wasm + vite build, then Playwright page tests (tests/e2e/*.test.mjs)"
   t0=$(date +%s)
-  if ! { bash scripts/build-wasm.sh && node_modules/.bin/vite build --logLevel warn; }; then
+  if ! { timeout 900 bash scripts/build-wasm.sh && timeout 300 node_modules/.bin/vite build --logLevel warn; }; then
     summary+=("$(printf '%-14s FAILED after %4d s: build:wasm or vite build' page "$(( $(date +%s) - t0 ))")")
     print_summary
     printf '\n[test] FAILED at stage page: build:wasm or vite build\n'
@@ -180,7 +183,7 @@ if want page; then
     echo "[test] serving dist/ at $POSEMFA_URL; ${#e2e[@]} page test file(s)"
     # node's test runner, one file after another (each may launch Chromium; 2 cores).
     run_stage page-e2e "Playwright page tests: ${e2e[*]}" \
-      timeout 1800 node --test --test-concurrency=1 "${e2e[@]}"
+      timeout 1200 node --test --test-concurrency=1 --test-timeout=240000 "${e2e[@]}"
     kill "$server_pid" 2>/dev/null || true; wait "$server_pid" 2>/dev/null || true; server_pid=
   fi
 fi
