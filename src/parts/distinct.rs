@@ -17,7 +17,7 @@
 //! `distinct_ratio` times); the final AECM runs on its labels, then 1 and 2, then the final AECM once more if any
 //! part went.
 
-use super::labels::{adjacency, compact};
+use super::labels::{adjacency, compact, weighted_median};
 pub use super::merge_tree::CurvePoint;
 use super::motion_labels::motion_residual;
 use crate::mfa::params::Params;
@@ -242,21 +242,6 @@ pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f
         members
     };
     crate::mfa::init::component_from_population(pop, members, members.len(), params.variance_floor).mean_variance()
-}
-
-/// The vertex-weighted median of per-part values.
-fn weighted_median(values: &[f64], weights: &[usize]) -> f64 {
-    let mut by: Vec<(f64, usize)> = values.iter().copied().zip(weights.iter().copied()).collect();
-    by.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let half = by.iter().map(|x| x.1).sum::<usize>().div_ceil(2);
-    let mut acc = 0;
-    for (v, w) in &by {
-        acc += w;
-        if acc >= half {
-            return *v;
-        }
-    }
-    by.last().map_or(0.0, |x| x.0)
 }
 
 /// Rule 2: merges adjacent parts whose motions are not distinct, cheapest first. The score of a pair (a, b) is

@@ -1,4 +1,4 @@
-//! Small operations on per-vertex part labels that both the part rules and the merge tree use.
+//! Small operations on part labels and per-part values that the part rules and the merge tree share.
 
 /// Labels renumbered 0.. in order of first appearance of each used value.
 pub fn compact(labels: &[u32]) -> Vec<u32> {
@@ -35,4 +35,19 @@ pub(crate) fn adjacency(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> (
         a.dedup();
     }
     (adjacent, members)
+}
+
+/// The vertex-weighted median of per-part values.
+pub fn weighted_median(values: &[f64], weights: &[usize]) -> f64 {
+    let mut by: Vec<(f64, usize)> = values.iter().copied().zip(weights.iter().copied()).collect();
+    by.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let half = by.iter().map(|x| x.1).sum::<usize>().div_ceil(2);
+    let mut acc = 0;
+    for (v, w) in &by {
+        acc += w;
+        if acc >= half {
+            return *v;
+        }
+    }
+    by.last().map_or(0.0, |x| x.0)
 }

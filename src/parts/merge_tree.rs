@@ -364,17 +364,8 @@ impl Node {
 
 /// The vertex-weighted median of the nodes' variances.
 fn typical_variance(nodes: &[Option<Node>]) -> f64 {
-    let mut by: Vec<(f64, usize)> = nodes.iter().flatten().map(|n| (n.variance(), n.size)).collect();
-    by.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let half = by.iter().map(|x| x.1).sum::<usize>().div_ceil(2);
-    let mut acc = 0;
-    for (v, w) in &by {
-        acc += w;
-        if acc >= half {
-            return *v;
-        }
-    }
-    by.last().map_or(0.0, |x| x.0)
+    let (values, sizes): (Vec<f64>, Vec<usize>) = nodes.iter().flatten().map(|n| (n.variance(), n.size)).unzip();
+    super::labels::weighted_median(&values, &sizes)
 }
 
 impl MergeTree {
