@@ -143,7 +143,7 @@ test('bad parameters: each field named and outlined with what it allows, no fit,
   await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 2, null, { timeout: 10000 });
   const lines = await page.locator('[data-testid=param-errors] li').allInnerTexts();
   assert.deepEqual(lines.sort(), [
-    "Parts in the end: 'seven' is not a whole number: it must be a whole number of at least 1, or auto (Algorithm 1's own count)",
+    "Parts in the end: 'seven' is not a whole number: it must be a positive whole number, or auto (Algorithm 1's own count)",
     "Tolerance (nats / vertex): 'abc' is not a number: it must be a positive number (try 1e-3)",
   ]);
   assert.equal(await page.getAttribute('#params [name=tol]', 'aria-invalid'), 'true');
@@ -335,4 +335,56 @@ test('layout at 1280x800: nothing below the window, the running fit\'s progress 
   assert.deepEqual(cut, [], 'eq 18 view labels cut');
   assert.deepEqual([...log.errors, ...art.log.errors], []);
   await art.context.close();
+});
+
+// ---------------------------------------------------------------- the second first-use review
+
+// The one line of the form's problems about `field`, once it is there.
+async function fieldLine(page, field) {
+  await page.waitForFunction((f) => document.querySelector(`[data-testid=param-errors] li[data-field=${f}]`), field, { timeout: 10000 });
+  return page.locator(`[data-testid=param-errors] li[data-field=${field}]`).innerText();
+}
+
+test('Parts in the end: a negative count must be a positive whole number; more than the population holds is refused before a fit, naming the limit', async () => {
+  const { page, context, log } = await fitted();
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  const stage = await text(page, '#stage');
+  const field = '#params [name=targetParts]';
+  const refused = async () => {
+    assert.equal(await page.getAttribute(field, 'aria-invalid'), 'true');
+    assert.notEqual(await page.$eval(field, (e) => getComputedStyle(e).outlineStyle), 'none');
+    await page.waitForTimeout(400);
+    assert.equal(await page.evaluate(() => window.posemfa.fitCount()), n, 'no fit started');
+    assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted', 'the page is back at rest, not fitting');
+    assert.equal(await text(page, '#stage'), stage, 'the Stage field did not move');
+  };
+  await page.fill(field, '-3');
+  await page.click('#fit');
+  assert.equal(await fieldLine(page, 'targetParts'), "Parts in the end: '-3' is negative: it must be a positive whole number, or auto (Algorithm 1's own count)");
+  await refused();
+  // fixed: the line goes as it is typed
+  await page.fill(field, '3');
+  await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 0);
+  assert.equal(await page.getAttribute(field, 'aria-invalid'), null);
+  // more parts than the population can hold (every part needs min_part_vertices = 4 vertices)
+  const { vertices } = await summary(page);
+  const most = Math.floor(vertices / 4);
+  await page.fill(field, String(vertices + 1));
+  await page.click('#fit');
+  const line = await fieldLine(page, 'targetParts');
+  assert.equal(line, `Parts in the end: ${vertices + 1} is more than this population allows: it has ${vertices} vertices and every part needs at least 4, so it must be at most ${most} (or auto)`);
+  await refused();
+  // Defaults: the mark goes
+  await page.click('#reset-params');
+  assert.equal(await page.locator('[data-testid=param-errors] li').count(), 0);
+  assert.equal(await page.locator('#params [aria-invalid]').count(), 0);
+  // the limit itself: one more is refused, the limit is accepted as it is typed (no fit is started here)
+  await page.fill(field, String(most + 1));
+  await page.click('#fit');
+  assert.match(await fieldLine(page, 'targetParts'), new RegExp(`^Parts in the end: ${most + 1} is more than .* at most ${most} \\(or auto\\)$`));
+  await page.fill(field, String(most));
+  await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 0);
+  assert.equal(await page.evaluate(() => window.posemfa.fitCount()), n);
+  assert.deepEqual(log.errors, []);
+  await context.close();
 });

@@ -8,8 +8,9 @@ const $ = (id) => document.getElementById(id);
 const form = () => $('params').elements;
 const TEXT_FIELDS = ['parts', 'targetParts', 'seed', 'tol', 'varianceFloor'];
 
-let checker = null; // (base, fields) => Promise<{ params, problems: [{ field, message }] }> (the core's check)
+let checker = null; // (base, fields, vertices) => Promise<{ params, problems: [{ field, message }] }> (the core's check)
 let checking = Promise.resolve(null);
+let checkedFor = null; // the vertex count of the population the last check was for (null: none known)
 
 /** Shows fit parameters in the form (and clears the marks of fields the core refused). */
 export function fillParams(p) {
@@ -75,11 +76,13 @@ function showFieldProblems(problems) {
 }
 
 /** The core's check of the form (the latest one asked); shows what it refuses. Resolves to the parameters, or
- * null when a field cannot be used. */
-export function checkedParams() {
+ * null when a field cannot be used. `vertices`: the vertex count of the population to fit, when it is known
+ * (the core then refuses more parts than it can hold). */
+export function checkedParams({ vertices = null } = {}) {
   if (!checker) return Promise.resolve(readParams());
+  checkedFor = vertices;
   const fields = Object.fromEntries(TEXT_FIELDS.map((n) => [n, String(form()[n].value)]));
-  const mine = checker(base(), fields).then((r) => {
+  const mine = checker(base(), fields, vertices).then((r) => {
     if (mine === checking) showFieldProblems(r.problems);
     return r.params;
   });
@@ -96,7 +99,7 @@ export function installForm({ startFit, cancelFit, runExample, check }) {
   });
   // a refused field is checked again as it is typed: its mark goes as soon as it is fixed
   $('params').addEventListener('input', (e) => {
-    if (TEXT_FIELDS.includes(e.target.name) && $('params').dataset.invalid) checkedParams();
+    if (TEXT_FIELDS.includes(e.target.name) && $('params').dataset.invalid) checkedParams({ vertices: checkedFor });
   });
   $('cancel').addEventListener('click', cancelFit);
   $('reset-params').addEventListener('click', () => state.baseParams && fillParams(state.baseParams));
