@@ -5,7 +5,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload } from './helpers.mjs';
 
 const session = pageSession();
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
@@ -385,6 +385,32 @@ test('Parts in the end: a negative count must be a positive whole number; more t
   await page.fill(field, String(most));
   await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 0);
   assert.equal(await page.evaluate(() => window.posemfa.fitCount()), n);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+const picked = (page) => page.$eval('#example', (s) => ({ value: s.value, text: s.selectedOptions[0]?.textContent ?? '' }));
+
+test('the example picker says "your files" once files are opened, not the example shown before; Generate needs an example again', async () => {
+  const { page, context, log } = await fitted();
+  const first = await picked(page);
+  assert.equal(first.value, 'quadruped');
+  assert.ok(first.text.length > 0 && !/your files/.test(first.text), JSON.stringify(first));
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.setInputFiles('[data-testid=file-input]', asPayload(tubePopulation({ segments: 3, poses: 6 }).files));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 90000 });
+  const mine = await picked(page);
+  assert.equal(mine.text, 'your files');
+  assert.notEqual(mine.value, 'quadruped');
+  assert.equal(await page.isDisabled('#generate'), true, 'Generate & fit has no example to generate');
+  // picking an example again: Generate works, and the picker names it
+  await page.selectOption('#example', 'arm');
+  assert.equal(await page.isDisabled('#generate'), false);
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  await page.click('#generate');
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 90000 });
+  assert.equal((await picked(page)).value, 'arm');
+  assert.equal(await page.locator('#example option[value=arm]').evaluate((o) => o.selected), true);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

@@ -2,7 +2,7 @@
 // picker in the header (Generate & fit). The core checks the form's fields (wasm formParams, the same words as
 // the CLI's): a field it cannot use is outlined and named with what it allows, and no fit starts until it is
 // fixed; the message goes as soon as the value is fixed or Defaults is pressed.
-import { state } from '../state.js';
+import { state, subscribe } from '../state.js';
 
 const $ = (id) => document.getElementById(id);
 const form = () => $('params').elements;
@@ -103,11 +103,32 @@ export function installForm({ startFit, cancelFit, runExample, check }) {
   });
   $('cancel').addEventListener('click', cancelFit);
   $('reset-params').addEventListener('click', () => state.baseParams && fillParams(state.baseParams));
-  $('generate').addEventListener('click', () => runExample(state.examples.find((e) => e.id === $('example').value)));
+  $('generate').addEventListener('click', () => {
+    const ex = state.examples.find((e) => e.id === $('example').value);
+    if (ex) runExample(ex);
+  });
+  $('example').addEventListener('change', showPicked);
+  subscribe((s, changed) => changed.has('pop') && showSource(s.source));
 }
+
+// The picker says what is shown: the example's name, or "your files" / "a generated population" (an entry that
+// cannot be picked), so that it never names an example that is not shown. Generate & fit needs an example.
+const OTHER = '-shown-';
+function showSource(source) {
+  const other = $('example').querySelector(`option[value="${OTHER}"]`);
+  if (!other) return;
+  other.hidden = !!source?.example || !source;
+  other.textContent = source?.spec ? 'a generated population' : 'your files';
+  $('example').value = source?.example?.id ?? (source ? OTHER : $('example').value);
+  showPicked();
+}
+const showPicked = () => { $('generate').disabled = $('example').value === OTHER; };
 
 /** The example picker, filled when the core's examples are known. */
 export function showExamples(examples) {
   document.querySelector('.generate').hidden = !examples.length;
-  $('example').replaceChildren(...examples.map((e) => Object.assign(document.createElement('option'), { value: e.id, textContent: e.title })));
+  const other = Object.assign(document.createElement('option'), { value: OTHER, disabled: true, hidden: true, textContent: 'your files' });
+  $('example').replaceChildren(other, ...examples.map((e) => Object.assign(document.createElement('option'), { value: e.id, textContent: e.title })));
+  $('example').value = state.source?.example?.id ?? examples[0]?.id ?? '';
+  showSource(state.source);
 }
