@@ -414,3 +414,39 @@ test('the example picker says "your files" once files are opened, not the exampl
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+// How many lines the element's own text takes (its text nodes' line boxes), and its height against one line.
+const lines = (page, sel) => page.$$eval(sel, (els) => els.map((e) => {
+  const tops = new Set();
+  for (const n of e.childNodes) {
+    if (n.nodeType !== Node.TEXT_NODE || !n.textContent.trim()) continue;
+    const r = document.createRange();
+    r.selectNodeContents(n);
+    for (const q of r.getClientRects()) if (q.width > 0) tops.add(Math.round(q.top));
+  }
+  const lh = parseFloat(getComputedStyle(e).fontSize) * 1.6;
+  return { text: e.textContent.trim(), lines: tops.size, height: e.getBoundingClientRect().height, oneLine: lh };
+}));
+
+test('pose mode at 1280x800: every pose-space slider\'s label is one line, its slider beside it', async () => {
+  const { page, context, log } = await fitted();
+  await mode(page, 'pose');
+  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  await page.waitForFunction(() => document.querySelectorAll('#pose-modes label').length > 0);
+  const labels = await lines(page, '#pose-modes label');
+  assert.ok(labels.length >= 1);
+  for (const l of labels) {
+    assert.equal(l.lines, 1, `"${l.text}" takes ${l.lines} lines`);
+    assert.ok(l.height <= l.oneLine * 1.3, `"${l.text}" is ${l.height} px high (one line: ${l.oneLine} px)`);
+  }
+  // the slider on the label's line
+  const beside = await page.$$eval('#pose-modes label', (els) => els.map((e) => {
+    const a = e.getBoundingClientRect();
+    const b = e.querySelector('input').getBoundingClientRect();
+    return b.top >= a.top - 0.5 && b.bottom <= a.bottom + 0.5 && b.left > a.left;
+  }));
+  assert.ok(beside.every(Boolean), JSON.stringify(beside));
+  for (const l of await lines(page, '#pose-panel > label, #pose-panel > button')) assert.equal(l.lines, 1, `"${l.text}" takes ${l.lines} lines`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
