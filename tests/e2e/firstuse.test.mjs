@@ -450,3 +450,19 @@ test('pose mode at 1280x800: every pose-space slider\'s label is one line, its s
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('article: the sticky header is opaque, so the text scrolling under it does not show through', async () => {
+  const { page, context, log } = await session.open('explain.html');
+  await page.evaluate(() => window.scrollTo(0, 1500));
+  await page.waitForFunction(() => window.scrollY > 1000);
+  const h = await page.$eval('header.top', (e) => {
+    const r = e.getBoundingClientRect();
+    return { top: r.top, bottom: r.bottom, background: getComputedStyle(e).backgroundColor };
+  });
+  assert.equal(h.top, 0, 'the header stays at the top');
+  const m = h.background.match(/^rgba?\(([\d.]+),\s*([\d.]+),\s*([\d.]+)(?:,\s*([\d.]+))?\)$/);
+  assert.ok(m, h.background);
+  assert.equal(m[4] === undefined ? 1 : Number(m[4]), 1, `header background ${h.background} is not opaque`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
