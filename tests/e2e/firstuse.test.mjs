@@ -466,3 +466,49 @@ test('article: the sticky header is opaque, so the text scrolling under it does 
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+// Visible labels, buttons and selects whose text is cut (wider than their box) or that leave the window sideways,
+// and labels whose control is broken off onto another line than their name.
+const cutOff = (page) => page.evaluate(() => {
+  const out = [];
+  for (const e of document.querySelectorAll('label, button, .button, select, summary, h1, h2, legend, dt, dd')) {
+    const r = e.getBoundingClientRect();
+    if (r.width === 0 || r.height === 0 || getComputedStyle(e).visibility === 'hidden' || e.closest('.visually-hidden')) continue;
+    const cut = e.clientWidth > 0 && e.scrollWidth > e.clientWidth + 1;
+    // inside a box that scrolls sideways (the thumbnail strip) it is reached by scrolling, not cut
+    let scrolls = false;
+    for (let a = e.parentElement; a && a !== document.body; a = a.parentElement) scrolls ||= ['auto', 'scroll'].includes(getComputedStyle(a).overflowX);
+    const out_ = !scrolls && (r.left < -0.5 || r.right > innerWidth + 0.5);
+    // a label's control on the line of its name (not broken off onto the next line)
+    let apart = false;
+    const ctl = e.tagName === 'LABEL' && e.querySelector('select, input:not([type=checkbox]):not([type=radio]):not([type=hidden])');
+    const name = ctl && [...e.childNodes].find((n) => n.nodeType === Node.TEXT_NODE && n.textContent.trim());
+    if (ctl && name && ctl.getBoundingClientRect().width > 0) {
+      const rg = document.createRange();
+      rg.selectNodeContents(name);
+      const t = [...rg.getClientRects()].filter((q) => q.width > 0);
+      const c = ctl.getBoundingClientRect();
+      const line = t[t.length - 1];
+      apart = !!line && !(c.top < line.bottom && c.bottom > line.top);
+    }
+    if (apart) out.push(`label "${e.textContent.trim().slice(0, 40)}": its control is on another line than its name`);
+    if (cut || out_) out.push(`${e.tagName.toLowerCase()}${e.id ? `#${e.id}` : ''} "${e.textContent.trim().slice(0, 40)}": ${cut ? `text ${e.scrollWidth} px in ${e.clientWidth} px` : `from ${r.left.toFixed(0)} to ${r.right.toFixed(0)} px`}`);
+  }
+  return out;
+});
+
+test('a phone (390x844): no label or button text cut, no control broken off its label, nothing wider than the window, in every view', async () => {
+  const { page, context, log } = await fitted('', { width: 390, height: 844 });
+  const width = () => page.evaluate(() => document.documentElement.scrollWidth);
+  assert.ok(await width() <= 390, `the page is ${await width()} px wide`);
+  assert.deepEqual(await cutOff(page), [], 'parts view');
+  for (const m of ['interp', 'latent', 'pose']) {
+    await mode(page, m);
+    if (m === 'pose') await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+    await frames(page);
+    assert.ok(await width() <= 390, `${m}: the page is ${await width()} px wide`);
+    assert.deepEqual(await cutOff(page), [], `${m} view`);
+  }
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
