@@ -465,13 +465,14 @@ pub fn memory_bytes() -> f64 {
 /// The fit form's fields, as typed (an object of text values: any of parts, targetParts, seed, tol,
 /// varianceFloor), read over `base` (fit parameters as a plain object; missing fields take defaults) and every
 /// field checked (`Params::with_fields`): {params, problems: []} or {params: null, problems: [{field, message}]},
-/// one problem per field that cannot be used, naming what is allowed.
+/// one problem per field that cannot be used, naming what is allowed. With `vertices` (the population's vertex
+/// count, when one is loaded) a part count the population cannot hold is refused too, naming the limit.
 #[wasm_bindgen(js_name = formParams)]
-pub fn form_params(base: JsValue, fields: JsValue) -> Result<JsValue, JsValue> {
+pub fn form_params(base: JsValue, fields: JsValue, vertices: Option<u32>) -> Result<JsValue, JsValue> {
     let base: Params = from_js(base, "fit parameters")?;
     let fields: std::collections::BTreeMap<String, String> = descriptor(fields, "form fields")?;
     let pairs: Vec<(&str, &str)> = fields.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
-    let v = match base.with_fields(&pairs) {
+    let v = match base.with_fields_for(&pairs, vertices.map(|n| n as usize)) {
         Ok(p) => serde_json::json!({ "params": p, "problems": [] }),
         Err(problems) => serde_json::json!({ "params": null, "problems": problems }),
     };

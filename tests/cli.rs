@@ -144,7 +144,7 @@ fn a_missing_or_bad_value_is_named() {
         (&["fit", "synth:horse"][..], "unknown preset 'horse'"),
         (&["fit", "synth:arm", "--parts", "0"][..], "parts"),
         (&["fit", "synth:arm:600:6:1", "--bones", "0"][..], "target_parts = 0"),
-        (&["fit", "synth:arm:600:6:1", "--bones", "some"][..], "invalid value 'some' for '--bones <N>': 'some' is not a whole number: it must be a whole number of at least 1, or auto"),
+        (&["fit", "synth:arm:600:6:1", "--bones", "some"][..], "invalid value 'some' for '--bones <N>': 'some' is not a whole number: it must be a positive whole number, or auto"),
         (&["fit", "synth:arm:600:6:1", "--refine-threshold", "1e-4", "--part-rule", "distinct"][..], "--part-rule distinct"),
         (&["export-gltf", "synth:arm:600:6:1", "--out", "x.glb", "--bones", "100000"][..], "ask for at most"),
         (&["completions", "tcsh"][..], "invalid value 'tcsh' for '<SHELL>'"),

@@ -74,7 +74,7 @@ installPoses(); // before the views: a new population's pose lists are filled be
 installViews();
 installResult();
 installInspect();
-installForm({ startFit, cancelFit, runExample, check: (base, fields) => query('formParams', base, fields) });
+installForm({ startFit, cancelFit, runExample, check: (base, fields, vertices) => query('formParams', base, fields, vertices) });
 installInterp();
 installPose();
 installTree();

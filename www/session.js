@@ -130,7 +130,7 @@ function onLoaded(pop, fitId) {
 /** A fit of the population shown, with the form's parameters. */
 export async function startFit() {
   if (!state.pop) return;
-  const params = await checkedParams();
+  const params = await checkedParams({ vertices: state.pop.nVertices });
   if (!params || !state.pop) return; // the form says which field, and what it allows
   showProblems([]);
   const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });

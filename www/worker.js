@@ -295,7 +295,7 @@ const QUERIES = {
 
 // Questions that need no population: the fit form's fields checked by the core.
 const FREE_QUERIES = {
-  formParams: (base, fields) => wasm.formParams(base, fields),
+  formParams: (base, fields, vertices) => wasm.formParams(base, fields, vertices ?? undefined),
 };
 
 function query({ id, method, args }) {

@@ -133,7 +133,7 @@ pub const ALLOWED_PARTS: &str = "a whole number from 1 to 512 (try 11)";
 pub const ALLOWED_SEED: &str = "a whole number from 0 to 18446744073709551615 (try 0)";
 pub const ALLOWED_TOL: &str = "a positive number (try 1e-3)";
 pub const ALLOWED_VARIANCE_FLOOR: &str = "a number in (0, 1) unit-box units² (try 1e-7)";
-pub const ALLOWED_TARGET_PARTS: &str = "a whole number of at least 1, or auto (Algorithm 1's own count)";
+pub const ALLOWED_TARGET_PARTS: &str = "a positive whole number, or auto (Algorithm 1's own count)";
 
 /// A field of the fit form that cannot be used: its name (camelCase, as in [`Params`]'s JSON and the page's
 /// form) and why, with what is allowed.
@@ -152,6 +152,9 @@ impl Params {
         let whole = |allowed: &str| -> std::result::Result<u64, String> {
             if t.is_empty() {
                 return Err(format!("is empty: it must be {allowed}"));
+            }
+            if t.strip_prefix('-').is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit())) {
+                return Err(format!("'{t}' is negative: it must be {allowed}"));
             }
             t.parse::<u64>().map_err(|_| format!("'{t}' is not a whole number: it must be {allowed}"))
         };
@@ -184,6 +187,16 @@ impl Params {
     /// These parameters with the form's fields (name, text) set over them, every field checked: the
     /// parameters, or one problem per field that cannot be used (each field's text first, then its range).
     pub fn with_fields(&self, fields: &[(&str, &str)]) -> std::result::Result<Params, Vec<FieldProblem>> {
+        self.with_fields_for(fields, None)
+    }
+
+    /// [`Params::with_fields`] for a population of `n_vertices` vertices (when known): a part count the
+    /// population cannot hold ([`Params::target_problem`]) is refused too, naming the limit.
+    pub fn with_fields_for(
+        &self,
+        fields: &[(&str, &str)],
+        n_vertices: Option<usize>,
+    ) -> std::result::Result<Params, Vec<FieldProblem>> {
         let mut p = self.clone();
         let mut problems = Vec::new();
         for &(name, text) in fields {
@@ -192,7 +205,8 @@ impl Params {
                 problems.push(FieldProblem { field, message: m });
             }
         }
-        for (field, message) in p.problems() {
+        let limit = n_vertices.and_then(|n| p.target_problem(n)).map(|m| ("targetParts", m));
+        for (field, message) in p.problems().into_iter().chain(limit) {
             if !problems.iter().any(|q| q.field == field) {
                 // "= 0 must be ..." after the field's name in validate(); here the value leads
                 problems.push(FieldProblem { field, message: message.trim_start_matches("= ").to_string() });
@@ -214,6 +228,26 @@ impl Params {
             }
             None => Ok(()),
         }
+    }
+
+    /// The most parts a population of `n_vertices` vertices can have: every part needs at least
+    /// `min_part_vertices` vertices ([`crate::parts::part_count::check_target`] refuses more).
+    pub fn most_parts(&self, n_vertices: usize) -> usize {
+        n_vertices / self.min_part_vertices.max(1)
+    }
+
+    /// `target_parts` against a population of `n_vertices` vertices: "= N is more than ..." naming the limit, or
+    /// None when the count fits (or is auto).
+    pub fn target_problem(&self, n_vertices: usize) -> Option<String> {
+        let n = self.target_parts?;
+        let most = self.most_parts(n_vertices);
+        (n > most).then(|| {
+            format!(
+                "= {n} is more than this population allows: it has {n_vertices} vertices and every part needs at \
+                 least {}, so it must be at most {most} (or auto)",
+                self.min_part_vertices.max(1)
+            )
+        })
     }
 
     /// Every field that is out of its range: (camelCase name, "= value must be ...").
@@ -339,6 +373,16 @@ mod tests {
         assert!(base.with_fields(&[("tol", "NaN")]).is_err() && base.with_fields(&[("tol", "-1e-3")]).is_err());
         assert!(base.with_fields(&[("varianceFloor", "2")]).unwrap_err()[0].message.contains("(0, 1)"));
         assert!(base.with_fields(&[("targetParts", "0")]).unwrap_err()[0].field == "targetParts");
+        // a negative count is named as negative, with what is allowed
+        let neg = base.with_fields(&[("targetParts", "-3")]).unwrap_err();
+        assert_eq!(neg[0].message, format!("'-3' is negative: it must be {ALLOWED_TARGET_PARTS}"));
+        assert!(neg[0].message.contains("must be a positive whole number"));
+        // more parts than the population can hold: refused when its vertex count is known, naming the limit
+        let big = base.with_fields_for(&[("targetParts", "500")], Some(1198)).unwrap_err();
+        assert_eq!((big.len(), big[0].field), (1, "targetParts"));
+        assert!(big[0].message.starts_with("500 is more than") && big[0].message.contains("at most 299"), "{big:?}");
+        assert_eq!(base.with_fields_for(&[("targetParts", "299")], Some(1198)).unwrap().target_parts, Some(299));
+        assert!(base.with_fields_for(&[("targetParts", "auto")], Some(3)).is_ok());
         // the CLI's words for the same value are the same (its flags call set_field)
         let mut q = Params::default();
         assert_eq!(q.set_field("tol", "abc").unwrap_err(), by("tol"));

@@ -5,7 +5,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload } from './helpers.mjs';
 
 const session = pageSession();
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
@@ -143,7 +143,7 @@ test('bad parameters: each field named and outlined with what it allows, no fit,
   await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 2, null, { timeout: 10000 });
   const lines = await page.locator('[data-testid=param-errors] li').allInnerTexts();
   assert.deepEqual(lines.sort(), [
-    "Parts in the end: 'seven' is not a whole number: it must be a whole number of at least 1, or auto (Algorithm 1's own count)",
+    "Parts in the end: 'seven' is not a whole number: it must be a positive whole number, or auto (Algorithm 1's own count)",
     "Tolerance (nats / vertex): 'abc' is not a number: it must be a positive number (try 1e-3)",
   ]);
   assert.equal(await page.getAttribute('#params [name=tol]', 'aria-invalid'), 'true');
@@ -335,4 +335,180 @@ test('layout at 1280x800: nothing below the window, the running fit\'s progress 
   assert.deepEqual(cut, [], 'eq 18 view labels cut');
   assert.deepEqual([...log.errors, ...art.log.errors], []);
   await art.context.close();
+});
+
+// ---------------------------------------------------------------- the second first-use review
+
+// The one line of the form's problems about `field`, once it is there.
+async function fieldLine(page, field) {
+  await page.waitForFunction((f) => document.querySelector(`[data-testid=param-errors] li[data-field=${f}]`), field, { timeout: 10000 });
+  return page.locator(`[data-testid=param-errors] li[data-field=${field}]`).innerText();
+}
+
+test('Parts in the end: a negative count must be a positive whole number; more than the population holds is refused before a fit, naming the limit', async () => {
+  const { page, context, log } = await fitted();
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  const stage = await text(page, '#stage');
+  const field = '#params [name=targetParts]';
+  const refused = async () => {
+    assert.equal(await page.getAttribute(field, 'aria-invalid'), 'true');
+    assert.notEqual(await page.$eval(field, (e) => getComputedStyle(e).outlineStyle), 'none');
+    await page.waitForTimeout(400);
+    assert.equal(await page.evaluate(() => window.posemfa.fitCount()), n, 'no fit started');
+    assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted', 'the page is back at rest, not fitting');
+    assert.equal(await text(page, '#stage'), stage, 'the Stage field did not move');
+  };
+  await page.fill(field, '-3');
+  await page.click('#fit');
+  assert.equal(await fieldLine(page, 'targetParts'), "Parts in the end: '-3' is negative: it must be a positive whole number, or auto (Algorithm 1's own count)");
+  await refused();
+  // fixed: the line goes as it is typed
+  await page.fill(field, '3');
+  await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 0);
+  assert.equal(await page.getAttribute(field, 'aria-invalid'), null);
+  // more parts than the population can hold (every part needs min_part_vertices = 4 vertices)
+  const { vertices } = await summary(page);
+  const most = Math.floor(vertices / 4);
+  await page.fill(field, String(vertices + 1));
+  await page.click('#fit');
+  const line = await fieldLine(page, 'targetParts');
+  assert.equal(line, `Parts in the end: ${vertices + 1} is more than this population allows: it has ${vertices} vertices and every part needs at least 4, so it must be at most ${most} (or auto)`);
+  await refused();
+  // Defaults: the mark goes
+  await page.click('#reset-params');
+  assert.equal(await page.locator('[data-testid=param-errors] li').count(), 0);
+  assert.equal(await page.locator('#params [aria-invalid]').count(), 0);
+  // the limit itself: one more is refused, the limit is accepted as it is typed (no fit is started here)
+  await page.fill(field, String(most + 1));
+  await page.click('#fit');
+  assert.match(await fieldLine(page, 'targetParts'), new RegExp(`^Parts in the end: ${most + 1} is more than .* at most ${most} \\(or auto\\)$`));
+  await page.fill(field, String(most));
+  await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 0);
+  assert.equal(await page.evaluate(() => window.posemfa.fitCount()), n);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+const picked = (page) => page.$eval('#example', (s) => ({ value: s.value, text: s.selectedOptions[0]?.textContent ?? '' }));
+
+test('the example picker says "your files" once files are opened, not the example shown before; Generate needs an example again', async () => {
+  const { page, context, log } = await fitted();
+  const first = await picked(page);
+  assert.equal(first.value, 'quadruped');
+  assert.ok(first.text.length > 0 && !/your files/.test(first.text), JSON.stringify(first));
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.setInputFiles('[data-testid=file-input]', asPayload(tubePopulation({ segments: 3, poses: 6 }).files));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 90000 });
+  const mine = await picked(page);
+  assert.equal(mine.text, 'your files');
+  assert.notEqual(mine.value, 'quadruped');
+  assert.equal(await page.isDisabled('#generate'), true, 'Generate & fit has no example to generate');
+  // picking an example again: Generate works, and the picker names it
+  await page.selectOption('#example', 'arm');
+  assert.equal(await page.isDisabled('#generate'), false);
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  await page.click('#generate');
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 90000 });
+  assert.equal((await picked(page)).value, 'arm');
+  assert.equal(await page.locator('#example option[value=arm]').evaluate((o) => o.selected), true);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+// How many lines the element's own text takes (its text nodes' line boxes), and its height against one line.
+const lines = (page, sel) => page.$$eval(sel, (els) => els.map((e) => {
+  const tops = new Set();
+  for (const n of e.childNodes) {
+    if (n.nodeType !== Node.TEXT_NODE || !n.textContent.trim()) continue;
+    const r = document.createRange();
+    r.selectNodeContents(n);
+    for (const q of r.getClientRects()) if (q.width > 0) tops.add(Math.round(q.top));
+  }
+  const lh = parseFloat(getComputedStyle(e).fontSize) * 1.6;
+  return { text: e.textContent.trim(), lines: tops.size, height: e.getBoundingClientRect().height, oneLine: lh };
+}));
+
+test('pose mode at 1280x800: every pose-space slider\'s label is one line, its slider beside it', async () => {
+  const { page, context, log } = await fitted();
+  await mode(page, 'pose');
+  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  await page.waitForFunction(() => document.querySelectorAll('#pose-modes label').length > 0);
+  const labels = await lines(page, '#pose-modes label');
+  assert.ok(labels.length >= 1);
+  for (const l of labels) {
+    assert.equal(l.lines, 1, `"${l.text}" takes ${l.lines} lines`);
+    assert.ok(l.height <= l.oneLine * 1.3, `"${l.text}" is ${l.height} px high (one line: ${l.oneLine} px)`);
+  }
+  // the slider on the label's line
+  const beside = await page.$$eval('#pose-modes label', (els) => els.map((e) => {
+    const a = e.getBoundingClientRect();
+    const b = e.querySelector('input').getBoundingClientRect();
+    return b.top >= a.top - 0.5 && b.bottom <= a.bottom + 0.5 && b.left > a.left;
+  }));
+  assert.ok(beside.every(Boolean), JSON.stringify(beside));
+  for (const l of await lines(page, '#pose-panel > label, #pose-panel > button')) assert.equal(l.lines, 1, `"${l.text}" takes ${l.lines} lines`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('article: the sticky header is opaque, so the text scrolling under it does not show through', async () => {
+  const { page, context, log } = await session.open('explain.html');
+  await page.evaluate(() => window.scrollTo(0, 1500));
+  await page.waitForFunction(() => window.scrollY > 1000);
+  const h = await page.$eval('header.top', (e) => {
+    const r = e.getBoundingClientRect();
+    return { top: r.top, bottom: r.bottom, background: getComputedStyle(e).backgroundColor };
+  });
+  assert.equal(h.top, 0, 'the header stays at the top');
+  const m = h.background.match(/^rgba?\(([\d.]+),\s*([\d.]+),\s*([\d.]+)(?:,\s*([\d.]+))?\)$/);
+  assert.ok(m, h.background);
+  assert.equal(m[4] === undefined ? 1 : Number(m[4]), 1, `header background ${h.background} is not opaque`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+// Visible labels, buttons and selects whose text is cut (wider than their box) or that leave the window sideways,
+// and labels whose control is broken off onto another line than their name.
+const cutOff = (page) => page.evaluate(() => {
+  const out = [];
+  for (const e of document.querySelectorAll('label, button, .button, select, summary, h1, h2, legend, dt, dd')) {
+    const r = e.getBoundingClientRect();
+    if (r.width === 0 || r.height === 0 || getComputedStyle(e).visibility === 'hidden' || e.closest('.visually-hidden')) continue;
+    const cut = e.clientWidth > 0 && e.scrollWidth > e.clientWidth + 1;
+    // inside a box that scrolls sideways (the thumbnail strip) it is reached by scrolling, not cut
+    let scrolls = false;
+    for (let a = e.parentElement; a && a !== document.body; a = a.parentElement) scrolls ||= ['auto', 'scroll'].includes(getComputedStyle(a).overflowX);
+    const out_ = !scrolls && (r.left < -0.5 || r.right > innerWidth + 0.5);
+    // a label's control on the line of its name (not broken off onto the next line)
+    let apart = false;
+    const ctl = e.tagName === 'LABEL' && e.querySelector('select, input:not([type=checkbox]):not([type=radio]):not([type=hidden])');
+    const name = ctl && [...e.childNodes].find((n) => n.nodeType === Node.TEXT_NODE && n.textContent.trim());
+    if (ctl && name && ctl.getBoundingClientRect().width > 0) {
+      const rg = document.createRange();
+      rg.selectNodeContents(name);
+      const t = [...rg.getClientRects()].filter((q) => q.width > 0);
+      const c = ctl.getBoundingClientRect();
+      const line = t[t.length - 1];
+      apart = !!line && !(c.top < line.bottom && c.bottom > line.top);
+    }
+    if (apart) out.push(`label "${e.textContent.trim().slice(0, 40)}": its control is on another line than its name`);
+    if (cut || out_) out.push(`${e.tagName.toLowerCase()}${e.id ? `#${e.id}` : ''} "${e.textContent.trim().slice(0, 40)}": ${cut ? `text ${e.scrollWidth} px in ${e.clientWidth} px` : `from ${r.left.toFixed(0)} to ${r.right.toFixed(0)} px`}`);
+  }
+  return out;
+});
+
+test('a phone (390x844): no label or button text cut, no control broken off its label, nothing wider than the window, in every view', async () => {
+  const { page, context, log } = await fitted('', { width: 390, height: 844 });
+  const width = () => page.evaluate(() => document.documentElement.scrollWidth);
+  assert.ok(await width() <= 390, `the page is ${await width()} px wide`);
+  assert.deepEqual(await cutOff(page), [], 'parts view');
+  for (const m of ['interp', 'latent', 'pose']) {
+    await mode(page, m);
+    if (m === 'pose') await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+    await frames(page);
+    assert.ok(await width() <= 390, `${m}: the page is ${await width()} px wide`);
+    assert.deepEqual(await cutOff(page), [], `${m} view`);
+  }
+  assert.deepEqual(log.errors, []);
+  await context.close();
 });

@@ -36,7 +36,7 @@ test('the slider shows every count of the merge tree, each partition with that m
     const d = await move(page, n);
     assert.equal(Number(d.parts), n, `count ${n}`);
     slowest = Math.max(slowest, Number(d.ms));
-    assert.match(await page.locator('#tree-count').innerText(), new RegExp(`^${n} parts`));
+    assert.match(await page.locator('#tree-count').innerText(), new RegExp(`^${n} ${n === 1 ? 'part' : 'parts'} `)); // "1 part", not "1 parts"
   }
   console.log(`# merge tree slider: ${tree.most - tree.fewest + 1} counts, slowest move ${slowest.toFixed(1)} ms`);
   // no fit ran for any of it
@@ -101,5 +101,42 @@ test('on horse-poses every count of the tree shows at once (needs ../shared)', a
   }
   times.sort((a, b) => a - b);
   t.diagnostic(`horse-poses: ${times.length} counts, median move ${times[times.length >> 1].toFixed(1)} ms, slowest ${times.at(-1).toFixed(1)} ms`);
+  assert.deepEqual(log.errors, []);
+});
+
+// Every pose thumbnail's pixels, hashed (FNV-1a), once the strip says it drew them all.
+async function thumbnails(page, drawnAfter) {
+  await page.waitForFunction((d) => Number(document.getElementById('pose-strip').dataset.drawn ?? 0) > d, drawnAfter, { timeout: 30000 });
+  return page.evaluate(() => ({
+    drawn: Number(document.getElementById('pose-strip').dataset.drawn),
+    hashes: [...document.querySelectorAll('#pose-strip canvas')].map((src) => {
+      const c = document.createElement('canvas');
+      c.width = src.width;
+      c.height = src.height;
+      const g = c.getContext('2d');
+      g.drawImage(src, 0, 0);
+      const { data } = g.getImageData(0, 0, c.width, c.height);
+      let h = 2166136261;
+      for (let i = 0; i < data.length; i++) h = Math.imul(h ^ data[i], 16777619);
+      return h >>> 0;
+    }),
+  }));
+}
+
+test('the pose thumbnails take the merge tree\'s colours with the slider, and the fit\'s again when it goes back', async () => {
+  const { page, log } = await session.open();
+  await fitted(page);
+  const fit = await thumbnails(page, 0);
+  assert.ok(fit.hashes.length >= 2, `${fit.hashes.length} thumbnails`);
+  const tree = await page.evaluate(() => window.posemfa.tree());
+  const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
+  const other = tree.fewest === parts ? tree.most : tree.fewest;
+  assert.notEqual(other, parts);
+  await move(page, other);
+  const moved = await thumbnails(page, fit.drawn);
+  moved.hashes.forEach((h, i) => assert.notEqual(h, fit.hashes[i], `thumbnail ${i} kept the fitted parts' colours at ${other} parts`));
+  await move(page, parts);
+  const back = await thumbnails(page, moved.drawn);
+  assert.deepEqual(back.hashes, fit.hashes, 'back at the fit\'s count: the fitted parts\' colours');
   assert.deepEqual(log.errors, []);
 });

@@ -2,14 +2,15 @@
 // picker in the header (Generate & fit). The core checks the form's fields (wasm formParams, the same words as
 // the CLI's): a field it cannot use is outlined and named with what it allows, and no fit starts until it is
 // fixed; the message goes as soon as the value is fixed or Defaults is pressed.
-import { state } from '../state.js';
+import { state, subscribe } from '../state.js';
 
 const $ = (id) => document.getElementById(id);
 const form = () => $('params').elements;
 const TEXT_FIELDS = ['parts', 'targetParts', 'seed', 'tol', 'varianceFloor'];
 
-let checker = null; // (base, fields) => Promise<{ params, problems: [{ field, message }] }> (the core's check)
+let checker = null; // (base, fields, vertices) => Promise<{ params, problems: [{ field, message }] }> (the core's check)
 let checking = Promise.resolve(null);
+let checkedFor = null; // the vertex count of the population the last check was for (null: none known)
 
 /** Shows fit parameters in the form (and clears the marks of fields the core refused). */
 export function fillParams(p) {
@@ -75,11 +76,13 @@ function showFieldProblems(problems) {
 }
 
 /** The core's check of the form (the latest one asked); shows what it refuses. Resolves to the parameters, or
- * null when a field cannot be used. */
-export function checkedParams() {
+ * null when a field cannot be used. `vertices`: the vertex count of the population to fit, when it is known
+ * (the core then refuses more parts than it can hold). */
+export function checkedParams({ vertices = null } = {}) {
   if (!checker) return Promise.resolve(readParams());
+  checkedFor = vertices;
   const fields = Object.fromEntries(TEXT_FIELDS.map((n) => [n, String(form()[n].value)]));
-  const mine = checker(base(), fields).then((r) => {
+  const mine = checker(base(), fields, vertices).then((r) => {
     if (mine === checking) showFieldProblems(r.problems);
     return r.params;
   });
@@ -96,15 +99,36 @@ export function installForm({ startFit, cancelFit, runExample, check }) {
   });
   // a refused field is checked again as it is typed: its mark goes as soon as it is fixed
   $('params').addEventListener('input', (e) => {
-    if (TEXT_FIELDS.includes(e.target.name) && $('params').dataset.invalid) checkedParams();
+    if (TEXT_FIELDS.includes(e.target.name) && $('params').dataset.invalid) checkedParams({ vertices: checkedFor });
   });
   $('cancel').addEventListener('click', cancelFit);
   $('reset-params').addEventListener('click', () => state.baseParams && fillParams(state.baseParams));
-  $('generate').addEventListener('click', () => runExample(state.examples.find((e) => e.id === $('example').value)));
+  $('generate').addEventListener('click', () => {
+    const ex = state.examples.find((e) => e.id === $('example').value);
+    if (ex) runExample(ex);
+  });
+  $('example').addEventListener('change', showPicked);
+  subscribe((s, changed) => changed.has('pop') && showSource(s.source));
 }
+
+// The picker says what is shown: the example's name, or "your files" / "a generated population" (an entry that
+// cannot be picked), so that it never names an example that is not shown. Generate & fit needs an example.
+const OTHER = '-shown-';
+function showSource(source) {
+  const other = $('example').querySelector(`option[value="${OTHER}"]`);
+  if (!other) return;
+  other.hidden = !!source?.example || !source;
+  other.textContent = source?.spec ? 'a generated population' : 'your files';
+  $('example').value = source?.example?.id ?? (source ? OTHER : $('example').value);
+  showPicked();
+}
+const showPicked = () => { $('generate').disabled = $('example').value === OTHER; };
 
 /** The example picker, filled when the core's examples are known. */
 export function showExamples(examples) {
   document.querySelector('.generate').hidden = !examples.length;
-  $('example').replaceChildren(...examples.map((e) => Object.assign(document.createElement('option'), { value: e.id, textContent: e.title })));
+  const other = Object.assign(document.createElement('option'), { value: OTHER, disabled: true, hidden: true, textContent: 'your files' });
+  $('example').replaceChildren(other, ...examples.map((e) => Object.assign(document.createElement('option'), { value: e.id, textContent: e.title })));
+  $('example').value = state.source?.example?.id ?? examples[0]?.id ?? '';
+  showSource(state.source);
 }

@@ -1,7 +1,7 @@
 // The pose list and the thumbnail strip (arrow keys step through it); the interpolation's From / To lists.
 import { state, update, subscribe } from '../state.js';
 import { viewer } from '../views/viewer-instance.js';
-import { partColours } from '../views/render.js';
+import { thumbnailColours } from '../views/render.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -38,13 +38,19 @@ function showPose(i) {
 }
 
 let thumbsToken = 0;
+let drawnWith = null; // the colours the thumbnails were drawn with
 function drawThumbnails() {
   const token = ++thumbsToken;
   const canvases = [...$('pose-strip').querySelectorAll('canvas')];
-  const colours = partColours();
+  const colours = thumbnailColours();
+  drawnWith = colours;
   let i = 0;
   const next = () => {
-    if (token !== thumbsToken || i >= canvases.length || !state.pop) return;
+    if (token !== thumbsToken || !state.pop) return;
+    if (i >= canvases.length) {
+      $('pose-strip').dataset.drawn = String(token); // every thumbnail drawn (for the tests)
+      return;
+    }
     viewer.thumbnail(state.pop.positions[i], colours, canvases[i]);
     i++;
     setTimeout(next, 0);
@@ -66,5 +72,7 @@ export function installPoses() {
     if (changed.has('pop')) fillPoseLists(s.pop.names);
     if (changed.has('pose')) showPose(s.pose);
     if (changed.has('model') && s.model) setTimeout(drawThumbnails, 0);
+    // the merge tree's slider recolours the main view: the thumbnails follow (and go back with it)
+    else if (s.model && ['treeParts', 'mode', 'colours'].some((k) => changed.has(k)) && thumbnailColours() !== drawnWith) drawThumbnails();
   });
 }

@@ -8,6 +8,7 @@ import { paletteColours } from '../colors.js';
 import { renderView } from '../views/render.js';
 
 const $ = (id) => document.getElementById(id);
+const parts = (n) => `${n} part${n === 1 ? '' : 's'}`;
 let token = 0;
 
 /** Shows the tree's partition with n parts in the parts view. */
@@ -19,9 +20,9 @@ async function show(n) {
   if (n === fit) {
     // the fit's own parts (the tree's cut at that count can differ: the fit was refitted after the cut)
     update({ treeParts: null });
-    $('tree-count').textContent = `${n} parts (the fit)`;
+    $('tree-count').textContent = `${parts(n)} (the fit)`;
     $('tree-refine').disabled = true;
-    $('tree-refine').textContent = `Refine ${n} parts`;
+    $('tree-refine').textContent = `Refine ${parts(n)}`;
     const slider = $('tree-slider');
     slider.dataset.parts = String(new Set(state.model.labels).size);
     await renderView();
@@ -33,9 +34,9 @@ async function show(n) {
   if (mine !== token) return;
   const shown = paletteColours(labels, colours);
   update({ colours: { ...state.colours, tree: shown.vertexColours }, treeParts: n });
-  $('tree-count').textContent = `${n} parts of the merge tree${n > fit ? ' (finer than the fit)' : ''}`;
+  $('tree-count').textContent = `${parts(n)} of the merge tree${n > fit ? ' (finer than the fit)' : ''}`;
   $('tree-refine').disabled = n === state.model.summary.parts;
-  $('tree-refine').textContent = `Refine ${n} parts`;
+  $('tree-refine').textContent = `Refine ${parts(n)}`;
   if (state.mode !== 'parts') update({ mode: 'parts' });
   await renderView();
   const slider = $('tree-slider');
@@ -64,9 +65,9 @@ export function installTree() {
     slider.min = String(tree.fewest);
     slider.max = String(tree.most);
     slider.value = String(s.model.summary.parts);
-    $('tree-count').textContent = `${s.model.summary.parts} parts (the fit)`;
+    $('tree-count').textContent = `${parts(s.model.summary.parts)} (the fit)`;
     $('tree-refine').disabled = true;
-    $('tree-refine').textContent = `Refine ${slider.value} parts`;
+    $('tree-refine').textContent = `Refine ${parts(Number(slider.value))}`;
     if (s.treeParts !== null) update({ treeParts: null });
   });
 }

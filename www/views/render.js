@@ -16,6 +16,13 @@ export function partColours() {
   return state.colours.live ?? state.colours.grey;
 }
 
+/** The part colours of the pose thumbnails: the same as the main view's, so the merge tree's partition when
+ * the slider (controls/tree.js) shows one in the parts view, else the fitted parts'. */
+export function thumbnailColours() {
+  if (state.model && state.mode === 'parts' && state.treeParts !== null && state.colours.tree) return state.colours.tree;
+  return partColours();
+}
+
 export const poseName = (i) => state.pop.names[i];
 
 // `parts`: the fit stage whose parts colour the mesh (its OBJ export groups the faces by them), when fitted.
