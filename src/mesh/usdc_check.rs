@@ -347,7 +347,8 @@ impl<'a> Crate<'a> {
     fn ints(&self, s: &mut Cur<'a>, count: u64, width: Width, decode: bool) -> Check<Vec<i64>> {
         let at = s.pos;
         let w: u64 = if width == Width::W64 { 8 } else { 4 };
-        let size = s.clone().u64("a compressed size")?;
+        // (a size beyond the section is refused by block() below, with its own message)
+        let size = s.clone().u64("a compressed size")?.min(s.left().saturating_sub(8));
         // The coding needs the common value and a code byte per 4 integers, so a count beyond 4 x what the
         // block can expand to cannot be right; this also keeps openusd's size arithmetic from overflowing.
         if count > lz4_cap(size).saturating_mul(4) {
@@ -793,3 +794,50 @@ impl<'a> Crate<'a> {
 const ARRAY: u64 = 1 << 63;
 const INLINED: u64 = 1 << 62;
 const COMPRESSED: u64 = 1 << 61;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lz4_blocks_expand_and_corrupt_ones_are_refused() {
+        // "abc", then a match 3 back of 6 bytes, then an empty last sequence
+        let block = [0x32, b'a', b'b', b'c', 3, 0, 0x00];
+        let mut out = Vec::new();
+        assert_eq!(lz4(&block, 9, Some(&mut out), "t"), Ok(9));
+        assert_eq!(out, b"abcabcabc");
+        assert_eq!(lz4(&block, u64::MAX, None, "t"), Ok(9));
+        let e = lz4(&block, 8, None, "t").unwrap_err();
+        assert_eq!(e, format!("t: the LZ4 data expands beyond the 8 bytes expected (to 9 at least); {DAMAGED}"));
+        let e = lz4(&[0x32, b'a', b'b', b'c', 4, 0, 0x00], 100, None, "t").unwrap_err();
+        assert_eq!(e, format!("t: the LZ4 data is corrupt (a match points before the start); {DAMAGED}"));
+        let e = lz4(&[0x50, b'a'], 100, None, "t").unwrap_err();
+        assert_eq!(e, format!("t: the LZ4 data is corrupt (literals run past the end); {DAMAGED}"));
+        // a long match: 15 + 255 + 10 + 4 bytes from one byte
+        assert_eq!(lz4(&[0x1f, b'x', 1, 0, 255, 10, 0x00], u64::MAX, None, "t"), Ok(1 + 284));
+    }
+
+    #[test]
+    fn coded_integers_decode_as_in_pixars_example() {
+        // integerCoding.cpp: [123, 124, 125, 100125, 100125, 100126, 100126] is
+        // int32(1) 01 00 00 11 01 00 01 XX int8(123) int32(100000) int8(0) int8(0)
+        let mut coded = 1i32.to_le_bytes().to_vec();
+        coded.extend_from_slice(&0b1100_0001_0001_0001u16.to_be_bytes());
+        coded.push(123);
+        coded.extend_from_slice(&100000i32.to_le_bytes());
+        coded.extend_from_slice(&[0, 0]);
+        // stored as literals only: one LZ4 sequence
+        let mut block = vec![0u8, (coded.len() as u8) << 4];
+        block.extend_from_slice(&coded);
+        let mut file = (block.len() as u64).to_le_bytes().to_vec();
+        file.extend_from_slice(&block);
+        let c = Crate { b: &file, version: (0, 8, 0), tokens: 0, strings: 0, paths: 0, heights: HashMap::new() };
+        let mut s = c.at(0, "T");
+        assert_eq!(c.ints(&mut s, 7, Width::W32, true), Ok(vec![123, 124, 125, 100125, 100125, 100126, 100126]));
+        // 100 integers cannot be coded in 4 + 2 + 7 bytes (they need 4 + 25 bytes of codes alone)
+        let e = c.ints(&mut c.at(0, "T"), 100, Width::W32, false).unwrap_err();
+        assert_eq!(e, format!("T: 100 integers at byte 0 need 29 bytes of codes, the block holds 13; {DAMAGED}"));
+        let e = c.ints(&mut c.at(0, "T"), 1 << 40, Width::W32, false).unwrap_err();
+        assert_eq!(e, format!("T claims 1099511627776 integers at byte 0, more than its 15 compressed bytes can hold; {DAMAGED}"));
+    }
+}
