@@ -341,8 +341,9 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
     };
     let first = points(&pts.samples[0].1).ok_or_else(|| err(file, format!("mesh {mesh}: points at time {} are not an array of 3-vectors; the file is damaged: export it again", pts.samples[0].0)))?;
     let n = first.len();
-    let total: i64 = counts.iter().map(|&c| c.max(0)).sum();
-    if counts.iter().any(|&c| c < 0) || total as u64 != indices.len() as u64 {
+    // (in i128: an int64 or uint array of counts may add up beyond i64)
+    let total: i128 = counts.iter().map(|&c| i128::from(c.max(0))).sum();
+    if counts.iter().any(|&c| c < 0) || total != indices.len() as i128 {
         return Err(err(
             file,
             format!("mesh {mesh}: faceVertexCounts add up to {total} corners but faceVertexIndices has {}; the file is damaged: export it again", indices.len()),

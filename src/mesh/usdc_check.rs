@@ -840,4 +840,90 @@ mod tests {
         let e = c.ints(&mut c.at(0, "T"), 1 << 40, Width::W32, false).unwrap_err();
         assert_eq!(e, format!("T claims 1099511627776 integers at byte 0, more than its 15 compressed bytes can hold; {DAMAGED}"));
     }
+
+    /// The seed .usdc with its FIELDS ValueReps replaced by `reps`: a new FIELDS section (the reps stored as
+    /// LZ4 literals) and a new TOC appended, the header pointing at the new TOC.
+    fn with_reps(seed: &[u8], reps: &[u64]) -> Vec<u8> {
+        let c = Crate { b: seed, version: (0, 8, 0), tokens: 0, strings: 0, paths: 0, heights: HashMap::new() };
+        let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
+        let n = u64::from_le_bytes(seed[toc..toc + 8].try_into().unwrap()) as usize;
+        let entry = (0..n).map(|k| toc + 8 + 32 * k).find(|&e| seed[e..e + 7] == *b"FIELDS\0").unwrap();
+        let start = u64::from_le_bytes(seed[entry + 16..entry + 24].try_into().unwrap());
+        let mut s = c.at(start + 8, "FIELDS");
+        let size = s.u64("size").unwrap();
+        s.take(size, "indices").unwrap();
+        let indices = &seed[start as usize..s.pos as usize];
+        let mut out = seed.to_vec();
+        let new_start = out.len() as u64;
+        out.extend_from_slice(indices);
+        let raw: Vec<u8> = reps.iter().flat_map(|r| r.to_le_bytes()).collect();
+        let mut block = vec![0u8, 0xf0];
+        let mut l = raw.len() - 15;
+        while l >= 255 {
+            block.push(255);
+            l -= 255;
+        }
+        block.push(l as u8);
+        block.extend_from_slice(&raw);
+        out.extend_from_slice(&(block.len() as u64).to_le_bytes());
+        out.extend_from_slice(&block);
+        let new_size = out.len() as u64 - new_start;
+        let new_toc = out.len() as u64;
+        out.extend_from_slice(&seed[toc..toc + 8 + 32 * n]);
+        let e = new_toc as usize + (entry - toc);
+        out[e + 16..e + 24].copy_from_slice(&new_start.to_le_bytes());
+        out[e + 24..e + 32].copy_from_slice(&new_size.to_le_bytes());
+        out[16..24].copy_from_slice(&new_toc.to_le_bytes());
+        out
+    }
+
+    /// Random changes to the ValueReps of the seed .usdc (type, flags, payload: the values openusd reads
+    /// lazily), read through `usd::read`: none may panic or abort. `POSEMFA_USD_MUTATIONS` (default 3000).
+    #[test]
+    fn mutated_value_reps_never_panic() {
+        use rand::{Rng, SeedableRng};
+        let seed = include_bytes!("../../fuzz/seeds/arm-pointcache.usdc");
+        let mut c = Crate { b: seed, version: (0, 8, 0), tokens: 0, strings: 0, paths: 0, heights: HashMap::new() };
+        c.run().unwrap();
+        // the seed's reps, read back the way run() reads them
+        let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
+        let fields = (0..6).map(|k| toc + 8 + 32 * k).find(|&e| seed[e..e + 7] == *b"FIELDS\0").unwrap();
+        let start = u64::from_le_bytes(seed[fields + 16..fields + 24].try_into().unwrap());
+        let mut s = c.at(start, "FIELDS");
+        let count = s.u64("n").unwrap();
+        c.ints(&mut s, count, Width::W32, false).unwrap();
+        let (_, bytes) = c.block(&mut s, Some(count * 8), true, "reps").unwrap();
+        let reps: Vec<u64> = bytes.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().unwrap())).collect();
+        assert_eq!(crate::mesh::usd::read("seed.usdc", &with_reps(seed, &reps), &Default::default()).unwrap().poses.len(), 2);
+        let n: usize = std::env::var("POSEMFA_USD_MUTATIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(std::env::var("POSEMFA_USD_MUTATION_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(7));
+        let (mut loaded, mut refused) = (0, 0);
+        for _ in 0..n {
+            let mut r = reps.clone();
+            for _ in 0..rng.gen_range(1..=3) {
+                let k = rng.gen_range(0..r.len());
+                let payload = r[k] & ((1 << 48) - 1);
+                let flags = r[k] & (7 << 61);
+                let ty = (r[k] >> 48) & 0xff;
+                r[k] = match rng.gen_range(0..5) {
+                    0 => (r[k] & !(0xff << 48)) | (rng.gen_range(0..60u64) << 48),
+                    1 => r[k] ^ (1 << rng.gen_range(61..64)),
+                    2 => flags | ty << 48 | rng.gen_range(0..seed.len() as u64 + 16),
+                    3 => r[rng.gen_range(0..r.len())] & !((1 << 48) - 1) | payload,
+                    _ => flags | rng.gen_range(0..60u64) << 48 | (r[rng.gen_range(0..r.len())] & ((1 << 48) - 1)),
+                };
+            }
+            let mut b = with_reps(seed, &r);
+            if rng.gen_bool(0.3) {
+                let at = rng.gen_range(0..2896);
+                b[at] = rng.gen();
+            }
+            match crate::mesh::usd::read("fuzz.usdc", &b, &Default::default()) {
+                Ok(_) => loaded += 1,
+                Err(crate::Error::Obj { .. }) => refused += 1,
+                Err(e) => panic!("{e:?}"),
+            }
+        }
+        eprintln!("mutated_value_reps_never_panic: {n} mutations, {loaded} loaded, {refused} refused");
+    }
 }
