@@ -163,7 +163,8 @@ dual_test! {
 /// The usd_read fuzz target's body (fuzz/fuzz_targets/usd_read.rs) over random mutations of its .usdc seed
 /// (fuzz/seeds/arm-pointcache.usdc): byte changes, `u64`s set to edge values (mostly in the TOC and the
 /// structural sections, where the counts are), cuts. None may abort or panic; a file that loads gives poses
-/// with the welded vertex count and the same faces. `POSEMFA_USD_MUTATIONS` sets how many (default 3000), `POSEMFA_USD_MUTATION_SEED` the random seed (29).
+/// with the welded vertex count and the same faces. `POSEMFA_USD_MUTATIONS` sets how many (default 3000),
+/// `POSEMFA_USD_MUTATION_SEED` the random seed (29).
 /// Native only (an abort would take the whole wasm test run with it, and it is slow there).
 #[cfg(not(target_arch = "wasm32"))]
 #[test]

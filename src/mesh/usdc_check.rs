@@ -16,7 +16,9 @@
 //! - the values read later (the ValueReps of the FIELDS section): every array's count against the bytes after
 //!   it (by element size, compressed or not), every token / string / path index in range, dictionaries and
 //!   time samples followed (their jumps inside the file, at most [`MAX_DEPTH`] levels deep, so a value that
-//!   contains itself is refused), and the flag combinations on which openusd's debug assertions fire.
+//!   contains itself is refused), and the flag combinations on which openusd's debug assertions fire; values
+//!   already checked are not walked again, and the whole walk is bounded (about 1000 elements per byte of
+//!   file), so many values over the same data cannot make the check itself slow.
 //!
 //! Nothing here refuses a file that Pixar's writer makes, except an empty string / asset array (payload 0),
 //! which openusd 0.6.0 would misread as a count from the file header. The format (integer coding, ValueRep
@@ -42,7 +44,7 @@ fn damaged<T>(what: String) -> Check<T> {
 
 /// Checks a crate file (starting with `PXR-USDC`); `Err` is the message (what is wrong and what to do).
 pub fn check(bytes: &[u8]) -> Check<()> {
-    let mut c = Crate { b: bytes, version: (0, 0, 0), tokens: 0, strings: 0, paths: 0, heights: HashMap::new() };
+    let mut c = Crate::new(bytes, (0, 0, 0));
     c.run()
 }
 
@@ -207,6 +209,10 @@ struct Crate<'a> {
     paths: u64,
     /// Values already checked (ValueRep -> its summary), so shared values are walked once.
     heights: HashMap<u64, Info>,
+    /// Elements and compressed bytes walked so far, and how many the file may make us walk: distinct
+    /// ValueReps pointing at the same large array would otherwise make the check quadratic.
+    work: std::cell::Cell<u64>,
+    budget: u64,
 }
 
 /// The integer width openusd decodes an integer array with.
@@ -217,6 +223,26 @@ enum Width {
 }
 
 impl<'a> Crate<'a> {
+    fn new(b: &'a [u8], version: (u8, u8, u8)) -> Self {
+        // Generous: a constant array of a million floats codes to about 1 kB (LZ4 of integer codes), so a valid
+        // file can hold about 1000 elements per byte.
+        let budget = (b.len() as u64).saturating_mul(1024).saturating_add(1 << 24);
+        Crate { b, version, tokens: 0, strings: 0, paths: 0, heights: HashMap::new(), work: Default::default(), budget }
+    }
+
+    fn spend(&self, n: u64) -> Check<()> {
+        let w = self.work.get().saturating_add(n);
+        self.work.set(w);
+        if w > self.budget {
+            return damaged(format!(
+                "its values make the reader walk more than {} elements for a file of {} bytes (many values over the same data)",
+                self.budget,
+                self.b.len()
+            ));
+        }
+        Ok(())
+    }
+
     fn at(&self, pos: u64, what: &'a str) -> Cur<'a> {
         Cur { b: self.b, pos, end: self.b.len() as u64, what }
     }
@@ -320,6 +346,7 @@ impl<'a> Crate<'a> {
             ));
         }
         let data = s.take(size, item)?;
+        self.spend(size)?;
         let Some((&chunks, block)) = data.split_first() else {
             return damaged(format!("{}: the compressed {item} at byte {at} are empty", s.what));
         };
@@ -377,6 +404,7 @@ impl<'a> Crate<'a> {
         let mut d = Cur { b: &data, pos: 0, end: n, what: s.what };
         let common = if width == Width::W64 { d.u64("integers")? as i64 } else { i64::from(d.u32("integers")? as i32) };
         let mut v = Cur { b: &data, pos: w + codes, end: n, what: s.what };
+        self.spend(count)?;
         let mut out = Vec::with_capacity(count as usize);
         let mut prev = 0i64;
         'all: for k in 0..codes {
@@ -512,6 +540,7 @@ impl<'a> Crate<'a> {
     fn indexed(&self, c: &mut Cur<'a>, limit: u64, table: &str) -> Check<u64> {
         let count = c.u64("a count")?;
         c.fits(count, 4, &format!("{table} indices"))?;
+        self.spend(count)?;
         for _ in 0..count {
             c.index(limit, table)?;
         }
@@ -531,6 +560,7 @@ impl<'a> Crate<'a> {
         let count = c.u64("a dictionary size")?;
         // Each entry is at least a key (4 bytes), a jump (8) and a ValueRep (8), one after the other.
         c.fits(count, 20, "dictionary entries")?;
+        self.spend(count)?;
         let mut height = 0;
         for _ in 0..count {
             c.index(self.strings, "string")?;
@@ -652,6 +682,7 @@ impl<'a> Crate<'a> {
             11 if array => {
                 let (n, _, mut c) = self.array(rep, 0)?;
                 c.fits(n, 4, "token indices")?;
+                self.spend(n)?;
                 for _ in 0..n {
                     c.index(tokens, "token")?;
                 }
@@ -705,6 +736,7 @@ impl<'a> Crate<'a> {
                         35 => {
                             let n = c.u64("a reference count")?;
                             c.fits(n, 32, "references")?;
+                            self.spend(n)?;
                             for _ in 0..n {
                                 c.index(strings, "string")?;
                                 c.index(paths, "path")?;
@@ -716,6 +748,7 @@ impl<'a> Crate<'a> {
                             let offset = if self.version >= (0, 8, 0) { 16 } else { 0 };
                             let n = c.u64("a payload count")?;
                             c.fits(n, 8 + offset, "payloads")?;
+                            self.spend(n)?;
                             for _ in 0..n {
                                 c.index(strings, "string")?;
                                 c.index(paths, "path")?;
@@ -745,6 +778,7 @@ impl<'a> Crate<'a> {
                 let mut c = self.at(p, "a variant selection");
                 let n = c.u64("a variant selection count")?;
                 c.fits(n, 8, "variant selections")?;
+                self.spend(n)?;
                 for _ in 0..2 * n {
                     c.index(strings, "string")?;
                 }
@@ -754,6 +788,7 @@ impl<'a> Crate<'a> {
                 let mut c = self.at(p, "relocates");
                 let n = c.u64("a relocates count")?;
                 c.fits(n, 8, "relocates")?;
+                self.spend(n)?;
                 for _ in 0..2 * n {
                     c.index(paths, "path")?;
                 }
@@ -775,6 +810,7 @@ impl<'a> Crate<'a> {
                     return Ok(LEAF);
                 }
                 c.fits(k, 8, "time samples")?;
+                self.spend(k)?;
                 let mut height = 1;
                 for _ in 0..k {
                     let v = c.u64("a time sample's ValueRep")?;
@@ -831,7 +867,7 @@ mod tests {
         block.extend_from_slice(&coded);
         let mut file = (block.len() as u64).to_le_bytes().to_vec();
         file.extend_from_slice(&block);
-        let c = Crate { b: &file, version: (0, 8, 0), tokens: 0, strings: 0, paths: 0, heights: HashMap::new() };
+        let c = Crate::new(&file, (0, 8, 0));
         let mut s = c.at(0, "T");
         assert_eq!(c.ints(&mut s, 7, Width::W32, true), Ok(vec![123, 124, 125, 100125, 100125, 100126, 100126]));
         // 100 integers cannot be coded in 4 + 2 + 7 bytes (they need 4 + 25 bytes of codes alone)
@@ -844,7 +880,7 @@ mod tests {
     /// The seed .usdc with its FIELDS ValueReps replaced by `reps`: a new FIELDS section (the reps stored as
     /// LZ4 literals) and a new TOC appended, the header pointing at the new TOC.
     fn with_reps(seed: &[u8], reps: &[u64]) -> Vec<u8> {
-        let c = Crate { b: seed, version: (0, 8, 0), tokens: 0, strings: 0, paths: 0, heights: HashMap::new() };
+        let c = Crate::new(seed, (0, 8, 0));
         let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
         let n = u64::from_le_bytes(seed[toc..toc + 8].try_into().unwrap()) as usize;
         let entry = (0..n).map(|k| toc + 8 + 32 * k).find(|&e| seed[e..e + 7] == *b"FIELDS\0").unwrap();
@@ -883,8 +919,11 @@ mod tests {
     fn mutated_value_reps_never_panic() {
         use rand::{Rng, SeedableRng};
         let seed = include_bytes!("../../fuzz/seeds/arm-pointcache.usdc");
-        let mut c = Crate { b: seed, version: (0, 8, 0), tokens: 0, strings: 0, paths: 0, heights: HashMap::new() };
+        let mut c = Crate::new(seed, (0, 8, 0));
         c.run().unwrap();
+        let mut small = Crate::new(seed, (0, 0, 0));
+        small.budget = 100;
+        assert!(small.run().unwrap_err().contains("make the reader walk more than 100 elements for a file of 3894 bytes"));
         // the seed's reps, read back the way run() reads them
         let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
         let fields = (0..6).map(|k| toc + 8 + 32 * k).find(|&e| seed[e..e + 7] == *b"FIELDS\0").unwrap();
