@@ -77,3 +77,162 @@ dual_test! {
         assert_fits(&pop, cfg);
     }
 }
+
+/// `posemfa::mesh::usd::read` of `bytes` as `name`, as an error message.
+fn usd_error(name: &str, bytes: &[u8]) -> String {
+    posemfa::mesh::usd::read(name, bytes, &Default::default()).map(|g| g.source).unwrap_err().to_string()
+}
+
+/// usd-core's .usdc of the arm point cache with the little-endian `u64` at `at` set to `value`.
+fn usdc_with(at: usize, value: u64) -> Vec<u8> {
+    let mut b = include_bytes!("fixtures/usd/arm-pointcache.usdc").to_vec();
+    b[at..at + 8].copy_from_slice(&value.to_le_bytes());
+    b
+}
+
+dual_test! {
+    /// usd_read target (byte 0: the options, then a .usdc): usd-core's arm point cache with one byte of the
+    /// SPECS section mutated, so that the compressed size of its second integer array reads 18 PB. openusd
+    /// 0.6.0 allocated that much (`read_compressed`) and the process aborted; now the file is refused first
+    /// (src/mesh/usdc_check.rs).
+    fn usd_huge_compressed_size_is_refused() {
+        let data = include_bytes!("fuzz_regressions/usd_read-openusd-huge-alloc.usdc");
+        let (cfg, file) = data.split_first().expect("not empty");
+        assert_eq!(*cfg, 0x20);
+        assert_eq!(
+            usd_error("fuzz.usdc", file),
+            "file fuzz.usdc: cannot read the USD crate file (usdc): SPECS claims 18014398509482002 compressed bytes of \
+             integers at byte 3647, but only 39 bytes follow; the file is cut or damaged: export it again"
+        );
+    }
+
+    /// Hand-mutated copies of usd-core's .usdc (tests/fixtures/usd/arm-pointcache.usdc: TOC at byte 26014,
+    /// TOKENS at 25216, SPECS at 25936): each refused by the check with what is wrong, none reaching openusd.
+    fn usdc_with_damaged_structure_is_refused() {
+        let usdc = include_bytes!("fixtures/usd/arm-pointcache.usdc");
+        let tail = "; the file is cut or damaged: export it again";
+        let cases: Vec<(&str, Vec<u8>, String)> = vec![
+            (
+                "cut-toc.usdc",
+                usdc[..26014 + 8 + 40].to_vec(),
+                format!("the table of contents claims 6 sections at byte 26022 (32 bytes each), but only 40 bytes follow{tail}"),
+            ),
+            (
+                "toc-out.usdc",
+                usdc_with(16, 26214),
+                format!("the table of contents is at byte 26214, outside the file of 26214 bytes{tail}"),
+            ),
+            (
+                "section-out.usdc",
+                usdc_with(26014 + 8 + 5 * 32 + 24, 1000),
+                format!("section 5 (SPECS) spans bytes 25936 to 26936, past the end of the file (26214 bytes){tail}"),
+            ),
+            (
+                "tokens.usdc",
+                usdc_with(25216, 1 << 40),
+                format!("TOKENS claims 1099511627776 tokens but holds only 336 bytes of them{tail}"),
+            ),
+            (
+                "compressed.usdc",
+                usdc_with(25232, 1 << 50),
+                format!("TOKENS claims 1125899906842624 compressed bytes of tokens at byte 25232, but only 293 bytes follow{tail}"),
+            ),
+            (
+                "expanded.usdc",
+                usdc_with(25224, 1 << 40),
+                format!("TOKENS claims 1099511627776 bytes of tokens at byte 25232, more than its 293 compressed bytes can hold{tail}"),
+            ),
+            (
+                "old.usdc",
+                {
+                    let mut b = usdc.to_vec();
+                    b[9] = 3;
+                    b
+                },
+                "it is crate version 0.3.0, older than 0.4.0; the reader (openusd 0.6.0) reads crate versions 0.4.0 to \
+                 0.12.x: save the stage again with a current USD (e.g. usdcat in.usdc -o out.usdc)"
+                    .to_string(),
+            ),
+        ];
+        for (name, bytes, message) in cases {
+            assert_eq!(usd_error(name, &bytes), format!("file {name}: cannot read the USD crate file (usdc): {message}"));
+        }
+    }
+}
+
+/// The usd_read fuzz target's body (fuzz/fuzz_targets/usd_read.rs) over random mutations of its .usdc seed
+/// (fuzz/seeds/arm-pointcache.usdc): byte changes, `u64`s set to edge values (mostly in the TOC and the
+/// structural sections, where the counts are), cuts. None may abort or panic; a file that loads gives poses
+/// with the welded vertex count and the same faces. `POSEMFA_USD_MUTATIONS` sets how many (default 3000),
+/// `POSEMFA_USD_MUTATION_SEED` the random seed (29).
+/// Native only (an abort would take the whole wasm test run with it, and it is slow there).
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn usd_read_survives_mutated_usdc() {
+    use posemfa::mesh::gltf::{Options, PoseSource};
+    use rand::{Rng, SeedableRng};
+    let seed = include_bytes!("../fuzz/seeds/arm-pointcache.usdc");
+    let n: usize = std::env::var("POSEMFA_USD_MUTATIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
+    let seed_no = std::env::var("POSEMFA_USD_MUTATION_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(29);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed_no);
+    // where the TOC points: the structural sections follow the values
+    let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
+    let structure = 2896.min(toc);
+    let edges = [0u64, 1, 2, 3, 4, 7, 8, 255, 256, 4096, 65535, 1 << 31, 1 << 32, 1 << 40, 1 << 62, u64::MAX, u64::MAX - 7, i64::MAX as u64];
+    let (mut loaded, mut refused) = (0, 0);
+    for _ in 0..n {
+        let mut b = seed.to_vec();
+        for _ in 0..rng.gen_range(1..=3) {
+            let from = if rng.gen_bool(0.8) { structure.min(b.len() - 1) } else { 0 };
+            match rng.gen_range(0..4) {
+                0 => {
+                    let at = rng.gen_range(from..b.len());
+                    b[at] = rng.gen();
+                }
+                1 if b.len() >= 8 => {
+                    let at = rng.gen_range(from.min(b.len() - 8)..=b.len() - 8);
+                    let v = if rng.gen_bool(0.5) { edges[rng.gen_range(0..edges.len())] } else { rng.gen::<u64>() >> rng.gen_range(0..64) };
+                    b[at..at + 8].copy_from_slice(&v.to_le_bytes());
+                }
+                2 => {
+                    let at = rng.gen_range(from..b.len());
+                    b[at] ^= 1 << rng.gen_range(0..8);
+                }
+                _ => {
+                    let at = rng.gen_range(from..b.len());
+                    b.truncate(at.max(1));
+                }
+            }
+        }
+        let cfg: u8 = rng.gen();
+        let options = Options {
+            source: [PoseSource::Auto, PoseSource::Animation, PoseSource::MorphTargets, PoseSource::Auto][(cfg & 3) as usize],
+            frames: match (cfg >> 2) & 7 {
+                0 => None,
+                f => Some(f as usize),
+            },
+            mesh: (cfg & 32 != 0).then(|| "0".to_string()),
+            animation: (cfg & 64 != 0).then(|| "0".to_string()),
+        };
+        match posemfa::mesh::usd::read("fuzz.usdc", &b, &options) {
+            Ok(g) => {
+                loaded += 1;
+                assert!(!g.poses.is_empty());
+                assert!(g.vertices_welded >= 1 && g.vertices_welded <= g.vertices_in_file);
+                let faces = &g.poses[0].1.faces;
+                for (_, mesh) in &g.poses {
+                    assert_eq!(mesh.positions.len(), g.vertices_welded);
+                    assert_eq!(&mesh.faces, faces);
+                    assert!(mesh.faces.iter().flatten().all(|&v| (v as usize) < g.vertices_welded));
+                }
+            }
+            Err(Error::Obj { file, message, .. }) => {
+                refused += 1;
+                assert_eq!(file, "fuzz.usdc");
+                assert!(!message.is_empty());
+            }
+            Err(e) => panic!("the reader returned a non-Obj error: {e:?}"),
+        }
+    }
+    eprintln!("usd_read_survives_mutated_usdc: {n} mutations, {loaded} loaded, {refused} refused, none aborted or panicked");
+}

@@ -8,6 +8,7 @@ pub mod load;
 pub mod obj;
 pub mod ply;
 pub mod usd;
+pub mod usdc_check;
 pub mod population;
 
 pub use population::{Normalization, Population};

@@ -28,22 +28,45 @@ fn err(file: &str, message: String) -> Error {
     Error::Obj { file: file.to_string(), line: 0, message }
 }
 
+fn damaged(file: &str, what: &str, e: impl std::fmt::Display) -> Error {
+    err(file, format!("cannot read the {what}: {e:#}; the file is cut or damaged: export it again"))
+}
+
+/// A crate layer (a .usdc file, or the crate layer of a .usdz): checked by [`super::usdc_check`] first, which
+/// refuses what would make openusd 0.6.0 allocate beyond the file or panic, then read by openusd.
+fn crate_layer(file: &str, bytes: &[u8], what: &str) -> Result<Box<dyn AbstractData>> {
+    super::usdc_check::check(bytes).map_err(|m| err(file, format!("cannot read the {what}: {m}")))?;
+    let data = openusd::usdc::CrateData::open(Cursor::new(bytes.to_vec()), true).map_err(|e| damaged(file, what, e))?;
+    Ok(Box::new(data))
+}
+
 /// Which encoding the bytes are in.
 fn layer(file: &str, bytes: &[u8]) -> Result<Box<dyn AbstractData>> {
-    fn damaged(file: &str, what: &str, e: impl std::fmt::Display) -> Error {
-        err(file, format!("cannot read the {what}: {e:#}; the file is cut or damaged: export it again"))
-    }
     if bytes.starts_with(b"PXR-USDC") {
-        let data = openusd::usdc::CrateData::open(Cursor::new(bytes.to_vec()), true).map_err(|e| damaged(file, "USD crate file (usdc)", e))?;
-        return Ok(Box::new(data));
+        return crate_layer(file, bytes, "USD crate file (usdc)");
     }
     if bytes.starts_with(b"PK\x03\x04") {
-        let mut archive =
-            openusd::usdz::Archive::from_reader(Cursor::new(bytes.to_vec())).map_err(|e| damaged(file, "USDZ package (zip)", e))?;
-        if archive.first_layer_name().is_none() {
+        // The package is opened here (not with openusd's usdz::Archive, which hands its layer to openusd
+        // unseen) so that a crate layer is checked like a .usdc file. The root layer is the first .usda /
+        // .usdc / .usd entry (the USDZ spec), told apart by its extension, a .usd by its first bytes.
+        let mut zip = zip::ZipArchive::new(Cursor::new(bytes)).map_err(|e| damaged(file, "USDZ package (zip)", e))?;
+        let Some(name) = zip.file_names().find(|n| n.ends_with(".usdc") || n.ends_with(".usda") || n.ends_with(".usd")).map(String::from) else {
             return Err(err(file, "the USDZ package holds no .usda, .usdc or .usd layer; package the stage again (usdzip)".into()));
+        };
+        let what = "first layer of the USDZ package";
+        let mut layer_bytes = Vec::new();
+        {
+            use std::io::Read;
+            let mut entry = zip.by_name(&name).map_err(|e| damaged(file, what, e))?;
+            entry.read_to_end(&mut layer_bytes).map_err(|e| damaged(file, what, e))?;
         }
-        return archive.read_first_layer().map_err(|e| damaged(file, "first layer of the USDZ package", e));
+        let is_crate = name.ends_with(".usdc") || (!name.ends_with(".usda") && layer_bytes.starts_with(b"PXR-USDC"));
+        if is_crate {
+            return crate_layer(file, &layer_bytes, what);
+        }
+        let text = String::from_utf8(layer_bytes).map_err(|e| damaged(file, what, format!("{name} is not UTF-8 text: {e}")))?;
+        let data = openusd::usda::parse(&text).map_err(|e| damaged(file, what, e))?;
+        return Ok(Box::new(data));
     }
     if bytes.starts_with(b"#usda") {
         let text = std::str::from_utf8(bytes)
@@ -318,8 +341,9 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
     };
     let first = points(&pts.samples[0].1).ok_or_else(|| err(file, format!("mesh {mesh}: points at time {} are not an array of 3-vectors; the file is damaged: export it again", pts.samples[0].0)))?;
     let n = first.len();
-    let total: i64 = counts.iter().map(|&c| c.max(0)).sum();
-    if counts.iter().any(|&c| c < 0) || total as u64 != indices.len() as u64 {
+    // (in i128: an int64 or uint array of counts may add up beyond i64)
+    let total: i128 = counts.iter().map(|&c| i128::from(c.max(0))).sum();
+    if counts.iter().any(|&c| c < 0) || total != indices.len() as i128 {
         return Err(err(
             file,
             format!("mesh {mesh}: faceVertexCounts add up to {total} corners but faceVertexIndices has {}; the file is damaged: export it again", indices.len()),
