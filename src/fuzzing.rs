@@ -132,3 +132,59 @@ pub fn tiny_fbx_with(edit: impl FnOnce(&mut Vec<Node>), compress: bool) -> Vec<u
 pub fn tiny_fbx(compress: bool) -> Vec<u8> {
     tiny_fbx_with(|_| {}, compress)
 }
+
+/// The pose-file readers' options picked by a target's config byte (byte 0 of the input): bits 0-1 the pose
+/// source (auto, animation, morph targets, auto), bits 2-4 `frames` (0: the file's own, else 1-7 evenly
+/// spread), bit 5 asks for object `0`, bit 6 for animation `0`. The fbx_read, gltf_read and usd_read targets.
+pub fn read_options_from(cfg: u8) -> crate::mesh::gltf::Options {
+    use crate::mesh::gltf::{Options, PoseSource};
+    Options {
+        source: [PoseSource::Auto, PoseSource::Animation, PoseSource::MorphTargets, PoseSource::Auto][(cfg & 3) as usize],
+        frames: match (cfg >> 2) & 7 {
+            0 => None,
+            f => Some(f as usize),
+        },
+        mesh: (cfg & 32 != 0).then(|| "0".to_string()),
+        animation: (cfg & 64 != 0).then(|| "0".to_string()),
+    }
+}
+
+/// Invariants of a mesh that a reader returned: vertices, finite coordinates, faces in range. Panics otherwise.
+pub fn check_mesh(mesh: &crate::mesh::Mesh) {
+    assert!(!mesh.positions.is_empty(), "a mesh without vertices loaded");
+    assert!(mesh.positions.iter().flatten().all(|c| c.is_finite()), "non-finite coordinate loaded");
+    let n = mesh.positions.len();
+    assert!(mesh.faces.iter().flatten().all(|&i| (i as usize) < n), "face index out of range for {n} vertices");
+}
+
+/// What a pose-file reader (FBX, glTF, USD) must give for file `name` read with `options`: at least one pose,
+/// every pose with the welded vertex count (at most the file's) and the first pose's faces, each mesh whole
+/// ([`check_mesh`]), the asked number of animation frames, a source naming the file; or an error naming the
+/// file. Panics otherwise (a crash for the fuzz targets). Returns whether the file loaded.
+pub fn check_pose_read(name: &str, options: &crate::mesh::gltf::Options, read: crate::Result<crate::mesh::gltf::Gltf>) -> bool {
+    use crate::mesh::gltf::PoseSource;
+    match read {
+        Ok(g) => {
+            assert!(!g.poses.is_empty(), "no poses");
+            assert!(g.vertices_welded >= 1 && g.vertices_welded <= g.vertices_in_file);
+            assert!(g.source.contains(name), "{}", g.source);
+            let faces = &g.poses[0].1.faces;
+            assert!(!faces.is_empty());
+            for (_, mesh) in &g.poses {
+                check_mesh(mesh);
+                assert_eq!(mesh.positions.len(), g.vertices_welded);
+                assert_eq!(&mesh.faces, faces);
+            }
+            if let Some(f) = options.frames.filter(|_| options.source == PoseSource::Animation) {
+                assert_eq!(g.poses.len(), f, "{}", g.source);
+            }
+            true
+        }
+        Err(crate::Error::Obj { file, message, .. }) => {
+            assert_eq!(file, name);
+            assert!(!message.is_empty());
+            false
+        }
+        Err(e) => panic!("the reader of {name} returned a non-Obj error: {e:?}"),
+    }
+}

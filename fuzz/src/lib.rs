@@ -96,13 +96,7 @@ fn all_shapes_same(pop: &Population) -> bool {
     })
 }
 
-/// Invariants of a mesh that a reader returned: vertices, finite coordinates, faces in range.
-pub fn check_mesh(mesh: &posemfa::mesh::Mesh) {
-    assert!(!mesh.positions.is_empty(), "a mesh without vertices loaded");
-    assert!(mesh.positions.iter().flatten().all(|c| c.is_finite()), "non-finite coordinate loaded");
-    let n = mesh.positions.len();
-    assert!(mesh.faces.iter().flatten().all(|&i| (i as usize) < n), "face index out of range for {n} vertices");
-}
+pub use posemfa::fuzzing::check_mesh;
 
 /// Lowers the memory budget of the readers and fits to 256 MiB (once per process), well under libFuzzer's
 /// RSS limit, so that a file refused by the budget is an error and an allocation the budget does not cover
