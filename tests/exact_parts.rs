@@ -57,7 +57,7 @@ dual_test! {
         let ex = example("arm").unwrap();
         let g = generate(&ex.spec).unwrap();
         let nv = g.population.n_vertices();
-        for (n, want) in [(0usize, "at least 1"), (nv + 1, "at most"), (nv / 4 + 1, "at most")] {
+        for (n, want) in [(0usize, "positive whole number"), (nv + 1, "at most"), (nv / 4 + 1, "at most")] {
             let params = Params { target_parts: Some(n), ..ex.params.clone() };
             match Pipeline::new(&g.population, &params) {
                 Err(Error::Params(m)) => assert!(m.contains("target_parts") && m.contains(want), "{n}: {m}"),
