@@ -5,28 +5,10 @@
 #[macro_use]
 mod common;
 
+use common::blender::{blender_source, fit_summary, max_diff, y_up};
+
 use posemfa::mesh::Population;
 use posemfa::synth::{generate, Preset, Spec};
-
-/// The population the Blender fixtures were made from (scripts/fixtures/make-blender-fixtures.sh).
-fn blender_source() -> posemfa::synth::Generated {
-    generate(&Spec { preset: Preset::Quadruped, vertices: 1200, poses: 6, seed: 5, ..Spec::default() }).unwrap()
-}
-
-/// Blender is Z-up; its FBX exporter writes Y-up: (x, y, z) -> (x, z, -y).
-fn y_up(p: [f64; 3]) -> [f64; 3] {
-    [p[0], p[2], -p[1]]
-}
-
-fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    a.iter().zip(b).map(|(p, q)| (0..3).map(|d| (p[d] - q[d]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max)
-}
-
-fn fit_summary(pop: &Population) -> (usize, f64, Vec<u32>) {
-    let r = posemfa::parts::hierarchy::fit(pop, &posemfa::mfa::Params::default(), &mut |_| true).unwrap();
-    let rmse = r.model.rmse(pop);
-    (r.model.parts.len(), rmse, r.model.labels)
-}
 
 dual_test! {
     /// Blender's FBX of the poses as shape keys, animated one key per frame (DeformPercent curves): six

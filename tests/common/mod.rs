@@ -19,6 +19,10 @@ macro_rules! dual_test {
 ///
 /// The line goes straight to the process's stderr, past libtest's capture of `println!` / `eprintln!`, so it is
 /// in the log even when the test passes.
+/// The Blender fixtures' source population and comparisons (tests/formats.rs, tests/fbx_usd.rs).
+#[allow(dead_code)]
+pub mod blender;
+
 #[allow(dead_code)]
 pub fn shared_dir(rel: &str, test: &str) -> Option<std::path::PathBuf> {
     use std::io::Write;
