@@ -351,28 +351,7 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
         let t32: Vec<f32> = times.iter().map(|&t| t as f32).collect();
         let input = bin.floats(&t32, json::accessor::Type::Scalar, 1, true, None, &format!("{name}: time"));
         let per_frame: Vec<Vec<(Vec3, [f64; 4])>> = frames.iter().map(|w| locals(tree, w)).collect();
-        let mut samplers = Vec::new();
-        let mut channels = Vec::new();
-        let mut channel = |samplers: &mut Vec<json::animation::Sampler>, out, node: u32, path| {
-            samplers.push(json::animation::Sampler {
-                extensions: Default::default(),
-                extras: Default::default(),
-                input,
-                interpolation: Valid(json::animation::Interpolation::Linear),
-                output: out,
-            });
-            channels.push(json::animation::Channel {
-                sampler: json::Index::new(samplers.len() as u32 - 1),
-                target: json::animation::Target {
-                    extensions: Default::default(),
-                    extras: Default::default(),
-                    node: json::Index::new(node),
-                    path: Valid(path),
-                },
-                extensions: Default::default(),
-                extras: Default::default(),
-            });
-        };
+        let mut clip = Channels::new(input);
         for (slot, &k) in tree.order.iter().enumerate() {
             let mut tr: Vec<f32> = Vec::with_capacity(3 * frames.len());
             let mut rot: Vec<f32> = Vec::with_capacity(4 * frames.len());
@@ -391,10 +370,10 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             // with fixed joints only the root's translation moves: the others keep their rest translation
             if opts.joints == Joints::Free || tree.parent[k].is_none() {
                 let out = bin.floats(&tr, json::accessor::Type::Vec3, 3, false, None, &format!("{name}: part {k} translation"));
-                channel(&mut samplers, out, 2 + slot as u32, json::animation::Property::Translation);
+                clip.add(out, 2 + slot as u32, json::animation::Property::Translation);
             }
             let out = bin.floats(&rot, json::accessor::Type::Vec4, 4, false, None, &format!("{name}: part {k} rotation"));
-            channel(&mut samplers, out, 2 + slot as u32, json::animation::Property::Rotation);
+            clip.add(out, 2 + slot as u32, json::animation::Property::Rotation);
         }
         if name == "training poses" && !targets.is_empty() {
             let mut w = vec![0f32; ns * ns];
@@ -402,14 +381,14 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
                 w[i * ns + i] = 1.0;
             }
             let out = bin.floats(&w, json::accessor::Type::Scalar, 1, false, None, "training poses: morph weights");
-            channel(&mut samplers, out, 0, json::animation::Property::MorphTargetWeights);
+            clip.add(out, 0, json::animation::Property::MorphTargetWeights);
         }
         animations.push(json::Animation {
             extensions: Default::default(),
             extras: Default::default(),
-            channels,
+            channels: clip.channels,
             name: Some(name.to_string()),
-            samplers,
+            samplers: clip.samplers,
         });
     }
 
@@ -817,4 +796,39 @@ pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
         })
         .collect();
     Ok(GlbCheck { joints, clips: play.clips, max_frame_error: frame_error.iter().cloned().fold(0.0, f64::max), frame_error })
+}
+
+/// The samplers and channels of one glTF animation clip whose keyframes all share the times `input`, linear.
+pub(crate) struct Channels {
+    input: json::Index<json::Accessor>,
+    pub samplers: Vec<json::animation::Sampler>,
+    pub channels: Vec<json::animation::Channel>,
+}
+
+impl Channels {
+    pub fn new(input: json::Index<json::Accessor>) -> Self {
+        Channels { input, samplers: Vec::new(), channels: Vec::new() }
+    }
+
+    /// A channel moving `path` of node `node` through the values of accessor `output`.
+    pub fn add(&mut self, output: json::Index<json::Accessor>, node: u32, path: json::animation::Property) {
+        self.samplers.push(json::animation::Sampler {
+            extensions: Default::default(),
+            extras: Default::default(),
+            input: self.input,
+            interpolation: Valid(json::animation::Interpolation::Linear),
+            output,
+        });
+        self.channels.push(json::animation::Channel {
+            sampler: json::Index::new(self.samplers.len() as u32 - 1),
+            target: json::animation::Target {
+                extensions: Default::default(),
+                extras: Default::default(),
+                node: json::Index::new(node),
+                path: Valid(path),
+            },
+            extensions: Default::default(),
+            extras: Default::default(),
+        });
+    }
 }

@@ -14,7 +14,7 @@
 //! is not a joint); morph weights 0 when the mesh has morph targets (no residual for a new pose).
 //! Everything is in scene coordinates (the population's original units for this project's rigs).
 
-use super::gltf::{glb_container, parse_glb, read_floats, Bin};
+use super::gltf::{glb_container, parse_glb, read_floats, Bin, Channels};
 use crate::articulate::pose::{PoseSpace, SkinnedRig};
 use crate::articulate::skin::SkinWeights;
 use crate::articulate::RigidMotion;
@@ -311,33 +311,12 @@ impl GlbRig {
                 rot[k].extend(q.map(|c| c as f32));
             }
         }
-        let mut samplers = Vec::new();
-        let mut channels = Vec::new();
-        let mut channel = |out: json::Index<json::Accessor>, node: usize, path: json::animation::Property| {
-            samplers.push(json::animation::Sampler {
-                extensions: Default::default(),
-                extras: Default::default(),
-                input,
-                interpolation: Valid(json::animation::Interpolation::Linear),
-                output: out,
-            });
-            channels.push(json::animation::Channel {
-                sampler: json::Index::new(samplers.len() as u32 - 1),
-                target: json::animation::Target {
-                    extensions: Default::default(),
-                    extras: Default::default(),
-                    node: json::Index::new(node as u32),
-                    path: Valid(path),
-                },
-                extensions: Default::default(),
-                extras: Default::default(),
-            });
-        };
+        let mut clip = Channels::new(input);
         for k in 0..nb {
             let t = bin.floats(&tr[k], json::accessor::Type::Vec3, 3, false, None, &format!("{name}: {} translation", self.names[k]));
-            channel(t, self.joint_nodes[k], json::animation::Property::Translation);
+            clip.add(t, self.joint_nodes[k] as u32, json::animation::Property::Translation);
             let r = bin.floats(&rot[k], json::accessor::Type::Vec4, 4, false, None, &format!("{name}: {} rotation", self.names[k]));
-            channel(r, self.joint_nodes[k], json::animation::Property::Rotation);
+            clip.add(r, self.joint_nodes[k] as u32, json::animation::Property::Rotation);
         }
         // morph targets: weights 0 (a new pose has no residual); on every node that shows the mesh
         let n_targets = root.meshes.first().and_then(|m| m.primitives.first()).and_then(|p| p.targets.as_ref()).map_or(0, |t| t.len());
@@ -346,15 +325,15 @@ impl GlbRig {
             let w = bin.floats(&zeros, json::accessor::Type::Scalar, 1, false, None, &format!("{name}: morph weights"));
             let mesh_nodes: Vec<usize> = root.nodes.iter().enumerate().filter(|(_, nd)| nd.mesh.map(|m| m.value()) == Some(0)).map(|(i, _)| i).collect();
             for node in mesh_nodes {
-                channel(w, node, json::animation::Property::MorphTargetWeights);
+                clip.add(w, node as u32, json::animation::Property::MorphTargetWeights);
             }
         }
         root.animations.push(json::Animation {
             extensions: Default::default(),
             extras: Default::default(),
-            channels,
+            channels: clip.channels,
             name: Some(name.to_string()),
-            samplers,
+            samplers: clip.samplers,
         });
         while bin.data.len() % 4 != 0 {
             bin.data.push(0);
