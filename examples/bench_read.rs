@@ -42,7 +42,7 @@ fn convert(files: Vec<(String, Vec<u8>)>, format: &str) -> Result<Vec<(String, V
     use posemfa::export::ply::{write_ply, PlyFormat};
     let pop = posemfa::mesh::Population::from_files(files).map_err(|e| e.to_string())?;
     let poses: Vec<Vec<[f64; 3]>> =
-        pop.shapes.iter().map(|s| s.iter().map(|&p| pop.normalization.to_original(p)).collect()).collect();
+        pop.shapes().map(|s| s.iter().map(|p| pop.normalization.to_original(p)).collect()).collect();
     let stem = |n: &str| n.rsplit_once('.').map_or(n, |(s, _)| s).to_string();
     let base = || ("base.obj".to_string(), posemfa::export::obj::write_obj(&poses[0], &pop.faces, "faces for the cache (pose 1)").into_bytes());
     Ok(match format {

@@ -75,7 +75,7 @@ fn main() -> Result<(), String> {
         let rig = rig.expect("builds >= 1");
         let (mut sq, mut worst) = (0.0f64, 0.0f64);
         for i in 0..pop.n_shapes() {
-            for (x, y) in rig.pose(i).iter().zip(&pop.shapes[i]) {
+            for (x, y) in rig.pose(i).iter().zip(pop.shape(i).to_vec().iter()) {
                 let d = (0..3).map(|c| (x[c] - y[c]).powi(2)).sum::<f64>();
                 sq += d;
                 worst = worst.max(d.sqrt());

@@ -15,6 +15,10 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200 } =
     pop = new wasm.Population(input.names, input.files);
   }
   const loadMs = performance.now() - t0;
+  // linear memory only grows: its size after loading, and after the first fit (before the kernel limits, which
+  // lay the data out again), is the peak of each
+  const memoryAfterLoad = wasm.memoryBytes();
+  let memoryAfterFit = null;
   const runs = [];
   const fractions = [];
   let summary;
@@ -26,13 +30,16 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200 } =
     while (!fitter.isDone()) fitter.run(1e9);
     const model = fitter.result();
     runs.push(performance.now() - t);
+    // as the page's worker does: the model's summary (its diagnosis) while the fitter is still alive, then the
+    // fitter freed (before the kernel limits lay the data out again)
     summary = model.summary();
+    if (memoryAfterFit === null) memoryAfterFit = wasm.memoryBytes();
+    fitter.free();
     // the kernels right after each fit, so that each fraction compares two measurements of the same moment
     kernel = model.kernelLimit(kernelMs);
     fractions.push(kernel.fraction);
     if (truth && r === repeat - 1) groundTruth = truth.groundTruth(model);
     model.free();
-    fitter.free();
   }
   const stages = summary.stageStats.map((s, i) => ({
     stage: s.name, ms: s.ms, iterations: s.iterations, aecm_runs: s.aecmRuns, estep_ms: s.estepMs,
@@ -48,6 +55,7 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200 } =
     kernel_limit_f64: kernel.f64, kernel_limit_f32: kernel.f32,
     estep_fraction_of_limit: median(fractions), estep_fraction_of_limit_all: fractions,
     peak_memory_bytes: wasm.memoryBytes(),
+    peak_memory_bytes_load: memoryAfterLoad, peak_memory_bytes_fit: memoryAfterFit,
     ground_truth: groundTruth,
   };
   pop.free();

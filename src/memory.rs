@@ -3,10 +3,16 @@
 //! [`estimate_bytes`] is an upper estimate of the peak working set of Algorithm 1 (coarse AECM, refinement,
 //! final AECM) on a population of `n_vertices` x `n_shapes`, with at most `parts` components in any stage:
 //!
-//! - 7 copies of the coordinates, 24 bytes per (vertex, shape): the caller's population, the pipeline's own
-//!   copy, the data vectors h_j of the running AECM and the E-step's blocked copy of them (plus its f32 copy
-//!   of two shapes), and during the refinement the data of the part being split, its blocked copy and its
-//!   residual vectors;
+//! - 48 bytes per (vertex, shape) for the coordinates, which are stored in f32 and read as f64 (the
+//!   arithmetic stays f64): the population, 12 bytes, one copy shared by the caller, the pipeline and the
+//!   page's models ([`crate::mesh::Population`]); the running AECM's data vectors h_j, 12 bytes, stored once in
+//!   the E-step's blocked layout and shared with it ([`crate::mfa::data::Data`]); and 24 bytes for what comes
+//!   and goes around them: a part's data in the refinement, the f32 points of a Procrustes start or of the
+//!   diagnosis, the readers' f64 poses while a population is assembled (24 bytes, freed pose by pose), and the
+//!   allocator's slack (wasm's linear memory never shrinks, so a large block freed where a larger one is
+//!   needed stays unused). Measured in wasm (`node scripts/bench-wasm.mjs INPUT --node`, issue 27, see
+//!   docs/speed.md): 49.6 bytes per (vertex, shape) at 20 k x 200 (where the terms below vanish), 59.1 at
+//!   42 k x 11; 7 copies of 24 bytes (168) before;
 //! - the responsibilities, dense when labels are read, 8 bytes per (vertex, component);
 //! - 128 bytes per vertex of labels, latent points, k-means distances, the sparse responsibilities of the
 //!   CM steps (40 bytes per pair, one or two pairs per vertex) and such;
@@ -31,14 +37,14 @@ pub const WASM_BUDGET_BYTES: u64 = GIB;
 /// Default native budget: 8 GiB (override with `POSEMFA_MEMORY_BUDGET`).
 pub const NATIVE_BUDGET_BYTES: u64 = 8 * GIB;
 
-/// Copies of the coordinates alive at the peak (see the module documentation).
-const COORDINATE_COPIES: u64 = 7;
+/// Bytes per (vertex, shape) for the coordinates at the peak (see the module documentation): 4 x 12 (f32).
+pub const COORDINATE_BYTES: u64 = 48;
 
 /// Upper estimate, in bytes, of the working set of a fit of `n_vertices` x `n_shapes` with at most `parts`
 /// components in any stage. Saturates instead of overflowing (wasm32's usize is 32 bits).
 pub fn estimate_bytes(n_vertices: usize, n_shapes: usize, parts: usize) -> u64 {
     let (nv, ns, m) = (n_vertices as u64, n_shapes as u64, parts.max(1) as u64);
-    let coordinates = nv.saturating_mul(ns).saturating_mul(24).saturating_mul(COORDINATE_COPIES);
+    let coordinates = nv.saturating_mul(ns).saturating_mul(COORDINATE_BYTES);
     let responsibilities = nv.saturating_mul(m).saturating_mul(8);
     let per_vertex = nv.saturating_mul(128);
     let components = m.saturating_mul(ns).saturating_mul(8 * 49);
@@ -141,8 +147,8 @@ mod tests {
         assert!(estimate_bytes(2000, 10, 11) > base);
         assert!(estimate_bytes(1000, 20, 11) > base);
         assert!(estimate_bytes(1000, 10, 22) > base);
-        // 1000 x 10 x 24 x 7 + 1000 x 11 x 8 + 128 000 + 11 x 10 x 392
-        assert_eq!(base, 1_680_000 + 88_000 + 128_000 + 43_120);
+        // 1000 x 10 x 48 + 1000 x 11 x 8 + 128 000 + 11 x 10 x 392
+        assert_eq!(base, 480_000 + 88_000 + 128_000 + 43_120);
         assert_eq!(estimate_bytes(usize::MAX, usize::MAX, usize::MAX), u64::MAX);
     }
 

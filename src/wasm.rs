@@ -125,8 +125,9 @@ impl WasmPopulation {
 
     /// Shape i's vertices, unit box, flat xyz.
     pub fn positions(&self, shape: usize) -> Result<Float32Array, JsValue> {
-        let s = self.inner.shapes.get(shape).ok_or_else(|| js_err(format!("no shape {shape}")))?;
-        Ok(flat_f32(s))
+        let s = self.inner.get_shape(shape).ok_or_else(|| js_err(format!("no shape {shape}")))?;
+        // the stored f32 coordinates as they are
+        Ok(Float32Array::from(s.as_f32().as_flattened()))
     }
 
     /// [offset x, y, z, scale]: unit = (original - offset) * scale.
@@ -139,8 +140,8 @@ impl WasmPopulation {
     /// (`geometry::along_longest_axis`).
     #[wasm_bindgen(js_name = alongLongestAxis)]
     pub fn along_longest_axis(&self, shape: usize) -> Result<Float32Array, JsValue> {
-        let s = self.inner.shapes.get(shape).ok_or_else(|| js_err(format!("no shape {shape}")))?;
-        let t: Vec<f32> = crate::geometry::along_longest_axis(s).iter().map(|&x| x as f32).collect();
+        let s = self.inner.get_shape(shape).ok_or_else(|| js_err(format!("no shape {shape}")))?;
+        let t: Vec<f32> = crate::geometry::along_longest_axis(&s.to_vec()).iter().map(|&x| x as f32).collect();
         Ok(Float32Array::from(t.as_slice()))
     }
 

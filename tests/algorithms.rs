@@ -262,7 +262,7 @@ dual_test! {
         let best18 = trace.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         let mut ll_model = 0.0;
         for j in 0..c.pop.n_vertices() {
-            let h: Vec<Vec3> = c.pop.shapes.iter().map(|s| s[j]).collect();
+            let h: Vec<Vec3> = c.pop.unit_shapes().iter().map(|s| s[j]).collect();
             let logs: Vec<f64> = model.parts.iter().map(|p| p.log_weighted_density(&p.woodbury(), &h)).collect();
             let mx = logs.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
             ll_model += mx + logs.iter().map(|l| (l - mx).exp()).sum::<f64>().ln();
@@ -280,7 +280,7 @@ dual_test! {
                 let k = m.labels[j] as usize;
                 let r = &m.parts[k].rotations[i];
                 let q = add(mat_vec(r, m.latent[j]), m.parts[k].translations[i]);
-                let d = sub(c.pop.shapes[i][j], q);
+                let d = sub(c.pop.unit_shapes()[i][j], q);
                 s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             }
         }

@@ -112,7 +112,7 @@ dual_test! {
         assert_err_has(&e, &["got 0"]);
         // data handed to a fit directly
         let h: Vec<f64> = shape.iter().flatten().copied().collect();
-        let data = Data { n_vertices: 10, n_shapes: 1, h, offsets: vec![[0.0; 3]] };
+        let data = Data::from_f64(10, 1, &h, vec![[0.0; 3]]);
         let e = Fit::new(data, &quick(2)).err().expect("one shape must be refused");
         assert!(matches!(e, Error::Data(_)), "{e:?}");
         assert_err_has(&e, &["1 shape(s)", "at least 2 poses"]);
@@ -254,8 +254,10 @@ dual_test! {
         }
         // data given to a fit directly (no population in between)
         let pop = Population::from_unit_shapes(names(2), fan(6), vec![blob(6, 0.0), blob(6, 1.0)]).unwrap();
-        let mut data = Data::from_population(&pop);
-        data.h[(4 * 2 + 1) * 3 + 2] = f64::NAN; // vertex 5, shape 2, z
+        let data = Data::from_population(&pop);
+        let mut h: Vec<f64> = (0..data.n_vertices).flat_map(|j| data.vertex(j).to_vec()).flatten().collect();
+        h[(4 * 2 + 1) * 3 + 2] = f64::NAN; // vertex 5, shape 2, z
+        let data = Data::from_f64(data.n_vertices, data.n_shapes, &h, data.offsets.clone());
         let e = Fit::new(data, &quick(2)).err().expect("NaN data must be refused");
         assert!(matches!(e, Error::Data(_)), "{e:?}");
         assert_err_has(&e, &["vertex 5 of shape 2", "non-finite", "NaN"]);
@@ -279,7 +281,7 @@ dual_test! {
         } else if std::env::var_os("POSEMFA_MEMORY_BUDGET").is_none() {
             assert_eq!(budget, 8 << 30);
         }
-        // A small population (40 000 vertices x 2 shapes, 1.9 MB) with a request whose working set is not:
+        // A small population (40 000 vertices x 2 shapes, 1.0 MB) with a request whose working set is not:
         // 512 parts, each split up to 64 ways by the refinement -> responsibilities for up to 32 768 parts,
         // about 10 GB. The fit refuses at once, before k-means or the responsibilities are allocated.
         let n = 40_000;
@@ -306,8 +308,9 @@ dual_test! {
         assert_err_has(&e, &["2000000 vertices x 200 shapes needs about", "GiB", "fewer vertices", "fewer poses"]);
         assert!(!e.to_string().contains("parts"), "{e}");
         // and a small budget refuses a small population the same way
-        let e = memory::check(1000, 10, 11, 1 << 20).unwrap_err();
-        assert_err_has(&e, &["needs about 1.8 MiB", "budget of 1.0 MiB"]);
-        assert!(memory::check(1000, 10, 11, 2 << 20).is_ok());
+        // (1000 x 10 x 48 + 1000 x 11 x 8 + 1000 x 128 + 11 x 10 x 392 = 739 120 bytes, memory::estimate_bytes)
+        let e = memory::check(1000, 10, 11, 512 << 10).unwrap_err();
+        assert_err_has(&e, &["needs about 721.8 KiB", "budget of 512.0 KiB"]);
+        assert!(memory::check(1000, 10, 11, 1 << 20).is_ok());
     }
 }

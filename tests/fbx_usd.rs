@@ -21,9 +21,9 @@ dual_test! {
         assert!(pop.source.contains("5 blend shapes"), "{}", pop.source);
         assert_eq!((pop.n_shapes(), pop.n_vertices()), (6, 1198));
         assert_eq!(pop.faces, g.population.faces);
-        for (i, shape) in pop.shapes.iter().enumerate() {
+        for (i, shape) in pop.unit_shapes().iter().enumerate() {
             let ours: Vec<[f64; 3]> = shape.iter().map(|&p| pop.normalization.to_original(p)).collect();
-            let want: Vec<[f64; 3]> = g.population.shapes[i].iter().map(|&p| y_up(p)).collect();
+            let want: Vec<[f64; 3]> = g.population.unit_shapes()[i].iter().map(|&p| y_up(p)).collect();
             assert!(max_diff(&ours, &want) < 1e-6, "pose {i}: {}", max_diff(&ours, &want));
         }
         let (parts_obj, rmse_obj, labels_obj) = fit_summary(&g.population);
@@ -208,9 +208,9 @@ dual_test! {
             );
             assert_eq!((pop.n_shapes(), pop.n_vertices()), (5, 408));
             assert_eq!(pop.faces, g.population.faces);
-            for (k, shape) in pop.shapes.iter().enumerate() {
+            for (k, shape) in pop.unit_shapes().iter().enumerate() {
                 let ours: Vec<[f64; 3]> = shape.iter().map(|&p| pop.normalization.to_original(p)).collect();
-                let want: Vec<[f64; 3]> = g.population.shapes[k].iter().map(|&p| usd_expected(k, p)).collect();
+                let want: Vec<[f64; 3]> = g.population.unit_shapes()[k].iter().map(|&p| usd_expected(k, p)).collect();
                 let d = max_diff(&ours, &want);
                 assert!(d < 1e-8, "{name} pose {k}: {d}");
             }

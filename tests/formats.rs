@@ -39,14 +39,14 @@ dual_test! {
     /// A population as PLY files (ASCII: bit for bit; binary float32: to float precision), mixed with OBJ.
     fn ply_files_give_the_obj_population() {
         let pop = small();
-        let ascii: Vec<(String, Vec<u8>)> = pop.names.iter().zip(&pop.shapes).map(|(n, s)| {
+        let ascii: Vec<(String, Vec<u8>)> = pop.names.iter().zip(&pop.unit_shapes()).map(|(n, s)| {
             (n.replace(".obj", ".ply"), write_ply(s, &pop.faces, PlyFormat::Ascii, "ascii"))
         }).collect();
         let back = Population::from_files(ascii).unwrap();
-        assert_eq!(back.shapes, pop.shapes);
+        assert_eq!(back.unit_shapes(), pop.unit_shapes());
         assert_eq!(back.faces, pop.faces);
         assert_eq!(back.source, "4 PLY files");
-        let mixed: Vec<(String, Vec<u8>)> = pop.names.iter().zip(&pop.shapes).enumerate().map(|(i, (n, s))| {
+        let mixed: Vec<(String, Vec<u8>)> = pop.names.iter().zip(&pop.unit_shapes()).enumerate().map(|(i, (n, s))| {
             if i % 2 == 0 {
                 (n.replace(".obj", ".ply"), write_ply(s, &pop.faces, PlyFormat::Binary, ""))
             } else {
@@ -56,7 +56,7 @@ dual_test! {
         let back = Population::from_files(mixed).unwrap();
         assert_eq!(back.source, "2 OBJ and 2 PLY files");
         assert_eq!(back.n_shapes(), 4);
-        let worst = back.shapes.iter().zip(&pop.shapes).flat_map(|(a, b)| a.iter().zip(b))
+        let worst = back.unit_shapes().iter().zip(&pop.unit_shapes()).flat_map(|(a, b)| a.iter().zip(b))
             .map(|(p, q)| (0..3).map(|d| (p[d] - q[d]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
         assert!(worst < 1e-6, "{worst}");
     }
@@ -65,12 +65,12 @@ dual_test! {
     /// reads back through the animation (one key per pose) to float32 precision, in the original units.
     fn morph_target_glb_gives_the_population() {
         let pop = small();
-        let glb = posemfa::export::morph_glb::write_morph_glb("arm", &pop.names, &pop.shapes, &pop.faces).unwrap();
+        let glb = posemfa::export::morph_glb::write_morph_glb("arm", &pop.names, &pop.unit_shapes(), &pop.faces).unwrap();
         let back = Population::from_files(vec![("arm.glb".into(), glb)]).unwrap();
         assert!(back.source.starts_with("4 frames of animation 'Poses' (sampled at its keyframes, 24 fps) of mesh 'arm' in arm.glb"), "{}", back.source);
         assert_eq!((back.n_shapes(), back.n_vertices()), (4, pop.n_vertices()));
         assert_eq!(back.faces, pop.faces);
-        let worst = back.shapes.iter().zip(&pop.shapes).flat_map(|(a, b)| a.iter().zip(b))
+        let worst = back.unit_shapes().iter().zip(&pop.unit_shapes()).flat_map(|(a, b)| a.iter().zip(b))
             .map(|(p, q)| {
                 let p = back.normalization.to_original(*p);
                 let q = pop.normalization.to_original(*q);
@@ -83,8 +83,8 @@ dual_test! {
     /// A point cache over one base mesh: frames are the poses; a vertex-count mismatch names both files.
     fn point_caches_over_a_base_mesh() {
         let pop = small();
-        let base = ("rest.obj".to_string(), obj_bytes(&pop.shapes[0], &pop.faces));
-        for (name, bytes) in [("walk.pc2", write_pc2(&pop.shapes)), ("walk.mdd", write_mdd(&pop.shapes, 24.0))] {
+        let base = ("rest.obj".to_string(), obj_bytes(&pop.unit_shapes()[0], &pop.faces));
+        for (name, bytes) in [("walk.pc2", write_pc2(&pop.unit_shapes())), ("walk.mdd", write_mdd(&pop.unit_shapes(), 24.0))] {
             let back = Population::from_files(vec![(name.into(), bytes.clone()), base.clone()]).unwrap();
             assert_eq!(back.n_shapes(), 4);
             assert_eq!(back.faces, pop.faces);
@@ -92,7 +92,7 @@ dual_test! {
             assert!(back.source.ends_with("faces from rest.obj"), "{}", back.source);
             let e = Population::from_files(vec![(name.into(), bytes.clone())]).unwrap_err().to_string();
             assert!(e.contains(name) && e.contains("base mesh"), "{e}");
-            let other = ("rest.ply".to_string(), write_ply(&pop.shapes[0][..500], &[[0, 1, 2]], PlyFormat::Ascii, ""));
+            let other = ("rest.ply".to_string(), write_ply(&pop.unit_shapes()[0][..500], &[[0, 1, 2]], PlyFormat::Ascii, ""));
             let e = Population::from_files(vec![(name.into(), bytes), other]).unwrap_err().to_string();
             let n = pop.n_vertices();
             assert!(e.contains(&format!("{n} vertices per frame")) && e.contains("rest.ply has 500"), "{e}");
@@ -111,7 +111,7 @@ fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
     use posemfa::{mfa::Params, parts::hierarchy::fit};
     let Some(dir) = common::shared_dir("data/horse-poses", "horse_as_ply_and_pc2_fits_like_the_obj_folder") else { return };
     let obj = Population::from_paths(&[&dir]).unwrap();
-    let original: Vec<Vec<[f64; 3]>> = obj.shapes.iter().map(|s| s.iter().map(|&p| obj.normalization.to_original(p)).collect()).collect();
+    let original: Vec<Vec<[f64; 3]>> = obj.unit_shapes().iter().map(|s| s.iter().map(|&p| obj.normalization.to_original(p)).collect()).collect();
     let ply: Vec<(String, Vec<u8>)> = obj.names.iter().zip(&original).map(|(n, s)| {
         (n.replace(".obj", ".ply"), write_ply(s, &obj.faces, PlyFormat::Binary, "horse-poses"))
     }).collect();
@@ -123,7 +123,7 @@ fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
     }).collect();
     let ascii = Population::from_files(ascii).unwrap();
     assert_eq!(ascii.source, "11 PLY files");
-    assert_eq!((&ascii.shapes, &ascii.faces), (&obj.shapes, &obj.faces), "ASCII PLY gives the OBJ population exactly");
+    assert_eq!((&ascii.unit_shapes(), &ascii.faces), (&obj.unit_shapes(), &obj.faces), "ASCII PLY gives the OBJ population exactly");
     let pc2 = Population::from_files(vec![
         ("horse.pc2".into(), write_pc2(&original)),
         ("reference.obj".into(), std::fs::read(dir.join("reference.obj")).unwrap()),
@@ -163,7 +163,7 @@ dual_test! {
     /// PLY vertex to the generator's vertex at the same position: all 1198 found, and the same triangles.
     fn blender_ply_ascii_and_binary_load_as_the_generated_pose() {
         let g = blender_source();
-        let pose = &g.population.shapes[0];
+        let pose = &g.population.unit_shapes()[0];
         for (name, bytes, tol) in [
             ("pose01-ascii.ply", &include_bytes!("fixtures/blender/pose01-ascii.ply")[..], 1e-6),
             ("pose01-binary.ply", &include_bytes!("fixtures/blender/pose01-binary.ply")[..], 1e-7),
@@ -195,9 +195,9 @@ dual_test! {
         assert!(pop.source.contains("24 fps"), "{}", pop.source);
         assert_eq!((pop.n_shapes(), pop.n_vertices()), (6, 1198));
         assert_eq!(pop.faces.len(), g.population.faces.len());
-        for (i, shape) in pop.shapes.iter().enumerate() {
+        for (i, shape) in pop.unit_shapes().iter().enumerate() {
             let ours: Vec<[f64; 3]> = shape.iter().map(|&p| pop.normalization.to_original(p)).collect();
-            let want: Vec<[f64; 3]> = g.population.shapes[i].iter().map(|&p| y_up(p)).collect();
+            let want: Vec<[f64; 3]> = g.population.unit_shapes()[i].iter().map(|&p| y_up(p)).collect();
             assert!(max_diff(&ours, &want) < 1e-6, "pose {i}: {}", max_diff(&ours, &want));
         }
         let (parts_obj, rmse_obj, labels_obj) = fit_summary(&g.population);

@@ -68,9 +68,9 @@ dual_test! {
     fn frames_solved_onto_the_true_rig_recover_the_true_bones() {
         let g = creature(5, 3);
         let rig = true_rig(&g);
-        let solved = solve_frames(&rig, &g.population.shapes).unwrap();
+        let solved = solve_frames(&rig, &g.population.unit_shapes()).unwrap();
         let d = rig.diagonal();
-        for (i, frame) in g.population.shapes.iter().enumerate() {
+        for (i, frame) in g.population.unit_shapes().iter().enumerate() {
             let e = e_rms(solved.sse[i], rig.n_vertices(), d);
             assert!(e < 1e-4, "pose {i}: E_RMS {e} on the generator's own rig");
             for k in 0..g.n_parts() {
@@ -104,7 +104,7 @@ dual_test! {
             }
             let root = rig.order[0];
             let posed = pose_from_locals(&rig, poses[i][root], &locals);
-            let d = max_distance(&rig.skin(&posed), &g.population.shapes[i]);
+            let d = max_distance(&rig.skin(&posed), &g.population.unit_shapes()[i]);
             assert!(d < 1e-6 * rig.diagonal(), "pose {i}: carried pose off by {d}");
         }
         // random poses stay within the training range
@@ -162,7 +162,7 @@ fn subset(pop: &Population, keep: impl Fn(usize) -> bool) -> Population {
     Population::from_unit_shapes(
         idx.iter().map(|&i| pop.names[i].clone()).collect(),
         pop.faces.clone(),
-        idx.iter().map(|&i| pop.shapes[i].iter().map(|&p| pop.normalization.to_original(p)).collect()).collect(),
+        idx.iter().map(|&i| pop.unit_shapes()[i].iter().map(|&p| pop.normalization.to_original(p)).collect()).collect(),
     )
     .unwrap()
 }
@@ -182,7 +182,7 @@ dual_test! {
         // held-out poses, in the training population's unit box
         let held: Vec<Vec<Vec3>> = (0..12)
             .filter(|i| i % 2 == 1)
-            .map(|i| g.population.shapes[i].iter().map(|&p| train.normalization.to_unit(g.population.normalization.to_original(p))).collect())
+            .map(|i| g.population.unit_shapes()[i].iter().map(|&p| train.normalization.to_unit(g.population.normalization.to_original(p))).collect())
             .collect();
         let solved = solve_frames(&skinned, &held).unwrap();
         let e_in = e_rms(own, nv * train.n_shapes(), d);
@@ -207,7 +207,7 @@ dual_test! {
         // bind positions as written (original units)
         let rest = art.to_original(&rig.rest);
         assert!(max_distance(&read.rig.rest, &rest) < 1e-6 * d);
-        let frames: Vec<Vec<Vec3>> = g.population.shapes.iter().map(|s| art.to_original(s)).collect();
+        let frames: Vec<Vec<Vec3>> = g.population.unit_shapes().iter().map(|s| art.to_original(s)).collect();
         let solved = solve_frames(&read.rig, &frames).unwrap();
         let out = read.with_clip("frames", &solved.bones).unwrap();
         let play = play_glb_clip(&out, "frames").unwrap();

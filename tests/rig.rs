@@ -74,12 +74,12 @@ dual_test! {
             // the file plays what the solver fitted (f32 storage only)
             let mut sq = 0.0;
             for i in 0..pop.n_shapes() {
-                for (p, q) in rig.pose(i).iter().zip(&pop.shapes[i]) {
+                for (p, q) in rig.pose(i).iter().zip(&pop.unit_shapes()[i]) {
                     let d = norm(sub(*p, *q));
                     sq += d * d;
                 }
             }
-            let unit_diag = posemfa::export::rig_report::bbox_diagonal(&pop.shapes[0]);
+            let unit_diag = posemfa::export::rig_report::bbox_diagonal(&pop.unit_shapes()[0]);
             let e_fit = 1000.0 * (sq / (3 * pop.n_vertices() * pop.n_shapes()) as f64).sqrt() / unit_diag;
             assert!((err.e_rms - e_fit).abs() <= 1e-3 * e_fit + 1e-4, "K = {k}: glb {} vs fit {e_fit}", err.e_rms);
             assert!(err.e_rms <= last * 1.02, "K = {k}: {} after {last}", err.e_rms);

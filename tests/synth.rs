@@ -57,7 +57,7 @@ fn check_closed_sphere(pop: &Population, what: &str) {
     }
     let euler = nv as i64 - n_edges as i64 + faces.len() as i64;
     assert_eq!(euler, 2, "{what}: Euler characteristic {euler} (V {nv}, E {n_edges}, F {})", faces.len());
-    for (i, shape) in pop.shapes.iter().enumerate() {
+    for (i, shape) in pop.unit_shapes().iter().enumerate() {
         let mut volume = 0.0;
         let mut min_area = f64::INFINITY;
         for f in faces {
@@ -166,7 +166,7 @@ fn same_seed_same_output_other_seed_other_poses() {
         assert_eq!(a.population.faces, c.population.faces);
         assert_eq!(a.part_of_vertex, c.part_of_vertex);
         for i in 0..4 {
-            assert_ne!(a.population.shapes[i], c.population.shapes[i], "{preset:?}: seeds 7 and 8 give pose {i} alike");
+            assert_ne!(a.population.unit_shapes()[i], c.population.unit_shapes()[i], "{preset:?}: seeds 7 and 8 give pose {i} alike");
             assert_ne!(a.rotations[i], c.rotations[i]);
         }
     }
@@ -176,7 +176,7 @@ fn same_seed_same_output_other_seed_other_poses() {
 fn rigid_residual(g: &Generated) -> (f64, usize) {
     let mut worst: f64 = 0.0;
     let mut n = 0;
-    for (i, shape) in g.population.shapes.iter().enumerate() {
+    for (i, shape) in g.population.unit_shapes().iter().enumerate() {
         for (j, b) in g.blend.iter().enumerate() {
             if !b.is_rigid() {
                 continue;
@@ -199,7 +199,8 @@ fn rigid_parts_follow_their_ground_truth_motion() {
         assert!(g.blend.iter().all(|b| b.is_rigid()));
         let (worst, n) = rigid_residual(&g);
         assert_eq!(n, 6 * g.population.n_vertices());
-        assert!(worst < 1e-9, "{preset:?} band 0: residual {worst:e}");
+        // (the population stores its coordinates in f32: each within 6e-8 of the generated one)
+        assert!(worst < 2e-7, "{preset:?} band 0: residual {worst:e}");
         // with a band: the vertices outside every band are rigid, the others are blended, and the blend
         // region grows with the band
         let g1 = generate(&Spec { preset, vertices: 5_000, poses: 6, joint_band: 0.03, seed: 3, ..Spec::default() })
@@ -209,12 +210,12 @@ fn rigid_parts_follow_their_ground_truth_motion() {
         let blended = |g: &Generated| g.blend.iter().filter(|b| !b.is_rigid()).count();
         assert!(blended(&g1) > 0 && blended(&g2) > blended(&g1), "{preset:?}: {} vs {}", blended(&g1), blended(&g2));
         let (worst, _) = rigid_residual(&g2);
-        assert!(worst < 1e-9, "{preset:?} band 0.08: residual {worst:e}");
+        assert!(worst < 2e-7, "{preset:?} band 0.08: residual {worst:e}");
         // same angles whatever the band: the rotations do not depend on it
         assert_eq!(g.rotations, g2.rotations);
         // blended vertices are NOT on either part's rigid motion (the data is not piecewise rigid)
         let mut off = 0.0f64;
-        for (i, shape) in g2.population.shapes.iter().enumerate() {
+        for (i, shape) in g2.population.unit_shapes().iter().enumerate() {
             for (j, b) in g2.blend.iter().enumerate() {
                 if b.weight > 0.3 && b.weight < 0.7 {
                     for &p in &b.parts {
@@ -262,7 +263,8 @@ fn root_motion_moves_the_whole_creature() {
         assert!(angle_between(&g.rotations[i][0], &IDENTITY) > 1e-3);
     }
     let (worst, _) = rigid_residual(&g);
-    assert!(worst < 1e-9, "{worst:e}");
+    // (f32 coordinates, as above)
+    assert!(worst < 2e-7, "{worst:e}");
 }
 
 #[test]
@@ -306,7 +308,7 @@ fn blob_is_one_part_and_not_rigid() {
     assert_eq!(g.n_parts(), 1);
     assert!(g.part_of_vertex.iter().all(|&l| l == 0));
     let mut worst = 0.0f64;
-    for (i, shape) in g.population.shapes.iter().enumerate() {
+    for (i, shape) in g.population.unit_shapes().iter().enumerate() {
         for (j, p) in shape.iter().enumerate() {
             worst = worst.max(norm(sub(*p, add(mat_vec(&g.rotations[i][0], g.rest[j]), g.translations[i][0]))));
         }
@@ -323,7 +325,7 @@ fn noise_has_the_requested_size() {
     // both are normalised with their own box; compare through the ground truth instead
     let mut s = 0.0;
     let mut n = 0;
-    for (i, shape) in noisy.population.shapes.iter().enumerate() {
+    for (i, shape) in noisy.population.unit_shapes().iter().enumerate() {
         for (j, b) in noisy.blend.iter().enumerate() {
             let p = b.parts[0] as usize;
             let d = sub(shape[j], add(mat_vec(&noisy.rotations[i][p], noisy.rest[j]), noisy.translations[i][p]));
@@ -366,7 +368,7 @@ fn obj_files_round_trip_through_the_importer() {
     assert_eq!(back.names, g.population.names);
     assert_eq!(back.faces, g.population.faces);
     assert_eq!(back.normalization, Normalization::IDENTITY);
-    assert_eq!(back.shapes, g.population.shapes, "coordinates must come back bit for bit");
+    assert_eq!(back.unit_shapes(), g.population.unit_shapes(), "coordinates must come back bit for bit");
 }
 
 #[test]
@@ -458,7 +460,7 @@ fn new_creatures_do_not_cross_themselves_at_the_default_angles() {
         for seed in 0..3 {
             let g = generate(&Spec { preset, vertices: 3_000, poses: 10, seed, ..Spec::default() }).unwrap();
             assert_eq!(self_intersections(&g.rest, &g.population.faces), 0, "{preset:?}: rest pose");
-            for (i, shape) in g.population.shapes.iter().enumerate() {
+            for (i, shape) in g.population.unit_shapes().iter().enumerate() {
                 let n = self_intersections(shape, &g.population.faces);
                 assert_eq!(n, 0, "{preset:?} seed {seed} pose {}: {n} pairs of triangles cross", i + 1);
             }

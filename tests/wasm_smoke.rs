@@ -142,14 +142,14 @@ dual_test! {
         let n = p.normalization;
         assert!((n.scale - 1.0 / 7.0).abs() < 1e-12, "scale {}", n.scale);
         assert_eq!(n.offset, [-1.0, 0.0, 0.0]);
-        for shape in &p.shapes {
+        for shape in &p.unit_shapes() {
             for v in shape {
                 assert!(v.iter().all(|c| (-1e-12..=1.0 + 1e-12).contains(c)), "{v:?} outside the unit box");
             }
         }
         // shape "10.obj" vertex 1 was (6, 0, 0): the far corner of the box, and it maps back
-        assert!((p.shapes[2][1][0] - 1.0).abs() < 1e-12);
-        let back = n.to_original(p.shapes[2][1]);
+        assert!((p.unit_shapes()[2][1][0] - 1.0).abs() < 1e-12);
+        let back = n.to_original(p.unit_shapes()[2][1]);
         assert!((back[0] - 6.0).abs() < 1e-12 && back[1].abs() < 1e-12);
     }
 

@@ -238,7 +238,8 @@ fn format_seeds(root: &Path) {
     for preset in [Preset::Arm, Preset::Snake] {
         let spec = Spec { preset, vertices: 100, poses: 3, seed: 2, ..Spec::default() };
         let g = generate(&spec).expect("generate a small population").population;
-        populations.push((format!("synth-{}", preset.name()), g.names, g.shapes, g.faces));
+        let shapes = g.shapes().map(|s| s.to_vec()).collect();
+        populations.push((format!("synth-{}", preset.name()), g.names, shapes, g.faces));
     }
     for (name, names, shapes, faces) in &populations {
         // ply: ASCII and binary little endian from posemfa's writer; big endian by hand below

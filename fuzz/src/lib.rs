@@ -26,9 +26,9 @@ pub fn check_population(pop: &Population) {
     assert!(n.scale.is_finite() && n.scale > 0.0, "normalisation scale {}", n.scale);
     assert!(n.offset.iter().all(|o| o.is_finite()), "normalisation offset {:?}", n.offset);
     let eps = 1e-9;
-    for (i, shape) in pop.shapes.iter().enumerate() {
+    for (i, shape) in pop.shapes().enumerate() {
         assert_eq!(shape.len(), nv, "shape {i}");
-        for p in shape {
+        for p in shape.iter() {
             assert!(p.iter().all(|c| c.is_finite() && *c >= -eps && *c <= 1.0 + eps), "shape {i}: point {p:?}");
         }
     }
@@ -89,10 +89,11 @@ fn all_shapes_same(pop: &Population) -> bool {
         let n = s.len() as f64;
         [0, 1, 2].map(|d| s.iter().map(|p| p[d]).sum::<f64>() / n)
     };
-    let c0 = centroid(&pop.shapes[0]);
-    pop.shapes[1..].iter().all(|s| {
+    let shapes: Vec<Vec<[f64; 3]>> = pop.shapes().map(|s| s.to_vec()).collect();
+    let c0 = centroid(&shapes[0]);
+    shapes[1..].iter().all(|s| {
         let c = centroid(s);
-        s.iter().zip(&pop.shapes[0]).all(|(p, q)| (0..3).all(|d| ((p[d] - c[d]) - (q[d] - c0[d])).abs() <= 1e-9))
+        s.iter().zip(&shapes[0]).all(|(p, q)| (0..3).all(|d| ((p[d] - c[d]) - (q[d] - c0[d])).abs() <= 1e-9))
     })
 }
 

@@ -212,10 +212,11 @@ impl Articulation {
             return Err(Error::Params(format!("the skinning band must be a positive number, got {band}")));
         }
         let n_parts = model.parts.len();
-        let graph = PartGraph::new(&model.labels, &pop.faces, n_parts, &pop.shapes[0]);
-        let joints = joints::joints(&graph, model, &pop.faces, &pop.shapes);
+        let shapes = pop.unit_shapes();
+        let graph = PartGraph::new(&model.labels, &pop.faces, n_parts, &shapes[0]);
+        let joints = joints::joints(&graph, model, &pop.faces, &shapes);
         let mut part_area = vec![0.0; n_parts];
-        for s in &pop.shapes {
+        for s in &shapes {
             for f in &pop.faces {
                 let a = graph::triangle_area(s[f[0] as usize], s[f[1] as usize], s[f[2] as usize]) / 3.0;
                 for v in f {
@@ -236,12 +237,12 @@ impl Articulation {
             .expect("at least one used part");
         let rigid: Vec<Vec<Vec3>> = (0..model.n_shapes).map(|i| model.reconstruct(i)).collect();
         let rigid_weights = SkinWeights::rigid(&model.labels);
-        let smooth_weights = skin::smooth_weights(&graph, &model.labels, &model.latent, &pop.faces, &pop.shapes, band);
+        let smooth_weights = skin::smooth_weights(&graph, &model.labels, &model.latent, &pop.faces, &shapes, band);
         Ok(Articulation {
             model: model.clone(),
             faces: pop.faces.clone(),
             edges: graph::mesh_edges(&pop.faces),
-            shapes: pop.shapes.clone(),
+            shapes,
             rigid,
             normalization: pop.normalization,
             graph,

@@ -494,7 +494,7 @@ pub fn crossval(
         let t0 = crate::clock::now_ms();
         let keep: Vec<usize> = (0..ns).filter(|&i| i != out).collect();
         let names: Vec<String> = keep.iter().map(|&i| pop.names[i].clone()).collect();
-        let shapes: Vec<Vec<Vec3>> = keep.iter().map(|&i| pop.shapes[i].iter().map(|&p| pop.normalization.to_original(p)).collect()).collect();
+        let shapes: Vec<Vec<Vec3>> = keep.iter().map(|&i| pop.shape(i).iter().map(|p| pop.normalization.to_original(p)).collect()).collect();
         let train = crate::mesh::Population::from_unit_shapes(names, pop.faces.clone(), shapes)?;
         let fit = crate::parts::hierarchy::fit(&train, params, &mut |_| true)?;
         let art = super::Articulation::new(&fit.model, &train)?;
@@ -504,12 +504,12 @@ pub fn crossval(
         let t1 = crate::clock::now_ms();
         let nv = train.n_vertices();
         let diag = {
-            let (lo, hi) = crate::geometry::bounds(&train.shapes[bind]);
+            let (lo, hi) = crate::geometry::bounds(&train.shape(bind).to_vec());
             norm(sub(hi, lo))
         };
-        let in_sse: f64 = (0..train.n_shapes()).map(|i| sse(&rig.pose(i), &train.shapes[i])).sum();
+        let in_sse: f64 = (0..train.n_shapes()).map(|i| sse(&rig.pose(i), &train.shape(i).to_vec())).sum();
         let skinned = SkinnedRig::from_rig(&rig);
-        let frame: Vec<Vec3> = pop.shapes[out].iter().map(|&p| train.normalization.to_unit(pop.normalization.to_original(p))).collect();
+        let frame: Vec<Vec3> = pop.shape(out).iter().map(|p| train.normalization.to_unit(pop.normalization.to_original(p))).collect();
         let solved = solve_frames(&skinned, std::slice::from_ref(&frame))?;
         let t2 = crate::clock::now_ms();
         folds.push(Fold {

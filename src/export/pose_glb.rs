@@ -383,7 +383,7 @@ impl Poser {
     pub fn new(art: &crate::articulate::Articulation, pop: &crate::mesh::Population, opts: &super::gltf::GltfOptions) -> Result<Poser> {
         let rig = crate::articulate::rig::build(art, &opts.rig_options())?;
         let glb = super::gltf::write_glb(art, &rig, opts)?;
-        let mut p = Poser::from_glb("rig.glb", &glb, &pop.shapes.iter().map(|s| art.to_original(s)).collect::<Vec<_>>())?;
+        let mut p = Poser::from_glb("rig.glb", &glb, &pop.shapes().map(|s| art.to_original(&s.to_vec())).collect::<Vec<_>>())?;
         p.normalization = pop.normalization;
         Ok(p)
     }

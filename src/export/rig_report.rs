@@ -54,7 +54,7 @@ pub fn rig_error(pop: &Population, play: &GlbPlayback, rest: usize) -> Result<Ri
     if rest >= pop.n_shapes() {
         return Err(Error::Request(format!("rest pose {rest} (0-based): the population has {} poses", pop.n_shapes())));
     }
-    let rest_pose: Vec<Vec3> = pop.shapes[rest].iter().map(|&u| pop.normalization.to_original(u)).collect();
+    let rest_pose: Vec<Vec3> = pop.shape(rest).iter().map(|u| pop.normalization.to_original(u)).collect();
     let diagonal = bbox_diagonal(&rest_pose);
     if !(diagonal > 0.0) {
         return Err(Error::Data("the rest pose has an empty bounding box".into()));
@@ -66,8 +66,8 @@ pub fn rig_error(pop: &Population, play: &GlbPlayback, rest: usize) -> Result<Ri
     for (i, frame) in play.frames.iter().enumerate() {
         let mut sq = 0.0;
         let mut worst: f64 = 0.0;
-        for (x, u) in frame.iter().zip(&pop.shapes[i]) {
-            let d = norm(sub(*x, pop.normalization.to_original(*u)));
+        for (x, u) in frame.iter().zip(pop.shape(i).iter()) {
+            let d = norm(sub(*x, pop.normalization.to_original(u)));
             sq += d * d;
             worst = worst.max(d);
         }

@@ -35,12 +35,12 @@ impl Shown {
     /// Its positions, unit box. `model` and `articulation` are needed when [`Shown::needs_model`].
     pub fn positions(&self, pop: &Population, model: Option<&Model>, articulation: Option<&Articulation>) -> Result<Vec<Vec3>> {
         let shape = |i: usize| {
-            pop.shapes.get(i).ok_or_else(|| Error::Request(format!("no pose {i}: the population has {} poses", pop.shapes.len())))
+            pop.get_shape(i).map(|s| s.to_vec()).ok_or_else(|| Error::Request(format!("no pose {i}: the population has {} poses", pop.n_shapes())))
         };
         let need_model = || model.ok_or_else(|| Error::Request("this mesh needs a fitted model".into()));
         match *self {
-            Shown::Pose { pose } => Ok(shape(pose)?.clone()),
-            Shown::Linear { from, to, t } => crate::articulate::interpolate::linear_blend(shape(from)?, shape(to)?, t),
+            Shown::Pose { pose } => shape(pose),
+            Shown::Linear { from, to, t } => crate::articulate::interpolate::linear_blend(&shape(from)?, &shape(to)?, t),
             Shown::Reconstruction { pose } => {
                 shape(pose)?;
                 Ok(need_model()?.reconstruct(pose))
@@ -130,8 +130,8 @@ mod tests {
         let p = Shown::Pose { pose: 1 }.positions(&pop, None, None).unwrap();
         let text = obj_in_original_units(&pop, &p, "pose b");
         let v: Vec<Vec<f64>> = text.lines().filter(|l| l.starts_with("v ")).map(|l| l[2..].split(' ').map(|x| x.parse().unwrap()).collect()).collect();
-        for (k, q) in pop.shapes[1].iter().enumerate() {
-            let o = pop.normalization.to_original(*q);
+        for (k, q) in pop.shape(1).iter().enumerate() {
+            let o = pop.normalization.to_original(q);
             assert_eq!(v[k], o.to_vec(), "exact floats");
         }
         assert_eq!(v[2], vec![100.0, 3.0, 5.25]);

@@ -26,7 +26,7 @@
 //! Errors name the file, the node or object at fault and say what to do.
 
 use super::fbx_tree::{self, Node, Prop};
-use super::gltf::{Gltf, Options, PoseSource};
+use super::gltf::{Gltf, Options, PoseSource, Weld};
 use super::Mesh;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix4, Point3, Rotation3, Vector3};
@@ -462,14 +462,30 @@ fn read_geometry(doc: &Doc, model: &Object, geom: &Object) -> Result<MeshModel> 
 }
 
 /// A blend shape channel: its id and the (sparse) offsets of its first shape.
-struct Channel {
+struct Channel<'a> {
     id: i64,
     name: String,
     rest_percent: f64,
-    offsets: Vec<(usize, DVec3)>,
+    /// The control points the shape moves (each checked against the mesh) ...
+    points: Vec<u32>,
+    /// ... and their offsets, 3 numbers each (the file's array, borrowed when it holds doubles).
+    offsets: std::borrow::Cow<'a, [f64]>,
 }
 
-fn read_channels(doc: &Doc, mm: &MeshModel) -> Result<Vec<Channel>> {
+impl Channel<'_> {
+    /// Adds the offsets times `w` to the control points `p`.
+    fn add_to(&self, p: &mut [[f64; 3]], w: f64) {
+        for (&i, d) in self.points.iter().zip(self.offsets.chunks_exact(3)) {
+            if let Some(v) = p.get_mut(i as usize) {
+                for c in 0..3 {
+                    v[c] += d[c] * w;
+                }
+            }
+        }
+    }
+}
+
+fn read_channels<'a>(doc: &Doc<'a>, mm: &MeshModel) -> Result<Vec<Channel<'a>>> {
     let mut out = Vec::new();
     let n = mm.positions.len();
     for bs in doc.kids(mm.geometry, "Deformer", Some("BlendShape")) {
@@ -484,19 +500,19 @@ fn read_channels(doc: &Doc, mm: &MeshModel) -> Result<Vec<Channel>> {
                     format!("{what} has {} indexes but {} numbers of offsets (3 per index); the file is damaged: export it again", idx.len(), v.len()),
                 ));
             }
-            let mut offsets = Vec::with_capacity(idx.len());
-            for (k, (&i, d)) in idx.iter().zip(v.chunks_exact(3)).enumerate() {
+            let mut points = Vec::with_capacity(idx.len());
+            for (k, &i) in idx.iter().enumerate() {
                 if i < 0 || i as u64 >= n as u64 {
                     return Err(err(
                         doc.file,
                         format!("{what}: Indexes[{k}] names control point {i}, but the mesh has {n}; the file is damaged: export it again"),
                     ));
                 }
-                offsets.push((i as usize, DVec3::new(d[0], d[1], d[2])));
+                points.push(i as u32);
             }
             let rest_percent =
                 ch.node.child_prop("DeformPercent").and_then(Prop::as_f64).or_else(|| p70_f64(ch.node, "DeformPercent")).unwrap_or(0.0);
-            out.push(Channel { id: ch.id, name: ch.name.clone(), rest_percent, offsets });
+            out.push(Channel { id: ch.id, name: ch.name.clone(), rest_percent, points, offsets: v });
         }
     }
     Ok(out)
@@ -625,7 +641,16 @@ fn frame_rate(tree: &fbx_tree::Tree) -> f64 {
 pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
     let budget = crate::memory::budget_bytes()?;
     let tree = fbx_tree::parse_skipping(file, bytes, budget, UNUSED_ARRAYS)?;
-    let doc = Doc::new(file, &tree);
+    let (weld, poses, description) = poses(file, &tree, options, budget)?;
+    // The file's decoded arrays are freed before every pose gets its faces: the allocator can hand their
+    // memory on instead of new pages.
+    drop(tree);
+    Ok(weld.finish(file, poses, description))
+}
+
+/// The poses of the chosen mesh (its kept points), its weld, and the description of what was read.
+fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> Result<(Weld, Vec<(String, Vec<[f64; 3]>)>, String)> {
+    let doc = Doc::new(file, tree);
 
     // Mesh models, with their geometry.
     let mut candidates: Vec<(&Object, &Object)> = Vec::new();
@@ -709,8 +734,8 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
     let geo = geometric(model.node);
     let channels = read_channels(&doc, &mm)?;
     let clusters = read_clusters(&doc, &mm, &geo)?;
-    let (axes, axes_note) = axis_system(&tree);
-    let fps = frame_rate(&tree);
+    let (axes, axes_note) = axis_system(tree);
+    let fps = frame_rate(tree);
 
     // Influences per control point.
     let mut influences: Vec<Vec<(usize, f64)>> = vec![Vec::new(); if clusters.is_empty() { 0 } else { n_file }];
@@ -732,38 +757,66 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
         PoseSource::Auto => !moving.is_empty() || options.animation.is_some(),
     };
 
-    let pose_at = |anim: Option<&Anim>, t: i64, percents: &[f64]| -> Vec<DVec3> {
-        let mut p = mm.positions.clone();
+    // Every pose of the file's control points: the base, the blend shapes at their percents, then the mesh's
+    // transform (or its skin); welded (`Weld::keep`) and checked as it is made.
+    let weld = Weld::new(&mm.positions, &mm.faces);
+    let base: Vec<[f64; 3]> = mm.positions.iter().map(|v| [v.x, v.y, v.z]).collect();
+    let mut spare: Vec<[f64; 3]> = Vec::new();
+    // Returns the pose's kept points and whether all its points (kept or not) are finite numbers.
+    let mut pose_at = |anim: Option<&Anim>, t: i64, percents: &[f64]| -> (Vec<[f64; 3]>, bool) {
+        // The weld keeps every point (the usual case): the pose is made in the vector it is returned in;
+        // else in `spare`, reused from pose to pose, and its kept points copied out.
+        let mut p = if weld.is_identity() { Vec::with_capacity(n_file) } else { std::mem::take(&mut spare) };
+        p.clear();
+        p.extend_from_slice(&base);
         for (ch, &pc) in channels.iter().zip(percents) {
             if pc != 0.0 {
-                let w = pc / 100.0;
-                for &(i, d) in &ch.offsets {
-                    p[i] += d * w;
-                }
+                ch.add_to(&mut p, pc / 100.0);
             }
         }
         let mut cache = HashMap::new();
         let mesh_global = global_matrix(&doc, anim, mm.model, t, &mut cache) * geo;
-        let apply = |m: &DMat4, v: &DVec3| m.transform_point(&Point3::from(*v)).coords;
+        let rigid = Affine::new(&(axes * mesh_global));
+        let mut finite = true;
         if clusters.is_empty() {
-            let m = axes * mesh_global;
-            return p.iter().map(|v| apply(&m, v)).collect();
-        }
-        let mats: Vec<DMat4> = clusters.iter().map(|cl| axes * global_matrix(&doc, anim, cl.bone, t, &mut cache) * cl.bind).collect();
-        let rigid = axes * mesh_global;
-        p.iter()
-            .zip(&influences)
-            .map(|(v, infl)| {
+            for v in &mut p {
+                *v = rigid.apply(v);
+                finite &= v[0].is_finite() & v[1].is_finite() & v[2].is_finite();
+            }
+        } else {
+            let mats: Vec<Affine> = clusters.iter().map(|cl| Affine::new(&(axes * global_matrix(&doc, anim, cl.bone, t, &mut cache) * cl.bind))).collect();
+            for (v, infl) in p.iter_mut().zip(&influences) {
                 let total: f64 = infl.iter().map(|(_, w)| w).sum();
-                if infl.is_empty() || total <= 0.0 {
-                    return apply(&rigid, v);
-                }
-                infl.iter().map(|&(c, w)| apply(&mats[c], v) * (w / total)).sum()
-            })
-            .collect()
+                *v = if infl.is_empty() || total <= 0.0 {
+                    rigid.apply(v)
+                } else {
+                    let at = DVec3::from(*v);
+                    let s: DVec3 = infl.iter().map(|&(c, w)| DVec3::from(mats[c].apply(&at.into())) * (w / total)).sum();
+                    s.into()
+                };
+                finite &= v[0].is_finite() & v[1].is_finite() & v[2].is_finite();
+            }
+        }
+        if weld.is_identity() {
+            return (p, finite);
+        }
+        let kept = weld.keep(&p);
+        spare = p;
+        (kept, finite)
     };
 
-    let mut poses_raw: Vec<(String, Vec<DVec3>)> = Vec::new();
+    let mut poses: Vec<(String, Vec<[f64; 3]>)> = Vec::new();
+    // A pose with a coordinate that is not a finite number is refused (every control point, welded or not).
+    let mut push = |name: String, (p, finite): (Vec<[f64; 3]>, bool)| -> Result<()> {
+        if !finite {
+            return Err(err(
+                file,
+                format!("{mname} at {name} has coordinates that are not finite numbers (a transform, bind matrix or curve holds NaN or infinity); the file is damaged: export it again"),
+            ));
+        }
+        poses.push((name, p));
+        Ok(())
+    };
     let description;
     if use_animation {
         let chosen = match &options.animation {
@@ -835,7 +888,7 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
         let w = times.len().to_string().len();
         for (fi, &t) in times.iter().enumerate() {
             let percents: Vec<f64> = channels.iter().map(|c| anim.value(c.id, "DeformPercent", "DeformPercent", t).unwrap_or(c.rest_percent)).collect();
-            poses_raw.push((format!("frame {:0w$}", fi + 1), pose_at(Some(anim), t, &percents)));
+            push(format!("frame {:0w$}", fi + 1), pose_at(Some(anim), t, &percents))?;
         }
     } else {
         if channels.is_empty() {
@@ -851,18 +904,12 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
             .map_err(|e| err(file, format!("{} blend shapes of {mname}, each one pose: {e}", channels.len())))?;
         description = format!("{} frames of {mname} in {file} (its {} blend shapes at 100 %, after the base)", channels.len() + 1, channels.len());
         let w = (channels.len() + 1).to_string().len();
-        poses_raw.push((format!("shape {:0w$} base", 0), pose_at(None, 0, &vec![0.0; channels.len()])));
+        push(format!("shape {:0w$} base", 0), pose_at(None, 0, &vec![0.0; channels.len()]))?;
         for k in 0..channels.len() {
             let mut p = vec![0.0; channels.len()];
             p[k] = 100.0;
-            poses_raw.push((format!("shape {:0w$} {}", k + 1, channels[k].name), pose_at(None, 0, &p)));
+            push(format!("shape {:0w$} {}", k + 1, channels[k].name), pose_at(None, 0, &p))?;
         }
-    }
-    if let Some((name, _)) = poses_raw.iter().find(|(_, p)| p.iter().any(|v| !v.iter().all(|x| x.is_finite()))) {
-        return Err(err(
-            file,
-            format!("{mname} at {name} has coordinates that are not finite numbers (a transform, bind matrix or curve holds NaN or infinity); the file is damaged: export it again"),
-        ));
     }
     let others: Vec<String> = candidates.iter().filter(|(m, _)| m.id != model.id).map(|(m, _)| label(m)).collect();
     let more = if others.is_empty() {
@@ -870,38 +917,104 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
     } else {
         format!(" (other meshes: {}; --object NAME picks one)", others.join(", "))
     };
-    Ok(weld(file, &mm.positions, &mm.faces, poses_raw, format!("{description}{more}; {axes_note}")))
+    Ok((weld, poses, format!("{description}{more}; {axes_note}")))
+}
+
+impl Weld {
+    /// The poses (kept points) named and with their faces, and how many vertices.
+    pub(super) fn finish(self, file: &str, poses: Vec<(String, Vec<[f64; 3]>)>, description: String) -> Gltf {
+        let (n_file, n_welded) = (self.n_file, self.kept.len());
+        let weld_note = if n_welded == n_file {
+            format!("{n_file} vertices")
+        } else {
+            format!("{n_file} vertices welded to {n_welded} (duplicates split by the exporter)")
+        };
+        let source = format!("{description}; {weld_note}");
+        let poses = poses.into_iter().map(|(name, positions)| (format!("{file} {name}"), Mesh { positions, faces: self.faces.clone() })).collect();
+        Gltf { file: file.to_string(), poses, source, vertices_in_file: n_file, vertices_welded: n_welded }
+    }
 }
 
 /// Welds control points that are exact duplicates in the file, names the poses and says how many vertices.
 pub(super) fn weld(file: &str, base: &[DVec3], faces: &[[u32; 3]], poses_raw: Vec<(String, Vec<DVec3>)>, description: String) -> Gltf {
-    let n_file = base.len();
-    let mut first_of: HashMap<[u64; 3], u32> = HashMap::with_capacity(n_file);
-    let mut map = Vec::with_capacity(n_file);
-    let mut kept: Vec<usize> = Vec::new();
-    for (j, p) in base.iter().enumerate() {
-        let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
-        let next = kept.len() as u32;
-        let w = *first_of.entry(key).or_insert(next);
-        if w == next {
-            kept.push(j);
-        }
-        map.push(w);
+    let weld = Weld::new(base, faces);
+    let poses = poses_raw.into_iter().map(|(name, pos)| (name, weld.keep(&pos))).collect();
+    weld.finish(file, poses, description)
+}
+
+/// A 4x4 transform applied to points: nalgebra's `transform_point`, without its division by w when the last row
+/// is 0 0 0 1 (w is then exactly 1: the same numbers, one division less per coordinate).
+struct Affine {
+    m: DMat4,
+    r: nalgebra::Matrix3<f64>,
+    t: DVec3,
+    affine: bool,
+}
+
+impl Affine {
+    fn new(m: &DMat4) -> Affine {
+        let affine = m[(3, 0)] == 0.0 && m[(3, 1)] == 0.0 && m[(3, 2)] == 0.0 && m[(3, 3)] == 1.0;
+        Affine { m: *m, r: m.fixed_view::<3, 3>(0, 0).into_owned(), t: m.fixed_view::<3, 1>(0, 3).into_owned(), affine }
     }
-    let faces: Vec<[u32; 3]> = faces.iter().map(|f| f.map(|v| map.get(v as usize).copied().unwrap_or(0))).collect();
-    let n_welded = kept.len();
-    let weld_note = if n_welded == n_file {
-        format!("{n_file} vertices")
-    } else {
-        format!("{n_file} vertices welded to {n_welded} (duplicates split by the exporter)")
-    };
-    let source = format!("{description}; {weld_note}");
-    let poses = poses_raw
-        .into_iter()
-        .map(|(name, pos)| {
-            let positions = kept.iter().map(|&j| pos.get(j).map_or([0.0; 3], |p| [p.x, p.y, p.z])).collect();
-            (format!("{file} {name}"), Mesh { positions, faces: faces.clone() })
-        })
-        .collect();
-    Gltf { file: file.to_string(), poses, source, vertices_in_file: n_file, vertices_welded: n_welded }
+
+    fn apply(&self, v: &[f64; 3]) -> [f64; 3] {
+        let p = DVec3::from(*v);
+        if self.affine {
+            (self.r * p + self.t).into()
+        } else {
+            self.m.transform_point(&Point3::from(p)).coords.into()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fuzzing::{fbx_node, tiny_fbx_with};
+
+    /// The tiny quad with its corners 0 and 2 stored twice (as exporters split them at seams): points 3 and 4
+    /// repeat 0 and 2, and the shape moves points 2 and 3 by `offsets`.
+    fn split_quad(offsets: Vec<f64>) -> Vec<u8> {
+        let bytes = tiny_fbx_with(
+            |g| {
+                let v = vec![0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 0., 0., 1., 1., 0., 0., 1., 0.];
+                g[0] = fbx_node("Vertices", vec![Prop::F64s(v)], vec![]);
+                g[1] = fbx_node("PolygonVertexIndex", vec![Prop::I32s(vec![0, 1, -3, 3, 4, -6])], vec![]);
+            },
+            false,
+        );
+        with_shape_offsets(bytes, offsets)
+    }
+
+    /// Replaces the shape's 6 offsets (the plain f64 array after the node name `Vertices` that holds 6).
+    fn with_shape_offsets(mut bytes: Vec<u8>, offsets: Vec<f64>) -> Vec<u8> {
+        let pat: Vec<u8> = [&[8u8][..], b"Vertices", b"d", &6u32.to_le_bytes()].concat();
+        let at = bytes.windows(pat.len()).position(|w| w == &pat[..]).expect("the shape's offsets") + pat.len() + 8;
+        let raw: Vec<u8> = offsets.iter().flat_map(|x| x.to_le_bytes()).collect();
+        bytes[at..at + 48].copy_from_slice(&raw);
+        bytes
+    }
+
+    #[test]
+    fn duplicate_control_points_are_welded_in_every_pose() {
+        let f = read("split.fbx", &split_quad(vec![0., 0., 1., 0., 0., 2.]), &Default::default()).unwrap();
+        assert!(f.source.ends_with("; 6 vertices welded to 4 (duplicates split by the exporter)"), "{}", f.source);
+        assert_eq!(f.poses.len(), 3);
+        for (_, m) in &f.poses {
+            assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3]]);
+        }
+        // Point 2 rises to 0.5 at 50 %; point 3's offset goes with it, welded into point 0.
+        assert_eq!(f.poses[1].1.positions, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.5], [0.0, 1.0, 0.0]]);
+        assert_eq!(f.poses[2].1.positions[2], [1.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn a_non_finite_point_is_refused_even_where_welded_away() {
+        let e = read("nan.fbx", &split_quad(vec![0., 0., 1., 0., 0., f64::NAN]), &Default::default()).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "file nan.fbx: Quad at frame 2 has coordinates that are not finite numbers (a transform, bind matrix or curve holds NaN or \
+             infinity); the file is damaged: export it again"
+        );
+    }
 }

@@ -134,6 +134,8 @@ struct Reader<'a> {
     budget: u64,
     /// Names of nodes whose arrays are not decoded (kept as [`Prop::Raw`] of their stored length).
     skip: &'a [&'a str],
+    /// The zlib inflater, made at the first compressed array and reset for each next one.
+    inflater: Option<zlib_rs::Inflate>,
 }
 
 impl<'a> Reader<'a> {
@@ -329,74 +331,97 @@ impl<'a> Reader<'a> {
                 ),
             ));
         }
-        let raw: std::borrow::Cow<'a, [u8]> = match encoding {
-            0 => {
-                if stored != bytes_needed {
-                    return Err(err(
-                        self.file,
-                        format!(
-                            "{what} at byte {at} declares {count} elements ({bytes_needed} bytes) but stores {stored} \
-                             bytes; the file is damaged: export it again"
-                        ),
-                    ));
-                }
-                std::borrow::Cow::Borrowed(data)
-            }
-            1 => {
-                if bytes_needed > stored.saturating_mul(MAX_INFLATE_RATIO) + 64 {
-                    return Err(err(
-                        self.file,
-                        format!(
-                            "{what} at byte {at} declares {count} elements ({bytes_needed} bytes) from {stored} compressed \
-                             bytes, more than zlib can hold; the file is damaged: export it again"
-                        ),
-                    ));
-                }
-                // Inflated into a buffer of exactly the declared size (bounded above): no regrowth, and a
-                // stream that goes on past it stops there.
-                let mut out = vec![0u8; bytes_needed as usize];
-                let n = miniz_oxide::inflate::decompress_slice_iter_to_slice(&mut out, std::iter::once(data), true, false)
-                    .map_err(|status| {
-                        let why = match status {
-                            miniz_oxide::inflate::TINFLStatus::HasMoreOutput => {
-                                format!("inflates past the {bytes_needed} bytes it declares")
-                            }
-                            _ => format!("is not valid zlib data ({status:?})"),
-                        };
-                        err(self.file, format!("{what} at byte {at} {why}; the file is damaged: export it again"))
-                    })?;
-                out.truncate(n);
-                if out.len() as u64 != bytes_needed {
-                    return Err(err(
-                        self.file,
-                        format!(
-                            "{what} at byte {at} inflates to {} bytes but declares {count} elements ({bytes_needed} bytes); \
-                             the file is damaged: export it again",
-                            out.len()
-                        ),
-                    ));
-                }
-                std::borrow::Cow::Owned(out)
-            }
-            e => {
-                return Err(err(
-                    self.file,
-                    format!("{what} at byte {at} has the unknown array encoding {e} (0: plain, 1: zlib); the file is damaged: export it again"),
-                ))
-            }
-        };
+        if encoding > 1 {
+            return Err(err(
+                self.file,
+                format!("{what} at byte {at} has the unknown array encoding {encoding} (0: plain, 1: zlib); the file is damaged: export it again"),
+            ));
+        }
+        if encoding == 0 && stored != bytes_needed {
+            return Err(err(
+                self.file,
+                format!(
+                    "{what} at byte {at} declares {count} elements ({bytes_needed} bytes) but stores {stored} \
+                     bytes; the file is damaged: export it again"
+                ),
+            ));
+        }
+        if encoding == 1 && bytes_needed > stored.saturating_mul(MAX_INFLATE_RATIO) + 64 {
+            return Err(err(
+                self.file,
+                format!(
+                    "{what} at byte {at} declares {count} elements ({bytes_needed} bytes) from {stored} compressed \
+                     bytes, more than zlib can hold; the file is damaged: export it again"
+                ),
+            ));
+        }
         self.budget -= bytes_needed;
-        let r = &raw[..];
+        // The elements are written straight into their typed buffer (its bytes, little endian as in the file):
+        // plain arrays copied, zlib arrays inflated into exactly the declared size.
+        let n = count as usize;
         let prop = match code {
-            b'd' => Prop::F64s(r.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect()),
-            b'l' => Prop::I64s(r.chunks_exact(8).map(|c| i64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect()),
-            b'f' => Prop::F32s(r.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap_or([0; 4]))).collect()),
-            b'i' => Prop::I32s(r.chunks_exact(4).map(|c| i32::from_le_bytes(c.try_into().unwrap_or([0; 4]))).collect()),
-            _ => Prop::Bools(r.iter().map(|&b| b != 0).collect()),
+            b'd' => Prop::F64s(self.fill(vec![0f64; n], data, encoding, at, what)?),
+            b'l' => Prop::I64s(self.fill(vec![0i64; n], data, encoding, at, what)?),
+            b'f' => Prop::F32s(self.fill(vec![0f32; n], data, encoding, at, what)?),
+            b'i' => Prop::I32s(self.fill(vec![0i32; n], data, encoding, at, what)?),
+            _ => Prop::Bools(self.fill(vec![0u8; n], data, encoding, at, what)?.into_iter().map(|b| b != 0).collect()),
         };
         Ok((prop, data_at + stored))
     }
+
+    /// Fills `out` (the declared number of elements) from an array's stored bytes: copied when `encoding` is 0,
+    /// inflated when it is 1 (zlib, its Adler-32 checked; the stream must fill `out` exactly).
+    fn fill<T: LittleEndian>(&mut self, mut out: Vec<T>, data: &[u8], encoding: u32, at: u64, what: &str) -> Result<Vec<T>> {
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out[..]);
+        let declared = bytes.len();
+        if encoding == 0 {
+            bytes.copy_from_slice(data);
+        } else {
+            let inflater = self.inflater.get_or_insert_with(|| zlib_rs::Inflate::new(true, 15));
+            inflater.reset(true);
+            let status = inflater.decompress(data, bytes, zlib_rs::InflateFlush::Finish);
+            let (read, written) = (inflater.total_in(), inflater.total_out());
+            let why = match status {
+                Ok(zlib_rs::Status::StreamEnd) if written == declared as u64 => None,
+                Ok(zlib_rs::Status::StreamEnd) => Some(format!(
+                    "inflates to {written} bytes but declares {} elements ({declared} bytes)",
+                    declared / std::mem::size_of::<T>()
+                )),
+                // Output full and input left: the stream goes on past the declared size (inflating stops there).
+                Ok(_) if written == declared as u64 && read < data.len() as u64 => {
+                    Some(format!("inflates past the {declared} bytes it declares"))
+                }
+                Ok(_) => Some("is not valid zlib data (its stream stops before its end)".to_string()),
+                Err(e) => Some(format!("is not valid zlib data ({})", e.as_str())),
+            };
+            if let Some(why) = why {
+                return Err(err(self.file, format!("{what} at byte {at} {why}; the file is damaged: export it again")));
+            }
+        }
+        if cfg!(target_endian = "big") {
+            out.iter_mut().for_each(LittleEndian::from_le);
+        }
+        Ok(out)
+    }
 }
+
+/// Array elements stored little endian: turned to the machine's order in place (a no-op on little-endian
+/// machines, which is every target posemfa ships for).
+trait LittleEndian: bytemuck::Pod {
+    fn from_le(&mut self);
+}
+
+macro_rules! little_endian {
+    ($($t:ty),*) => {$(
+        impl LittleEndian for $t {
+            fn from_le(&mut self) {
+                *self = <$t>::from_le_bytes(self.to_ne_bytes());
+            }
+        }
+    )*};
+}
+little_endian!(f64, i64, f32, i32, u8);
+
 
 /// Parses a binary FBX file into its node tree. `budget` bounds the bytes of all decoded arrays.
 pub fn parse(file: &str, bytes: &[u8], budget: u64) -> Result<Tree> {
@@ -437,7 +462,7 @@ pub fn parse_skipping(file: &str, bytes: &[u8], budget: u64, skip: &[&str]) -> R
             ),
         ));
     }
-    let mut r = Reader { file, bytes, wide: version >= 7500, budget, skip };
+    let mut r = Reader { file, bytes, wide: version >= 7500, budget, skip, inflater: None };
     let (nodes, _) = r.records(27, bytes.len() as u64, 0, "(top level)")?;
     Ok(Tree { version, nodes })
 }
@@ -482,7 +507,14 @@ fn write_prop(out: &mut Vec<u8>, p: &Prop, compress: bool) {
     let array = |out: &mut Vec<u8>, code: u8, count: usize, raw: Vec<u8>| {
         out.push(code);
         out.extend_from_slice(&(count as u32).to_le_bytes());
-        let data = if compress { miniz_oxide::deflate::compress_to_vec_zlib(&raw, 6) } else { raw };
+        let data = if compress {
+            let mut z = vec![0u8; zlib_rs::compress_bound(raw.len())];
+            let (done, rc) = zlib_rs::compress_slice(&mut z, &raw, zlib_rs::DeflateConfig::new(6));
+            assert_eq!(rc, zlib_rs::ReturnCode::Ok, "deflate into its bound cannot fail");
+            done.to_vec()
+        } else {
+            raw
+        };
         out.extend_from_slice(&u32::from(compress).to_le_bytes());
         out.extend_from_slice(&(data.len() as u32).to_le_bytes());
         out.extend_from_slice(&data);
@@ -515,5 +547,65 @@ fn write_prop(out: &mut Vec<u8>, p: &Prop, compress: bool) {
         Prop::I32s(v) => array(out, b'i', v.len(), v.iter().flat_map(|x| x.to_le_bytes()).collect()),
         Prop::I64s(v) => array(out, b'l', v.len(), v.iter().flat_map(|x| x.to_le_bytes()).collect()),
         Prop::Bools(v) => array(out, b'b', v.len(), v.iter().map(|&b| u8::from(b)).collect()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file of one node `V` holding one zlib f64 array: its bytes and where the array's zlib stream starts.
+    fn one_array(values: &[f64]) -> (Vec<u8>, usize) {
+        let node = Node { name: "V".into(), props: vec![Prop::F64s(values.to_vec())], children: vec![], offset: 0 };
+        let bytes = write(&[node], true);
+        // header 27, record header 13, name 1, type code 1, count 4, encoding 4, length 4
+        (bytes, 27 + 13 + 1 + 1 + 12)
+    }
+
+    fn error(bytes: &[u8]) -> String {
+        parse("t.fbx", bytes, 1 << 30).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn zlib_arrays_inflate_into_their_elements() {
+        let values: Vec<f64> = (0..1000).map(|i| (i as f64).sin()).collect();
+        for v in [&values[..], &[][..]] {
+            let (bytes, _) = one_array(v);
+            let tree = parse("t.fbx", &bytes, 1 << 30).unwrap();
+            assert_eq!(tree.nodes[0].props[0], Prop::F64s(v.to_vec()));
+        }
+    }
+
+    #[test]
+    fn damaged_zlib_arrays_are_refused() {
+        let (bytes, data) = one_array(&[1.5, 2.5, 3.5]);
+        let len = u32::from_le_bytes(bytes[data - 4..data].try_into().unwrap()) as usize;
+        let at = 27 + 13 + 1;
+        let tail = "the file is damaged: export it again";
+        // The Adler-32 of the inflated bytes (the stream's last 4 bytes) does not match.
+        let mut bad = bytes.clone();
+        bad[data + len - 1] ^= 1;
+        assert_eq!(error(&bad), format!("file t.fbx: property 0 of node 'V' at byte {at} is not valid zlib data (data error); {tail}"));
+        // The stream stops before its end (its checksum cut off; the stored length says so).
+        let mut cut = bytes.clone();
+        cut[data - 4..data].copy_from_slice(&(len as u32 - 4).to_le_bytes());
+        assert_eq!(
+            error(&cut),
+            format!("file t.fbx: property 0 of node 'V' at byte {at} is not valid zlib data (its stream stops before its end); {tail}")
+        );
+        // Not zlib at all (a wrong header).
+        let mut junk = bytes.clone();
+        junk[data] = 0;
+        assert_eq!(error(&junk), format!("file t.fbx: property 0 of node 'V' at byte {at} is not valid zlib data (data error); {tail}"));
+        // It declares more elements than the stream holds, or fewer (zero among them).
+        for (count, message) in [
+            (4u32, format!("inflates to 24 bytes but declares 4 elements (32 bytes)")),
+            (2, format!("inflates past the 16 bytes it declares")),
+            (0, format!("inflates past the 0 bytes it declares")),
+        ] {
+            let mut lying = bytes.clone();
+            lying[data - 12..data - 8].copy_from_slice(&count.to_le_bytes());
+            assert_eq!(error(&lying), format!("file t.fbx: property 0 of node 'V' at byte {at} {message}; {tail}"));
+        }
     }
 }

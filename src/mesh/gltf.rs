@@ -1024,20 +1024,8 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     }
 
     // Weld exact duplicates of the base positions.
-    let mut first_of: HashMap<[u64; 3], u32> = HashMap::with_capacity(n_file);
-    let mut map = Vec::with_capacity(n_file);
-    let mut kept: Vec<usize> = Vec::new();
-    for (j, p) in md.positions.iter().enumerate() {
-        let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
-        let next = kept.len() as u32;
-        let w = *first_of.entry(key).or_insert(next);
-        if w == next {
-            kept.push(j);
-        }
-        map.push(w);
-    }
-    let faces: Vec<[u32; 3]> = md.faces.iter().map(|f| f.map(|v| map.get(v as usize).copied().unwrap_or(0))).collect();
-    let n_welded = kept.len();
+    let weld = Weld::new(&md.positions, &md.faces);
+    let n_welded = weld.kept.len();
     let weld_note = if n_welded == n_file {
         format!("{n_file} vertices")
     } else {
@@ -1047,10 +1035,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     let source = format!("{description} in {file}{more}; {weld_note}");
     let poses = poses_raw
         .into_iter()
-        .map(|(name, pos)| {
-            let positions = kept.iter().map(|&j| pos.get(j).map_or([0.0; 3], |p| [p.x, p.y, p.z])).collect();
-            (format!("{file} {name}"), Mesh { positions, faces: faces.clone() })
-        })
+        .map(|(name, pos)| (format!("{file} {name}"), Mesh { positions: weld.keep(&pos), faces: weld.faces.clone() }))
         .collect();
     Ok(Gltf { file: file.to_string(), poses, source, vertices_in_file: n_file, vertices_welded: n_welded })
 }
@@ -1080,6 +1065,47 @@ fn skin_positions(positions: &[DVec3], influences: &[Vec<(usize, f64)>], mats: &
         })
         .collect()
 }
+
+/// Points that are exact duplicates in the first pose (the exporter split them at seams or per face corner),
+/// welded: the first of each kept. The glTF and FBX readers share it.
+pub(super) struct Weld {
+    pub(super) n_file: usize,
+    /// The kept points, in order.
+    pub(super) kept: Vec<usize>,
+    /// The faces on the kept points.
+    pub(super) faces: Vec<[u32; 3]>,
+}
+
+impl Weld {
+    pub(super) fn new(base: &[DVec3], faces: &[[u32; 3]]) -> Weld {
+        let n_file = base.len();
+        let mut first_of: HashMap<[u64; 3], u32> = HashMap::with_capacity(n_file);
+        let mut map = Vec::with_capacity(n_file);
+        let mut kept: Vec<usize> = Vec::new();
+        for (j, p) in base.iter().enumerate() {
+            let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+            let next = kept.len() as u32;
+            let w = *first_of.entry(key).or_insert(next);
+            if w == next {
+                kept.push(j);
+            }
+            map.push(w);
+        }
+        let faces = faces.iter().map(|f| f.map(|v| map.get(v as usize).copied().unwrap_or(0))).collect();
+        Weld { n_file, kept, faces }
+    }
+
+    /// Whether every point is kept (no duplicates): a pose needs no copy.
+    pub(super) fn is_identity(&self) -> bool {
+        self.kept.len() == self.n_file
+    }
+
+    /// The kept points of a pose.
+    pub(super) fn keep<P: Copy + Into<[f64; 3]>>(&self, pose: &[P]) -> Vec<[f64; 3]> {
+        self.kept.iter().map(|&j| pose.get(j).map_or([0.0; 3], |&p| p.into())).collect()
+    }
+}
+
 
 #[cfg(test)]
 mod tests {

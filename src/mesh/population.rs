@@ -29,19 +29,76 @@ impl Normalization {
 }
 
 /// Registered shapes in unit-box coordinates.
+///
+/// The coordinates are stored once, in single precision (12 bytes per vertex and shape, see
+/// [`crate::memory`]): every reader gets them as f64 ([`Population::point`], [`Population::shape`]), the
+/// widened f32 values, so every consumer sees the same numbers and all arithmetic stays in f64. The unit box
+/// keeps every coordinate within [0, 1], where f32 resolves 6e-8 (the input positions are f32 in most files:
+/// glTF, point caches, binary PLY). Clones share the coordinates (a fit's pipeline, the page's models and a
+/// generated population's truth hold the same copy); [`Population::set_shapes`] replaces them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Population {
     /// Shape names in the order used (natural sort).
     pub names: Vec<String>,
     /// Triangles shared by every shape.
     pub faces: Vec<[u32; 3]>,
-    /// `shapes[i][j]`: vertex j of shape i, unit-box coordinates.
-    pub shapes: Vec<Vec<[f64; 3]>>,
+    /// `points[i * n_vertices + j]`: vertex j of shape i, unit-box coordinates in f32.
+    points: std::sync::Arc<Vec<[f32; 3]>>,
+    n_vertices: usize,
     /// How the original coordinates were mapped into the unit box.
     pub normalization: Normalization,
     /// Where the shapes came from, for people: "11 OBJ files", "48 morph targets of mesh 'horse' in
     /// horse.glb, ...", "241 frames of animation 'Walk' (sampled at its keyframes, 24 fps) ...".
     pub source: String,
+}
+
+/// One shape of a [`Population`]: its vertices' unit-box coordinates, widened to f64 when read.
+#[derive(Debug, Clone, Copy)]
+pub struct Shape<'a> {
+    points: &'a [[f32; 3]],
+}
+
+impl<'a> Shape<'a> {
+    /// Vertex j.
+    #[inline]
+    pub fn get(&self, j: usize) -> [f64; 3] {
+        widen(self.points[j])
+    }
+
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// The vertices in order.
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = [f64; 3]> + DoubleEndedIterator + Clone + 'a {
+        self.points.iter().map(|&p| widen(p))
+    }
+
+    /// A copy in f64.
+    pub fn to_vec(&self) -> Vec<[f64; 3]> {
+        self.iter().collect()
+    }
+
+    /// The stored single-precision coordinates.
+    pub fn as_f32(&self) -> &'a [[f32; 3]] {
+        self.points
+    }
+}
+
+/// A stored coordinate as the f64 every reader sees.
+#[inline(always)]
+pub fn widen(p: [f32; 3]) -> [f64; 3] {
+    [p[0] as f64, p[1] as f64, p[2] as f64]
+}
+
+/// A unit-box coordinate as stored (rounded to nearest f32).
+#[inline(always)]
+pub fn narrow(p: [f64; 3]) -> [f32; 3] {
+    [p[0] as f32, p[1] as f32, p[2] as f32]
 }
 
 /// Natural order of names: digit runs compare as numbers ("2.obj" < "10.obj"), the rest byte-wise,
@@ -80,15 +137,64 @@ pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
 
 impl Population {
     pub fn n_shapes(&self) -> usize {
-        self.shapes.len()
+        self.points.len().checked_div(self.n_vertices).unwrap_or(0)
     }
 
     pub fn n_vertices(&self) -> usize {
-        self.shapes.first().map_or(0, |s| s.len())
+        self.n_vertices
+    }
+
+    /// Vertex j of shape i, unit-box coordinates.
+    #[inline]
+    pub fn point(&self, i: usize, j: usize) -> [f64; 3] {
+        debug_assert!(j < self.n_vertices);
+        widen(self.points[i * self.n_vertices + j])
+    }
+
+    /// Shape i. Panics if there is no shape i (as indexing does); [`Population::get_shape`] does not.
+    #[inline]
+    pub fn shape(&self, i: usize) -> Shape<'_> {
+        self.get_shape(i).unwrap_or_else(|| panic!("no shape {i}: the population has {} shapes", self.n_shapes()))
+    }
+
+    /// Shape i, or None.
+    pub fn get_shape(&self, i: usize) -> Option<Shape<'_>> {
+        let nv = self.n_vertices;
+        (i < self.n_shapes()).then(|| Shape { points: &self.points[i * nv..(i + 1) * nv] })
+    }
+
+    /// Every shape in order.
+    pub fn shapes(&self) -> impl ExactSizeIterator<Item = Shape<'_>> + DoubleEndedIterator + Clone + '_ {
+        let nv = self.n_vertices.max(1);
+        self.points.chunks_exact(nv).map(|points| Shape { points })
+    }
+
+    /// A copy of every shape in f64 (`[i][j]`: vertex j of shape i), for code that wants slices; 24 bytes per
+    /// vertex and shape, twice the stored size.
+    pub fn unit_shapes(&self) -> Vec<Vec<[f64; 3]>> {
+        self.shapes().map(|s| s.to_vec()).collect()
+    }
+
+    /// Vertex j in every shape.
+    pub fn track(&self, j: usize) -> Vec<[f64; 3]> {
+        (0..self.n_shapes()).map(|i| self.point(i, j)).collect()
+    }
+
+    /// Replaces the shapes with `shapes` (unit-box coordinates, each rounded to f32 as stored; as many
+    /// vertices each as now; the normalisation is kept). For tests and variants of a population.
+    pub fn set_shapes(&mut self, shapes: &[Vec<[f64; 3]>]) {
+        assert!(shapes.iter().all(|s| s.len() == self.n_vertices), "every shape needs {} vertices", self.n_vertices);
+        self.points = std::sync::Arc::new(shapes.iter().flatten().map(|&p| narrow(p)).collect());
     }
 
     /// Validates, orders by natural sort of the names, and normalises into the unit box.
-    pub fn from_meshes(mut named: Vec<(String, Mesh)>) -> Result<Population> {
+    pub fn from_meshes(named: Vec<(String, Mesh)>) -> Result<Population> {
+        Population::from_meshes_sharing(named, false)
+    }
+
+    /// [`Population::from_meshes`]; with `faces_of_first`, only the first mesh (in natural order) carries the
+    /// faces and the others none (one copy of the faces instead of one per shape).
+    fn from_meshes_sharing(mut named: Vec<(String, Mesh)>, faces_of_first: bool) -> Result<Population> {
         if named.len() < 2 {
             let file = named.first().map_or_else(|| "(none)".to_string(), |n| n.0.clone());
             return Err(Error::Population {
@@ -122,6 +228,9 @@ impl Population {
             });
         }
         for (name, mesh) in &named[1..] {
+            if faces_of_first && mesh.positions.len() == first.positions.len() {
+                continue;
+            }
             if mesh.positions.len() != first.positions.len() {
                 return Err(Error::Population {
                     file: name.clone(),
@@ -189,20 +298,16 @@ impl Population {
         }
         let normalization = Normalization { offset: lo, scale: 1.0 / side };
         let faces = first.faces.clone();
+        let n_vertices = first.positions.len();
         let mut names = Vec::with_capacity(named.len());
-        let mut shapes = Vec::with_capacity(named.len());
+        let mut points = Vec::with_capacity(named.len() * n_vertices);
         for (name, mesh) in named {
-            // In place: the mesh's positions become the shape (no second copy of every pose).
-            let mut shape: Vec<[f64; 3]> = mesh.positions;
-            for p in &mut shape {
-                *p = normalization.to_unit(*p);
-            }
-            shape.shrink_to_fit();
-            shapes.push(shape);
+            // each pose's f64 positions are freed as soon as they are stored
+            points.extend(mesh.positions.iter().map(|&p| narrow(normalization.to_unit(p))));
             names.push(name);
         }
         let source = format!("{} shapes", names.len());
-        Ok(Population { names, faces, shapes, normalization, source })
+        Ok(Population { names, faces, points: std::sync::Arc::new(points), n_vertices, normalization, source })
     }
 
     /// Reads every file (name, bytes) with the reader its extension calls for ([`super::load`]: OBJ, PLY,
@@ -247,12 +352,19 @@ impl Population {
                 message: format!("{} names for {} shapes; give one name per shape", names.len(), shapes.len()),
             });
         }
+        // the faces once, on the shape that comes first in natural order (the one the others are checked against)
+        let first = (0..names.len()).min_by(|&a, &b| natural_cmp(&names[a], &names[b]));
+        let mut faces = Some(faces);
         let named = names
             .into_iter()
             .zip(shapes)
-            .map(|(n, positions)| (n, Mesh { positions, faces: faces.clone() }))
+            .enumerate()
+            .map(|(k, (n, positions))| {
+                let faces = if Some(k) == first { faces.take().unwrap_or_default() } else { Vec::new() };
+                (n, Mesh { positions, faces })
+            })
             .collect();
-        Population::from_meshes(named)
+        Population::from_meshes_sharing(named, true)
     }
 
     /// Loads the mesh files of a directory (every file of an extension [`super::load::FORMATS`] lists, and
@@ -380,7 +492,7 @@ mod tests {
         assert_eq!(p.names, vec!["a", "b"]);
         let n = p.normalization;
         assert!((n.scale - 0.5).abs() < 1e-12);
-        let back = n.to_original(p.shapes[1][1]);
+        let back = n.to_original(p.point(1, 1));
         assert!((back[0] - 2.0).abs() < 1e-12);
     }
 

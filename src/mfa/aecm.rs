@@ -358,10 +358,11 @@ impl Fit {
 
     fn model_of(&self, comps: &[Component], labels: Vec<u32>) -> Model {
         let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
+        let mut h = Vec::new();
         let latent: Vec<Vec3> = (0..self.data.n_vertices)
             .map(|j| {
                 let k = labels[j] as usize;
-                let e = comps[k].posterior_mean(&wbs[k], self.data.vertex(j));
+                let e = comps[k].posterior_mean(&wbs[k], self.data.vertex_into(j, &mut h));
                 [comps[k].lambda[0] * e[0], comps[k].lambda[1] * e[1], comps[k].lambda[2] * e[2]]
             })
             .collect();
@@ -452,13 +453,12 @@ fn check_data(data: &Data, parts: usize, most_components: usize) -> Result<()> {
             data.n_vertices, data.n_vertices
         )));
     }
-    if let Some(at) = data.h.iter().position(|v| !v.is_finite()) {
-        let (j, i) = (at / (3 * data.n_shapes), (at / 3) % data.n_shapes);
+    if let Some((j, i, v)) = data.first_non_finite() {
         return Err(Error::Data(format!(
             "vertex {} of shape {} has a non-finite coordinate ({}); fix or remove that vertex",
             j + 1,
             i + 1,
-            data.h[at]
+            v
         )));
     }
     memory::check(data.n_vertices, data.n_shapes, most_components, memory::budget_bytes()?)
@@ -468,10 +468,12 @@ fn check_data(data: &Data, parts: usize, most_components: usize) -> Result<()> {
 /// its centroid: identical shapes, or the whole mesh moved by a translation only): there is no motion, so no
 /// parts, to learn. Only for the whole population: a part that does not move is fine inside a fit.
 fn check_motion(data: &Data) -> Result<()> {
-    const SAME: f64 = 1e-9; // unit-box units; rounding of the centring is about 1e-16
+    // unit-box units: the coordinates are stored in f32 and centred on that grid (each rounding at most 6e-8)
+    const SAME: f64 = 1e-6;
     for j in 0..data.n_vertices {
         let h = data.vertex(j);
-        if h[1..].iter().any(|p| (0..3).any(|d| (p[d] - h[0][d]).abs() > SAME)) {
+        let first = h.get(0);
+        if h.iter().skip(1).any(|p| (0..3).any(|d| (p[d] - first[d]).abs() > SAME)) {
             return Ok(());
         }
     }

@@ -65,7 +65,7 @@ avx2_fn! {
                 for (i, a) in acc.chunks_exact_mut(3).enumerate() {
                     let mut s = [a[0], a[1], a[2]];
                     for &Member { j, g, .. } in chunk {
-                        let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+                        let p = data.point(j as usize, i);
                         for d in 0..3 {
                             s[d] += g * p[d];
                         }
@@ -149,7 +149,7 @@ avx2_fn! {
                     }
                 }
                 for (&Member { j, g, .. }, q) in chunk.iter().zip(&gez) {
-                    let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+                    let p = data.point(j as usize, i);
                     let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
                     sq += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
                     for a in 0..3 {
@@ -167,7 +167,7 @@ avx2_fn! {
                 if want_scatter {
                     let sc = &mut st.scatter[i];
                     for &Member { j, g, .. } in chunk {
-                        let p = &data.h[(j as usize * ns + i) * 3..(j as usize * ns + i) * 3 + 3];
+                        let p = data.point(j as usize, i);
                         let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
                         for a in 0..3 {
                             for e in 0..3 {

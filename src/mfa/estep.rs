@@ -3,7 +3,7 @@
 
 use super::component::{Component, Woodbury};
 use super::cm::{Member, Members, GAMMA_SKIP};
-use super::data::Data;
+use super::data::{Data, Layout};
 
 /// Floating-point operations per (vertex, shape) of the kernel: 3 (x = h - b) + 6 (|x|²/s) + 18
 /// (y += R^T x / s) + 1.
@@ -33,9 +33,10 @@ pub fn e_step(data: &Data, comps: &[Component], gamma: &mut Vec<f64>) -> f64 {
     gamma.clear();
     gamma.resize(data.n_vertices * m, 0.0);
     let mut ll = 0.0;
+    let mut h = Vec::new();
     for j in 0..data.n_vertices {
         let row = &mut gamma[j * m..(j + 1) * m];
-        log_densities(data.vertex(j), comps, &wbs, row);
+        log_densities(data.vertex_into(j, &mut h), comps, &wbs, row);
         ll += normalise_log_row(row);
     }
     ll
@@ -76,7 +77,7 @@ fn ordered_woodbury(comps: &[Component], order: &[usize]) -> Vec<Woodbury> {
 }
 
 /// Shapes after which the early-exit bound is checked in f64 (after the f32 screen).
-const CHECK_AFTER: [usize; 2] = [4, 8];
+pub(crate) const CHECK_AFTER: [usize; 2] = [4, 8];
 
 /// Shapes of the first early-exit check, done in f32 (twice the SIMD lanes of f64) with a rigorous slack.
 const SCREEN_SHAPES: usize = 2;
@@ -92,30 +93,20 @@ const GROUP_BLOCKS: usize = 4;
 /// Shapes the group bound looks at (the first ones of the farthest-first order).
 const GROUP_SHAPES: usize = 8;
 
-/// Most vertices the farthest-first shape order looks at.
-const ORDER_SAMPLE: usize = 4096;
-
 /// Vertices per block of the streaming layout: the E-step's kernel runs over one block at a time with the
 /// vertices in SIMD lanes (the reduction over shapes then needs no horizontal sums).
 pub const LANES: usize = 4;
 
 type Lanes = [f64; LANES];
 
-/// The data vectors regrouped for the E-step: blocks of [`LANES`] vertices that are close in the first shape
-/// (Morton order), stored structure-of-arrays, `h[(b * n_s + t) * 3 + c][l]` = coordinate c of vertex
-/// `idx[b][l]` in shape `order[t]`. The last block repeats its last vertex in the unused lanes (`valid[b]` are
-/// real). Nearby vertices mostly belong to the same parts, so a block shares its pruning decisions. The shapes
-/// are in farthest-first order (each next shape the one least like those before it), so that the early-exit
-/// bound over the first few shapes already sees most of the motion.
+/// What the E-step needs besides the data's own [`Layout`] (which it shares: the data are stored once, in
+/// that layout): the shapes the f32 screen reads (the first ones of every block, as stored) and the group
+/// bound's centres and radii.
 #[derive(Debug, Clone)]
 pub struct Blocked {
     n_shapes: usize,
-    order: Vec<usize>,
-    idx: Vec<[u32; LANES]>,
-    valid: Vec<u8>,
-    h: Vec<Lanes>,
-    /// The first [`Blocked::screen`] shapes again in f32, `h32[(b * screen + t) * 3 + c][l]`.
-    h32: Vec<[f32; LANES]>,
+    layout: std::sync::Arc<Layout>,
+    /// Shapes the f32 screen reads: the first ones of every block.
     screen: usize,
     /// Groups of [`GROUP_BLOCKS`] consecutive blocks: per group, the centre of its vertices in each of the
     /// first `group_shapes` shapes (in `order`), `centres[g * group_shapes + t]`, and the squared radius of the
@@ -127,33 +118,11 @@ pub struct Blocked {
 
 impl Blocked {
     pub fn new(data: &Data) -> Blocked {
-        let (nv, ns) = (data.n_vertices, data.n_shapes);
-        let order = morton_order(data);
-        let shapes = farthest_first_shapes(data);
-        let nb = nv.div_ceil(LANES);
-        let mut idx = Vec::with_capacity(nb);
-        let mut valid = Vec::with_capacity(nb);
-        // written in order, one lane vector at a time from the block's LANES vertex rows (not zeroed first: in
-        // wasm the allocator clears reused memory for a zeroed allocation, 9.9 MB a run on horse-gallop)
-        let mut h: Vec<Lanes> = Vec::with_capacity(nb * ns * 3);
-        for chunk in order.chunks(LANES) {
-            let ids: [usize; LANES] = std::array::from_fn(|l| chunk[l.min(chunk.len() - 1)]);
-            let rows: [&[[f64; 3]]; LANES] = std::array::from_fn(|l| data.vertex(ids[l]));
-            for &i in &shapes {
-                for c in 0..3 {
-                    h.push(std::array::from_fn(|l| rows[l][i][c]));
-                }
-            }
-            idx.push(ids.map(|j| j as u32));
-            valid.push(chunk.len() as u8);
-        }
+        let ns = data.n_shapes;
+        let layout = data.layout.clone();
+        let h = &layout.h;
+        let nb = layout.n_blocks();
         let screen = if ns > SCREEN_SHAPES { SCREEN_SHAPES } else { 0 };
-        let mut h32 = Vec::with_capacity(nb * screen * 3);
-        for b in 0..nb {
-            for t in 0..screen * 3 {
-                h32.push(h[b * ns * 3 + t].map(|v| v as f32));
-            }
-        }
         let group_shapes = ns.min(GROUP_SHAPES);
         let ng = nb.div_ceil(GROUP_BLOCKS);
         let mut centres = vec![[0.0; 3]; ng * group_shapes];
@@ -166,108 +135,36 @@ impl Blocked {
                 let n = (blocks.len() * LANES) as f64;
                 for (b, l) in lanes() {
                     for d in 0..3 {
-                        c[d] += h[(b * ns + t) * 3 + d][l] / n;
+                        c[d] += h[(b * ns + t) * 3 + d][l] as f64 / n;
                     }
                 }
                 let mut r2 = 0.0f64;
                 for (b, l) in lanes() {
-                    let e: f64 = (0..3).map(|d| (h[(b * ns + t) * 3 + d][l] - c[d]).powi(2)).sum();
+                    let e: f64 = (0..3).map(|d| (h[(b * ns + t) * 3 + d][l] as f64 - c[d]).powi(2)).sum();
                     r2 = r2.max(e);
                 }
                 centres[g * group_shapes + t] = c;
                 radii2[g * group_shapes + t] = r2;
             }
         }
-        Blocked { n_shapes: ns, order: shapes, idx, valid, h, h32, screen, centres, radii2, group_shapes }
+        Blocked { n_shapes: ns, layout, screen, centres, radii2, group_shapes }
     }
 
     pub fn n_blocks(&self) -> usize {
-        self.idx.len()
+        self.layout.n_blocks()
     }
 
     /// The block's data: n_s x 3 lane vectors.
     #[inline]
-    fn block(&self, b: usize) -> &[Lanes] {
-        &self.h[b * self.n_shapes * 3..(b + 1) * self.n_shapes * 3]
+    fn block(&self, b: usize) -> &[[f32; LANES]] {
+        &self.layout.h[b * self.n_shapes * 3..(b + 1) * self.n_shapes * 3]
     }
 
-    /// The block's first [`Blocked::screen`] shapes in f32.
+    /// The block's first [`Blocked::screen`] shapes.
     #[inline]
     fn block32(&self, b: usize) -> &[[f32; LANES]] {
-        &self.h32[b * self.screen * 3..(b + 1) * self.screen * 3]
+        &self.layout.h[b * self.n_shapes * 3..b * self.n_shapes * 3 + self.screen * 3]
     }
-}
-
-/// Shapes in farthest-first order: shape 0, then repeatedly the shape whose smallest summed squared vertex
-/// distance to the shapes already taken is largest, for as many shapes as the early-exit checks look at (8);
-/// the rest follow in their own order. The distances are summed over at most [`ORDER_SAMPLE`] evenly spaced
-/// vertices (the order only decides how early the bounds prune; every order gives the same E-step).
-fn farthest_first_shapes(data: &Data) -> Vec<usize> {
-    let ns = data.n_shapes;
-    let stride = data.n_vertices.div_ceil(ORDER_SAMPLE).max(1);
-    let dist = |a: usize, b: usize| -> f64 {
-        (0..data.n_vertices)
-            .step_by(stride)
-            .map(|j| {
-                let v = data.vertex(j);
-                let d = [v[a][0] - v[b][0], v[a][1] - v[b][1], v[a][2] - v[b][2]];
-                d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-            })
-            .sum()
-    };
-    if ns == 0 {
-        return Vec::new();
-    }
-    let mut order = vec![0];
-    let mut taken = vec![false; ns];
-    taken[0] = true;
-    let mut nearest: Vec<f64> = (0..ns).map(|i| if i == 0 { -1.0 } else { dist(0, i) }).collect();
-    let chosen = ns.min(CHECK_AFTER[CHECK_AFTER.len() - 1]);
-    while order.len() < chosen {
-        let next = (0..ns).filter(|&i| !taken[i]).fold(None, |a: Option<usize>, i| match a {
-            Some(b) if nearest[b] >= nearest[i] => Some(b),
-            _ => Some(i),
-        });
-        let Some(next) = next else { break };
-        order.push(next);
-        taken[next] = true;
-        if order.len() < chosen {
-            for i in 0..ns {
-                if !taken[i] {
-                    nearest[i] = nearest[i].min(dist(next, i));
-                }
-            }
-        }
-    }
-    order.extend((0..ns).filter(|&i| !taken[i]));
-    order
-}
-
-/// Vertices sorted along a Z-order curve of their positions in the first shape (10 bits per axis).
-fn morton_order(data: &Data) -> Vec<usize> {
-    let nv = data.n_vertices;
-    let (lo, hi) = crate::geometry::bounds((0..nv).map(|j| &data.vertex(j)[0]));
-    let spread = |x: u32| -> u64 {
-        let mut v = 0u64;
-        for bit in 0..10 {
-            v |= (((x >> bit) & 1) as u64) << (3 * bit);
-        }
-        v
-    };
-    let mut keyed: Vec<(u64, usize)> = (0..nv)
-        .map(|j| {
-            let p = data.vertex(j)[0];
-            let mut key = 0u64;
-            for c in 0..3 {
-                let w = hi[c] - lo[c];
-                let t = if w > 0.0 && p[c].is_finite() { ((p[c] - lo[c]) / w * 1023.0).clamp(0.0, 1023.0) } else { 0.0 };
-                key |= spread(t as u32) << c;
-            }
-            (key, j)
-        })
-        .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|(_, j)| j).collect()
 }
 
 /// The arithmetic of the kernel: f64, and f32 for the screening pass.
@@ -276,15 +173,15 @@ impl Real for f64 {}
 impl Real for f32 {}
 
 /// y and Σ|x|²/s of one block, accumulated over the shapes `packed` (and the matching `h`, 3 lane vectors per
-/// shape): the E-step's kernel, the same arithmetic as [`super::component::project_packed`] with the vertices
-/// in lanes.
+/// shape, f32 widened to `T`): the E-step's kernel, the same arithmetic as [`super::component::project_packed`]
+/// with the vertices in lanes.
 #[inline(always)]
-fn accumulate_block<T: Real>(packed: &[[T; 13]], h: &[[T; LANES]], y: &mut [[T; LANES]; 3], sq: &mut [T; LANES]) {
+fn accumulate_block<T: Real + From<f32>>(packed: &[[T; 13]], h: &[[f32; LANES]], y: &mut [[T; LANES]; 3], sq: &mut [T; LANES]) {
     for (q, hi) in packed.iter().zip(h.chunks_exact(3)) {
         for l in 0..LANES {
-            let x0 = hi[0][l] - q[0];
-            let x1 = hi[1][l] - q[1];
-            let x2 = hi[2][l] - q[2];
+            let x0 = T::from(hi[0][l]) - q[0];
+            let x1 = T::from(hi[1][l]) - q[1];
+            let x2 = T::from(hi[2][l]) - q[2];
             sq[l] += (x0 * x0 + x1 * x1 + x2 * x2) * q[3];
             y[0][l] += q[4] * x0 + q[5] * x1 + q[6] * x2;
             y[1][l] += q[7] * x0 + q[8] * x1 + q[9] * x2;
@@ -299,7 +196,7 @@ avx2_fn! {
     /// compiled as the small loop it is (in wasm the engine allocates its registers as in [`kernel_pass`], the
     /// limit it is compared with, instead of within the whole E-step).
     #[inline(never)]
-    fn accumulate_block_f64(packed: &[[f64; 13]], h: &[Lanes], y: &mut [Lanes; 3], sq: &mut Lanes) {
+    fn accumulate_block_f64(packed: &[[f64; 13]], h: &[[f32; LANES]], y: &mut [Lanes; 3], sq: &mut Lanes) {
         accumulate_block(packed, h, y, sq);
     }
 }
@@ -429,8 +326,8 @@ impl EStep {
             members.clear();
             return (f64::NEG_INFINITY, 0);
         }
-        let wbs = ordered_woodbury(comps, &self.blocked.order);
-        let shrinks = prefix_shrinks(comps, &self.blocked.order);
+        let wbs = ordered_woodbury(comps, &self.blocked.layout.order);
+        let shrinks = prefix_shrinks(comps, &self.blocked.layout.order);
         if self.owner_parts != m || self.owner.len() != nv {
             self.owner.clear();
             self.owner.resize(nv, 0);
@@ -451,7 +348,7 @@ impl EStep {
         if ts > 0 {
             for (k, wb) in wbs.iter().enumerate() {
                 self.packed32.extend(wb.packed[..ts].iter().map(|q| q.map(|v| v as f32)));
-                let s_min = self.blocked.order[..ts].iter().map(|&i| comps[k].variances[i]).fold(f64::INFINITY, f64::min);
+                let s_min = self.blocked.layout.order[..ts].iter().map(|&i| comps[k].variances[i]).fold(f64::INFINITY, f64::min);
                 self.screen.push(Screen {
                     shrink: shrinks[k][ts - 1].map(|v| v as f32),
                     abs: (ts as f64 * (1.0 + SCREEN_ABS_S / s_min)) as f32,
@@ -485,8 +382,8 @@ impl EStep {
             }
             let h = self.blocked.block(b);
             let h32 = self.blocked.block32(b);
-            let ids = self.blocked.idx[b];
-            let nvalid = self.blocked.valid[b] as usize;
+            let ids = self.blocked.layout.idx[b];
+            let nvalid = self.blocked.layout.valid[b] as usize;
             self.alive.clear();
             // the previous owners first
             let mut best = [f64::NEG_INFINITY; LANES];
@@ -573,7 +470,7 @@ impl EStep {
                     // no component gives this vertex a density (or NaN): share it evenly, nothing divides by 0
                     let u = 1.0 / m as f64;
                     for (c, list) in comps.iter().zip(members.iter_mut()) {
-                        let (y, _) = super::component::project_packed(&c.woodbury().packed, data.vertex(j));
+                        let (y, _) = super::component::project_packed(&c.woodbury().packed, &data.vertex(j).to_vec());
                         list.push(Member { j: j as u32, g: u, y });
                     }
                     self.owner[j] = 0;
@@ -774,27 +671,35 @@ pub struct KernelRate {
 /// `min_ms` (and at least 5 passes: in wasm, engines compile a function with their optimising tier only
 /// after it has run a while, and a pass is one call). The real E-step's rate is compared with this.
 pub fn kernel_limit(data: &Data, comps: &[Component], min_ms: f64) -> KernelRate {
-    let blocked = Blocked::new(data);
-    let wbs = ordered_woodbury(comps, &blocked.order);
+    kernel_limit_on(&Blocked::new(data), comps, min_ms)
+}
+
+/// [`kernel_limit`] on data already laid out.
+pub fn kernel_limit_on(blocked: &Blocked, comps: &[Component], min_ms: f64) -> KernelRate {
+    let wbs = ordered_woodbury(comps, &blocked.layout.order);
     let packed: Vec<Vec<[f64; 13]>> = wbs.iter().map(|wb| wb.packed.clone()).collect();
-    let per_pass = (blocked.n_blocks() * LANES * comps.len()) as f64 * flops_per_pair(data.n_shapes);
-    measure(per_pass, min_ms, || kernel_pass(&blocked.h, data.n_shapes, &packed))
+    let per_pass = (blocked.n_blocks() * LANES * comps.len()) as f64 * flops_per_pair(blocked.n_shapes);
+    measure(per_pass, min_ms, || kernel_pass(&blocked.layout.h, blocked.n_shapes, &packed))
 }
 
 /// The same for the f32 screen: every block x every component, the first [`SCREEN_SHAPES`] shapes in f32 and
 /// the check's arithmetic (as [`screened_out`] does it), no branches. This is the limit of the screened part of
 /// the E-step's work, which comes in short pieces of 2 shapes.
 pub fn kernel_limit_f32(data: &Data, comps: &[Component], min_ms: f64) -> KernelRate {
-    let blocked = Blocked::new(data);
+    kernel_limit_f32_on(&Blocked::new(data), comps, min_ms)
+}
+
+/// [`kernel_limit_f32`] on data already laid out.
+pub fn kernel_limit_f32_on(blocked: &Blocked, comps: &[Component], min_ms: f64) -> KernelRate {
     let ts = blocked.screen;
     if ts == 0 {
         return KernelRate { gflop: 0.0, ms: 0.0, gflops_per_s: f64::INFINITY };
     }
-    let wbs = ordered_woodbury(comps, &blocked.order);
+    let wbs = ordered_woodbury(comps, &blocked.layout.order);
     let packed: Vec<[f32; 13]> = wbs.iter().flat_map(|wb| wb.packed[..ts].iter().map(|q| q.map(|v| v as f32))).collect();
     let m = comps.len();
     let per_pass = (blocked.n_blocks() * LANES * m * (FLOPS_PER_SHAPE * ts + FLOPS_PER_SCREEN_CHECK)) as f64;
-    measure(per_pass, min_ms, || screen_pass(&blocked, &packed, m, ts) as f64)
+    measure(per_pass, min_ms, || screen_pass(blocked, &packed, m, ts) as f64)
 }
 
 #[inline(never)]
@@ -821,7 +726,7 @@ fn screen_pass(blocked: &Blocked, packed: &[[f32; 13]], m: usize, ts: usize) -> 
 }
 
 #[inline(never)]
-fn kernel_pass<T: Real + PartialOrd + From<f32>>(h: &[[T; LANES]], ns: usize, packed: &[Vec<[T; 13]>]) -> T {
+fn kernel_pass<T: Real + PartialOrd + From<f32>>(h: &[[f32; LANES]], ns: usize, packed: &[Vec<[T; 13]>]) -> T {
     let zero = T::from(0.0);
     let mut sink = [zero; LANES];
     for hb in h.chunks_exact(ns * 3) {
@@ -857,8 +762,9 @@ pub fn kernel_rate_vertex_major(data: &Data, comps: &[Component], min_ms: f64) -
 #[inline(never)]
 fn vertex_major_pass(data: &Data, comps: &[Component], wbs: &[Woodbury]) -> f64 {
     let mut sink = f64::NEG_INFINITY;
+    let mut buf = Vec::new();
     for j in 0..data.n_vertices {
-        let h = data.vertex(j);
+        let h = data.vertex_into(j, &mut buf);
         for (c, wb) in comps.iter().zip(wbs) {
             sink = sink.max(c.log_weighted_density(wb, h));
         }
@@ -972,7 +878,7 @@ mod tests {
         // direct: plain probabilities without log-sum-exp (values are moderate here)
         let mut ll_direct = 0.0;
         for j in 0..nv {
-            let h: Vec<[f64; 3]> = (0..ns).map(|i| data.vertex(j)[i]).collect();
+            let h: Vec<[f64; 3]> = (0..ns).map(|i| data.point(j, i)).collect();
             let p: Vec<f64> = comps.iter().map(|c| c.log_weighted_density(&c.woodbury(), &h).exp()).collect();
             let s: f64 = p.iter().sum();
             ll_direct += s.ln();

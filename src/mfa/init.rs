@@ -8,22 +8,23 @@ use super::component::Component;
 use super::data::Data;
 use crate::geometry::procrustes::best_rotation;
 use crate::geometry::{mat_mul, mat_t_vec, mat_vec, sub, Mat3, Vec3};
+use crate::mesh::population::widen;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
 /// Squared distance between two data vectors (four running sums, so that the loop vectorises).
 #[inline]
-fn dist2(a: &[f64], b: &[f64]) -> f64 {
+fn dist2<A: Copy + Into<f64>, B: Copy + Into<f64>>(a: &[A], b: &[B]) -> f64 {
     let mut acc = [0.0; 4];
     let (a4, a_rest) = a.as_chunks::<4>();
     let (b4, b_rest) = b.as_chunks::<4>();
     for (x, y) in a4.iter().zip(b4) {
         for l in 0..4 {
-            let d = x[l] - y[l];
+            let d = x[l].into() - y[l].into();
             acc[l] += d * d;
         }
     }
-    let rest: f64 = a_rest.iter().zip(b_rest).map(|(x, y)| (x - y) * (x - y)).sum();
+    let rest: f64 = a_rest.iter().zip(b_rest).map(|(&x, &y)| (x.into() - y.into()) * (x.into() - y.into())).sum();
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
 }
 
@@ -39,11 +40,13 @@ avx2_fn! {
     fn kmeans_once(data: &Data, m: usize, rng: &mut Pcg64, lloyd_iters: usize) -> (Vec<u32>, f64) {
         let n = data.n_vertices;
         let dim = data.n_shapes * 3;
-        let row = |j: usize| &data.h[j * dim..(j + 1) * dim];
+        // h_j gathered from the data's layout, as stored (f32), into a reused buffer
+        let (mut buf, mut buf2) = (Vec::with_capacity(dim), Vec::with_capacity(dim));
         let mut centres: Vec<f64> = Vec::with_capacity(m * dim);
         let first = index_below(rng, n);
-        centres.extend_from_slice(row(first));
-        let mut d2: Vec<f64> = (0..n).map(|j| dist2(row(j), row(first))).collect();
+        let c0: Vec<f32> = data.row_into(first, &mut buf).to_vec();
+        centres.extend(c0.iter().map(|&v| v as f64));
+        let mut d2: Vec<f64> = (0..n).map(|j| dist2(data.row_into(j, &mut buf), &c0)).collect();
         while centres.len() < m * dim {
             let total: f64 = d2.iter().sum();
             let pick = if total > 0.0 {
@@ -60,9 +63,9 @@ avx2_fn! {
             } else {
                 index_below(rng, n)
             };
-            let c = row(pick).to_vec();
+            let c: Vec<f64> = data.row_into(pick, &mut buf).iter().map(|&v| v as f64).collect();
             for j in 0..n {
-                d2[j] = d2[j].min(dist2(row(j), &c));
+                d2[j] = d2[j].min(dist2(data.row_into(j, &mut buf), &c));
             }
             centres.extend_from_slice(&c);
         }
@@ -73,7 +76,7 @@ avx2_fn! {
             let mut new_cost = 0.0;
             let mut changed = false;
             for j in 0..n {
-                let r = row(j);
+                let r = data.row_into(j, &mut buf);
                 let mut best = (f64::INFINITY, 0u32);
                 for k in 0..m {
                     let d = dist2(r, &centres[k * dim..(k + 1) * dim]);
@@ -93,20 +96,22 @@ avx2_fn! {
             for j in 0..n {
                 let k = labels[j] as usize;
                 counts[k] += 1;
-                for (s, v) in sums[k * dim..(k + 1) * dim].iter_mut().zip(row(j)) {
-                    *s += v;
+                for (s, &v) in sums[k * dim..(k + 1) * dim].iter_mut().zip(data.row_into(j, &mut buf)) {
+                    *s += v as f64;
                 }
             }
             for k in 0..m {
                 if counts[k] == 0 {
                     let far = (0..n)
                         .max_by(|&a, &b| {
-                            let da = dist2(row(a), &centres[labels[a] as usize * dim..(labels[a] as usize + 1) * dim]);
-                            let db = dist2(row(b), &centres[labels[b] as usize * dim..(labels[b] as usize + 1) * dim]);
+                            let da = dist2(data.row_into(a, &mut buf), &centres[labels[a] as usize * dim..(labels[a] as usize + 1) * dim]);
+                            let db = dist2(data.row_into(b, &mut buf2), &centres[labels[b] as usize * dim..(labels[b] as usize + 1) * dim]);
                             da.partial_cmp(&db).unwrap_or(std::cmp::Ordering::Equal)
                         })
                         .unwrap_or(0);
-                    centres[k * dim..(k + 1) * dim].copy_from_slice(row(far));
+                    for (c, &v) in centres[k * dim..(k + 1) * dim].iter_mut().zip(data.row_into(far, &mut buf)) {
+                        *c = v as f64;
+                    }
                     labels[far] = k as u32;
                     changed = true;
                 } else {
@@ -162,26 +167,41 @@ fn principal_axes(cov: &Mat3) -> (Vec3, Mat3) {
 pub fn component_from_points(data: &Data, members: &[usize], n_total: usize, floor: f64) -> Component {
     let ns = data.n_shapes;
     let n = members.len();
-    // the members' points, shape-major (read vertex by vertex, each h_j contiguous)
-    let mut xs = vec![[0.0; 3]; ns * n];
+    // the members' points, shape-major, in f32 as the data store them
+    let mut xs = vec![[0.0f32; 3]; ns * n];
     for (m, &j) in members.iter().enumerate() {
         for (i, p) in data.vertex(j).iter().enumerate() {
-            xs[i * n + m] = *p;
+            xs[i * n + m] = crate::mesh::population::narrow(p);
         }
     }
     procrustes_start(ns, n, xs, n_total, floor)
 }
 
 /// [`component_from_points`] of `Data::from_population_subset(pop, members)`'s vertices, all of them, without
-/// the copy: the same points (each shape centred on the members' centroid), so the same component bit for bit.
+/// the copy: the same points (each shape centred on the members' centroid, rounded to f32 as `Data` stores
+/// them), so the same component bit for bit.
 pub fn component_from_population(pop: &crate::mesh::Population, members: &[usize], n_total: usize, floor: f64) -> Component {
+    let offsets = super::data::Data::centroids(pop, members);
+    component_from_population_centred(pop, members, &offsets, n_total, floor)
+}
+
+/// [`component_from_points`] of `members` of data whose shapes are centred on `offsets` (the data of a
+/// population and its offsets, e.g. `Data::from_population(pop)` for `Data::centroids(pop, all vertices)`), read
+/// from the population without that copy: the same component bit for bit.
+pub fn component_from_population_centred(
+    pop: &crate::mesh::Population,
+    members: &[usize],
+    offsets: &[Vec3],
+    n_total: usize,
+    floor: f64,
+) -> Component {
     let ns = pop.n_shapes();
     let n = members.len();
-    let mut xs = vec![[0.0; 3]; ns * n];
-    let offsets = super::data::Data::centroids(pop, members);
-    for ((i, shape), &offset) in pop.shapes.iter().enumerate().zip(&offsets) {
+    let mut xs = vec![[0.0f32; 3]; ns * n];
+    for ((i, shape), &offset) in pop.shapes().enumerate().zip(offsets) {
         for (x, &j) in xs[i * n..(i + 1) * n].iter_mut().zip(members) {
-            *x = sub(shape[j], offset);
+            // rounded to f32 as `Data` stores it
+            *x = crate::mesh::population::narrow(sub(shape.get(j), offset));
         }
     }
     procrustes_start(ns, n, xs, n_total, floor)
@@ -191,28 +211,30 @@ avx2_fn! {
     /// Generalised Procrustes on `n` points in each of `ns` shapes, `xs[i * n + m]` = point m in shape i (see the
     /// module doc). Every loop runs shape by shape over the points in order (contiguous reads), with a sum's
     /// accumulators in registers; each sum adds the points in their order.
-    fn procrustes_start(ns: usize, n: usize, xs: Vec<Vec3>, n_total: usize, floor: f64) -> Component {
-        let mut xs = xs;
+    fn procrustes_start(ns: usize, n: usize, xs: Vec<[f32; 3]>, n_total: usize, floor: f64) -> Component {
         let nf = n.max(1) as f64;
         let mut centroids = vec![[0.0; 3]; ns];
-        for (c, shape) in centroids.iter_mut().zip(xs.chunks_exact_mut(n.max(1))) {
-            for p in shape.iter() {
+        for (c, shape) in centroids.iter_mut().zip(xs.chunks_exact(n.max(1))) {
+            for &p in shape.iter() {
+                let p = widen(p);
                 for d in 0..3 {
                     c[d] += p[d] / nf;
                 }
             }
-            for p in shape.iter_mut() {
-                *p = sub(*p, *c);
-            }
         }
-        let shape = |i: usize| &xs[i * n..(i + 1) * n];
+        // the points centred on their shape's centroid, computed where they are read (f64, the same values as
+        // subtracting once and storing: the points stay f32, half the bytes)
+        let shape = |i: usize| {
+            let c = centroids[i];
+            xs[i * n..(i + 1) * n].iter().map(move |&p| sub(widen(p), c))
+        };
         // generalised Procrustes: X_i ≈ R_i mean
-        let mut mean: Vec<Vec3> = if ns > 0 { shape(0).to_vec() } else { vec![[0.0; 3]; n] };
+        let mut mean: Vec<Vec3> = if ns > 0 { shape(0).collect() } else { vec![[0.0; 3]; n] };
         let mut rots = vec![crate::geometry::IDENTITY; ns];
         for _ in 0..4 {
             for (i, rot) in rots.iter_mut().enumerate() {
                 let mut c = [[0.0; 3]; 3];
-                for (x, mm) in shape(i).iter().zip(&mean) {
+                for (x, mm) in shape(i).zip(&mean) {
                     for a in 0..3 {
                         for b in 0..3 {
                             c[a][b] += x[a] * mm[b];
@@ -223,7 +245,7 @@ avx2_fn! {
             }
             mean.iter_mut().for_each(|mm| *mm = [0.0; 3]);
             for (i, rot) in rots.iter().enumerate() {
-                for (mm, &x) in mean.iter_mut().zip(shape(i)) {
+                for (mm, x) in mean.iter_mut().zip(shape(i)) {
                     let v = mat_t_vec(rot, x);
                     for d in 0..3 {
                         mm[d] += v[d] / ns as f64;
@@ -248,7 +270,7 @@ avx2_fn! {
             .enumerate()
             .map(|(i, rot)| {
                 let mut s = 0.0;
-                for (&x, y) in shape(i).iter().zip(&latent) {
+                for (x, y) in shape(i).zip(&latent) {
                     let d = sub(x, mat_vec(rot, *y));
                     s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
                 }

@@ -4,7 +4,7 @@
 
 use super::component::Component;
 use super::data::Data;
-use super::estep::{kernel_limit, kernel_limit_f32, KernelRate};
+use super::estep::{kernel_limit_f32_on, kernel_limit_on, Blocked, KernelRate};
 use super::aecm::StageStats;
 use serde::Serialize;
 
@@ -29,8 +29,11 @@ fn kernel_ms(flops: f64, flops_f32: f64, f64_rate: &KernelRate, f32_rate: &Kerne
 /// Measures both kernels for at least `min_ms` each on `parts` (a fitted model's components) and compares
 /// them with the E-step figures of `stats`.
 pub fn limit_report(data: &Data, parts: &[Component], stats: &[StageStats], min_ms: f64) -> LimitReport {
-    let f64_rate = kernel_limit(data, parts, min_ms);
-    let f32_rate = kernel_limit_f32(data, parts, min_ms);
+    // one layout for both kernels
+    let blocked = Blocked::new(data);
+    let f64_rate = kernel_limit_on(&blocked, parts, min_ms);
+    let f32_rate = kernel_limit_f32_on(&blocked, parts, min_ms);
+    drop(blocked);
     let frac = |flops: f64, flops_f32: f64, ms: f64| if ms > 0.0 { kernel_ms(flops, flops_f32, &f64_rate, &f32_rate) / ms } else { 0.0 };
     let stage_fractions = stats.iter().map(|s| frac(s.estep_flops, s.estep_flops_f32, s.estep_ms)).collect();
     let sum = |f: fn(&StageStats) -> f64| stats.iter().map(f).sum::<f64>();

@@ -47,7 +47,7 @@ impl Model {
     /// Residuals ε_j^i = v_j^i - (R^i v_j^ref + b^i): the "muscle" motion, per shape and vertex.
     pub fn residuals(&self, pop: &Population) -> Vec<Vec<Vec3>> {
         (0..self.n_shapes)
-            .map(|i| self.reconstruct(i).iter().zip(&pop.shapes[i]).map(|(&r, &v)| sub(v, r)).collect())
+            .map(|i| self.reconstruct(i).iter().zip(pop.shape(i).iter()).map(|(&r, v)| sub(v, r)).collect())
             .collect()
     }
 
@@ -55,8 +55,8 @@ impl Model {
     pub fn rmse(&self, pop: &Population) -> f64 {
         let mut s = 0.0;
         for i in 0..self.n_shapes {
-            for (r, v) in self.reconstruct(i).iter().zip(&pop.shapes[i]) {
-                let d = sub(*v, *r);
+            for (r, v) in self.reconstruct(i).iter().zip(pop.shape(i).iter()) {
+                let d = sub(v, *r);
                 s += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             }
         }
@@ -67,14 +67,14 @@ impl Model {
     pub fn vertex_errors(&self, pop: &Population, shape: usize) -> Vec<f64> {
         self.reconstruct(shape)
             .iter()
-            .zip(&pop.shapes[shape])
-            .map(|(r, v)| crate::geometry::norm(sub(*v, *r)))
+            .zip(pop.shape(shape).iter())
+            .map(|(r, v)| crate::geometry::norm(sub(v, *r)))
             .collect()
     }
 
     /// P(k | h_j) for every part k (eq 12) for one vertex.
     pub fn responsibilities(&self, pop: &Population, vertex: usize) -> Vec<f64> {
-        let h: Vec<Vec3> = pop.shapes.iter().map(|s| s[vertex]).collect();
+        let h: Vec<Vec3> = pop.track(vertex);
         let logs: Vec<f64> = self.parts.iter().map(|c| c.log_weighted_density(&c.woodbury(), &h)).collect();
         let mx = logs.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         let e: Vec<f64> = logs.iter().map(|l| (l - mx).exp()).collect();

@@ -36,21 +36,34 @@ pub struct Diagnosis {
     pub parts: usize,
 }
 
-/// RMSE of the best rigid motion (generalised Procrustes) of each labelled part of `data` (unit-box units); one
-/// label for all vertices gives the single body's.
-fn rigid_rmse(data: &Data, labels: &[u32]) -> f64 {
+/// RMSE of the best rigid motion (generalised Procrustes) of each labelled part of `pop`'s data (unit-box
+/// units); one label for all vertices gives the single body's. The data as `Data::from_population(pop)` holds
+/// them (every shape centred on its centroid, rounded to f32), read from the population without that copy.
+fn rigid_rmse(pop: &Population, labels: &[u32]) -> f64 {
+    let (nv, ns) = (pop.n_vertices(), pop.n_shapes());
+    let all: Vec<usize> = (0..nv).collect();
+    let offsets = Data::centroids(pop, &all);
     let m = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
     let mut members = vec![Vec::new(); m];
     labels.iter().enumerate().for_each(|(j, &l)| members[l as usize].push(j));
+    let mut h = vec![[0.0; 3]; ns];
     let sse: f64 = members
         .iter()
         .filter(|v| !v.is_empty())
         .map(|v| {
-            let c = crate::mfa::init::component_from_points(data, v, v.len(), f64::MIN_POSITIVE);
-            v.iter().map(|&j| super::motion_labels::motion_residual(&c, data.vertex(j))).sum::<f64>()
+            let c = crate::mfa::init::component_from_population_centred(pop, v, &offsets, v.len(), f64::MIN_POSITIVE);
+            v.iter()
+                .map(|&j| {
+                    for (i, p) in h.iter_mut().enumerate() {
+                        let q = crate::geometry::sub(pop.point(i, j), offsets[i]);
+                        *p = crate::mesh::population::widen(crate::mesh::population::narrow(q));
+                    }
+                    super::motion_labels::motion_residual(&c, &h)
+                })
+                .sum::<f64>()
         })
         .sum();
-    (sse / (data.n_vertices * data.n_shapes).max(1) as f64).sqrt()
+    (sse / (nv * ns).max(1) as f64).sqrt()
 }
 
 /// The verdict for a fit of `pop`: [`diagnose`] of its model, except with an exact part count (`target_parts`)
@@ -62,14 +75,13 @@ fn rigid_rmse(data: &Data, labels: &[u32]) -> f64 {
 pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     let asked = diagnose(pop, &result.model);
     let Some(labels) = result.decided_labels.as_ref() else { return asked };
-    let data = Data::from_population(pop);
     let decided = super::labels::compact(labels);
     let n = decided.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
     if n == asked.parts || asked.single_body_rmse < RIGID_RMSE {
         return asked;
     }
     let single = asked.single_body_rmse;
-    let rmse = rigid_rmse(&data, &decided);
+    let rmse = rigid_rmse(pop, &decided);
     let explained = 1.0 - (rmse / single).powi(2);
     if asked.articulated || n < 2 || explained < MIN_EXPLAINED {
         return asked;
@@ -97,8 +109,7 @@ pub const UNFINISHED: &str = "cancelled: the diagnosis needs a finished fit";
 
 /// The verdict for a fitted model of `pop`.
 pub fn diagnose(pop: &Population, model: &Model) -> Diagnosis {
-    let data = Data::from_population(pop);
-    let single = rigid_rmse(&data, &vec![0; data.n_vertices]);
+    let single = rigid_rmse(pop, &vec![0; pop.n_vertices()]);
     let parts_rmse = model.rmse(pop);
     let parts = model.n_parts();
     let explained = if single > 0.0 { 1.0 - (parts_rmse / single).powi(2) } else { 1.0 };
@@ -196,12 +207,15 @@ mod tests {
     fn a_rigidly_moving_population_is_not_articulated() {
         let g = generate(&Spec { preset: Preset::Arm, vertices: 500, poses: 4, ..Spec::default() }).unwrap();
         let mut pop = g.population.clone();
-        let first = pop.shapes[0].clone();
-        for (i, s) in pop.shapes.iter_mut().enumerate() {
-            // every pose the first one, turned as a whole
-            let r = crate::geometry::rotation::axis_angle([0.2, 1.0, 0.1], 0.3 * i as f64);
-            *s = first.iter().map(|&p| crate::geometry::mat_vec(&r, p)).collect();
-        }
+        let first = pop.shape(0).to_vec();
+        let turned: Vec<Vec<[f64; 3]>> = (0..pop.n_shapes())
+            .map(|i| {
+                // every pose the first one, turned as a whole
+                let r = crate::geometry::rotation::axis_angle([0.2, 1.0, 0.1], 0.3 * i as f64);
+                first.iter().map(|&p| crate::geometry::mat_vec(&r, p)).collect()
+            })
+            .collect();
+        pop.set_shapes(&turned);
         let r = fit(&pop, &Params::default(), &mut |_| true).unwrap();
         let d = diagnose(&pop, &r.model);
         assert!(!d.articulated && d.single_body_rmse < RIGID_RMSE, "{d:?}");

@@ -22,7 +22,7 @@ pub use super::merge_tree::CurvePoint;
 use super::motion_labels::motion_residual;
 use crate::mfa::params::Params;
 use crate::mfa::result::Model;
-use crate::geometry::rotation::{angle_between, to_quat, Quat, SlerpPath};
+use crate::geometry::rotation::{angle_between, to_quat};
 use crate::geometry::Mat3;
 use crate::mesh::Population;
 
@@ -58,30 +58,95 @@ pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize], refs: &[usize]) 
 }
 
 /// [`blend_ratio`] with pose `r` as the bind pose.
+///
+/// Done in quaternions: with p_a = q_k^* q_a and p_b = q_k^* q_b (q_b on q_a's side of the 4-sphere, Ω the angle
+/// between them), k's motion seen from slerp(q_a, q_b, t) is q_k^* slerp_t = (sin((1-t)Ω) p_a + sin(tΩ) p_b) / sin Ω,
+/// linear in the two fixed products, and its rotation angle is 2 atan2(|vector part|, |scalar part|), which does
+/// not depend on the scale. So each pose costs 21 sines per pair (one table read both ways) and one atan2 per t,
+/// instead of a slerp, a matrix product and an atan2 per t. Equal to the matrix form to rounding (a test below).
 fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize) -> f64 {
+    let ns = model.n_shapes;
     let mk = relative_motion(&model.parts[k].rotations, r);
     let ms: Vec<Vec<Mat3>> = adjacent.iter().map(|&a| relative_motion(&model.parts[a].rotations, r)).collect();
-    // the neighbours' motions as quaternions once (slerp converts both ends at every t otherwise)
-    let qs: Vec<Vec<Quat>> = ms.iter().map(|m| m.iter().map(to_quat).collect()).collect();
-    let rms = |f: &dyn Fn(usize) -> f64| ((0..mk.len()).map(|i| f(i).powi(2)).sum::<f64>() / mk.len() as f64).sqrt();
+    let qk: Vec<[f64; 4]> = mk.iter().map(quat4).collect();
+    let qs: Vec<Vec<[f64; 4]>> = ms.iter().map(|m| m.iter().map(quat4).collect()).collect();
+    let rms = |f: &mut dyn FnMut(usize) -> f64| ((0..ns).map(|i| f(i).powi(2)).sum::<f64>() / ns as f64).sqrt();
     let mut best = f64::INFINITY;
+    // per pose: p_a, p_b, and sin(sΩ/20) for s = 0..=20 (sin((1-t)Ω) is the same table read backwards)
+    let mut ends = vec![([0.0; 4], [0.0; 4]); ns];
+    let mut sines = vec![[0.0; SLERP_STEPS + 1]; ns];
     for x in 0..ms.len() {
         for y in x + 1..ms.len() {
             let (ma, mb) = (&ms[x], &ms[y]);
-            let apart = rms(&|i| angle_between(&ma[i], &mb[i]));
+            let apart = rms(&mut |i| angle_between(&ma[i], &mb[i]));
             if apart < 1e-3 {
                 continue;
             }
-            // slerp(ma[i], mb[i], t) = paths[i].matrix_at(t), bit for bit
-            let paths: Vec<SlerpPath> = qs[x].iter().zip(&qs[y]).map(|(&a, &b)| SlerpPath::new(a, b)).collect();
-            for step in 0..=20 {
-                let t = step as f64 / 20.0;
-                let e = rms(&|i| angle_between(&mk[i], &paths[i].matrix_at(t)));
+            for i in 0..ns {
+                let (qa, mut qb) = (qs[x][i], qs[y][i]);
+                if dot4(&qa, &qb) < 0.0 {
+                    qb = qb.map(|c| -c);
+                }
+                let omega = 2.0 * norm4(&sub4(&qa, &qb)).atan2(norm4(&add4(&qa, &qb)));
+                let kc = conj4(&qk[i]);
+                ends[i] = (mul4(&kc, &qa), mul4(&kc, &qb));
+                for (s, v) in sines[i].iter_mut().enumerate() {
+                    let t = s as f64 / SLERP_STEPS as f64;
+                    // below 1e-12 rad slerp is the straight line (SlerpPath does the same)
+                    *v = if omega < 1e-12 { t } else { (t * omega).sin() };
+                }
+            }
+            for step in 0..=SLERP_STEPS {
+                let e = rms(&mut |i| {
+                    let (pa, pb) = &ends[i];
+                    let (wa, wb) = (sines[i][SLERP_STEPS - step], sines[i][step]);
+                    let p: [f64; 4] = std::array::from_fn(|c| wa * pa[c] + wb * pb[c]);
+                    2.0 * (p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt().atan2(p[0].abs())
+                });
                 best = best.min(e / apart);
             }
         }
     }
     best
+}
+
+/// Steps of t in [0, 1] at which [`blend_ratio`] tries the in-between (t = s / 20).
+const SLERP_STEPS: usize = 20;
+
+/// (w, x, y, z) of a rotation matrix.
+fn quat4(m: &Mat3) -> [f64; 4] {
+    let q = to_quat(m);
+    [q.w, q.i, q.j, q.k]
+}
+
+fn conj4(q: &[f64; 4]) -> [f64; 4] {
+    [q[0], -q[1], -q[2], -q[3]]
+}
+
+/// Hamilton product a b of (w, x, y, z) quaternions.
+fn mul4(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+fn dot4(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+}
+
+fn add4(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    std::array::from_fn(|c| a[c] + b[c])
+}
+
+fn sub4(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    std::array::from_fn(|c| a[c] - b[c])
+}
+
+fn norm4(a: &[f64; 4]) -> f64 {
+    dot4(a, a).sqrt()
 }
 
 /// The best rigid trajectory of a vertex (`h`, one point per shape) under a part's motion: the mean of its points
@@ -107,15 +172,17 @@ const BLEND_FIT_SAMPLE: usize = 256;
 /// How well two neighbours' motions, blended per vertex, explain part k's vertices, against k's own rigid motion:
 /// min over pairs (a, b) of `sides` of Σ_j min_{w in [0,1]} Σ_i |h_j^i - ((1-w) T_a(j)^i + w T_b(j)^i)|² over
 /// Σ_j r_k(j), with T the vertex's best rigid trajectory under a part ([`rigid_trajectory`]) and r_k its
-/// [`motion_residual`] (on at most [`BLEND_FIT_SAMPLE`] of k's vertices). Flesh of a skinning blend band is a fixed
-/// blend of its sides per vertex: below 1 (its own rigid motion explains it worse than the blend: a wide band's
-/// slice measures 0.17-0.33 on the generated spider, band 0.10). A part with a joint of its own: far above
+/// [`motion_residual`] (on at most [`BLEND_FIT_SAMPLE`] of k's vertices), each per the residual degrees of freedom
+/// its own fit leaves: times (1 - 2/n - 1/n_s) / (1 - 1/(3 n_s)) for a part of n vertices and n_s shapes (the own
+/// fit's motion and latent points against the blend's weight; about 1/2 at 4 vertices, 0.98 at 100 with many
+/// shapes). Flesh of a skinning blend band is a fixed blend of its sides per vertex: below 1 (its own rigid motion
+/// explains it worse than the blend: a wide band's slice measures 0.17-0.33 on the generated spider, band 0.10). A part with a joint of its own: far above
 /// (12.7 and more on the generated creatures). Infinity without two sides.
 pub fn blend_fit_ratio(model: &Model, pop: &Population, k: usize, members: &[usize], sides: &[usize]) -> f64 {
     let ns = pop.n_shapes();
     let stride = members.len().div_ceil(BLEND_FIT_SAMPLE).max(1);
     let sample: Vec<usize> = members.iter().copied().step_by(stride).collect();
-    let points: Vec<Vec<[f64; 3]>> = sample.iter().map(|&j| pop.shapes.iter().map(|s| s[j]).collect()).collect();
+    let points: Vec<Vec<[f64; 3]>> = sample.iter().map(|&j| pop.track(j)).collect();
     let own: f64 = points.iter().map(|h| motion_residual(&model.parts[k], h)).sum();
     let (mut ta, mut tb) = (vec![[0.0; 3]; ns], vec![[0.0; 3]; ns]);
     let mut best = f64::INFINITY;
@@ -145,7 +212,14 @@ pub fn blend_fit_ratio(model: &Model, pop: &Population, k: usize, members: &[usi
     if best.is_infinite() {
         return best;
     }
-    best / own.max(f64::MIN_POSITIVE)
+    // per residual degree of freedom: the part's own fit spends 6 numbers per pose on its motion (2 / n of each
+    // vertex's 3 coordinates per pose) and 3 per vertex on its latent point, the blend one weight per vertex. A
+    // part of a few vertices otherwise wins by fitting its own noise: a 4-vertex ring where three or four bones
+    // share the skinning weights measured 1.2-1.6 and stayed a part
+    let n = members.len().max(1) as f64;
+    let own_dof = (1.0 - 2.0 / n - 1.0 / ns as f64).max(1e-3);
+    let blend_dof = 1.0 - 1.0 / (3.0 * ns as f64);
+    best / own.max(f64::MIN_POSITIVE) * own_dof / blend_dof
 }
 
 /// Rule 1: dissolves, smallest first, every part whose [`blend_ratio`] is below `ratio` or whose
@@ -156,6 +230,12 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
     let mut dissolved = 0;
     let mut h = vec![[0.0; 3]; pop.n_shapes()];
     let refs = blend_references(pop);
+    // Both tests are functions of the parts' motions, which this loop never changes, of the sides and (the fit
+    // ratio) of the part's vertices: remembered by the parts' first indices, so a dissolution re-tests only the
+    // parts it touched.
+    let mut ids: Vec<usize> = (0..model.n_parts()).collect();
+    let mut rotation_memo: std::collections::HashMap<(usize, Vec<usize>), f64> = Default::default();
+    let mut fit_memo: std::collections::HashMap<(usize, Vec<usize>, Vec<usize>), f64> = Default::default();
     loop {
         if model.n_parts() < 3 {
             return dissolved;
@@ -181,12 +261,17 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
             .collect();
         let mut order: Vec<usize> = (0..model.n_parts()).filter(|&k| sides[k].len() >= 2).collect();
         order.sort_by_key(|&k| members[k].len());
-        let flesh = |k: usize| {
-            let r = blend_ratio(model, k, &sides[k], &refs);
+        let mut flesh = |k: usize| {
+            let side_ids: Vec<usize> = sides[k].iter().map(|&a| ids[a]).collect();
+            let r = *rotation_memo
+                .entry((ids[k], side_ids.clone()))
+                .or_insert_with(|| blend_ratio(model, k, &sides[k], &refs));
             if r < ratio {
                 return Some((r, f64::NAN));
             }
-            let f = blend_fit_ratio(model, pop, k, &members[k], &sides[k]);
+            let f = *fit_memo
+                .entry((ids[k], side_ids, members[k].clone()))
+                .or_insert_with(|| blend_fit_ratio(model, pop, k, &members[k], &sides[k]));
             (f < 1.0).then_some((r, f))
         };
         let Some((k, (r, f))) = order.clone().into_iter().find_map(|k| flesh(k).map(|x| (k, x))) else {
@@ -203,8 +288,8 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
             eprintln!("flesh: part {k} ({} vertices) dissolved, blend ratio {r:.3}, blend fit {f:.3}", members[k].len());
         }
         for &j in &members[k] {
-            for (i, s) in pop.shapes.iter().enumerate() {
-                h[i] = s[j];
+            for (i, s) in pop.shapes().enumerate() {
+                h[i] = s.get(j);
             }
             // (each neighbour's residual once; min_by keeps the first of equal ones, as before)
             let to = adjacent[k]
@@ -217,6 +302,7 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
             model.latent[j] = model.parts[to].latent_image(&h);
         }
         let gone = model.parts.remove(k).weight;
+        ids.remove(k);
         let left = (1.0 - gone).max(f64::MIN_POSITIVE);
         for c in model.parts.iter_mut() {
             c.weight /= left;
@@ -352,6 +438,64 @@ mod tests {
         }
     }
 
+    /// The matrix form [`blend_ratio_from`] replaced: slerp, matrix, angle at every t.
+    fn blend_ratio_from_matrices(model: &Model, k: usize, adjacent: &[usize], r: usize) -> f64 {
+        let mk = relative_motion(&model.parts[k].rotations, r);
+        let ms: Vec<Vec<Mat3>> = adjacent.iter().map(|&a| relative_motion(&model.parts[a].rotations, r)).collect();
+        // the neighbours' motions as quaternions once (slerp converts both ends at every t otherwise)
+        let qs: Vec<Vec<crate::geometry::rotation::Quat>> = ms.iter().map(|m| m.iter().map(to_quat).collect()).collect();
+        let rms = |f: &dyn Fn(usize) -> f64| ((0..mk.len()).map(|i| f(i).powi(2)).sum::<f64>() / mk.len() as f64).sqrt();
+        let mut best = f64::INFINITY;
+        for x in 0..ms.len() {
+            for y in x + 1..ms.len() {
+                let (ma, mb) = (&ms[x], &ms[y]);
+                let apart = rms(&|i| angle_between(&ma[i], &mb[i]));
+                if apart < 1e-3 {
+                    continue;
+                }
+                // slerp(ma[i], mb[i], t) = paths[i].matrix_at(t), bit for bit
+                let paths: Vec<crate::geometry::rotation::SlerpPath> = qs[x].iter().zip(&qs[y]).map(|(&a, &b)| crate::geometry::rotation::SlerpPath::new(a, b)).collect();
+                for step in 0..=20 {
+                    let t = step as f64 / 20.0;
+                    let e = rms(&|i| angle_between(&mk[i], &paths[i].matrix_at(t)));
+                    best = best.min(e / apart);
+                }
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn the_quaternion_blend_ratio_equals_the_matrix_one() {
+        // random parts (some near a blend of two others, some not), every reference pose
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        let ns = 9;
+        let mut u = || rng.gen::<f64>();
+        for trial in 0..40 {
+            let mut axis = || [u() - 0.5, u() - 0.5, u() - 0.5];
+            let (ax, bx, cx) = (axis(), axis(), axis());
+            let a: Vec<Mat3> = (0..ns).map(|_| axis_angle(ax, 3.0 * (u() - 0.5))).collect();
+            let b: Vec<Mat3> = (0..ns).map(|_| axis_angle(bx, 3.0 * (u() - 0.5))).collect();
+            let t = u();
+            let noise = if trial % 2 == 0 { 0.02 } else { 1.0 };
+            let k: Vec<Mat3> = (0..ns)
+                .map(|i| {
+                    let blend = crate::geometry::rotation::slerp(&a[i], &b[i], t);
+                    axis_angle(cx, noise * (u() - 0.5)) * blend
+                })
+                .collect();
+            let d = part(&vec![0.0; ns], ax);
+            let comp = |r: Vec<Mat3>| Component { rotations: r, ..d.clone() };
+            let other: Vec<Mat3> = (0..ns).map(|_| axis_angle(cx, 2.0 * (u() - 0.5))).collect();
+            let m = model(vec![comp(a), comp(b), comp(k), comp(other)]);
+            for r in 0..ns {
+                let (new, old) = (blend_ratio_from(&m, 2, &[0, 1, 3], r), blend_ratio_from_matrices(&m, 2, &[0, 1, 3], r));
+                assert!((new - old).abs() <= 1e-9 * old.max(1e-3), "trial {trial} ref {r}: {new} against {old}");
+            }
+        }
+    }
+
     #[test]
     fn a_fixed_blend_of_two_neighbours_is_flesh_and_an_own_joint_is_not() {
         let a: Vec<f64> = vec![0.0; 6];
@@ -388,7 +532,7 @@ mod tests {
         assert!(!ring.is_empty() && ring.len() < 200, "{} ring vertices", ring.len());
         let elbow = ring[0];
         let d = |j: usize| {
-            let (p, q) = (pop.shapes[0][j], pop.shapes[0][elbow]);
+            let (p, q) = (pop.point(0, j), pop.point(0, elbow));
             (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)
         };
         let mut far = forearm_ids.clone();
@@ -455,11 +599,12 @@ mod tests {
         let mut labels = g.part_of_vertex.clone();
         let forearm = crate::synth::part_index(Preset::Arm, "forearm").unwrap() as u32;
         let members: Vec<usize> = (0..labels.len()).filter(|&j| labels[j] == forearm).collect();
-        let mid = crate::geometry::bounds(members.iter().map(|&j| &pop.shapes[0][j]));
+        let first = pop.shape(0).to_vec();
+        let mid = crate::geometry::bounds(members.iter().map(|&j| &first[j]));
         let axis = (0..3).max_by(|&x, &y| (mid.1[x] - mid.0[x]).total_cmp(&(mid.1[y] - mid.0[y]))).unwrap();
         let cut = 0.5 * (mid.0[axis] + mid.1[axis]);
         for &j in &members {
-            if pop.shapes[0][j][axis] > cut {
+            if pop.point(0, j)[axis] > cut {
                 labels[j] = 3;
             }
         }

@@ -142,8 +142,8 @@ struct Best {
 /// The residual h_j - (R Λ E[z|h_j] + b) of vertex `j` of `fit`'s data under component `c`, appended to `out`
 /// (3 n_s values).
 fn push_residual(fit: &Fit, c: &crate::mfa::component::Component, wb: &crate::mfa::component::Woodbury, j: usize, out: &mut Vec<f64>) {
-    let h = fit.data().vertex(j);
-    let e = c.posterior_mean(wb, h);
+    let h = fit.data().vertex(j).to_vec();
+    let e = c.posterior_mean(wb, &h);
     let v = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
     for (i, p) in h.iter().enumerate() {
         let q = c.place(i, v);
@@ -571,6 +571,8 @@ impl Pipeline {
                     super::label_fit::fit_to_labels(&mut model, &full_data(&mut self.full, &self.pop).0, &self.params);
                 }
                 self.final_model = Some(model);
+                // the data are not read any more: free them before the caller reads the result
+                self.full = None;
                 return Ok(State::Done);
             }
         };
@@ -774,7 +776,7 @@ impl Pipeline {
         let global: Vec<usize> = worst.iter().map(|&l| mem[l]).collect();
         let mut data = Data::from_population_subset(&self.pop, &global);
         if rule == SplitRule::Residuals {
-            data.h = residuals.clone();
+            data = Data::from_f64(data.n_vertices, data.n_shapes, residuals, data.offsets);
         }
         let seed = self.params.seed.wrapping_add(1000 * r.part as u64 + r.sub_parts as u64);
         let halves = crate::mfa::init::kmeans(&data, 2, seed, self.params.restarts);
@@ -844,7 +846,7 @@ impl Pipeline {
 
 /// An empty stand-in while a finished refinement fit is moved out (never stepped).
 fn placeholder_fit() -> Fit {
-    let data = Data { n_vertices: 0, n_shapes: 0, h: Vec::new(), offsets: Vec::new() };
+    let data = Data::from_f64(0, 0, &[], Vec::new());
     Fit::from_components(data, Vec::new(), &Params::default())
 }
 

@@ -205,7 +205,7 @@ pub const SPLIT_FRACTION: f64 = 0.25;
 /// move together), not a stray boundary vertex.
 pub fn connect_parts(model: &mut Model, pop: &Population, new_parts: bool, min_vertices: usize) -> IslandRepair {
     let wbs: Vec<_> = model.parts.iter().map(|c| c.woodbury()).collect();
-    let h = |v: usize| -> Vec<[f64; 3]> { pop.shapes.iter().map(|s| s[v]).collect() };
+    let h = |v: usize| -> Vec<[f64; 3]> { pop.track(v) };
     let parts = &model.parts;
     let score = |v: usize, l: u32| parts[l as usize].log_weighted_density(&wbs[l as usize], &h(v));
     let old = model.labels.clone();

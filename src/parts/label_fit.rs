@@ -31,9 +31,10 @@ avx2_fn! {
         members.iter_mut().for_each(|list| list.clear());
         // (the sum as f64's Sum adds: in order from -0.0)
         let mut ll = -0.0;
+        let mut h = Vec::new();
         for (j, &l) in labels.iter().enumerate() {
             let k = l as usize;
-            let (y, sq) = comps[k].project(&wbs[k], data.vertex(j));
+            let (y, sq) = comps[k].project(&wbs[k], data.vertex_into(j, &mut h));
             let wb = &wbs[k];
             let quad = sq - (wb.shrink[0] * y[0] * y[0] + wb.shrink[1] * y[1] * y[1] + wb.shrink[2] * y[2] * y[2]);
             ll += wb.log_norm - 0.5 * quad;

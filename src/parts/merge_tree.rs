@@ -185,33 +185,32 @@ pub fn spread_poses(pop: &Population, most: usize) -> Vec<usize> {
     if ns <= most {
         return (0..ns).collect();
     }
-    // distances on at most 2 000 evenly spaced vertices
+    // distances on at most 2 000 evenly spaced vertices, gathered pose by pose
     let nv = pop.n_vertices();
     let stride = nv.div_ceil(2000).max(1);
     let sample: Vec<usize> = (0..nv).step_by(stride).collect();
-    let dist = |a: &dyn Fn(usize) -> [f64; 3], i: usize| -> f64 {
-        sample.iter().map(|&j| {
-            let (p, r) = (pop.shapes[i][j], a(j));
-            (p[0] - r[0]).powi(2) + (p[1] - r[1]).powi(2) + (p[2] - r[2]).powi(2)
-        }).sum()
+    let points: Vec<Vec<[f64; 3]>> = (0..ns).map(|i| sample.iter().map(|&j| pop.point(i, j)).collect()).collect();
+    let dist = |a: &[[f64; 3]], i: usize| -> f64 {
+        points[i].iter().zip(a).map(|(p, r)| (p[0] - r[0]).powi(2) + (p[1] - r[1]).powi(2) + (p[2] - r[2]).powi(2)).sum()
     };
-    let mean = |j: usize| {
-        let mut m = [0.0; 3];
-        for s in &pop.shapes {
+    // the mean shape at the sampled vertices
+    let mut means = vec![[0.0; 3]; sample.len()];
+    for (t, m) in means.iter_mut().enumerate() {
+        for p in &points {
             for c in 0..3 {
-                m[c] += s[j][c] / ns as f64;
+                m[c] += p[t][c] / ns as f64;
             }
         }
-        m
-    };
-    let first = (0..ns).map(|i| (dist(&mean, i), i)).max_by(|x, y| x.0.total_cmp(&y.0)).expect("poses").1;
+    }
+    let mean = &means[..];
+    let first = (0..ns).map(|i| (dist(mean, i), i)).max_by(|x, y| x.0.total_cmp(&y.0)).expect("poses").1;
     let mut chosen = vec![first];
-    let mut near: Vec<f64> = (0..ns).map(|i| dist(&|j| pop.shapes[first][j], i)).collect();
+    let mut near: Vec<f64> = (0..ns).map(|i| dist(&points[first], i)).collect();
     while chosen.len() < most {
         let next = (0..ns).filter(|i| !chosen.contains(i)).max_by(|&x, &y| near[x].total_cmp(&near[y]).then(y.cmp(&x))).expect("poses left");
         chosen.push(next);
         for i in 0..ns {
-            near[i] = near[i].min(dist(&|j| pop.shapes[next][j], i));
+            near[i] = near[i].min(dist(&points[next], i));
         }
     }
     chosen.sort_unstable();
@@ -234,7 +233,7 @@ fn edges(pop: &Population) -> Vec<(u32, u32, f64)> {
     let ns = pop.n_shapes() as f64;
     e.into_iter()
         .map(|(a, b)| {
-            let len: f64 = pop.shapes.iter().map(|s| crate::geometry::norm(crate::geometry::sub(s[a as usize], s[b as usize]))).sum();
+            let len: f64 = pop.shapes().map(|s| crate::geometry::norm(crate::geometry::sub(s.get(a as usize), s.get(b as usize)))).sum();
             (a, b, len / ns)
         })
         .collect()
@@ -309,9 +308,10 @@ pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
         let ns = pop.n_shapes() as f64;
         let mean = |j: usize| {
             let mut m = [0.0; 3];
-            for s in &pop.shapes {
+            for s in pop.shapes() {
+                let p = s.get(j);
                 for c in 0..3 {
-                    m[c] += s[j][c] / ns;
+                    m[c] += p[c] / ns;
                 }
             }
             m
@@ -347,6 +347,13 @@ impl Ord for Candidate {
     fn cmp(&self, o: &Self) -> Ordering {
         o.score.total_cmp(&self.score).then(o.a.cmp(&self.a)).then(o.b.cmp(&self.b))
     }
+}
+
+/// The rigid fit of a candidate merge: the rise it scores, its squared error and rotations.
+struct Fit {
+    rise: f64,
+    sse: f64,
+    rot: Vec<Mat3>,
 }
 
 struct Node {
@@ -386,7 +393,7 @@ impl MergeTree {
         let mut x = vec![[0.0; 3]; q];
         for (j, &l) in leaves.iter().enumerate() {
             for (t, &i) in poses.iter().enumerate() {
-                x[t] = pop.shapes[i][j];
+                x[t] = pop.point(i, j);
             }
             stats[l as usize].add_point(&x);
             size[l as usize] += 1;
@@ -415,20 +422,32 @@ impl MergeTree {
             }
         }
         link_pieces(pop, &leaves, &mut adjacent);
-        let pair = |nodes: &[Option<Node>], a: u32, b: u32| -> (f64, Node) {
+        // the statistics of a and b together, the larger side first (the rotations start from its fit)
+        fn joined(nodes: &[Option<Node>], a: u32, b: u32) -> (Stats, usize, usize, &[Mat3]) {
             let (na, nb) = (nodes[a as usize].as_ref().expect("live"), nodes[b as usize].as_ref().expect("live"));
             let (big, small) = if na.size >= nb.size { (na, nb) } else { (nb, na) };
-            let st = big.stats.plus(&small.stats);
-            let mut rot = big.rot.clone();
+            (big.stats.plus(&small.stats), na.size + nb.size, small.size, &big.rot[..])
+        }
+        // a candidate merge's rigid fit: (rise, sse, rotations), kept until the merge is made or a side is gone
+        let pair = |nodes: &[Option<Node>], a: u32, b: u32| -> Fit {
+            let (st, _, small, start) = joined(nodes, a, b);
+            let mut rot = start.to_vec();
             let sse = rigid_sse(&st, &mut rot);
-            let rise = (sse - na.sse - nb.sse).max(0.0) / (3.0 * q as f64 * small.size.max(1) as f64);
-            (rise, Node { stats: st, rot, sse, size: na.size + nb.size })
+            let (na, nb) = (nodes[a as usize].as_ref().expect("live"), nodes[b as usize].as_ref().expect("live"));
+            let rise = (sse - na.sse - nb.sse).max(0.0) / (3.0 * q as f64 * small.max(1) as f64);
+            Fit { rise, sse, rot }
         };
         let typical = typical_variance(&nodes).max(floor);
         let mut heap = BinaryHeap::new();
+        let mut fits: std::collections::HashMap<(u32, u32), Fit> = Default::default();
+        let push = |heap: &mut BinaryHeap<Candidate>, fits: &mut std::collections::HashMap<(u32, u32), Fit>, nodes: &[Option<Node>], a: u32, b: u32| {
+            let fit = pair(nodes, a, b);
+            heap.push(Candidate { score: fit.rise, a, b });
+            fits.insert((a, b), fit);
+        };
         for a in 0..n_leaves {
             for &b in adjacent[a].iter().filter(|&&b| b as usize > a) {
-                heap.push(Candidate { score: pair(&nodes, a as u32, b).0, a: a as u32, b });
+                push(&mut heap, &mut fits, &nodes, a as u32, b);
             }
         }
         let mut merges = Vec::with_capacity(n_leaves.saturating_sub(1));
@@ -436,10 +455,13 @@ impl MergeTree {
         let mut total_sse: f64 = nodes.iter().flatten().map(|n| n.sse).sum();
         let per_variance = 1.0 / (3.0 * q.max(1) as f64 * leaves.len().max(1) as f64);
         while let Some(Candidate { a, b, .. }) = heap.pop() {
+            let fit = fits.remove(&(a, b)).expect("every candidate has its fit");
             if nodes[a as usize].is_none() || nodes[b as usize].is_none() {
                 continue;
             }
-            let (rise, node) = pair(&nodes, a, b);
+            let (stats, size, _, _) = joined(&nodes, a, b);
+            let Fit { rise, sse, rot } = fit;
+            let node = Node { stats, rot, sse, size };
             let id = nodes.len() as u32;
             let variance = total_sse * per_variance;
             total_sse += node.sse - nodes[a as usize].as_ref().map_or(0.0, |n| n.sse) - nodes[b as usize].as_ref().map_or(0.0, |n| n.sse);
@@ -460,7 +482,7 @@ impl MergeTree {
             adjacent[a as usize].clear();
             adjacent[b as usize].clear();
             for &c in &around {
-                heap.push(Candidate { score: pair(&nodes, c, id).0, a: c, b: id });
+                push(&mut heap, &mut fits, &nodes, c, id);
             }
         }
         MergeTree { leaves, n_leaves, merges, typical }
@@ -562,9 +584,10 @@ fn link_pieces(pop: &Population, leaves: &[u32], adjacent: &mut [BTreeSet<u32>])
     let mean: Vec<[f64; 3]> = (0..pop.n_vertices())
         .map(|j| {
             let mut m = [0.0; 3];
-            for s in &pop.shapes {
+            for s in pop.shapes() {
+                let p = s.get(j);
                 for c in 0..3 {
-                    m[c] += s[j][c] / ns;
+                    m[c] += p[c] / ns;
                 }
             }
             m

@@ -55,8 +55,8 @@ pub fn label_by_motion(model: &mut Model, pop: &Population) -> usize {
         if adjacent[own].is_empty() {
             continue;
         }
-        for (i, s) in pop.shapes.iter().enumerate() {
-            h[i] = s[j];
+        for (i, s) in pop.shapes().enumerate() {
+            h[i] = s.get(j);
         }
         let mut best = (own, motion_residual(&model.parts[own], &h));
         for &k in &adjacent[own] {

@@ -25,25 +25,26 @@ pub fn spread_subset(pop: &Population, target: usize) -> Vec<usize> {
     if target == 0 || nv <= target || pop.n_shapes() == 0 {
         return (0..nv).collect();
     }
-    let first = &pop.shapes[0];
+    let first = pop.shape(0);
     // the shape farthest from the first (summed squared displacement)
     let far = (1..pop.n_shapes())
         .map(|i| {
-            let d: f64 = pop.shapes[i]
+            let d: f64 = pop
+                .shape(i)
                 .iter()
-                .zip(first)
+                .zip(first.iter())
                 .map(|(p, q)| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2))
                 .sum();
             (d, i)
         })
         .fold((f64::NEG_INFINITY, 0), |a, b| if b.0 > a.0 { b } else { a })
         .1;
-    let second = &pop.shapes[far];
+    let second = pop.shape(far);
     let cells = |size: f64| -> Vec<(u64, usize)> {
         let q = |v: f64| ((v / size).floor() as i64 & 0x3ff) as u64;
         let mut keyed: Vec<(u64, usize)> = (0..nv)
             .map(|j| {
-                let (a, b) = (first[j], second[j]);
+                let (a, b) = (first.get(j), second.get(j));
                 let key = q(a[0]) | q(a[1]) << 10 | q(a[2]) << 20 | q(b[0]) << 30 | q(b[1]) << 40 | q(b[2]) << 50;
                 (key, j)
             })

@@ -85,7 +85,8 @@ impl<'a> Counter<'a> {
     fn score(&self, members: &[usize]) -> f64 {
         let c = component_from_points(&self.data, members, self.data.n_vertices, self.params.variance_floor);
         let wb = c.woodbury();
-        members.iter().map(|&j| c.log_weighted_density(&wb, self.data.vertex(j))).sum()
+        let mut h = Vec::new();
+        members.iter().map(|&j| c.log_weighted_density(&wb, self.data.vertex_into(j, &mut h))).sum()
     }
 
     fn alive(&self) -> usize {
@@ -126,10 +127,10 @@ impl<'a> Counter<'a> {
         let positions = sub.clone();
         // residuals under the part's own rigid motion: h_j - (R Λ E[z|h_j] + b), as the refinement's second rule
         let whole = component_from_points(&positions, &(0..members.len()).collect::<Vec<_>>(), members.len(), self.params.variance_floor);
-        let mut residuals = Vec::with_capacity(sub.h.len());
+        let mut residuals = Vec::with_capacity(sub.n_vertices * sub.n_shapes * 3);
         for l in 0..members.len() {
-            let h = positions.vertex(l);
-            let v = whole.latent_image(h);
+            let h = positions.vertex(l).to_vec();
+            let v = whole.latent_image(&h);
             for (i, p) in h.iter().enumerate() {
                 let q = whole.place(i, v);
                 residuals.extend_from_slice(&[p[0] - q[0], p[1] - q[1], p[2] - q[2]]);
@@ -138,7 +139,7 @@ impl<'a> Counter<'a> {
         let mut best: Option<Split> = None;
         for rule in 0..2 {
             if rule == 1 {
-                sub.h = residuals.clone();
+                sub = Data::from_f64(sub.n_vertices, sub.n_shapes, &residuals, sub.offsets.clone());
             }
             let seed = self.params.seed.wrapping_add(7919 * k as u64 + rule);
             let mut halves = kmeans(&sub, 2, seed, self.params.restarts);
@@ -150,7 +151,7 @@ impl<'a> Counter<'a> {
                 })
                 .collect();
             let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
-            let score = |l: usize, h: u32| comps[h as usize].log_weighted_density(&wbs[h as usize], positions.vertex(l));
+            let score = |l: usize, h: u32| comps[h as usize].log_weighted_density(&wbs[h as usize], &positions.vertex(l).to_vec());
             connect_labels(&mut halves, &faces, &score, None, 1);
             let split: [Vec<usize>; 2] =
                 [0u32, 1].map(|h| (0..members.len()).filter(|&l| halves[l] == h).map(|l| members[l]).collect());

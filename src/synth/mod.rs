@@ -369,7 +369,7 @@ pub fn obj_files(generated: &Generated) -> Vec<(String, String)> {
     let n = pop.n_shapes();
     pop.names
         .iter()
-        .zip(&pop.shapes)
+        .zip(pop.shapes())
         .enumerate()
         .map(|(i, (name, shape))| {
             let header = format!(
@@ -386,7 +386,7 @@ pub fn obj_files(generated: &Generated) -> Vec<(String, String)> {
                 spec.root_motion,
                 generated.n_parts()
             );
-            let original: Vec<Vec3> = shape.iter().map(|&p| pop.normalization.to_original(p)).collect();
+            let original: Vec<Vec3> = shape.iter().map(|p| pop.normalization.to_original(p)).collect();
             (name.clone(), crate::export::obj::write_obj(&original, &pop.faces, &header))
         })
         .collect()

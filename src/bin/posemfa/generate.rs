@@ -75,12 +75,13 @@ pub fn run(a: Args) -> Result<(), String> {
     let files: Vec<(String, Vec<u8>)> = match a.format {
         Format::Obj => posemfa::synth::obj_files(&g).into_iter().map(|(n, t)| (n, t.into_bytes())).collect(),
         Format::Pc2 => {
-            let rest = posemfa::export::obj::write_obj(&pop.shapes[0], &pop.faces, "faces for poses.pc2 (pose 1)");
-            vec![("rest.obj".into(), rest.into_bytes()), ("poses.pc2".into(), posemfa::mesh::cache::write_pc2(&pop.shapes))]
+            let shapes = pop.unit_shapes();
+            let rest = posemfa::export::obj::write_obj(&shapes[0], &pop.faces, "faces for poses.pc2 (pose 1)");
+            vec![("rest.obj".into(), rest.into_bytes()), ("poses.pc2".into(), posemfa::mesh::cache::write_pc2(&shapes))]
         }
         Format::Glb => {
             let name = spec.preset.name();
-            let glb = posemfa::export::morph_glb::write_morph_glb(name, &pop.names, &pop.shapes, &pop.faces)
+            let glb = posemfa::export::morph_glb::write_morph_glb(name, &pop.names, &pop.unit_shapes(), &pop.faces)
                 .map_err(|e| e.to_string())?;
             vec![(format!("{name}.glb"), glb)]
         }
@@ -89,10 +90,10 @@ pub fn run(a: Args) -> Result<(), String> {
             let fmt = if a.format == Format::Ply { PlyFormat::Binary } else { PlyFormat::Ascii };
             pop.names
                 .iter()
-                .zip(&pop.shapes)
+                .zip(pop.shapes())
                 .map(|(n, s)| {
                     let comment = format!("posemfa synthetic population: preset {}, {n}", spec.preset.name());
-                    (n.replace(".obj", ".ply"), posemfa::export::ply::write_ply(s, &pop.faces, fmt, &comment))
+                    (n.replace(".obj", ".ply"), posemfa::export::ply::write_ply(&s.to_vec(), &pop.faces, fmt, &comment))
                 })
                 .collect()
         }
