@@ -3,7 +3,7 @@
 #   1. native        cargo test
 #   2. wasm-node     cargo test --target wasm32-unknown-unknown --lib --test '*'   (wasm-bindgen-test-runner, Node)
 #   3. wasm-chromium the same in headless Chromium (WASM_BINDGEN_USE_BROWSER=1, /usr/bin/chromedriver)
-#   4. page          build:wasm + vite build into dist/, then `node --test tests/e2e/*.test.mjs` (Playwright)
+#   4. page          build:wasm + vite build into dist/ + the debug CLI, then `node --test tests/e2e/*.test.mjs`
 # Needs what scripts/setup.sh installs.
 # Every stage has a time limit of about 3-4x what it takes on a quiet 2-core machine (native 6 min, wasm-node
 # 9, wasm-chromium 3, page build 3, page tests 7.5; each page test at most 4 min), so that a hang fails that
@@ -148,15 +148,19 @@ fi
 if want page; then
   banner page "build:wasm + vite build, then Playwright page tests (tests/e2e/*.test.mjs)"
   t0=$(date +%s)
-  if ! { timeout 900 bash scripts/build-wasm.sh && timeout 300 node_modules/.bin/vite build --logLevel warn; }; then
-    summary+=("$(printf '%-14s FAILED after %4d s: build:wasm or vite build' page "$(( $(date +%s) - t0 ))")")
+  # The CLI the page tests run (gltf, pose, pose-cli, rig) is built here, outside any test's time limit: after
+  # `cargo test` (stage native) `cargo build` recompiles the crate (its dependencies' features differ without
+  # the dev-dependencies), which alone can take minutes on a loaded machine.
+  if ! { timeout 900 bash scripts/build-wasm.sh && timeout 300 node_modules/.bin/vite build --logLevel warn \
+    && timeout 900 cargo build --quiet --bin posemfa; }; then
+    summary+=("$(printf '%-14s FAILED after %4d s: build:wasm, vite build or the CLI' page "$(( $(date +%s) - t0 ))")")
     print_summary
-    printf '\n[test] FAILED at stage page: build:wasm or vite build\n'
+    printf '\n[test] FAILED at stage page: build:wasm, vite build or cargo build --bin posemfa\n'
     exit 1
   fi
   [ -f dist/index.html ] || { echo "[test] vite build wrote no dist/index.html"; exit 1; }
   echo "[test] dist/: $(find dist -type f | wc -l) files, $(du -sh dist | cut -f1)"
-  summary+=("$(printf '%-14s ok     %4d s: build:wasm + vite build (dist/)' page-build "$(( $(date +%s) - t0 ))")")
+  summary+=("$(printf '%-14s ok     %4d s: build:wasm + vite build (dist/) + CLI' page-build "$(( $(date +%s) - t0 ))")")
 
   shopt -s nullglob
   e2e=(tests/e2e/*.test.mjs)
