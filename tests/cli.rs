@@ -52,6 +52,7 @@ const COMMANDS: &[(&str, &[&str])] = &[
     ("rig-report", &["--glb", "--out", "--weights", "--bind", "--band", "--parts"]),
     ("pose", &["--out", "--json"]),
     ("crossval", &["--json", "--weights", "--bones", "--parts"]),
+    ("subdivide", &["--out", "--levels"]),
     ("articulate-report", &["--from", "--to", "--t", "--glb", "--validate", "--band", "--tol"]),
     ("completions", &[]),
 ];
@@ -280,6 +281,56 @@ fn generate_writes_every_format_and_fit_reads_it_back() {
         let ari = posemfa::metrics::adjusted_rand_index(&obj, &labels);
         assert!(ari >= 0.99, "--format {format}: ARI {ari} against the OBJ files' fit");
     }
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// `posemfa subdivide`: every triangle in four, the same in every pose; the finer population keeps the names,
+/// has V + E vertices and 4F triangles, and fits to the same parts as the coarse one.
+#[test]
+fn subdivide_writes_a_registered_finer_population_that_fits_to_the_same_parts() {
+    let root = std::env::temp_dir().join(format!("posemfa-cli-subdivide-{}", std::process::id()));
+    let (coarse, fine) = (root.join("coarse"), root.join("fine"));
+    let r = posemfa(&["generate", "arm", "--vertices", "400", "--poses", "5", "--out", coarse.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let r = posemfa(&["subdivide", coarse.to_str().unwrap(), "--out", fine.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let read = |dir: &std::path::Path| {
+        let mut names: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        names.sort();
+        let first = posemfa::mesh::obj::parse_obj(&names[0], &std::fs::read(dir.join(&names[0])).unwrap()).unwrap();
+        (names, first)
+    };
+    let ((names, a), (fine_names, b)) = (read(&coarse), read(&fine));
+    assert_eq!(names, fine_names);
+    let mut edges = std::collections::HashSet::new();
+    for t in &a.faces {
+        for k in 0..3 {
+            edges.insert((t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])));
+        }
+    }
+    assert_eq!(b.positions.len(), a.positions.len() + edges.len());
+    assert_eq!(b.faces.len(), 4 * a.faces.len());
+    assert!(text(&r.stdout).contains(&format!("wrote 5 poses of {} vertices", b.positions.len())), "{}", text(&r.stdout));
+    // the old vertices where they were (to the f32 storage of the unit box)
+    let side = (0..3).map(|d| a.positions.iter().map(|p| p[d]).fold(f64::MIN, f64::max) - a.positions.iter().map(|p| p[d]).fold(f64::MAX, f64::min)).fold(0.0, f64::max);
+    for (p, q) in a.positions.iter().zip(&b.positions) {
+        assert!((0..3).all(|d| (p[d] - q[d]).abs() <= 1e-6 * side), "{p:?} vs {q:?}");
+    }
+    // both fit to the same parts on the old vertices
+    let labels = |dir: &std::path::Path, name: &str| -> Vec<u32> {
+        let json = root.join(name);
+        let r = posemfa(&["fit", dir.to_str().unwrap(), "--quiet", "--json", json.to_str().unwrap()]);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        v["labels"].as_array().unwrap().iter().map(|l| l.as_u64().unwrap() as u32).collect()
+    };
+    let (lc, lf) = (labels(&coarse, "coarse.json"), labels(&fine, "fine.json"));
+    let ari = posemfa::metrics::adjusted_rand_index(&lc, &lf[..lc.len()]);
+    assert!(ari >= 0.9, "adjusted Rand {ari} between the coarse and the subdivided arm's parts");
+    // a missing input is named
+    let r = posemfa(&["subdivide", root.join("nothing").to_str().unwrap(), "--out", fine.to_str().unwrap()]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(text(&r.stderr).contains("nothing"), "{}", text(&r.stderr));
     let _ = std::fs::remove_dir_all(&root);
 }
 

@@ -10,6 +10,7 @@ pub mod ply;
 pub mod usd;
 pub mod usdc_check;
 pub mod population;
+pub mod subdivide;
 
 pub use population::{Normalization, Population};
 

@@ -43,6 +43,8 @@ mod rig_report;
 mod robustness;
 #[cfg(not(target_arch = "wasm32"))]
 mod shared;
+#[cfg(not(target_arch = "wasm32"))]
+mod subdivide;
 
 #[cfg(not(target_arch = "wasm32"))]
 use clap::{Parser, Subcommand};
@@ -87,6 +89,7 @@ enum Command {
     Robustness(robustness::Args),
     Pose(pose::Args),
     Crossval(crossval::Args),
+    Subdivide(subdivide::Args),
     Completions(completions::Args),
 }
 
@@ -112,6 +115,7 @@ fn main() -> ExitCode {
         Command::Robustness(a) => robustness::run(a),
         Command::Pose(a) => pose::run(a),
         Command::Crossval(a) => crossval::run(a),
+        Command::Subdivide(a) => subdivide::run(a),
         Command::Completions(a) => completions::run(a, <Cli as clap::CommandFactory>::command()),
     };
     match res {

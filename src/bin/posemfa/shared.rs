@@ -229,7 +229,7 @@ impl FitArgs {
 
 /// A folder / files, or `synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]]` (a generated population
 /// with its truth).
-fn load_inputs(
+pub fn load_inputs(
     inputs: &[String],
     gltf: &posemfa::mesh::gltf::Options,
 ) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
