@@ -327,6 +327,15 @@ fn subdivide_writes_a_registered_finer_population_that_fits_to_the_same_parts() 
     let (lc, lf) = (labels(&coarse, "coarse.json"), labels(&fine, "fine.json"));
     let ari = posemfa::metrics::adjusted_rand_index(&lc, &lf[..lc.len()]);
     assert!(ari >= 0.9, "adjusted Rand {ari} between the coarse and the subdivided arm's parts");
+    // a population from one file (a .glb of 5 frames): one OBJ per pose, none overwritten
+    let (glb, from_glb) = (root.join("glb"), root.join("from-glb"));
+    let r = posemfa(&["generate", "arm", "--vertices", "300", "--poses", "5", "--format", "glb", "--out", glb.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let r = posemfa(&["subdivide", glb.to_str().unwrap(), "--out", from_glb.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    assert_eq!(std::fs::read_dir(&from_glb).unwrap().count(), 5, "{}", text(&r.stdout));
+    let r = posemfa(&["fit", from_glb.to_str().unwrap(), "--quiet"]);
+    assert!(r.status.success() && text(&r.stdout).contains("5 shapes"), "{}{}", text(&r.stdout), text(&r.stderr));
     // a missing input is named
     let r = posemfa(&["subdivide", root.join("nothing").to_str().unwrap(), "--out", fine.to_str().unwrap()]);
     assert_eq!(r.status.code(), Some(1));
