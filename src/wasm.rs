@@ -214,6 +214,15 @@ impl Fitter {
         Ok(Fitter { pipe, pop: population.inner.clone() })
     }
 
+    /// The fit a step-by-step lesson shows (`Pipeline::for_teaching`: the paper's Algorithm 1, whatever
+    /// `partRule` says); `params` as for the constructor.
+    #[wasm_bindgen(js_name = forTeaching)]
+    pub fn for_teaching(population: &WasmPopulation, params: JsValue) -> Result<Fitter, JsValue> {
+        let params: Params = from_js(params, "parameters")?;
+        let pipe = Pipeline::for_teaching(&population.inner, &params)?;
+        Ok(Fitter { pipe, pop: population.inner.clone() })
+    }
+
     /// One AECM iteration; returns the progress object {stage, iteration, totalIterations, logLikelihood,
     /// parts, runFinished}.
     pub fn step(&mut self) -> Result<JsValue, JsValue> {

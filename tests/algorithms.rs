@@ -223,6 +223,21 @@ dual_test! {
         }
     }
 
+    fn a_lesson_steps_through_algorithm_1_whatever_the_part_rule() {
+        use posemfa::parts::hierarchy::Stage;
+        let c = chain(4, 6, 5e-4, 21);
+        // the default part rule (the merge tree) starts at the final AECM from its own partition
+        assert_eq!(Pipeline::new(&c.pop, &Params::default()).unwrap().stage(), Stage::Final);
+        let mut lesson = Pipeline::for_teaching(&c.pop, &Params { parts: 3, ..Params::default() }).unwrap();
+        assert_eq!(lesson.stage(), Stage::Coarse);
+        let mut refined = false;
+        while !lesson.is_done() {
+            refined |= matches!(lesson.step().unwrap().stage, Stage::Refine { .. });
+        }
+        assert!(refined, "a lesson shows the refinement");
+        assert_eq!(lesson.result().model.n_parts(), 4);
+    }
+
     fn pruned_e_step_equals_the_plain_one() {
         let c = chain(5, 5, 1e-3, 31);
         let data = Data::from_population(&c.pop);

@@ -49,8 +49,8 @@ export class Teacher {
     this.drop();
     if (!population) throw new Error('no population loaded');
     if (!(await this.claim())) return false;
-    // step by step shows the paper's Algorithm 1 (coarse, refinement, final), whatever the page's part rule
-    this.fitter = new this.wasm.Fitter(population, { ...params, partRule: 'distinct' });
+    // (the core picks the pipeline a lesson shows: Algorithm 1, whatever the page's part rule)
+    this.fitter = this.wasm.Fitter.forTeaching(population, params);
     this.id = id;
     this.t0 = performance.now();
     this.report('reset', []);

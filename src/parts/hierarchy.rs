@@ -263,6 +263,13 @@ const COUNT_ROUNDS: usize = 3;
 const DECIDE_ROUNDS: usize = 3;
 
 impl Pipeline {
+    /// The pipeline a step-by-step lesson shows: the paper's Algorithm 1 (coarse AECM, refinement of each part,
+    /// final AECM) with the scale-free part rule ([`PartRule::Distinct`]), whatever part rule `params` name: the
+    /// default merge tree starts from its own partition and has no coarse or refinement stage to step through.
+    pub fn for_teaching(pop: &Population, params: &Params) -> Result<Pipeline> {
+        Pipeline::new(pop, &Params { part_rule: PartRule::Distinct, ..params.clone() })
+    }
+
     /// Validates the parameters and the data and runs the coarse initialisation (k-means++).
     pub fn new(pop: &Population, params: &Params) -> Result<Pipeline> {
         params.validate()?;
