@@ -336,6 +336,15 @@ fn subdivide_writes_a_registered_finer_population_that_fits_to_the_same_parts() 
     assert_eq!(std::fs::read_dir(&from_glb).unwrap().count(), 5, "{}", text(&r.stdout));
     let r = posemfa(&["fit", from_glb.to_str().unwrap(), "--quiet"]);
     assert!(r.status.success() && text(&r.stdout).contains("5 shapes"), "{}{}", text(&r.stdout), text(&r.stderr));
+    // a result larger than the memory budget is refused, nothing written
+    let big = root.join("big");
+    let r = Command::new(env!("CARGO_BIN_EXE_posemfa"))
+        .args(["subdivide", coarse.to_str().unwrap(), "--levels", "4", "--out", big.to_str().unwrap()])
+        .env("POSEMFA_MEMORY_BUDGET", "10M")
+        .output()
+        .unwrap();
+    assert_eq!(r.status.code(), Some(1));
+    assert!(text(&r.stderr).contains("fewer levels") && !big.exists(), "{}", text(&r.stderr));
     // a missing input is named
     let r = posemfa(&["subdivide", root.join("nothing").to_str().unwrap(), "--out", fine.to_str().unwrap()]);
     assert_eq!(r.status.code(), Some(1));

@@ -22,7 +22,8 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), String> {
     let (pop, _truth) = load_inputs(&a.inputs, &Default::default())?;
-    let (faces, shapes) = posemfa::mesh::subdivide::subdivide(&pop, a.levels as usize).map_err(|e| e.to_string())?;
+    let budget = posemfa::memory::budget_bytes().map_err(|e| e.to_string())?;
+    let (faces, shapes) = posemfa::mesh::subdivide::subdivide(&pop, a.levels as usize, budget).map_err(|e| e.to_string())?;
     let out_dir = std::path::Path::new(&a.out);
     std::fs::create_dir_all(out_dir).map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
     let mut taken = std::collections::HashSet::new();
