@@ -118,6 +118,19 @@ impl Stats {
         s
     }
 
+    /// Σ_i tr(C_ii): the spread of the node's points about their mean, summed over the poses.
+    fn spread(&self) -> f64 {
+        let q = self.sum.len();
+        let inv = if self.n > 0.0 { 1.0 / self.n } else { 0.0 };
+        (0..q)
+            .map(|i| {
+                let m = &self.cross[upper_index(q, i, i)];
+                let s = &self.sum[i];
+                m[0] + m[4] + m[8] - (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) * inv
+            })
+            .sum()
+    }
+
     /// The centred cross-covariances C_ik = Σ_j (x_j^i - x̄^i)(x_j^k - x̄^k)ᵀ for all i, k (q x q blocks).
     fn centred(&self) -> Vec<Mat3> {
         let q = self.sum.len();
@@ -150,11 +163,12 @@ fn rigid_sse(st: &Stats, rot: &mut [Mat3]) -> f64 {
     if total <= 0.0 || q < 2 {
         return 0.0;
     }
+    // Σ_{i,k} tr(R_iᵀ C_ik R_k) = Σ_i tr(C_ii) + 2 Σ_{i<k} <R_i, C_ik R_k> (C_ki = C_ikᵀ)
     let objective = |rot: &[Mat3]| {
-        let mut g = 0.0;
+        let mut g = total;
         for i in 0..q {
-            for k in 0..q {
-                g += (rot[i].transpose() * c[i * q + k] * rot[k]).trace();
+            for k in i + 1..q {
+                g += 2.0 * rot[i].dot(&(c[i * q + k] * rot[k]));
             }
         }
         g
@@ -352,8 +366,17 @@ impl Ord for Candidate {
 /// The rigid fit of a candidate merge: the rise it scores, its squared error and rotations.
 struct Fit {
     rise: f64,
+    /// sse - the two sides' sse (not clamped at 0).
+    raw: f64,
     sse: f64,
     rot: Vec<Mat3>,
+}
+
+/// A candidate merge in the heap: its fit once made; before that only a lower bound of its raw rise
+/// (`sse(a ∪ b) - sse(a) - sse(b)`, see [`MergeTree::from_leaves`]).
+struct Pending {
+    raw_lower: f64,
+    fit: Option<Fit>,
 }
 
 struct Node {
@@ -428,39 +451,51 @@ impl MergeTree {
             let (big, small) = if na.size >= nb.size { (na, nb) } else { (nb, na) };
             (big.stats.plus(&small.stats), na.size + nb.size, small.size, &big.rot[..])
         }
-        // a candidate merge's rigid fit: (rise, sse, rotations), kept until the merge is made or a side is gone
+        // a candidate merge's rigid fit, kept until the merge is made or a side is gone
         let pair = |nodes: &[Option<Node>], a: u32, b: u32| -> Fit {
             let (st, _, small, start) = joined(nodes, a, b);
             let mut rot = start.to_vec();
             let sse = rigid_sse(&st, &mut rot);
             let (na, nb) = (nodes[a as usize].as_ref().expect("live"), nodes[b as usize].as_ref().expect("live"));
-            let rise = (sse - na.sse - nb.sse).max(0.0) / (3.0 * q as f64 * small.max(1) as f64);
-            Fit { rise, sse, rot }
+            let raw = sse - na.sse - nb.sse;
+            Fit { rise: raw.max(0.0) / (3.0 * q as f64 * small.max(1) as f64), raw, sse, rot }
         };
+        let size_of = |nodes: &[Option<Node>], a: u32| nodes[a as usize].as_ref().expect("live").size;
         let typical = typical_variance(&nodes).max(floor);
+        // Lazy candidates. Every adjacent pair is in the heap once, keyed by its rise or by a lower bound of it:
+        // a bound that reaches the top gets its rigid fit and goes back in with its exact rise, an exact one on
+        // top is the cheapest merge. Bounds only postpone fits, so the merges are the eager greedy's, in order
+        // (the tree of every real population was checked equal: docs/speed.md). The bound after a and b merged
+        // into ab, for a neighbour c: the rigid error of a union is at least the sum of its pieces' (each piece
+        // fitted on its own does at least as well), so sse(c∪a∪b) >= sse(c∪a) + sse(b), i.e.
+        // raw(c, ab) >= raw(c, a) - raw(a, b), and the same with b; less a slack of 1e-9 of the points' spread
+        // for the fits' own convergence tolerance.
         let mut heap = BinaryHeap::new();
-        let mut fits: std::collections::HashMap<(u32, u32), Fit> = Default::default();
-        let push = |heap: &mut BinaryHeap<Candidate>, fits: &mut std::collections::HashMap<(u32, u32), Fit>, nodes: &[Option<Node>], a: u32, b: u32| {
-            let fit = pair(nodes, a, b);
-            heap.push(Candidate { score: fit.rise, a, b });
-            fits.insert((a, b), fit);
-        };
+        let mut pending: std::collections::HashMap<(u32, u32), Pending> = Default::default();
         for a in 0..n_leaves {
             for &b in adjacent[a].iter().filter(|&&b| b as usize > a) {
-                push(&mut heap, &mut fits, &nodes, a as u32, b);
+                heap.push(Candidate { score: 0.0, a: a as u32, b });
+                pending.insert((a as u32, b), Pending { raw_lower: 0.0, fit: None });
             }
         }
+        let key = |x: u32, y: u32| (x.min(y), x.max(y));
         let mut merges = Vec::with_capacity(n_leaves.saturating_sub(1));
         let mut live = n_leaves;
         let mut total_sse: f64 = nodes.iter().flatten().map(|n| n.sse).sum();
         let per_variance = 1.0 / (3.0 * q.max(1) as f64 * leaves.len().max(1) as f64);
         while let Some(Candidate { a, b, .. }) = heap.pop() {
-            let fit = fits.remove(&(a, b)).expect("every candidate has its fit");
-            if nodes[a as usize].is_none() || nodes[b as usize].is_none() {
+            let Some(entry) = pending.get_mut(&(a, b)) else { continue };
+            let Some(fit) = entry.fit.take() else {
+                let fit = pair(&nodes, a, b);
+                heap.push(Candidate { score: fit.rise, a, b });
+                entry.raw_lower = fit.raw;
+                entry.fit = Some(fit);
                 continue;
-            }
+            };
+            pending.remove(&(a, b));
             let (stats, size, _, _) = joined(&nodes, a, b);
-            let Fit { rise, sse, rot } = fit;
+            let spread = stats.spread();
+            let Fit { rise, raw, sse, rot } = fit;
             let node = Node { stats, rot, sse, size };
             let id = nodes.len() as u32;
             let variance = total_sse * per_variance;
@@ -477,13 +512,16 @@ impl MergeTree {
                 adjacent[c as usize].remove(&a);
                 adjacent[c as usize].remove(&b);
                 adjacent[c as usize].insert(id);
+                let lower = [a, b].iter().filter_map(|&x| pending.remove(&key(c, x))).map(|p| p.raw_lower).fold(0.0, f64::max);
+                let slack = 1e-9 * (spread + nodes[c as usize].as_ref().expect("live").stats.spread());
+                let raw_lower = (lower - raw.max(0.0) - slack).max(0.0);
+                let small = size_of(&nodes, c).min(size);
+                heap.push(Candidate { score: raw_lower / (3.0 * q as f64 * small.max(1) as f64), a: c, b: id });
+                pending.insert((c, id), Pending { raw_lower, fit: None });
             }
-            adjacent.push(around.clone());
+            adjacent.push(around);
             adjacent[a as usize].clear();
             adjacent[b as usize].clear();
-            for &c in &around {
-                push(&mut heap, &mut fits, &nodes, c, id);
-            }
         }
         MergeTree { leaves, n_leaves, merges, typical }
     }
@@ -636,6 +674,59 @@ mod tests {
             }
         }
         assert!(seen.iter().all(|&s| s));
+    }
+
+    /// The lazily evaluated merges are the eager greedy's: replaying the tree, every merge it made was the
+    /// cheapest of all adjacent live pairs at that moment, each pair's rise computed afresh.
+    #[test]
+    fn every_merge_is_the_cheapest_adjacent_pair() {
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 1200, poses: 9, seed: 3, ..Spec::default() }).unwrap();
+        let pop = &g.population;
+        let tree = MergeTree::build(pop, 1e-14);
+        let poses = spread_poses(pop, TREE_POSES);
+        let q = poses.len();
+        let mut stats: Vec<Option<Stats>> = vec![Some(Stats::empty(q)); tree.n_leaves];
+        for (j, &l) in tree.leaves.iter().enumerate() {
+            let x: Vec<[f64; 3]> = poses.iter().map(|&i| pop.point(i, j)).collect();
+            stats[l as usize].as_mut().unwrap().add_point(&x);
+        }
+        let sse = |st: &Stats| {
+            let c = st.centred();
+            let mut rot: Vec<Mat3> = (0..q).map(|i| if i == 0 { IDENTITY } else { best_rotation(&c[i * q]) }).collect();
+            rigid_sse(st, &mut rot)
+        };
+        let mut edges: BTreeSet<(u32, u32)> = BTreeSet::new();
+        for f in &pop.faces {
+            for s in 0..3 {
+                let (a, b) = (tree.leaves[f[s] as usize], tree.leaves[f[(s + 1) % 3] as usize]);
+                if a != b {
+                    edges.insert((a.min(b), a.max(b)));
+                }
+            }
+        }
+        let rise = |stats: &[Option<Stats>], a: u32, b: u32| {
+            let (sa, sb) = (stats[a as usize].as_ref().unwrap(), stats[b as usize].as_ref().unwrap());
+            (sse(&sa.plus(sb)) - sse(sa) - sse(sb)).max(0.0) / (3.0 * q as f64 * sa.n.min(sb.n))
+        };
+        assert!(tree.merges.len() > 100, "{} merges", tree.merges.len());
+        for (m, mg) in tree.merges.iter().enumerate() {
+            let cheapest = edges.iter().map(|&(a, b)| rise(&stats, a, b)).fold(f64::INFINITY, f64::min);
+            assert!(edges.contains(&(mg.a.min(mg.b), mg.a.max(mg.b))), "merge {m} joins no adjacent pair");
+            assert!(mg.rise <= cheapest * (1.0 + 1e-6) + 1e-15, "merge {m}: rise {} but a pair rises {cheapest}", mg.rise);
+            let id = (tree.n_leaves + m) as u32;
+            let joined = stats[mg.a as usize].as_ref().unwrap().plus(stats[mg.b as usize].as_ref().unwrap());
+            stats.push(Some(joined));
+            stats[mg.a as usize] = None;
+            stats[mg.b as usize] = None;
+            edges = edges
+                .into_iter()
+                .filter(|&e| e != (mg.a.min(mg.b), mg.a.max(mg.b)))
+                .map(|(a, b)| {
+                    let up = |x: u32| if x == mg.a || x == mg.b { id } else { x };
+                    (up(a).min(up(b)), up(a).max(up(b)))
+                })
+                .collect();
+        }
     }
 
     #[test]
