@@ -49,7 +49,7 @@ pub fn blend_references(pop: &Population) -> Vec<usize> {
 /// band moves as one fixed blend of its two sides: near 0. A part with a joint of its own turns independently:
 /// large. Infinity without two neighbours that move apart (more than 1e-3 rad RMS).
 pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize], refs: &[usize]) -> f64 {
-    let mut ratios: Vec<f64> = refs.iter().map(|&r| blend_ratio_from(model, k, adjacent, r)).collect();
+    let mut ratios: Vec<f64> = refs.iter().map(|&r| blend_ratio_from(model, k, adjacent, r, f64::NEG_INFINITY)).collect();
     if ratios.is_empty() {
         return f64::INFINITY;
     }
@@ -57,14 +57,38 @@ pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize], refs: &[usize]) 
     ratios[(ratios.len() - 1) / 2]
 }
 
-/// [`blend_ratio`] with pose `r` as the bind pose.
+/// Whether [`blend_ratio`] is below `ratio`, with only the work that decides it: the median is below once more
+/// than half the reference poses are, each of those known below at its first in-between under `ratio`, and not
+/// once half of them (rounded up) are not.
+pub fn is_blend(model: &Model, k: usize, adjacent: &[usize], refs: &[usize], ratio: f64) -> bool {
+    // the median of n sorted values is the ((n - 1) / 2)-th: below `ratio` when at least `need` values are
+    let need = (refs.len().max(1) - 1) / 2 + 1;
+    let (mut below, mut above) = (0, 0);
+    for &r in refs {
+        if blend_ratio_from(model, k, adjacent, r, ratio) < ratio {
+            below += 1;
+        } else {
+            above += 1;
+        }
+        if below >= need {
+            return true;
+        }
+        if above > refs.len() - need {
+            return false;
+        }
+    }
+    false
+}
+
+/// [`blend_ratio`] with pose `r` as the bind pose; returns as soon as the ratio is known below `stop` (a value
+/// below `stop`, not always the minimum).
 ///
 /// Done in quaternions: with p_a = q_k^* q_a and p_b = q_k^* q_b (q_b on q_a's side of the 4-sphere, Ω the angle
 /// between them), k's motion seen from slerp(q_a, q_b, t) is q_k^* slerp_t = (sin((1-t)Ω) p_a + sin(tΩ) p_b) / sin Ω,
 /// linear in the two fixed products, and its rotation angle is 2 atan2(|vector part|, |scalar part|), which does
 /// not depend on the scale. So each pose costs 21 sines per pair (one table read both ways) and one atan2 per t,
 /// instead of a slerp, a matrix product and an atan2 per t. Equal to the matrix form to rounding (a test below).
-fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize) -> f64 {
+fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize, stop: f64) -> f64 {
     let ns = model.n_shapes;
     let mk = relative_motion(&model.parts[k].rotations, r);
     let ms: Vec<Vec<Mat3>> = adjacent.iter().map(|&a| relative_motion(&model.parts[a].rotations, r)).collect();
@@ -104,6 +128,9 @@ fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize) -> f6
                     2.0 * (p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt().atan2(p[0].abs())
                 });
                 best = best.min(e / apart);
+                if best < stop {
+                    return best;
+                }
             }
         }
     }
@@ -234,7 +261,7 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
     // ratio) of the part's vertices: remembered by the parts' first indices, so a dissolution re-tests only the
     // parts it touched.
     let mut ids: Vec<usize> = (0..model.n_parts()).collect();
-    let mut rotation_memo: std::collections::HashMap<(usize, Vec<usize>), f64> = Default::default();
+    let mut rotation_memo: std::collections::HashMap<(usize, Vec<usize>), bool> = Default::default();
     let mut fit_memo: std::collections::HashMap<(usize, Vec<usize>, Vec<usize>), f64> = Default::default();
     loop {
         if model.n_parts() < 3 {
@@ -263,18 +290,15 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
         order.sort_by_key(|&k| members[k].len());
         let mut flesh = |k: usize| {
             let side_ids: Vec<usize> = sides[k].iter().map(|&a| ids[a]).collect();
-            let r = *rotation_memo
-                .entry((ids[k], side_ids.clone()))
-                .or_insert_with(|| blend_ratio(model, k, &sides[k], &refs));
-            if r < ratio {
-                return Some((r, f64::NAN));
+            if *rotation_memo.entry((ids[k], side_ids.clone())).or_insert_with(|| is_blend(model, k, &sides[k], &refs, ratio)) {
+                return Some(f64::NAN);
             }
             let f = *fit_memo
                 .entry((ids[k], side_ids, members[k].clone()))
                 .or_insert_with(|| blend_fit_ratio(model, pop, k, &members[k], &sides[k]));
-            (f < 1.0).then_some((r, f))
+            (f < 1.0).then_some(f)
         };
-        let Some((k, (r, f))) = order.clone().into_iter().find_map(|k| flesh(k).map(|x| (k, x))) else {
+        let Some((k, f)) = order.clone().into_iter().find_map(|k| flesh(k).map(|x| (k, x))) else {
             if std::env::var_os("POSEMFA_DEBUG").is_some() {
                 for k in (0..model.n_parts()).filter(|&k| members[k].len() < 60) {
                     let r = blend_ratio(model, k, &sides[k], &refs);
@@ -285,6 +309,7 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
             return dissolved;
         };
         if std::env::var_os("POSEMFA_DEBUG").is_some() {
+            let r = blend_ratio(model, k, &sides[k], &refs);
             eprintln!("flesh: part {k} ({} vertices) dissolved, blend ratio {r:.3}, blend fit {f:.3}", members[k].len());
         }
         for &j in &members[k] {
@@ -472,6 +497,7 @@ mod tests {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
         let ns = 9;
         let mut u = || rng.gen::<f64>();
+        let mut seen = [0; 2];
         for trial in 0..40 {
             let mut axis = || [u() - 0.5, u() - 0.5, u() - 0.5];
             let (ax, bx, cx) = (axis(), axis(), axis());
@@ -490,10 +516,20 @@ mod tests {
             let other: Vec<Mat3> = (0..ns).map(|_| axis_angle(cx, 2.0 * (u() - 0.5))).collect();
             let m = model(vec![comp(a), comp(b), comp(k), comp(other)]);
             for r in 0..ns {
-                let (new, old) = (blend_ratio_from(&m, 2, &[0, 1, 3], r), blend_ratio_from_matrices(&m, 2, &[0, 1, 3], r));
+                let (new, old) = (blend_ratio_from(&m, 2, &[0, 1, 3], r, f64::NEG_INFINITY), blend_ratio_from_matrices(&m, 2, &[0, 1, 3], r));
                 assert!((new - old).abs() <= 1e-9 * old.max(1e-3), "trial {trial} ref {r}: {new} against {old}");
             }
+            // the early-stopping decision is the full ratio's, for every threshold and reference set around it
+            let refs: Vec<usize> = (0..ns).collect();
+            for cut in [0.05, 0.1, 0.2, 0.4, 0.8] {
+                for n in [1, 2, 5, ns] {
+                    let full = blend_ratio(&m, 2, &[0, 1, 3], &refs[..n]);
+                    assert_eq!(is_blend(&m, 2, &[0, 1, 3], &refs[..n], cut), full < cut, "trial {trial}: {full} against {cut}, {n} references");
+                    seen[(full < cut) as usize] += 1;
+                }
+            }
         }
+        assert!(seen[0] > 100 && seen[1] > 100, "decisions either way: {seen:?}");
     }
 
     #[test]
