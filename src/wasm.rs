@@ -203,24 +203,29 @@ pub struct Fitter {
     pop: Rc<Population>,
 }
 
+impl Fitter {
+    /// The parameters read from JS and the pipeline `make` builds from them.
+    fn with(population: &WasmPopulation, params: JsValue, make: fn(&Population, &Params) -> crate::error::Result<Pipeline>) -> Result<Fitter, JsValue> {
+        let params: Params = from_js(params, "parameters")?;
+        let pipe = make(&population.inner, &params)?;
+        Ok(Fitter { pipe, pop: population.inner.clone() })
+    }
+}
+
 #[wasm_bindgen]
 impl Fitter {
     /// `params`: a plain object with any of the fields of `Params` in camelCase (parts, seed, tol, maxIter,
     /// varianceFloor, lambdaRule: "exact" | "paper-eq18", restarts, refine, ...); missing fields take defaults.
     #[wasm_bindgen(constructor)]
     pub fn new(population: &WasmPopulation, params: JsValue) -> Result<Fitter, JsValue> {
-        let params: Params = from_js(params, "parameters")?;
-        let pipe = Pipeline::new(&population.inner, &params)?;
-        Ok(Fitter { pipe, pop: population.inner.clone() })
+        Fitter::with(population, params, Pipeline::new)
     }
 
     /// The fit a step-by-step lesson shows (`Pipeline::for_teaching`: the paper's Algorithm 1, whatever
     /// `partRule` says); `params` as for the constructor.
     #[wasm_bindgen(js_name = forTeaching)]
     pub fn for_teaching(population: &WasmPopulation, params: JsValue) -> Result<Fitter, JsValue> {
-        let params: Params = from_js(params, "parameters")?;
-        let pipe = Pipeline::for_teaching(&population.inner, &params)?;
-        Ok(Fitter { pipe, pop: population.inner.clone() })
+        Fitter::with(population, params, Pipeline::for_teaching)
     }
 
     /// One AECM iteration; returns the progress object {stage, iteration, totalIterations, logLikelihood,

@@ -52,7 +52,7 @@ const COMMANDS: &[(&str, &[&str])] = &[
     ("rig-report", &["--glb", "--out", "--weights", "--bind", "--band", "--parts"]),
     ("pose", &["--out", "--json"]),
     ("crossval", &["--json", "--weights", "--bones", "--parts"]),
-    ("subdivide", &["--out", "--levels"]),
+    ("subdivide", &["--out", "--levels", "--object", "--animation", "--frames", "--poses-from"]),
     ("articulate-report", &["--from", "--to", "--t", "--glb", "--validate", "--band", "--tol"]),
     ("completions", &[]),
 ];
@@ -336,6 +336,11 @@ fn subdivide_writes_a_registered_finer_population_that_fits_to_the_same_parts() 
     assert_eq!(std::fs::read_dir(&from_glb).unwrap().count(), 5, "{}", text(&r.stdout));
     let r = posemfa(&["fit", from_glb.to_str().unwrap(), "--quiet"]);
     assert!(r.status.success() && text(&r.stdout).contains("5 shapes"), "{}{}", text(&r.stdout), text(&r.stderr));
+    // the input options a fit takes: 3 evenly spaced times of the clip, one OBJ each
+    let three = root.join("three");
+    let r = posemfa(&["subdivide", glb.to_str().unwrap(), "--frames", "3", "--out", three.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    assert_eq!(std::fs::read_dir(&three).unwrap().count(), 3, "{}", text(&r.stdout));
     // a result larger than the memory budget is refused, nothing written
     let big = root.join("big");
     let r = Command::new(env!("CARGO_BIN_EXE_posemfa"))

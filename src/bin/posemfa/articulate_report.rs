@@ -37,7 +37,7 @@ pub fn run(a: Args) -> Result<(), String> {
     let j = pose_index("--to", a.to, pop.n_shapes())?;
     let rep = posemfa::articulate::report::report(&art, i, j, t).map_err(|e| e.to_string())?;
     let mut out = serde_json::to_value(&rep).map_err(|e| e.to_string())?;
-    out["inputs"] = serde_json::json!(a.fit.inputs);
+    out["inputs"] = serde_json::json!(a.fit.input.inputs);
     out["fit_ms"] = serde_json::json!(fit_ms);
     if let Some(path) = &a.glb {
         let g = posemfa::export::gltf::GltfOptions::default();

@@ -47,7 +47,7 @@ pub fn run(o: Args) -> Result<(), String> {
     let fit_ms = median(&mut totals.clone());
     let out = serde_json::json!({
         "runtime": "native",
-        "inputs": o.fit.inputs, "shapes": pop.n_shapes(), "vertices": pop.n_vertices(),
+        "inputs": o.fit.input.inputs, "shapes": pop.n_shapes(), "vertices": pop.n_vertices(),
         "load_ms": load_ms, "fit_ms_median": fit_ms, "fit_ms_all": totals,
         "parts": m.n_parts(), "rmse": m.rmse(&pop), "iterations": result.stats.iter().map(|s| s.iterations).sum::<usize>(),
         "stages": stages,

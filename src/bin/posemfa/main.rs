@@ -159,6 +159,6 @@ mod tests {
             panic!("not interpolate")
         };
         assert!(a.paper && a.paper_root && a.no_residual);
-        assert_eq!(a.fit.inputs, vec!["d".to_string(), "e".to_string()]);
+        assert_eq!(a.fit.input.inputs, vec!["d".to_string(), "e".to_string()]);
     }
 }

@@ -96,13 +96,48 @@ const PART_RULES: &[(&str, PartRule)] =
 const POSE_SOURCES: &[(&str, PoseSource)] =
     &[("animation", PoseSource::Animation), ("morph-targets", PoseSource::MorphTargets)];
 
+/// The population to read: files, a folder or a generated population, and which mesh and poses of a glTF, FBX
+/// or USD file. Every subcommand that reads a population.
+#[derive(clap::Args)]
+#[command(next_help_heading = "Input options")]
+pub struct InputArgs {
+    #[arg(value_name = "DIR_OR_FILES", required = true, value_hint = ValueHint::AnyPath, help = format!("A {}", inputs_help()),
+          help_heading = "Arguments")]
+    pub inputs: Vec<String>,
+    /// glTF, FBX, USD input: the mesh / object (name or index; default the animated one with most vertices)
+    #[arg(long = "object", visible_alias = "mesh", value_name = "NAME")]
+    mesh: Option<String>,
+    /// glTF / FBX input: the animation or take (name or index; default the one with most keyframes / longest)
+    #[arg(long, value_name = "NAME")]
+    animation: Option<String>,
+    /// glTF / FBX / USD input: N evenly spaced times (default: the keyframes, frames or time samples)
+    #[arg(long, value_name = "N")]
+    frames: Option<usize>,
+    /// glTF / FBX input: animation or morph-targets (default: the animation if one moves the mesh)
+    #[arg(long, value_name = "WHAT", value_parser = choice(POSE_SOURCES))]
+    poses_from: Option<PoseSource>,
+}
+
+impl InputArgs {
+    fn gltf(&self) -> posemfa::mesh::gltf::Options {
+        posemfa::mesh::gltf::Options {
+            mesh: self.mesh.clone(),
+            animation: self.animation.clone(),
+            frames: self.frames,
+            source: self.poses_from.unwrap_or_default(),
+        }
+    }
+
+    /// The population (and its truth when generated).
+    pub fn load(&self) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
+        load_inputs(&self.inputs, &self.gltf())
+    }
+}
+
 /// The inputs and the fit parameters: every subcommand that fits.
 #[derive(clap::Args)]
 #[command(next_help_heading = "Fit options")]
 pub struct FitArgs {
-    #[arg(value_name = "DIR_OR_FILES", required = true, value_hint = ValueHint::AnyPath, help = format!("A {}", inputs_help()),
-          help_heading = "Arguments")]
-    pub inputs: Vec<String>,
     /// Coarse parts
     #[arg(long, value_name = "M", default_value_t = Params::default().parts, value_parser = parts_value)]
     parts: usize,
@@ -157,18 +192,9 @@ pub struct FitArgs {
     /// Exact part count: auto (Algorithm 1's own) or N (split / merge until N)
     #[arg(long, value_name = "N", default_value = "auto", value_parser = bones)]
     bones: Bones,
-    /// glTF, FBX, USD input: the mesh / object (name or index; default the animated one with most vertices)
-    #[arg(long = "object", visible_alias = "mesh", value_name = "NAME")]
-    mesh: Option<String>,
-    /// glTF / FBX input: the animation or take (name or index; default the one with most keyframes / longest)
-    #[arg(long, value_name = "NAME")]
-    animation: Option<String>,
-    /// glTF / FBX / USD input: N evenly spaced times (default: the keyframes, frames or time samples)
-    #[arg(long, value_name = "N")]
-    frames: Option<usize>,
-    /// glTF / FBX input: animation or morph-targets (default: the animation if one moves the mesh)
-    #[arg(long, value_name = "WHAT", value_parser = choice(POSE_SOURCES))]
-    poses_from: Option<PoseSource>,
+    /// (last: its options under their own heading)
+    #[command(flatten)]
+    pub input: InputArgs,
 }
 
 impl FitArgs {
@@ -209,27 +235,18 @@ impl FitArgs {
     }
 
     /// The choices for glTF inputs.
-    fn gltf(&self) -> posemfa::mesh::gltf::Options {
-        posemfa::mesh::gltf::Options {
-            mesh: self.mesh.clone(),
-            animation: self.animation.clone(),
-            frames: self.frames,
-            source: self.poses_from.unwrap_or_default(),
-        }
-    }
-
     /// The parameters (checked) and the population (and its truth when generated).
     pub fn load(&self) -> Result<(Params, Population, Option<posemfa::synth::Generated>), String> {
         let params = self.params()?;
         params.validate().map_err(|e| e.to_string())?;
-        let (pop, truth) = load_inputs(&self.inputs, &self.gltf())?;
+        let (pop, truth) = self.input.load()?;
         Ok((params, pop, truth))
     }
 }
 
 /// A folder / files, or `synth:PRESET[:VERTICES[:POSES[:SEED[:BAND[:MAX_ANGLE]]]]]` (a generated population
 /// with its truth).
-pub fn load_inputs(
+fn load_inputs(
     inputs: &[String],
     gltf: &posemfa::mesh::gltf::Options,
 ) -> Result<(Population, Option<posemfa::synth::Generated>), String> {

@@ -1,6 +1,6 @@
 //! `posemfa subdivide DIR_OR_FILES... --out DIR [--levels N]`: a finer registered population for measuring.
 
-use crate::shared::{inputs_help, load_inputs};
+use crate::shared::InputArgs;
 use clap::ValueHint;
 
 /// Split every triangle in four at its edge midpoints, the same in every pose (the population stays registered),
@@ -9,19 +9,19 @@ use clap::ValueHint;
 #[derive(clap::Args)]
 #[command(next_help_heading = "Subdivide options")]
 pub struct Args {
-    #[arg(value_name = "DIR_OR_FILES", required = true, value_hint = ValueHint::AnyPath, help = format!("A {}", inputs_help()),
-          help_heading = "Arguments")]
-    inputs: Vec<String>,
     /// Folder to write the OBJ files to (created if missing; files of the same names are overwritten)
     #[arg(long, value_name = "DIR", value_hint = ValueHint::DirPath)]
     out: String,
     /// How many times to subdivide (each multiplies the triangles by 4)
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=4))]
     levels: u8,
+    /// (last: its options under their own heading)
+    #[command(flatten)]
+    input: InputArgs,
 }
 
 pub fn run(a: Args) -> Result<(), String> {
-    let (pop, _truth) = load_inputs(&a.inputs, &Default::default())?;
+    let (pop, _truth) = a.input.load()?;
     let budget = posemfa::memory::budget_bytes().map_err(|e| e.to_string())?;
     let (faces, shapes) = posemfa::mesh::subdivide::subdivide(&pop, a.levels as usize, budget).map_err(|e| e.to_string())?;
     let out_dir = std::path::Path::new(&a.out);
