@@ -32,8 +32,10 @@ avx2_fn! {
         // (the sum as f64's Sum adds: in order from -0.0)
         let mut ll = -0.0;
         let mut h = Vec::new();
-        for (j, &l) in labels.iter().enumerate() {
-            let k = l as usize;
+        // in the data's layout order, as the E-step lists its members: the 4 vertices of a block are read one
+        // after the other (their values are interleaved), and so are they in the CM steps' sums
+        for j in data.layout_order() {
+            let k = labels[j] as usize;
             let (y, sq) = comps[k].project(&wbs[k], data.vertex_into(j, &mut h));
             let wb = &wbs[k];
             let quad = sq - (wb.shrink[0] * y[0] * y[0] + wb.shrink[1] * y[1] * y[1] + wb.shrink[2] * y[2] * y[2]);
