@@ -13,6 +13,7 @@
 
 use super::component::Component;
 use super::data::Data;
+use super::estep::{Lanes, LANES};
 use super::params::LambdaRule;
 use crate::geometry::procrustes::best_rotation;
 use crate::geometry::{Mat3, Vec3};
@@ -55,22 +56,27 @@ avx2_fn! {
         let ns = data.n_shapes;
         let mut mass = vec![0.0; m];
         let mut sums = vec![0.0; m * ns * 3];
+        let layout = &*data.layout;
+        // per stored shape t and coordinate, one partial sum per lane (summed over the lanes at the end)
+        let mut lanes = vec![[0.0; LANES]; ns * 3];
         for (k, list) in members.iter().enumerate().take(m) {
-            let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
-            // chunks of members, shape by shape (every sum still adds the members in list order: the same rounding)
-            for chunk in list.chunks(CHUNK) {
-                for &Member { g, .. } in chunk {
-                    mass[k] += g;
-                }
-                for (i, a) in acc.chunks_exact_mut(3).enumerate() {
-                    let mut s = [a[0], a[1], a[2]];
-                    for &Member { j, g, .. } in chunk {
-                        let p = data.point(j as usize, i);
-                        for d in 0..3 {
-                            s[d] += g * p[d];
+            lanes.iter_mut().for_each(|v| *v = [0.0; LANES]);
+            for (b, g, _) in blocks(data, list) {
+                for (t, acc) in lanes.chunks_exact_mut(3).enumerate() {
+                    let at = (b * ns + t) * 3;
+                    for d in 0..3 {
+                        let h = &layout.h[at + d];
+                        for l in 0..LANES {
+                            acc[d][l] += g[l] * h[l] as f64;
                         }
                     }
-                    a.copy_from_slice(&s);
+                }
+            }
+            mass[k] = list.iter().map(|mb| mb.g).sum();
+            let acc = &mut sums[k * ns * 3..(k + 1) * ns * 3];
+            for (t, &i) in layout.order.iter().enumerate() {
+                for d in 0..3 {
+                    acc[i * 3 + d] = lanes[t * 3 + d].iter().sum();
                 }
             }
         }
@@ -104,9 +110,42 @@ struct Stats {
     scatter: Vec<Mat3>,
 }
 
-/// Members per chunk of the sums' shape-outer loops ([`cycle1`], [`accumulate`]): each shape's accumulators
-/// stay in registers over the chunk, and the chunk's data rows are read side by side, each in order.
-const CHUNK: usize = 8;
+/// The blocks of the data that hold members of `list`, each as (block, g, y) with the members'
+/// responsibilities `g` and projections `y` in their lanes and 0 in the other lanes, so the sums over the shapes
+/// run 4 vertices at a time on the values as they are stored. `list` may come in any order; in layout order
+/// (the E-step's and the label fit's) every block comes once.
+struct Blocks<'a> {
+    data: &'a Data,
+    list: &'a [Member],
+    at: usize,
+}
+
+impl Iterator for Blocks<'_> {
+    type Item = (usize, Lanes, [Lanes; 3]);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<Self::Item> {
+        let first = self.list.get(self.at)?;
+        let (b, _) = self.data.block_lane(first.j as usize);
+        let (mut g, mut y) = ([0.0; LANES], [[0.0; LANES]; 3]);
+        while let Some(&Member { j, g: gj, y: yj }) = self.list.get(self.at) {
+            let (bj, l) = self.data.block_lane(j as usize);
+            if bj != b || g[l] != 0.0 {
+                break;
+            }
+            g[l] = gj;
+            for e in 0..3 {
+                y[e][l] = yj[e];
+            }
+            self.at += 1;
+        }
+        Some((b, g, y))
+    }
+}
+
+fn blocks<'a>(data: &'a Data, list: &'a [Member]) -> Blocks<'a> {
+    Blocks { data, list, at: 0 }
+}
 
 avx2_fn! {
     fn accumulate(data: &Data, list: &[Member], c: &Component, want_scatter: bool, want_moment: bool) -> Stats {
@@ -120,59 +159,69 @@ avx2_fn! {
             moment: Mat3::zeros(),
             scatter: if want_scatter { vec![Mat3::zeros(); ns] } else { Vec::new() },
         };
-        // γ E[z] per member of the chunk; the per-shape sums then run shape by shape over the chunk with their
-        // accumulators in registers (every sum still adds the members in list order: the same rounding)
-        let mut gez = [[0.0; 3]; CHUNK];
-        for chunk in list.chunks(CHUNK) {
-            for (q, &Member { g, y, .. }) in gez.iter_mut().zip(chunk) {
-                let ez = [wb.post_gain[0] * y[0], wb.post_gain[1] * y[1], wb.post_gain[2] * y[2]];
-                st.n += g;
-                for d in 0..3 {
-                    st.second[d] += g * (wb.post_var[d] + ez[d] * ez[d]);
+        for &Member { g, y, .. } in list {
+            let ez = [wb.post_gain[0] * y[0], wb.post_gain[1] * y[1], wb.post_gain[2] * y[2]];
+            st.n += g;
+            for d in 0..3 {
+                st.second[d] += g * (wb.post_var[d] + ez[d] * ez[d]);
+            }
+            if want_moment {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        st.moment[(a, b)] += g * ez[a] * ez[b];
+                    }
                 }
-                if want_moment {
-                    for a in 0..3 {
-                        for b in 0..3 {
-                            st.moment[(a, b)] += g * ez[a] * ez[b];
+            }
+        }
+        // S_i and C_i 4 vertices at a time (the lanes of a block), one partial sum per lane, per stored shape t:
+        // 1 + 9 values of LANES
+        let layout = &*data.layout;
+        let mut lanes = vec![[0.0; LANES]; ns * 10];
+        for (blk, g, y) in blocks(data, list) {
+            let mut q = [[0.0; LANES]; 3];
+            for e in 0..3 {
+                for l in 0..LANES {
+                    q[e][l] = g[l] * wb.post_gain[e] * y[e][l];
+                }
+            }
+            for (t, acc) in lanes.chunks_exact_mut(10).enumerate() {
+                let at = (blk * ns + t) * 3;
+                let b = c.translations[layout.order[t]];
+                let mut x = [[0.0; LANES]; 3];
+                for a in 0..3 {
+                    for l in 0..LANES {
+                        x[a][l] = layout.h[at + a][l] as f64 - b[a];
+                    }
+                }
+                for l in 0..LANES {
+                    acc[0][l] += g[l] * (x[0][l] * x[0][l] + x[1][l] * x[1][l] + x[2][l] * x[2][l]);
+                }
+                for a in 0..3 {
+                    for e in 0..3 {
+                        for l in 0..LANES {
+                            acc[1 + 3 * a + e][l] += x[a][l] * q[e][l];
                         }
                     }
                 }
-                *q = [g * ez[0], g * ez[1], g * ez[2]];
             }
-            for i in 0..ns {
-                let b = c.translations[i];
-                let mut sq = st.sq[i];
-                let mut cr = [[0.0; 3]; 3];
-                for a in 0..3 {
-                    for e in 0..3 {
-                        cr[a][e] = st.cross[i][(a, e)];
-                    }
+        }
+        for (t, &i) in layout.order.iter().enumerate() {
+            let acc = &lanes[t * 10..(t + 1) * 10];
+            st.sq[i] = acc[0].iter().sum();
+            for a in 0..3 {
+                for e in 0..3 {
+                    st.cross[i][(a, e)] = acc[1 + 3 * a + e].iter().sum();
                 }
-                for (&Member { j, g, .. }, q) in chunk.iter().zip(&gez) {
-                    let p = data.point(j as usize, i);
+            }
+        }
+        if want_scatter {
+            for &Member { j, g, .. } in list {
+                for i in 0..ns {
+                    let (p, b) = (data.point(j as usize, i), c.translations[i]);
                     let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
-                    sq += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
                     for a in 0..3 {
                         for e in 0..3 {
-                            cr[a][e] += x[a] * q[e];
-                        }
-                    }
-                }
-                st.sq[i] = sq;
-                for a in 0..3 {
-                    for e in 0..3 {
-                        st.cross[i][(a, e)] = cr[a][e];
-                    }
-                }
-                if want_scatter {
-                    let sc = &mut st.scatter[i];
-                    for &Member { j, g, .. } in chunk {
-                        let p = data.point(j as usize, i);
-                        let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
-                        for a in 0..3 {
-                            for e in 0..3 {
-                                sc[(a, e)] += g * x[a] * x[e];
-                            }
+                            st.scatter[i][(a, e)] += g * x[a] * x[e];
                         }
                     }
                 }
@@ -342,6 +391,61 @@ mod px_tests {
             for (i, b) in before.iter().enumerate() {
                 assert!((cov(&c, i, &eye) - b).norm() < 1e-12, "shape {i}, lambda {lambda:?}");
                 assert!((crate::geometry::det(&c.rotations[i]) - 1.0).abs() < 1e-12);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod sum_tests {
+    use super::*;
+    use crate::synth::{generate, Preset, Spec};
+
+    /// The sums by blocks of 4 lanes equal the member-by-member ones, for member lists in layout order, in
+    /// reverse and in a scattered order (blocks visited piecewise), with blocks partly filled.
+    #[test]
+    fn the_sums_by_blocks_equal_the_sums_by_members() {
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 400, poses: 5, seed: 1, ..Spec::default() }).unwrap();
+        let data = Data::from_population(&g.population);
+        let comps = crate::mfa::init::components_from_labels(&data, &g.part_of_vertex, 1e-8);
+        let mut members: Members = Vec::new();
+        crate::mfa::estep::EStep::new(&data).run(&data, &comps, &mut members);
+        let ns = data.n_shapes;
+        let k = (0..comps.len()).max_by_key(|&k| members[k].len()).unwrap();
+        let c = &comps[k];
+        let wb = c.woodbury();
+        let in_layout = members[k].clone();
+        assert!(in_layout.len() > 50 && in_layout.len() < data.n_vertices, "{} members", in_layout.len());
+        let reversed: Vec<Member> = in_layout.iter().rev().copied().collect();
+        let scattered: Vec<Member> = (0..7).flat_map(|r| in_layout.iter().skip(r).step_by(7).copied()).collect();
+        let scale = |m: &Mat3| m.amax().max(1e-300);
+        for list in [&in_layout, &reversed, &scattered] {
+            let st = accumulate(&data, list, c, false, false);
+            for i in 0..ns {
+                let (mut sq, mut cross) = (0.0, Mat3::zeros());
+                for &Member { j, g, y } in list {
+                    let (p, b) = (data.point(j as usize, i), c.translations[i]);
+                    let x = [p[0] - b[0], p[1] - b[1], p[2] - b[2]];
+                    sq += g * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+                    for a in 0..3 {
+                        for e in 0..3 {
+                            cross[(a, e)] += x[a] * g * wb.post_gain[e] * y[e];
+                        }
+                    }
+                }
+                assert!((st.sq[i] - sq).abs() <= 1e-12 * sq, "shape {i}: S {} against {sq}", st.sq[i]);
+                assert!((st.cross[i] - cross).amax() <= 1e-12 * scale(&cross), "shape {i}: C {} against {cross}", st.cross[i]);
+            }
+            let mut sums = comps.clone();
+            let one: Members = (0..comps.len()).map(|q| if q == k { list.clone() } else { Vec::new() }).collect();
+            let mass = cycle1(&data, &one, &mut sums);
+            let n: f64 = list.iter().map(|m| m.g).sum();
+            assert!((mass[k] - n).abs() <= 1e-12 * n);
+            for i in 0..ns {
+                for d in 0..3 {
+                    let b: f64 = list.iter().map(|m| m.g * data.point(m.j as usize, i)[d]).sum::<f64>() / n;
+                    assert!((sums[k].translations[i][d] - b).abs() <= 1e-12, "b {} against {b}", sums[k].translations[i][d]);
+                }
             }
         }
     }

@@ -179,6 +179,13 @@ impl Data {
         [layout.h[at][l] as f64, layout.h[at + 1][l] as f64, layout.h[at + 2][l] as f64]
     }
 
+    /// Where vertex j is stored: its block and lane ([`Layout`]).
+    #[inline(always)]
+    pub fn block_lane(&self, j: usize) -> (usize, usize) {
+        let s = self.layout.slot[j] as usize;
+        (s / LANES, s % LANES)
+    }
+
     /// The vertex ids in layout order (block by block, lane by lane): the order the E-step lists its members in,
     /// in which reading vertex after vertex reads the stored values in order.
     pub fn layout_order(&self) -> impl Iterator<Item = usize> + '_ {

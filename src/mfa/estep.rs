@@ -65,7 +65,7 @@ fn prefix_shrinks(comps: &[Component], order: &[usize]) -> Vec<Vec<[f64; 3]>> {
 }
 
 /// Woodbury constants with the packed per-shape constants in the order `order` (that of [`Blocked`]).
-fn ordered_woodbury(comps: &[Component], order: &[usize]) -> Vec<Woodbury> {
+pub(crate) fn ordered_woodbury(comps: &[Component], order: &[usize]) -> Vec<Woodbury> {
     comps
         .iter()
         .map(|c| {
@@ -97,7 +97,7 @@ const GROUP_SHAPES: usize = 8;
 /// vertices in SIMD lanes (the reduction over shapes then needs no horizontal sums).
 pub const LANES: usize = 4;
 
-type Lanes = [f64; LANES];
+pub type Lanes = [f64; LANES];
 
 /// What the E-step needs besides the data's own [`Layout`] (which it shares: the data are stored once, in
 /// that layout): the shapes the f32 screen reads (the first ones of every block, as stored) and the group
@@ -196,7 +196,7 @@ avx2_fn! {
     /// compiled as the small loop it is (in wasm the engine allocates its registers as in [`kernel_pass`], the
     /// limit it is compared with, instead of within the whole E-step).
     #[inline(never)]
-    fn accumulate_block_f64(packed: &[[f64; 13]], h: &[[f32; LANES]], y: &mut [Lanes; 3], sq: &mut Lanes) {
+    pub(crate) fn accumulate_block_f64(packed: &[[f64; 13]], h: &[[f32; LANES]], y: &mut [Lanes; 3], sq: &mut Lanes) {
         accumulate_block(packed, h, y, sq);
     }
 }

@@ -19,31 +19,47 @@
 
 use crate::mfa::cm::{self, Member, Members};
 use crate::mfa::data::Data;
+use crate::mfa::estep::LANES;
 use crate::mfa::{Model, Params};
 
-avx2_fn! {
-    /// The responsibilities of the labels (γ = 1 for each vertex's own part) with y under `comps`, written into
-    /// `members` (emptied first, its lists' capacity kept), and L_c of the labels under `comps` from the same
-    /// projections (log N = log_norm - (Σ|x|²/s - Σ shrink y²) / 2, as [`crate::mfa::Component::log_weighted_density`]).
-    fn label_members(data: &Data, labels: &[u32], comps: &[crate::mfa::Component], members: &mut Members) -> f64 {
-        let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
-        members.resize_with(comps.len(), Vec::new);
-        members.iter_mut().for_each(|list| list.clear());
-        // (the sum as f64's Sum adds: in order from -0.0)
-        let mut ll = -0.0;
-        let mut h = Vec::new();
-        // in the data's layout order, as the E-step lists its members: the 4 vertices of a block are read one
-        // after the other (their values are interleaved), and so are they in the CM steps' sums
-        for j in data.layout_order() {
-            let k = labels[j] as usize;
-            let (y, sq) = comps[k].project(&wbs[k], data.vertex_into(j, &mut h));
+/// The responsibilities of the labels (γ = 1 for each vertex's own part) with y under `comps`, written into
+/// `members` (emptied first, its lists' capacity kept), and L_c of the labels under `comps` from the same
+/// projections (log N = log_norm - (Σ|x|²/s - Σ shrink y²) / 2, as [`crate::mfa::Component::log_weighted_density`]).
+/// Block by block in the data's layout, as the E-step: the 4 vertices of a block are projected together under
+/// each part that labels one of them (one part for most blocks), so the members come in layout order.
+fn label_members(data: &Data, labels: &[u32], comps: &[crate::mfa::Component], members: &mut Members) -> f64 {
+    let layout = &*data.layout;
+    let wbs = crate::mfa::estep::ordered_woodbury(comps, &layout.order);
+    members.resize_with(comps.len(), Vec::new);
+    members.iter_mut().for_each(|list| list.clear());
+    let ns = data.n_shapes;
+    // (the sum as f64's Sum adds: in order from -0.0)
+    let mut ll = -0.0;
+    for (b, (ids, &valid)) in layout.idx.iter().zip(&layout.valid).enumerate() {
+        let ids = &ids[..valid as usize];
+        let h = &layout.h[b * ns * 3..(b + 1) * ns * 3];
+        let mut done = [false; LANES];
+        for first in 0..ids.len() {
+            if done[first] {
+                continue;
+            }
+            let k = labels[ids[first] as usize] as usize;
             let wb = &wbs[k];
-            let quad = sq - (wb.shrink[0] * y[0] * y[0] + wb.shrink[1] * y[1] * y[1] + wb.shrink[2] * y[2] * y[2]);
-            ll += wb.log_norm - 0.5 * quad;
-            members[k].push(Member { j: j as u32, g: 1.0, y });
+            let (mut y, mut sq) = ([[0.0; LANES]; 3], [0.0; LANES]);
+            crate::mfa::estep::accumulate_block_f64(&wb.packed, h, &mut y, &mut sq);
+            for (l, &j) in ids.iter().enumerate().skip(first) {
+                if done[l] || labels[j as usize] as usize != k {
+                    continue;
+                }
+                done[l] = true;
+                let yl = [y[0][l], y[1][l], y[2][l]];
+                let quad = sq[l] - (wb.shrink[0] * yl[0] * yl[0] + wb.shrink[1] * yl[1] * yl[1] + wb.shrink[2] * yl[2] * yl[2]);
+                ll += wb.log_norm - 0.5 * quad;
+                members[k].push(Member { j, g: 1.0, y: yl });
+            }
         }
-        ll
     }
+    ll
 }
 
 /// Refits `model.parts` to `model.labels` (see the module documentation) and recomputes the latent shape;
