@@ -120,7 +120,24 @@ fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize, stop:
                     *v = if omega < 1e-12 { t } else { (t * omega).sin() };
                 }
             }
+            // an in-between matters only below `stop` (deciding) or below the best so far (measuring)
+            let matters = if stop > f64::NEG_INFINITY { stop } else { best };
             for step in 0..=SLERP_STEPS {
+                // a lower bound first, without the atan2: the angle θ = 2 atan2(|v|, |w|) of p = (w, v) is at
+                // least 2 sin(θ/2) = 2 |v| / |p| (sin x <= x), with a margin for rounding
+                let mut low = 0.0;
+                for (i, (pa, pb)) in ends.iter().enumerate() {
+                    let (wa, wb) = (sines[i][SLERP_STEPS - step], sines[i][step]);
+                    let p: [f64; 4] = std::array::from_fn(|c| wa * pa[c] + wb * pb[c]);
+                    let v2 = p[1] * p[1] + p[2] * p[2] + p[3] * p[3];
+                    let n2 = v2 + p[0] * p[0];
+                    if n2 > 0.0 {
+                        low += 4.0 * v2 / n2;
+                    }
+                }
+                if (low / ns as f64).sqrt() * (1.0 - 1e-9) / apart >= matters.min(best) {
+                    continue;
+                }
                 let e = rms(&mut |i| {
                     let (pa, pb) = &ends[i];
                     let (wa, wb) = (sines[i][SLERP_STEPS - step], sines[i][step]);
