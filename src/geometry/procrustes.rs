@@ -152,25 +152,36 @@ mod tests {
         c
     }
 
-    /// The Newton polar path gives the maximiser of trace(R^T C) on cross-covariances of every conditioning it
-    /// accepts, and declines the ones it must (reflections, near-singular): best_rotation is then the SVD's.
-    #[test]
-    fn polar_rotation_equals_the_svd_one() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
+    /// Uniform numbers in [-1, 1) from a xorshift stream.
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        }
+    }
+
+    /// A random C = U D Vᵀ with singular values 1, 10^-a, 10^-b (a, b up to `decades`), the last one negative
+    /// when `reflect`, at a random scale; and D's diagonal.
+    fn cross_covariance(next: &mut impl FnMut() -> f64, decades: [f64; 2], reflect: bool) -> (Mat3, [f64; 3]) {
+        let u = axis_angle([next(), next(), next() + 0.1], 3.0 * next());
+        let v = axis_angle([next() + 0.1, next(), next()], 3.0 * next());
+        let d = [1.0, 10f64.powf(-decades[0] * next().abs()), 10f64.powf(-decades[1] * next().abs())];
+        let sign = if reflect { -1.0 } else { 1.0 };
+        (u * Mat3::from_diagonal(&[d[0], d[1], sign * d[2]].into()) * v.transpose() * (1e-3 + next().abs()), d)
+    }
+
+    /// The Newton polar path gives the maximiser of trace(R^T C) on cross-covariances of every conditioning it
+    /// accepts, and declines the ones it must (reflections, near-singular): best_rotation is then the SVD's.
+    #[test]
+    fn polar_rotation_equals_the_svd_one() {
+        let mut next = uniform(0x2545_f491_4f6c_dd1d);
         let (mut used, mut declined) = (0, 0);
         for k in 0..3000 {
-            let u = axis_angle([next(), next(), next() + 0.1], 3.0 * next());
-            let v = axis_angle([next() + 0.1, next(), next()], 3.0 * next());
             // singular values over 12 decades, sometimes a reflection
-            let d = [1.0, 10f64.powf(-3.0 * next().abs()), 10f64.powf(-12.0 * next().abs())];
-            let sign = if k % 7 == 0 { -1.0 } else { 1.0 };
-            let c = u * Mat3::from_diagonal(&[d[0], d[1], sign * d[2]].into()) * v.transpose() * (1e-3 + next().abs());
+            let (c, d) = cross_covariance(&mut next, [3.0, 12.0], k % 7 == 0);
             let svd = best_rotation_svd(&c);
             match polar_rotation(&c) {
                 Some(r) => {
@@ -195,20 +206,11 @@ mod tests {
     /// every conditioning and handedness; from far away the step is best_rotation itself.
     #[test]
     fn steps_toward_the_best_rotation_reach_it() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut stepped, mut fell_back) = (0, 0);
         for k in 0..2000 {
-            let u = axis_angle([next(), next(), next() + 0.1], 3.0 * next());
-            let v = axis_angle([next() + 0.1, next(), next()], 3.0 * next());
-            let d = [1.0, 10f64.powf(-2.0 * next().abs()), 10f64.powf(-6.0 * next().abs())];
-            let sign = if k % 5 == 0 { -1.0 } else { 1.0 };
-            let c = u * Mat3::from_diagonal(&[d[0], d[1], sign * d[2]].into()) * v.transpose() * (1e-3 + next().abs());
+            let reflect = k % 5 == 0;
+            let (c, d) = cross_covariance(&mut next, [2.0, 6.0], reflect);
             let best = best_rotation(&c);
             // a start up to about 0.3 rad away, then steps
             let mut r = best * axis_angle([next(), next(), next() + 0.1], 0.3 * next());
@@ -224,7 +226,7 @@ mod tests {
             assert!(orthonormality_error(&r) < 1e-12 && (det(&r) - 1.0).abs() < 1e-12, "k {k}");
             let (got, want) = ((r.transpose() * c).trace(), (best.transpose() * c).trace());
             assert!(got >= want - 1e-12 * c.norm(), "k {k}: trace {got} below {want}");
-            assert!((r - best).amax() < 1e-6, "k {k}: {d:?} sign {sign}, differs by {:e}", (r - best).amax());
+            assert!((r - best).amax() < 1e-6, "k {k}: {d:?} reflect {reflect}, differs by {:e}", (r - best).amax());
         }
         assert!(stepped > 5000 && fell_back > 10, "stepped {stepped}, fell back {fell_back}");
         // from the far side, best_rotation itself
