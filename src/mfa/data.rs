@@ -186,13 +186,6 @@ impl Data {
         (s / LANES, s % LANES)
     }
 
-    /// The vertex ids in layout order (block by block, lane by lane): the order the E-step lists its members in,
-    /// in which reading vertex after vertex reads the stored values in order.
-    pub fn layout_order(&self) -> impl Iterator<Item = usize> + '_ {
-        let layout = &*self.layout;
-        layout.idx.iter().zip(&layout.valid).flat_map(|(ids, &n)| ids[..n as usize].iter().map(|&j| j as usize))
-    }
-
     /// h_j.
     #[inline]
     pub fn vertex(&self, j: usize) -> Vertex<'_> {

@@ -79,7 +79,7 @@ pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64
     let mut members = Members::new();
     let mut prev = label_members(data, &labels, &comps, &mut members);
     for it in 0..params.max_iter {
-        // With the labels fixed, cycle 1 reads only the members (γ = 1, in vertex order) and the data: from the
+        // With the labels fixed, cycle 1 reads only the members (γ = 1, in layout order) and the data: from the
         // second iteration on it writes the same π and b again, bit for bit (cycle 2 changes neither), and the
         // projections under those parameters are the ones the last pass computed. So it runs once.
         if it == 0 {

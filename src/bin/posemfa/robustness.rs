@@ -10,8 +10,6 @@ use posemfa::parts::robustness::{agreement, run_variants, Variant};
 /// and scaled); print part counts, pairwise adjusted Rand index (median, min) and times
 #[derive(clap::Args)]
 pub struct Args {
-    #[command(flatten)]
-    pub fit: FitArgs,
     /// Seeds 0..N-1 (the nuisance variants use seed 0)
     #[arg(long, value_name = "N", default_value_t = 5)]
     seeds: u64,
@@ -22,6 +20,9 @@ pub struct Args {
     /// Write the runs and the agreement as JSON
     #[arg(long, value_name = "OUT", value_hint = ValueHint::FilePath)]
     json: Option<String>,
+    /// (last: its options under their own headings)
+    #[command(flatten)]
+    pub fit: FitArgs,
 }
 
 pub fn run(o: Args) -> Result<(), String> {

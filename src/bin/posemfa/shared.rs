@@ -234,7 +234,6 @@ impl FitArgs {
         Ok(p)
     }
 
-    /// The choices for glTF inputs.
     /// The parameters (checked) and the population (and its truth when generated).
     pub fn load(&self) -> Result<(Params, Population, Option<posemfa::synth::Generated>), String> {
         let params = self.params()?;
