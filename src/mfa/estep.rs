@@ -216,7 +216,7 @@ fn lanes_min(v: &Lanes) -> f64 {
 
 /// log_norm - q/2 with q = sq - Σ_d shrink_d y_d², per lane.
 #[inline(always)]
-fn log_density_lanes(log_norm: f64, shrink: &[f64; 3], y: &[Lanes; 3], sq: &Lanes) -> Lanes {
+pub(crate) fn log_density_lanes(log_norm: f64, shrink: &[f64; 3], y: &[Lanes; 3], sq: &Lanes) -> Lanes {
     let mut out = [0.0; LANES];
     for l in 0..LANES {
         let q = sq[l] - (shrink[0] * y[0][l] * y[0][l] + shrink[1] * y[1][l] * y[1][l] + shrink[2] * y[2][l] * y[2][l]);

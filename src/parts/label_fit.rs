@@ -47,15 +47,14 @@ fn label_members(data: &Data, labels: &[u32], comps: &[crate::mfa::Component], m
             let wb = &wbs[k];
             let (mut y, mut sq) = ([[0.0; LANES]; 3], [0.0; LANES]);
             crate::mfa::estep::accumulate_block_f64(&wb.packed, h, &mut y, &mut sq);
+            let density = crate::mfa::estep::log_density_lanes(wb.log_norm, &wb.shrink, &y, &sq);
             for (l, &j) in ids.iter().enumerate().skip(first) {
                 if done[l] || labels[j as usize] as usize != k {
                     continue;
                 }
                 done[l] = true;
-                let yl = [y[0][l], y[1][l], y[2][l]];
-                let quad = sq[l] - (wb.shrink[0] * yl[0] * yl[0] + wb.shrink[1] * yl[1] * yl[1] + wb.shrink[2] * yl[2] * yl[2]);
-                ll += wb.log_norm - 0.5 * quad;
-                members[k].push(Member { j, g: 1.0, y: yl });
+                ll += density[l];
+                members[k].push(Member { j, g: 1.0, y: [y[0][l], y[1][l], y[2][l]] });
             }
         }
     }
