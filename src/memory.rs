@@ -111,6 +111,32 @@ pub fn show_bytes(b: u64) -> String {
     }
 }
 
+/// Upper estimate of what [`crate::mesh::subdivide::subdivide`] needs for `levels` midpoint subdivisions of a
+/// mesh of `n_vertices` and `n_faces` in `n_shapes` poses: (vertices of the result, bytes). Each level adds at most
+/// one vertex per edge and an edge belongs to at most 3 triangles' worth of splits, so the result has at most
+/// V + F (4^L - 1) vertices; while a level is made, two poses' worth of f64 coordinates per pose (the old and the
+/// new), and the faces (12 bytes each, 4^L of them per original face).
+pub fn subdivision_bytes(n_vertices: usize, n_faces: usize, n_shapes: usize, levels: usize) -> (f64, f64) {
+    let grow = 4f64.powi(levels.min(32) as i32);
+    let vertices = n_vertices as f64 + n_faces as f64 * (grow - 1.0);
+    (vertices, 2.0 * 24.0 * vertices * n_shapes as f64 + 12.0 * n_faces as f64 * grow)
+}
+
+/// Err([`Error::Request`]) when [`subdivision_bytes`] is more than `budget`; the message gives the size, the
+/// budget and what to do.
+pub fn check_subdivision(n_vertices: usize, n_faces: usize, n_shapes: usize, levels: usize, budget: u64) -> Result<()> {
+    let (vertices, need) = subdivision_bytes(n_vertices, n_faces, n_shapes, levels);
+    if need <= budget as f64 {
+        return Ok(());
+    }
+    let shown = if need >= u64::MAX as f64 { "more than 16 EiB".to_string() } else { format!("about {}", show_bytes(need as u64)) };
+    Err(Error::Request(format!(
+        "subdividing {levels} times gives up to {vertices:.0} vertices in each of {n_shapes} poses, {shown}, more than \
+         the memory budget of {}; ask for fewer levels (or raise POSEMFA_MEMORY_BUDGET if this machine has the memory)",
+        show_bytes(budget)
+    )))
+}
+
 /// Err([`Error::Data`]) when a fit of `n_vertices` x `n_shapes` with at most `parts` components needs more
 /// than `budget` bytes. The message gives the estimate, the budget and what to change.
 pub fn check(n_vertices: usize, n_shapes: usize, parts: usize, budget: u64) -> Result<()> {

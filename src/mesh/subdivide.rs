@@ -74,23 +74,10 @@ impl Midpoints {
 /// The population with every triangle split in four, `levels` times, in its original units (each pose's
 /// coordinates mapped back through the population's normalization), with the same names. Its shapes and faces,
 /// for writing out; [`Population::from_meshes`] of them gives the finer population. Refused before anything is
-/// allocated when the result could need more than `budget` bytes (each level multiplies the triangles by 4).
+/// allocated when the result could need more than `budget` bytes ([`crate::memory::subdivision_bytes`]: each level
+/// multiplies the triangles by 4).
 pub fn subdivide(pop: &Population, levels: usize, budget: u64) -> Result<(Vec<[u32; 3]>, Vec<Vec<[f64; 3]>>)> {
-    // at most one new vertex per edge, at most 3 edges per triangle: V + F (4^L - 1) vertices; two poses' worth of
-    // f64 coordinates per pose while a level is made, and the faces
-    let grow = 4f64.powi(levels.min(32) as i32);
-    let vertices = pop.n_vertices() as f64 + pop.faces.len() as f64 * (grow - 1.0);
-    let need = 2.0 * 24.0 * vertices * pop.n_shapes() as f64 + 12.0 * pop.faces.len() as f64 * grow;
-    if need > budget as f64 {
-        return Err(Error::Request(format!(
-            "subdividing {} times gives up to {vertices:.0} vertices in each of {} poses, about {:.1} GB, more than the \
-             memory budget of {:.1} GB; ask for fewer levels (or raise POSEMFA_MEMORY_BUDGET if this machine has the memory)",
-            levels,
-            pop.n_shapes(),
-            need / 1e9,
-            budget as f64 / 1e9
-        )));
-    }
+    crate::memory::check_subdivision(pop.n_vertices(), pop.faces.len(), pop.n_shapes(), levels, budget)?;
     let norm = pop.normalization;
     let mut faces = pop.faces.clone();
     let mut shapes: Vec<Vec<[f64; 3]>> = pop.shapes().map(|s| s.iter().map(|p| norm.to_original(p)).collect()).collect();

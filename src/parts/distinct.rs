@@ -99,6 +99,8 @@ fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize, stop:
     // per pose: p_a, p_b, and sin(sΩ/20) for s = 0..=20 (sin((1-t)Ω) is the same table read backwards)
     let mut ends = vec![([0.0; 4], [0.0; 4]); ns];
     let mut sines = vec![[0.0; SLERP_STEPS + 1]; ns];
+    // the in-between's products p per pose, formed once for the bound and kept for the exact angles
+    let mut ps = vec![[0.0; 4]; ns];
     for x in 0..ms.len() {
         for y in x + 1..ms.len() {
             let (ma, mb) = (&ms[x], &ms[y]);
@@ -126,9 +128,9 @@ fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize, stop:
                 // a lower bound first, without the atan2: the angle θ = 2 atan2(|v|, |w|) of p = (w, v) is at
                 // least 2 sin(θ/2) = 2 |v| / |p| (sin x <= x), with a margin for rounding
                 let mut low = 0.0;
-                for (i, (pa, pb)) in ends.iter().enumerate() {
+                for (i, ((pa, pb), p)) in ends.iter().zip(ps.iter_mut()).enumerate() {
                     let (wa, wb) = (sines[i][SLERP_STEPS - step], sines[i][step]);
-                    let p: [f64; 4] = std::array::from_fn(|c| wa * pa[c] + wb * pb[c]);
+                    *p = std::array::from_fn(|c| wa * pa[c] + wb * pb[c]);
                     let v2 = p[1] * p[1] + p[2] * p[2] + p[3] * p[3];
                     let n2 = v2 + p[0] * p[0];
                     if n2 > 0.0 {
@@ -139,9 +141,7 @@ fn blend_ratio_from(model: &Model, k: usize, adjacent: &[usize], r: usize, stop:
                     continue;
                 }
                 let e = rms(&mut |i| {
-                    let (pa, pb) = &ends[i];
-                    let (wa, wb) = (sines[i][SLERP_STEPS - step], sines[i][step]);
-                    let p: [f64; 4] = std::array::from_fn(|c| wa * pa[c] + wb * pb[c]);
+                    let p = &ps[i];
                     2.0 * (p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt().atan2(p[0].abs())
                 });
                 best = best.min(e / apart);
