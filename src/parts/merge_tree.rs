@@ -191,6 +191,8 @@ fn rigid_sse(st: &Stats, rot: &mut [Mat3]) -> f64 {
             break;
         }
     }
+    // the rotations start the next fit of an overlapping set: rounding drift from the turns is not carried on
+    rot.iter_mut().for_each(|r| *r = crate::geometry::procrustes::reorthonormalised(r));
     (total - last / q as f64).max(0.0)
 }
 
