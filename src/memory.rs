@@ -13,9 +13,7 @@
 //!   needed stays unused). Measured in wasm (`node scripts/bench-wasm.mjs INPUT --node`, issue 27, see
 //!   docs/speed.md): 49.6 bytes per (vertex, shape) at 20 k x 200 (where the terms below vanish), 59.1 at
 //!   42 k x 11; 7 copies of 24 bytes (168) before;
-//! - the responsibilities, dense when labels are read, 8 bytes per (vertex, component), and the E-step's record
-//!   of what it proved per block ([`crate::mfa::estep::EStep::run_moved`]: an f32 per block of 4 vertices and
-//!   component), 1 byte per (vertex, component);
+//! - the responsibilities, dense when labels are read, 8 bytes per (vertex, component);
 //! - 128 bytes per vertex of labels, latent points, k-means distances, the sparse responsibilities of the
 //!   CM steps (40 bytes per pair, one or two pairs per vertex) and such;
 //! - 3 copies of the components (the running one, the best one seen, the model), each with 9 + 3 + 1 numbers
@@ -47,7 +45,7 @@ pub const COORDINATE_BYTES: u64 = 48;
 pub fn estimate_bytes(n_vertices: usize, n_shapes: usize, parts: usize) -> u64 {
     let (nv, ns, m) = (n_vertices as u64, n_shapes as u64, parts.max(1) as u64);
     let coordinates = nv.saturating_mul(ns).saturating_mul(COORDINATE_BYTES);
-    let responsibilities = nv.saturating_mul(m).saturating_mul(9);
+    let responsibilities = nv.saturating_mul(m).saturating_mul(8);
     let per_vertex = nv.saturating_mul(128);
     let components = m.saturating_mul(ns).saturating_mul(8 * 49);
     coordinates.saturating_add(responsibilities).saturating_add(per_vertex).saturating_add(components)
@@ -175,8 +173,8 @@ mod tests {
         assert!(estimate_bytes(2000, 10, 11) > base);
         assert!(estimate_bytes(1000, 20, 11) > base);
         assert!(estimate_bytes(1000, 10, 22) > base);
-        // 1000 x 10 x 48 + 1000 x 11 x 9 + 128 000 + 11 x 10 x 392
-        assert_eq!(base, 480_000 + 99_000 + 128_000 + 43_120);
+        // 1000 x 10 x 48 + 1000 x 11 x 8 + 128 000 + 11 x 10 x 392
+        assert_eq!(base, 480_000 + 88_000 + 128_000 + 43_120);
         assert_eq!(estimate_bytes(usize::MAX, usize::MAX, usize::MAX), u64::MAX);
     }
 

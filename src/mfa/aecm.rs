@@ -160,17 +160,6 @@ impl Fit {
         ll
     }
 
-    /// The E-step after cycle 1 (from `before`, the components before it: [`EStep::run_moved`], equal to a full
-    /// E-step to rounding).
-    fn run_moved_e_step(&mut self, before: &[Component]) -> f64 {
-        let t0 = crate::clock::now_ms();
-        let ll = self.estep.run_moved(&self.data, before, &self.comps, &mut self.members);
-        self.estep_ms += crate::clock::now_ms() - t0;
-        self.estep_flops += self.estep.flops_f64 + self.estep.flops_f32;
-        self.estep_flops_f32 += self.estep.flops_f32;
-        ll
-    }
-
     /// One AECM iteration. Does nothing but report once converged or at the cap.
     pub fn step(&mut self) -> StepInfo {
         if self.is_finished() {
@@ -179,9 +168,8 @@ impl Fit {
         if self.accelerate {
             self.sq_prev.push(self.comps.clone());
         }
-        let before = self.comps.clone();
         cm::cycle1(&self.data, &self.members, &mut self.comps);
-        self.run_moved_e_step(&before);
+        self.run_e_step();
         let masses = cm::cycle2(&self.data, &self.members, &mut self.comps, self.rule, self.floor, self.px);
         // drop components whose responsibility mass fell below a few vertices (never the last one)
         let before = self.comps.len();
@@ -263,9 +251,7 @@ impl Fit {
                 self.sq_step_max *= 4.0;
             }
         } else {
-            // the E-step's owner hints now belong to θ'; they only order the work, the result is exact; its
-            // record of the blocks belongs to θ' too, which the next cycle 1 does not start from
-            self.estep.forget_record();
+            // the E-step's owner hints now belong to θ'; they only order the work, the result is exact
             self.sq_step_max = (self.sq_step_max / 4.0).max(1.0);
         }
     }

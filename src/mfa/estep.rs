@@ -249,43 +249,6 @@ pub struct EStep {
     /// Most responsible component of every vertex after the last run, for `owner_parts` components.
     owner: Vec<u32>,
     owner_parts: usize,
-    /// What the last [`EStep::run`] knew of every block, for [`EStep::run_moved`]: see [`Record`].
-    record: Record,
-}
-
-/// Work of one run, counting every lane: shape evaluations (`screen_evals` of them in f32), log-density
-/// bounds and values in f64, and f32 screen checks.
-#[derive(Debug, Clone, Copy, Default)]
-struct Work {
-    evals: usize,
-    screen_evals: usize,
-    bounds: usize,
-    screens: usize,
-}
-
-/// What one [`EStep::run`] learnt of each block, enough for the E-step after a change of the weights and
-/// translations alone ([`EStep::run_moved`]): the components it evaluated exactly (`alive[start[b]..start[b + 1]]`),
-/// its best log-density per lane (`best[b]`), and for every other component k how far below the best it was
-/// proved: `gap[b * m + k]` nats at least, in every lane (rounded down to f32; 0 for the evaluated ones).
-#[derive(Debug, Clone, Default)]
-struct Record {
-    alive: Vec<u32>,
-    start: Vec<u32>,
-    best: Vec<Lanes>,
-    gap: Vec<f32>,
-    /// Components of the run it describes; None when it describes none (see [`EStep::forget_record`]).
-    parts: Option<usize>,
-}
-
-/// `gap` (nats, at least [`PRUNE_MARGIN`] where it is used) rounded down to f32 (NaN and negative: 0, nothing
-/// known).
-#[inline(always)]
-fn gap32(gap: f64) -> f32 {
-    if gap > 0.0 {
-        (gap * (1.0 - 1e-6)) as f32
-    } else {
-        0.0
-    }
 }
 
 impl EStep {
@@ -310,7 +273,6 @@ impl EStep {
             flops_f32: 0.0,
             owner: Vec::new(),
             owner_parts: 0,
-            record: Record::default(),
         }
     }
 
@@ -319,16 +281,9 @@ impl EStep {
         self.blocked
     }
 
-    /// Forgets the previous owners (the components were renumbered), and the last run's record.
+    /// Forgets the previous owners (the components were renumbered).
     pub fn forget_owners(&mut self) {
         self.owner_parts = 0;
-        self.forget_record();
-    }
-
-    /// Forgets what the last run learnt of the blocks: the components it ran on are not the ones the next
-    /// [`EStep::run_moved`] starts from (e.g. a SQUAREM state that was not kept).
-    pub fn forget_record(&mut self) {
-        self.record.parts = None;
     }
 
     /// Takes `labels` (one per vertex, each below `m`) as the owners to evaluate first.
@@ -373,18 +328,39 @@ impl EStep {
         }
         let wbs = ordered_woodbury(comps, &self.blocked.layout.order);
         let shrinks = prefix_shrinks(comps, &self.blocked.layout.order);
-        let checks = self.prepare(nv, comps, &wbs, &shrinks, members);
-        let nb = self.blocked.n_blocks();
-        let rec = &mut self.record;
-        rec.parts = None;
-        rec.alive.clear();
-        rec.start.clear();
-        rec.start.push(0);
-        rec.best.clear();
-        rec.gap.clear();
-        rec.gap.resize(nb * m, 0.0);
+        if self.owner_parts != m || self.owner.len() != nv {
+            self.owner.clear();
+            self.owner.resize(nv, 0);
+        }
+        members.resize_with(m, Vec::new);
+        members.truncate(m);
+        members.iter_mut().for_each(|l| l.clear());
+        self.vals.clear();
+        self.vals.resize(m, [f64::NEG_INFINITY; LANES]);
+        self.ys.clear();
+        self.ys.resize(m, [[0.0; LANES]; 3]);
+        self.is_hint.clear();
+        self.is_hint.resize(m, false);
+        let checks: Vec<usize> = CHECK_AFTER.iter().copied().filter(|&t| t < ns).collect();
+        let ts = self.blocked.screen;
+        self.packed32.clear();
+        self.screen.clear();
+        if ts > 0 {
+            for (k, wb) in wbs.iter().enumerate() {
+                self.packed32.extend(wb.packed[..ts].iter().map(|q| q.map(|v| v as f32)));
+                let s_min = self.blocked.layout.order[..ts].iter().map(|&i| comps[k].variances[i]).fold(f64::INFINITY, f64::min);
+                self.screen.push(Screen {
+                    shrink: shrinks[k][ts - 1].map(|v| v as f32),
+                    abs: (ts as f64 * (1.0 + SCREEN_ABS_S / s_min)) as f32,
+                    thr_base: 2.0 * (wb.log_norm + PRUNE_MARGIN),
+                });
+            }
+        }
         let mut ll = 0.0;
-        let mut work = Work::default();
+        let mut evals = 0usize;
+        let mut screen_evals = 0usize;
+        let mut bounds = 0usize; // lanes x log-density evaluations (checks and final values), f64
+        let mut screens = 0usize; // lanes x screen checks, f32
         let gs = self.blocked.group_shapes;
         self.group_bound.clear();
         self.group_bound.resize(m.next_multiple_of(LANES), f64::INFINITY);
@@ -401,9 +377,11 @@ impl EStep {
                 for (gc, out) in self.group_consts.iter().zip(self.group_bound.chunks_exact_mut(LANES)) {
                     out.copy_from_slice(&group_upper_bounds(gc, centre, radii2));
                 }
-                work.evals += gs * m;
-                work.bounds += m;
+                evals += gs * m;
+                bounds += m;
             }
+            let h = self.blocked.block(b);
+            let h32 = self.blocked.block32(b);
             let ids = self.blocked.layout.idx[b];
             let nvalid = self.blocked.layout.valid[b] as usize;
             self.alive.clear();
@@ -415,7 +393,20 @@ impl EStep {
                     continue;
                 }
                 self.is_hint[k] = true;
-                self.exact(k, b, &wbs[k], &mut best, &mut work);
+                self.alive.push(k);
+                let mut y = [[0.0; LANES]; 3];
+                let mut sq = [0.0; LANES];
+                accumulate_block_f64(&wbs[k].packed, h, &mut y, &mut sq);
+                let v = log_density_lanes(wbs[k].log_norm, &wbs[k].shrink, &y, &sq);
+                bounds += LANES;
+                for l in 0..LANES {
+                    if v[l] > best[l] {
+                        best[l] = v[l];
+                    }
+                }
+                self.vals[k] = v;
+                self.ys[k] = y;
+                evals += ns * LANES;
             }
             // the others, each stopped early once negligible in every lane
             let mut best_min = lanes_min(&best);
@@ -425,273 +416,104 @@ impl EStep {
                 }
                 // the whole group is far from this component (NaN never prunes)
                 if self.group_bound[k] < best_min - PRUNE_MARGIN {
-                    self.record.gap[b * m + k] = gap32(best_min - self.group_bound[k]);
                     continue;
                 }
-                match self.cascade(k, b, &wbs[k], &shrinks[k], &checks, &best, best_min, &mut work) {
-                    Err(gap) => self.record.gap[b * m + k] = gap32(gap),
-                    Ok((v, y)) => {
-                        self.keep(k, v, y, &mut best);
-                        best_min = lanes_min(&best);
+                let wb = &wbs[k];
+                if ts > 0 {
+                    evals += ts * LANES;
+                    screen_evals += ts * LANES;
+                    screens += LANES;
+                    if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], threshold(&self.screen[k], best_min)) {
+                        continue;
                     }
                 }
+                let mut y = [[0.0; LANES]; 3];
+                let mut sq = [0.0; LANES];
+                let mut start = 0;
+                let mut pruned = false;
+                for &t in &checks {
+                    accumulate_block_f64(&wb.packed[start..t], &h[3 * start..3 * t], &mut y, &mut sq);
+                    start = t;
+                    let ub = log_density_lanes(wb.log_norm, &shrinks[k][t - 1], &y, &sq);
+                    bounds += LANES;
+                    if (0..LANES).all(|l| ub[l] < best[l] - PRUNE_MARGIN) {
+                        pruned = true;
+                        break;
+                    }
+                }
+                evals += start * LANES;
+                if pruned {
+                    continue;
+                }
+                accumulate_block_f64(&wb.packed[start..], &h[3 * start..], &mut y, &mut sq);
+                evals += (ns - start) * LANES;
+                let v = log_density_lanes(wb.log_norm, &wb.shrink, &y, &sq);
+                bounds += LANES;
+                for l in 0..LANES {
+                    if v[l] > best[l] {
+                        best[l] = v[l];
+                    }
+                }
+                best_min = lanes_min(&best);
+                self.vals[k] = v;
+                self.ys[k] = y;
+                self.alive.push(k);
             }
             for &k in &self.alive {
                 self.is_hint[k] = false;
             }
-            self.record.alive.extend(self.alive.iter().map(|&k| k as u32));
-            self.record.start.push(self.record.alive.len() as u32);
-            self.record.best.push(best);
-            ll += self.emit_block(data, comps, &ids, nvalid, &best, members);
-        }
-        self.record.parts = Some(m);
-        self.owner_parts = m;
-        self.count(&work);
-        (ll, work.evals)
-    }
-
-    /// Scratch space for a run on `comps` (Woodbury constants `wbs`, prefix shrinks `shrinks`): members emptied,
-    /// values and flags reset, the f32 screen's constants. Returns the shapes after which the f64 checks run.
-    fn prepare(&mut self, nv: usize, comps: &[Component], wbs: &[Woodbury], shrinks: &[Vec<[f64; 3]>], members: &mut Members) -> Vec<usize> {
-        let (m, ns) = (comps.len(), self.blocked.n_shapes);
-        if self.owner_parts != m || self.owner.len() != nv {
-            self.owner.clear();
-            self.owner.resize(nv, 0);
-        }
-        members.resize_with(m, Vec::new);
-        members.truncate(m);
-        members.iter_mut().for_each(|l| l.clear());
-        self.vals.clear();
-        self.vals.resize(m, [f64::NEG_INFINITY; LANES]);
-        self.ys.clear();
-        self.ys.resize(m, [[0.0; LANES]; 3]);
-        self.is_hint.clear();
-        self.is_hint.resize(m, false);
-        let ts = self.blocked.screen;
-        self.packed32.clear();
-        self.screen.clear();
-        if ts > 0 {
-            for (k, wb) in wbs.iter().enumerate() {
-                self.packed32.extend(wb.packed[..ts].iter().map(|q| q.map(|v| v as f32)));
-                let s_min = self.blocked.layout.order[..ts].iter().map(|&i| comps[k].variances[i]).fold(f64::INFINITY, f64::min);
-                self.screen.push(Screen {
-                    shrink: shrinks[k][ts - 1].map(|v| v as f32),
-                    abs: (ts as f64 * (1.0 + SCREEN_ABS_S / s_min)) as f32,
-                    thr_base: 2.0 * (wb.log_norm + PRUNE_MARGIN),
-                });
-            }
-        }
-        CHECK_AFTER.iter().copied().filter(|&t| t < ns).collect()
-    }
-
-    /// The early exits for component k in block b, after the owners (see [`EStep::run`]): the f32 screen, then
-    /// the f64 checks after [`CHECK_AFTER`] shapes, then the exact value. `Err(gap)`: pruned, at least `gap` nats
-    /// below `best` in every lane; `Ok((value, y))`: the exact log-density and projections.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn cascade(&self, k: usize, b: usize, wb: &Woodbury, shrinks: &[[f64; 3]], checks: &[usize], best: &Lanes, best_min: f64, work: &mut Work) -> std::result::Result<(Lanes, [Lanes; 3]), f64> {
-        let ns = self.blocked.n_shapes;
-        let ts = self.blocked.screen;
-        let h = self.blocked.block(b);
-        if ts > 0 {
-            work.evals += ts * LANES;
-            work.screen_evals += ts * LANES;
-            work.screens += LANES;
-            let q_low = screen_q_low(&self.packed32[k * ts..(k + 1) * ts], self.blocked.block32(b), &self.screen[k]);
-            if q_low > threshold(&self.screen[k], best_min) {
-                // log π N <= log_norm - q_low / 2 in every lane
-                return Err(best_min - (wb.log_norm - 0.5 * q_low as f64));
-            }
-        }
-        let mut y = [[0.0; LANES]; 3];
-        let mut sq = [0.0; LANES];
-        let mut start = 0;
-        for &t in checks {
-            accumulate_block_f64(&wb.packed[start..t], &h[3 * start..3 * t], &mut y, &mut sq);
-            work.evals += (t - start) * LANES;
-            start = t;
-            let ub = log_density_lanes(wb.log_norm, &shrinks[t - 1], &y, &sq);
-            work.bounds += LANES;
-            if (0..LANES).all(|l| ub[l] < best[l] - PRUNE_MARGIN) {
-                return Err((0..LANES).map(|l| best[l] - ub[l]).fold(f64::INFINITY, |a, g| if g < a { g } else { a }));
-            }
-        }
-        accumulate_block_f64(&wb.packed[start..], &h[3 * start..], &mut y, &mut sq);
-        work.evals += (ns - start) * LANES;
-        work.bounds += LANES;
-        Ok((log_density_lanes(wb.log_norm, &wb.shrink, &y, &sq), y))
-    }
-
-    /// Sets the floating-point operations of the last run from its `work`.
-    fn count(&mut self, work: &Work) {
-        self.flops_f64 = (FLOPS_PER_SHAPE * (work.evals - work.screen_evals) + FLOPS_PER_BOUND * work.bounds) as f64;
-        self.flops_f32 = (FLOPS_PER_SHAPE * work.screen_evals + FLOPS_PER_SCREEN_CHECK * work.screens) as f64;
-    }
-
-    /// Component k's exact log-density and projections in block b, kept (in `self.alive`, `self.vals`,
-    /// `self.ys`) and taken into `best`.
-    #[inline(always)]
-    fn exact(&mut self, k: usize, b: usize, wb: &Woodbury, best: &mut Lanes, work: &mut Work) {
-        let mut y = [[0.0; LANES]; 3];
-        let mut sq = [0.0; LANES];
-        accumulate_block_f64(&wb.packed, self.blocked.block(b), &mut y, &mut sq);
-        self.keep(k, log_density_lanes(wb.log_norm, &wb.shrink, &y, &sq), y, best);
-        work.evals += self.blocked.n_shapes * LANES;
-        work.bounds += LANES;
-    }
-
-    /// Keeps component k's exact values in the current block (`self.alive`, `self.vals`, `self.ys`) and takes
-    /// them into `best`.
-    #[inline(always)]
-    fn keep(&mut self, k: usize, v: Lanes, y: [Lanes; 3], best: &mut Lanes) {
-        for l in 0..LANES {
-            if v[l] > best[l] {
-                best[l] = v[l];
-            }
-        }
-        self.vals[k] = v;
-        self.ys[k] = y;
-        self.alive.push(k);
-    }
-
-    /// The responsibilities of one block from the exact log-densities of the components in `self.alive`
-    /// (`self.vals`, `self.ys`; every other component is proved more than [`PRUNE_MARGIN`] below `best` in every
-    /// lane, so exactly 0 after rounding): its members pushed, its owners set, `self.vals` reset. Returns the
-    /// block's log-likelihood.
-    fn emit_block(&mut self, data: &Data, comps: &[Component], ids: &[u32; LANES], nvalid: usize, best: &Lanes, members: &mut Members) -> f64 {
-        let m = comps.len();
-        let mut ll = 0.0;
-        for (l, &j) in ids.iter().enumerate().take(nvalid) {
-            let j = j as usize;
-            let mx = best[l];
-            if !mx.is_finite() {
-                // no component gives this vertex a density (or NaN): share it evenly, nothing divides by 0
-                let u = 1.0 / m as f64;
-                for (c, list) in comps.iter().zip(members.iter_mut()) {
-                    let (y, _) = super::component::project_packed(&c.woodbury().packed, &data.vertex(j).to_vec());
-                    list.push(Member { j: j as u32, g: u, y });
-                }
-                self.owner[j] = 0;
-                ll += mx;
-                continue;
-            }
-            let mut s = 0.0;
-            let mut top = self.alive[0];
-            for &k in &self.alive {
-                let v = self.vals[k][l];
-                // exp(0) = 1 exactly, and far below the best is 0 after rounding: only the rest need exp
-                let e = if v == mx {
-                    1.0
-                } else if v < mx - 2.0 * PRUNE_MARGIN {
-                    0.0
-                } else {
-                    (v - mx).exp()
-                };
-                self.vals[k][l] = e;
-                s += e;
-                if v == mx {
-                    top = k;
-                }
-            }
-            let inv = 1.0 / s;
-            for &k in &self.alive {
-                let g = self.vals[k][l] * inv;
-                if g >= GAMMA_SKIP {
-                    let y = &self.ys[k];
-                    members[k].push(Member { j: j as u32, g, y: [y[0][l], y[1][l], y[2][l]] });
-                }
-            }
-            self.owner[j] = top as u32;
-            ll += if s == 1.0 { mx } else { mx + s.ln() };
-        }
-        for &k in &self.alive {
-            self.vals[k] = [f64::NEG_INFINITY; LANES];
-        }
-        ll
-    }
-
-    /// The E-step after cycle 1, which changes only the weights π and the translations b: `before` are the
-    /// components of the last [`EStep::run`] (whose [`Record`] is kept), `comps` the same components with new π
-    /// and b. Equal to [`EStep::run`] on `comps` to rounding, for a fraction of its work: in each block the
-    /// components the last run evaluated are evaluated again, exactly, and every other one is proved negligible
-    /// from what the last run proved of it.
-    ///
-    /// The bound: the last run proved log π_k N(h) <= best_0 - gap in every lane, i.e. q_0 >= Q =
-    /// 2 (log_norm_0 - best_0 + gap) for the quadratic form q_0 = |x|²_P (x = h - b, P the Woodbury precision,
-    /// see [`EStep::run`]). The new form is q_1 = |x - Δb|²_P, and P <= D = diag(1/s) (cycle 1 leaves P as it is),
-    /// so by the triangle inequality sqrt q_1 >= sqrt Q - r with r² = Σ_i |Δb_i|² / s_i; hence
-    /// log π' N'(h) <= log_norm_1 - max(0, sqrt Q - r)² / 2, compared with the new best less [`PRUNE_MARGIN`]
-    /// (the bound that prunes in [`EStep::run`]). Per block it is taken with the largest old best and the smallest
-    /// new one over the block's vertices; a component it does not prove negligible is evaluated exactly.
-    /// Without a record of `before` (none kept, or another number of components) it is [`EStep::run`].
-    pub fn run_moved(&mut self, data: &Data, before: &[Component], comps: &[Component], members: &mut Members) -> f64 {
-        let m = comps.len();
-        if self.record.parts != Some(m) || before.len() != m || self.owner.len() != data.n_vertices {
-            return self.run(data, comps, members).0;
-        }
-        debug_assert!(before.iter().zip(comps).all(|(a, c)| a.variances == c.variances && a.lambda == c.lambda && a.rotations == c.rotations));
-        let ns = data.n_shapes;
-        let wbs = ordered_woodbury(comps, &self.blocked.layout.order);
-        let shrinks = prefix_shrinks(comps, &self.blocked.layout.order);
-        let old_norm: Vec<f64> = before.iter().map(|c| c.woodbury().log_norm).collect();
-        let shifts: Vec<f64> = before
-            .iter()
-            .zip(comps)
-            .map(|(a, c)| {
-                let r2: f64 = (0..ns)
-                    .map(|i| {
-                        let (p, q) = (a.translations[i], c.translations[i]);
-                        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)) / c.variances[i]
-                    })
-                    .sum();
-                // (rounding of the sum and the root: far inside the slack)
-                r2.sqrt() * (1.0 + 1e-12) + 1e-300
-            })
-            .collect();
-        let checks = self.prepare(data.n_vertices, comps, &wbs, &shrinks, members);
-        // this run keeps no record of its own: the next one is a full run
-        let record = std::mem::take(&mut self.record);
-        let mut ll = 0.0;
-        let mut work = Work::default();
-        for b in 0..self.blocked.n_blocks() {
-            let ids = self.blocked.layout.idx[b];
-            let nvalid = self.blocked.layout.valid[b] as usize;
-            self.alive.clear();
-            let mut best = [f64::NEG_INFINITY; LANES];
-            for &k in &record.alive[record.start[b] as usize..record.start[b + 1] as usize] {
-                let k = k as usize;
-                self.is_hint[k] = true;
-                self.exact(k, b, &wbs[k], &mut best, &mut work);
-            }
-            // the old best, largest over the block's vertices
-            let old_best = record.best[b][..nvalid].iter().fold(f64::NEG_INFINITY, |a, &v| if v > a { v } else { a });
-            let known = old_best.is_finite();
-            let mut best_min = lanes_min(&best);
-            for k in 0..m {
-                if self.is_hint[k] {
+            // normalise over the components still alive (the pruned ones are exactly 0 after rounding)
+            for (l, &j) in ids.iter().enumerate().take(nvalid) {
+                let j = j as usize;
+                let mx = best[l];
+                if !mx.is_finite() {
+                    // no component gives this vertex a density (or NaN): share it evenly, nothing divides by 0
+                    let u = 1.0 / m as f64;
+                    for (c, list) in comps.iter().zip(members.iter_mut()) {
+                        let (y, _) = super::component::project_packed(&c.woodbury().packed, &data.vertex(j).to_vec());
+                        list.push(Member { j: j as u32, g: u, y });
+                    }
+                    self.owner[j] = 0;
+                    ll += mx;
                     continue;
                 }
-                // the new best, smallest over the block's vertices (NaN anywhere: not proved)
-                let new_best = best[..nvalid].iter().fold(f64::INFINITY, |a, &v| if v < a { v } else { a });
-                let q = 2.0 * (old_norm[k] - old_best + record.gap[b * m + k] as f64);
-                let gap = (q.max(0.0).sqrt() * (1.0 - 1e-12) - shifts[k]).max(0.0);
-                if known && wbs[k].log_norm - 0.5 * gap * gap < new_best - PRUNE_MARGIN {
-                    continue;
+                let mut s = 0.0;
+                let mut top = self.alive[0];
+                for &k in &self.alive {
+                    let v = self.vals[k][l];
+                    // exp(0) = 1 exactly, and far below the best is 0 after rounding: only the rest need exp
+                    let e = if v == mx {
+                        1.0
+                    } else if v < mx - 2.0 * PRUNE_MARGIN {
+                        0.0
+                    } else {
+                        (v - mx).exp()
+                    };
+                    self.vals[k][l] = e;
+                    s += e;
+                    if v == mx {
+                        top = k;
+                    }
                 }
-                // not proved from the record: the early exits of a full run
-                if let Ok((v, y)) = self.cascade(k, b, &wbs[k], &shrinks[k], &checks, &best, best_min, &mut work) {
-                    self.keep(k, v, y, &mut best);
-                    best_min = lanes_min(&best);
+                let inv = 1.0 / s;
+                for &k in &self.alive {
+                    let g = self.vals[k][l] * inv;
+                    if g >= GAMMA_SKIP {
+                        let y = &self.ys[k];
+                        members[k].push(Member { j: j as u32, g, y: [y[0][l], y[1][l], y[2][l]] });
+                    }
                 }
+                self.owner[j] = top as u32;
+                ll += if s == 1.0 { mx } else { mx + s.ln() };
             }
             for &k in &self.alive {
-                self.is_hint[k] = false;
+                self.vals[k] = [f64::NEG_INFINITY; LANES];
             }
-            ll += self.emit_block(data, comps, &ids, nvalid, &best, members);
         }
         self.owner_parts = m;
-        self.count(&work);
-        ll
+        self.flops_f64 = (FLOPS_PER_SHAPE * (evals - screen_evals) + FLOPS_PER_BOUND * bounds) as f64;
+        self.flops_f32 = (FLOPS_PER_SHAPE * screen_evals + FLOPS_PER_SCREEN_CHECK * screens) as f64;
+        (ll, evals)
     }
 }
 
@@ -779,9 +601,8 @@ struct Screen {
     thr_base: f64,
 }
 
-/// The first early-exit check in f32: the smallest over the lanes of a lower bound of the prefix quadratic form
-/// q_t (NaN if any lane's is), which prunes the component when above [`threshold`] (more than [`PRUNE_MARGIN`]
-/// below the best in every lane).
+/// The first early-exit check in f32: true when, in every lane, even a lower bound of the prefix quadratic
+/// form q_t puts the component more than [`PRUNE_MARGIN`] below the best.
 ///
 /// Error of the f32 value: every input (coordinates within the unit box, constants) rounds to f32 with
 /// relative error 6e-8, so a coordinate difference x carries an absolute error δ below 1.2e-7 per axis, and
@@ -790,21 +611,17 @@ struct Screen {
 /// 1e-6 relative. So q_t >= sq (1 - 1e-4) - r (1 + 1e-4) - t (1 + 5e-8/s_min), with sq and r the f32 values
 /// of Σ|x|²/s and Σ shrink y²: that lower bound is what is compared (NaN never prunes).
 #[inline(never)]
-fn screen_q_low(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen) -> f32 {
+fn screened_out(packed: &[[f32; 13]], h32: &[[f32; LANES]], sc: &Screen, thr32: f32) -> bool {
     let mut y = [[0.0f32; LANES]; 3];
     let mut sq = [0.0f32; LANES];
     accumulate_block(packed, h32, &mut y, &mut sq);
-    let mut low = f32::INFINITY;
-    let mut nan = false;
+    let mut out = true;
     for l in 0..LANES {
         let r = sc.shrink[0] * y[0][l] * y[0][l] + sc.shrink[1] * y[1][l] * y[1][l] + sc.shrink[2] * y[2][l] * y[2][l];
         let q_low = sq[l] * (1.0 - SCREEN_REL) - r * (1.0 + SCREEN_REL) - sc.abs;
-        nan |= q_low.is_nan();
-        if q_low < low {
-            low = q_low;
-        }
+        out &= q_low > thr32;
     }
-    if nan { f32::NAN } else { low }
+    out
 }
 
 /// A component's screen threshold for the block (`best_min` the smallest best log-density of its lanes):
@@ -866,7 +683,7 @@ pub fn kernel_limit_on(blocked: &Blocked, comps: &[Component], min_ms: f64) -> K
 }
 
 /// The same for the f32 screen: every block x every component, the first [`SCREEN_SHAPES`] shapes in f32 and
-/// the check's arithmetic (as [`screen_q_low`] does it), no branches. This is the limit of the screened part of
+/// the check's arithmetic (as [`screened_out`] does it), no branches. This is the limit of the screened part of
 /// the E-step's work, which comes in short pieces of 2 shapes.
 pub fn kernel_limit_f32(data: &Data, comps: &[Component], min_ms: f64) -> KernelRate {
     kernel_limit_f32_on(&Blocked::new(data), comps, min_ms)
