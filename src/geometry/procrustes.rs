@@ -209,8 +209,7 @@ mod tests {
         assert!(used > 1000 && declined > 300, "used {used}, declined {declined}");
     }
 
-    /// Newton steps from a nearby rotation reach best_rotation's maximiser (to rounding) in a few steps, for C of
-    /// every conditioning and handedness; from far away the step is best_rotation itself.
+    /// One Newton-Schulz step takes a drift of 1e-7 out of a rotation and leaves a rotation as it is.
     #[test]
     fn drift_is_taken_out_of_a_rotation() {
         let mut next = uniform(0x2545_f491_4f6c_dd1d);
@@ -226,6 +225,8 @@ mod tests {
         }
     }
 
+    /// Newton steps from a nearby rotation reach best_rotation's maximiser (to rounding) in a few steps, for C of
+    /// every conditioning and handedness; from far away the step is best_rotation itself.
     #[test]
     fn steps_toward_the_best_rotation_reach_it() {
         let mut next = uniform(0x9e37_79b9_7f4a_7c15);
