@@ -61,13 +61,6 @@ pub fn toward_best_rotation(c: &Mat3, r: &Mat3) -> Mat3 {
     r * turn
 }
 
-/// `r`, a rotation up to rounding drift, made orthonormal again by one Newton-Schulz step
-/// R (3 I - RᵀR) / 2 (quadratic: from an error e in RᵀR - I to about e²). For rotations carried from step to
-/// step ([`toward_best_rotation`] multiplies by a turn each time, and each product rounds).
-pub fn reorthonormalised(r: &Mat3) -> Mat3 {
-    r * (Mat3::identity() * 3.0 - r.transpose() * r) * 0.5
-}
-
 /// Smallest det(C) / |C|_F³ for which [`polar_rotation`] is used: below it C is close to singular (or a
 /// reflection), where the SVD's explicit handedness fix is the safe way.
 const POLAR_MIN_DET: f64 = 1e-9;
@@ -207,22 +200,6 @@ mod tests {
             assert!((best_rotation(&c) - polar_rotation(&c).unwrap_or(svd)).amax() == 0.0);
         }
         assert!(used > 1000 && declined > 300, "used {used}, declined {declined}");
-    }
-
-    /// One Newton-Schulz step takes a drift of 1e-7 out of a rotation and leaves a rotation as it is.
-    #[test]
-    fn drift_is_taken_out_of_a_rotation() {
-        let mut next = uniform(0x2545_f491_4f6c_dd1d);
-        for _ in 0..200 {
-            let r = axis_angle([next(), next(), next() + 0.1], 3.0 * next());
-            let drifted = r + Mat3::from_fn(|_, _| 1e-7 * next());
-            let fixed = reorthonormalised(&drifted);
-            assert!(orthonormality_error(&drifted) > 1e-9);
-            assert!(orthonormality_error(&fixed) < 1e-13, "{:e}", orthonormality_error(&fixed));
-            assert!((fixed - r).amax() < 1e-6 && (det(&fixed) - 1.0).abs() < 1e-13);
-            // a rotation stays itself to rounding
-            assert!((reorthonormalised(&r) - r).amax() < 1e-15);
-        }
     }
 
     /// Newton steps from a nearby rotation reach best_rotation's maximiser (to rounding) in a few steps, for C of

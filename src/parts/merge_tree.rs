@@ -192,7 +192,8 @@ fn rigid_sse(st: &Stats, rot: &mut [Mat3]) -> f64 {
         }
     }
     // the rotations start the next fit of an overlapping set: rounding drift from the turns is not carried on
-    rot.iter_mut().for_each(|r| *r = crate::geometry::procrustes::reorthonormalised(r));
+    // (the nearest rotation of a rotation up to rounding is its polar factor, a step or two from there)
+    rot.iter_mut().for_each(|r| *r = best_rotation(r));
     (total - last / q as f64).max(0.0)
 }
 
