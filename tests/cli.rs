@@ -374,3 +374,27 @@ fn object_picks_the_mesh_of_an_fbx_or_usd_file() {
     let out = text(&r.stdout) + &text(&r.stderr);
     assert!(out.contains("5 frames of Body in arm-pointcache.usda"), "{out}");
 }
+
+/// `robustness --drop-each`: one run per pose, each without that pose, with their own agreement line and JSON.
+/// The generated arm (3 rigid parts, ground truth from the generator) keeps its parts with any pose dropped.
+#[test]
+fn robustness_drops_each_pose_in_turn() {
+    let json = std::env::temp_dir().join(format!("posemfa-cli-robust-{}.json", std::process::id()));
+    let out = posemfa(&["robustness", "synth:arm:600:5", "--seeds", "1", "--drop-each", "--json", json.to_str().unwrap()]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
+    for k in 1..=5 {
+        assert!(stdout.contains(&format!("pose {k} dropped")), "{stdout}");
+    }
+    assert!(!stdout.contains("pose 6 dropped"), "{stdout}");
+    assert!(stdout.contains("each pose dropped: parts 3-3 (spread 0)"), "{stdout}");
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let _ = std::fs::remove_file(&json);
+    let each = &doc["eachDropped"];
+    assert_eq!(each["runs"].as_array().map(|r| r.len()), Some(5), "{doc}");
+    assert_eq!(each["agreement"]["mostParts"], 3);
+    assert!(each["runs"][0]["truthAri"].as_f64().unwrap() > 0.97, "{doc}");
+    // without the flag there is no such section
+    let plain = posemfa(&["robustness", "synth:arm:600:5", "--seeds", "1"]);
+    assert!(!text(&plain.stdout).contains("each pose dropped"));
+}

@@ -2,6 +2,11 @@
 //! variants of itself (poses in reverse order; the first pose dropped; the middle pose dropped; every pose moved
 //! by one rigid motion and scaled by 7.3), with the part counts, the pairwise adjusted Rand index of the labels
 //! and the times (`posemfa robustness`).
+//!
+//! Which pose comes first or in the middle is an accident of the file names, so the two dropped poses of the
+//! standard variants are a sample of two. [`Variant::leave_each_out`] drops every pose in turn: the part count
+//! over those runs says how much the answer hangs on any one pose, which is what a held-out population of the
+//! same kind meets (`posemfa robustness --drop-each`).
 
 use crate::geometry::rotation::axis_angle;
 use crate::mesh::Population;
@@ -22,6 +27,8 @@ pub enum Variant {
     DropMiddle,
     /// Every pose turned by one rotation (0.7 rad about (1, 2, 3)), scaled by 7.3 and shifted by (5, -2, 11).
     Moved,
+    /// Without pose k (0-based, in the population's order).
+    Drop(usize),
 }
 
 impl Variant {
@@ -32,6 +39,15 @@ impl Variant {
         v
     }
 
+    /// Every pose dropped in turn: one variant per pose (none for a population of 2 poses or fewer, where a
+    /// dropped pose would leave too few to fit).
+    pub fn leave_each_out(n_shapes: usize) -> Vec<Variant> {
+        if n_shapes <= 2 {
+            return Vec::new();
+        }
+        (0..n_shapes).map(Variant::Drop).collect()
+    }
+
     pub fn name(&self) -> String {
         match self {
             Variant::Seed(s) => format!("seed {s}"),
@@ -39,6 +55,7 @@ impl Variant {
             Variant::DropFirst => "first dropped".into(),
             Variant::DropMiddle => "middle dropped".into(),
             Variant::Moved => "moved x7.3".into(),
+            Variant::Drop(k) => format!("pose {} dropped", k + 1),
         }
     }
 
@@ -61,6 +78,9 @@ impl Variant {
             }
             Variant::DropMiddle if ns > 2 => {
                 order.remove(ns / 2);
+            }
+            Variant::Drop(k) if ns > 2 && *k < ns => {
+                order.remove(*k);
             }
             _ => {}
         }
@@ -189,6 +209,15 @@ mod tests {
         // (f32 coordinates: a length of about 0.1 is known to about 1e-6 of itself)
         assert!((ratio - ratio2).abs() < 1e-5, "{ratio} {ratio2}");
         assert!(d(moved.point(1, 0), pop.point(1, 0)) > 1e-3, "the placement changed");
+        // each pose dropped in turn: pose 3 dropped keeps poses 0, 1, 2 and 4, in that order
+        let each = Variant::leave_each_out(pop.n_shapes());
+        assert_eq!(each.len(), 5);
+        let no3 = each[3].apply(pop).unwrap();
+        assert_eq!(no3.n_shapes(), 4);
+        assert!(d(orig(&no3, 2, 3), orig(pop, 2, 3)) < 1e-6);
+        assert!(d(orig(&no3, 3, 3), orig(pop, 4, 3)) < 1e-6);
+        assert_eq!(each[3].name(), "pose 4 dropped");
+        assert!(Variant::leave_each_out(2).is_empty());
     }
 
     #[test]

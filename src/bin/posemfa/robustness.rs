@@ -17,6 +17,10 @@ pub struct Args {
     /// vertex's dominant joint of a skinned character)
     #[arg(long, value_name = "FILE", value_hint = ValueHint::FilePath)]
     truth: Option<String>,
+    /// Also fit with every pose dropped in turn (one run per pose), and report the part counts of those runs
+    /// apart: how much the answer hangs on any one pose
+    #[arg(long)]
+    drop_each: bool,
     /// Write the runs and the agreement as JSON
     #[arg(long, value_name = "OUT", value_hint = ValueHint::FilePath)]
     json: Option<String>,
@@ -41,32 +45,55 @@ pub fn run(o: Args) -> Result<(), String> {
     };
     out!("{} shapes x {} vertices; {} seeds and 4 nuisance variants", pop.n_shapes(), pop.n_vertices(), o.seeds);
     let score = |labels: &[u32]| truth.as_ref().map(|t| posemfa::metrics::adjusted_rand_index(labels, t));
-    let runs = run_variants(&pop, &params, &Variant::standard(o.seeds), |r| {
+    let show = |r: &posemfa::parts::robustness::Run| {
         let t = score(&r.labels).map_or(String::new(), |a| format!("  ARI vs truth {a:.3}"));
         out!("  {:<15} {:>3} parts  RMSE {:.5}  {:>6.2} s{t}", r.variant, r.parts, r.rmse, r.seconds);
-    })
-    .map_err(|e| e.to_string())?;
+    };
+    let runs = run_variants(&pop, &params, &Variant::standard(o.seeds), show).map_err(|e| e.to_string())?;
     let a = agreement(&runs);
-    out!(
-        "parts {}-{} (spread {}) | pairwise adjusted Rand median {:.3}, min {:.3}",
-        a.fewest_parts,
-        a.most_parts,
-        a.most_parts - a.fewest_parts,
-        a.median_ari,
-        a.min_ari
-    );
+    let line = |a: &posemfa::parts::robustness::Agreement| {
+        format!(
+            "parts {}-{} (spread {}) | pairwise adjusted Rand median {:.3}, min {:.3}",
+            a.fewest_parts,
+            a.most_parts,
+            a.most_parts - a.fewest_parts,
+            a.median_ari,
+            a.min_ari
+        )
+    };
+    out!("{}", line(&a));
+    let each = if o.drop_each {
+        let each_variants = Variant::leave_each_out(pop.n_shapes());
+        if each_variants.is_empty() {
+            out!("each pose dropped: not run ({} poses: dropping one would leave too few)", pop.n_shapes());
+            None
+        } else {
+            out!("each pose dropped in turn ({} runs, seed 0):", each_variants.len());
+            let runs = run_variants(&pop, &params, &each_variants, show).map_err(|e| e.to_string())?;
+            let e = agreement(&runs);
+            out!("each pose dropped: {}", line(&e));
+            Some((runs, e))
+        }
+    } else {
+        None
+    };
     if let Some(path) = &o.json {
-        let runs_json: Vec<serde_json::Value> = runs
-            .iter()
-            .map(|r| {
-                let mut v = serde_json::to_value(r).unwrap_or_default();
-                if let Some(a) = score(&r.labels) {
-                    v["truthAri"] = serde_json::json!(a);
-                }
-                v
-            })
-            .collect();
-        let doc = serde_json::json!({ "runs": runs_json, "agreement": a });
+        let to_json = |runs: &[posemfa::parts::robustness::Run]| -> Vec<serde_json::Value> {
+            runs.iter()
+                .map(|r| {
+                    let mut v = serde_json::to_value(r).unwrap_or_default();
+                    if let Some(a) = score(&r.labels) {
+                        v["truthAri"] = serde_json::json!(a);
+                    }
+                    v
+                })
+                .collect()
+        };
+        let runs_json = to_json(&runs);
+        let mut doc = serde_json::json!({ "runs": runs_json, "agreement": a });
+        if let Some((runs, e)) = &each {
+            doc["eachDropped"] = serde_json::json!({ "runs": to_json(runs), "agreement": e });
+        }
         std::fs::write(path, doc.to_string()).map_err(|e| format!("cannot write {path}: {e}"))?;
         out!("wrote {path}");
     }
