@@ -111,20 +111,26 @@ test('the tied-legs example says what it shows: one motion, two parts kept apart
 test('a cancelled fit gets no verdict: "cancelled: the diagnosis needs a finished fit"', async () => {
   const { page, context, log } = await fitted();
   assert.match(await text(page, '[data-testid=diagnosis]'), /^Articulated/);
-  const n = await page.evaluate(() => window.posemfa.fitCount());
-  // Cancel as soon as the fit runs: its first slice (40 ms) is in the coarse stage or just after it
-  await page.evaluate(() => new Promise((done) => {
-    const seen = new MutationObserver(() => {
-      if (document.body.dataset.state !== 'fitting') return;
-      seen.disconnect();
-      document.getElementById('cancel').click();
-      done();
-    });
-    seen.observe(document.body, { attributes: true, attributeFilter: ['data-state'] });
-    document.getElementById('fit').click();
-  }));
-  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 60000 });
-  const s = await summary(page);
+  // Cancel as soon as the fit runs: its first slice (40 ms) is in the coarse stage or just after it. On a
+  // loaded machine the worker can finish the example's short fit before the click reaches it (a lost race, not
+  // a fault): then the fit is started again, at most 5 times in all; a page that never cancels still fails.
+  let s;
+  for (let attempt = 0; attempt < 5; attempt++) {
+    const n = await page.evaluate(() => window.posemfa.fitCount());
+    await page.evaluate(() => new Promise((done) => {
+      const seen = new MutationObserver(() => {
+        if (document.body.dataset.state !== 'fitting') return;
+        seen.disconnect();
+        document.getElementById('cancel').click();
+        done();
+      });
+      seen.observe(document.body, { attributes: true, attributeFilter: ['data-state'] });
+      document.getElementById('fit').click();
+    }));
+    await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 60000 });
+    s = await summary(page);
+    if (s.cancelled) break;
+  }
   assert.equal(s.cancelled, true, 'the fit was cancelled before it ended');
   assert.equal(s.diagnosis, null);
   assert.equal(await text(page, '[data-testid=diagnosis]'), 'Cancelled: the diagnosis needs a finished fit.');
