@@ -5,7 +5,7 @@ import { startWorker, worker as firstWorker } from './worker-client.js';
 import { WorkerClient, MAX_RESTARTS } from './protocol.js';
 import { state, update, subscribe } from './state.js';
 import { paletteColours } from './colors.js';
-import { checkedParams, fillParams } from './controls/form.js';
+import { checkedParams, fillParams, resetForNewPopulation } from './controls/form.js';
 import { showProblems, note } from './problems.js';
 
 const GREY = 0.78;
@@ -75,7 +75,8 @@ export async function loadFiles(got) {
     update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
     return;
   }
-  update({ baseParams: state.defaults }); // the form's values stay; hidden ones back to the defaults
+  update({ baseParams: state.defaults }); // hidden parameters back to the defaults
+  resetForNewPopulation(state.defaults); // and the part count and the literal Λ step (seed, tolerance... stay)
   const label = files.length === 1 ? files[0].name : `${files.length} files`;
   // the page keeps the files' bytes (copies go to the worker): a restarted worker gets them again
   startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes);

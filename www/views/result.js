@@ -38,7 +38,9 @@ function showResult() {
   const stages = state.model?.tree ? `started from the merge tree's ${s?.coarseParts} parts` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${s.rmseOriginal.toExponential(3)} original units` : '–';
-  $('iterations').textContent = s ? `${s.iterations} in the final stage${s.converged ? ', converged' : ''}` : '–';
+  // a finished fit that stopped at the iteration cap says so (it is not converged)
+  const how = s?.converged ? ', converged' : s?.complete ? ', not converged: stopped at the iteration cap' : '';
+  $('iterations').textContent = s ? `${s.iterations} in the final stage${how}` : '–';
   $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
   $('truth-acc').textContent = accuracyText(s?.groundTruth);
   $('truth-acc').classList.toggle('good', s?.groundTruth?.ari >= 0.95);

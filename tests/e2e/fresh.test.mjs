@@ -1,0 +1,64 @@
+// A fresh-eyes review of the built page (docs/page-fixes.md, "Fresh-eyes review"): settings that carried into
+// the next population, the merge tree's slider that jumped under the mouse, Cancel that threw away a finished
+// fit, a Stage field that said "final" for every run, the vertex inspector's part against eq 12, and a .txt drop
+// counted as two problems. One test per finding, on dist/.
+// Run: npm run build && node --test tests/e2e/fresh.test.mjs
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { existsSync, readdirSync } from 'node:fs';
+import { readFile } from 'node:fs/promises';
+import path from 'node:path';
+import { pageSession, waitState, tubePopulation, asPayload, ROOT } from './helpers.mjs';
+
+const session = pageSession();
+const summary = (page) => page.evaluate(() => window.posemfa.summary());
+const fits = (page) => page.evaluate(() => window.posemfa.fitCount());
+const text = (page, sel) => page.locator(sel).innerText();
+const horseDir = path.join(process.env.POSEMFA_SHARED ?? path.join(ROOT, '../shared'), 'data/horse-poses');
+
+async function fitted(page) {
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted', await text(page, '[data-testid=errors]'));
+}
+
+// Waits until the fit after `n` ended and the page is fitted.
+async function nextFit(page, n) {
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 180000, polling: 50 });
+  await fitted(page);
+}
+
+async function moveTree(page, n) {
+  await page.evaluate((v) => {
+    const s = document.getElementById('tree-slider');
+    s.value = String(v);
+    s.dispatchEvent(new Event('input'));
+  }, n);
+  await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), n);
+}
+
+test('a new population starts with "Parts in the end" on auto and the exact Λ step, whatever the last one had', async () => {
+  const { page, context, log } = await session.open('#ex=literal-eq18');
+  await fitted(page);
+  assert.equal(await page.isChecked('#params [name=paperLambda]'), true, 'the eq 18 example ticks the literal step');
+  // Refine N on that population: "Parts in the end" = N
+  const parts = (await summary(page)).parts;
+  const tree = await page.evaluate(() => window.posemfa.tree());
+  const want = parts > tree.fewest + 1 ? parts - 1 : parts + 1;
+  await moveTree(page, want);
+  let n = await fits(page);
+  await page.click('[data-testid=tree-refine]');
+  await nextFit(page, n);
+  assert.equal((await summary(page)).parts, want);
+  assert.equal(await page.inputValue('#params [name=targetParts]'), String(want));
+  // a new population of 3 rigid pieces: fitted with the defaults of both, not with N parts and eq 18
+  n = await fits(page);
+  const tube = tubePopulation({ segments: 3, poses: 8 });
+  await page.setInputFiles('[data-testid=file-input]', asPayload(tube.files));
+  await nextFit(page, n);
+  assert.equal(await page.inputValue('#params [name=targetParts]'), '');
+  assert.equal(await page.isChecked('#params [name=paperLambda]'), false);
+  const s = await summary(page);
+  assert.notEqual(s.parts, want, `the tube was fitted with the ${want} parts asked for the last population`);
+  assert.equal(s.converged, true, 'the default fit of the tube converges');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
