@@ -121,7 +121,7 @@ function onLoaded(pop, fitId) {
   pop.source = source.label;
   showProblems(notes);
   update({
-    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null,
+    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, treeParts: null,
     hoverPart: null, lastStep: null, mode: !pop.truth && state.mode === 'truth' ? 'parts' : state.mode,
     phase: fitId === null ? 'idle' : 'fitting',
   });
@@ -190,7 +190,8 @@ function onFitted({ model }) {
     refined: paletteColours(model.refinedLabels, model.colours.refined),
   };
   kept = null;
-  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, phase: 'fitted' });
+  // the new model's own parts (not a merge tree cut the slider showed for the one before)
+  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, phase: 'fitted' });
 }
 
 // ------------------------------------------------------------------ questions about the model
