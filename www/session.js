@@ -121,7 +121,7 @@ function onLoaded(pop, fitId) {
   pop.source = source.label;
   showProblems(notes);
   update({
-    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, treeParts: null,
+    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, keptAfterCancel: false, treeParts: null,
     hoverPart: null, lastStep: null, mode: !pop.truth && state.mode === 'truth' ? 'parts' : state.mode,
     phase: fitId === null ? 'idle' : 'fitting',
   });
@@ -135,7 +135,7 @@ export async function startFit() {
   if (!params || !state.pop) return; // the form says which field, and what it allows
   showProblems([]);
   const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });
-  update({ fitId: id, lastStep: null, phase: 'fitting' });
+  update({ fitId: id, lastStep: null, keptAfterCancel: false, phase: 'fitting' });
   liveLabels = null;
   watchFit(id, done);
 }
@@ -182,7 +182,13 @@ function showProgress() {
 }
 const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
 
-function onFitted({ model }) {
+function onFitted({ model, kept: keptModel }) {
+  if (keptModel) {
+    // a new fit cancelled: the finished model stays shown (result.js says the new fit was cancelled)
+    kept = null;
+    update({ fitId: null, fitCount: state.fitCount + 1, keptAfterCancel: true, phase: 'fitted' });
+    return;
+  }
   const colours = {
     ...state.colours,
     final: paletteColours(model.labels, model.colours.final),
@@ -191,7 +197,7 @@ function onFitted({ model }) {
   };
   kept = null;
   // the new model's own parts (not a merge tree cut the slider showed for the one before)
-  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, phase: 'fitted' });
+  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, keptAfterCancel: false, phase: 'fitted' });
 }
 
 // ------------------------------------------------------------------ questions about the model

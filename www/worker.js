@@ -31,6 +31,8 @@
 //     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
 //                                                                   coarseLabels, refinedLabels, colours {final,
 //                                                                   coarse, refined}, latent
+//     { type: 'fitted', id, cancelled: true, kept: true, fitMs }    a cancelled fit of a population whose
+//                                                                   finished model stays (no model sent)
 //     { type: 'fit-error', id, message, problems }
 //     { type: 'reply', id, result } | { type: 'reply', id, error, problems }   answer to a query
 //     { type: 'crashed', message }                                  the wasm instance trapped: this worker stops
@@ -49,7 +51,8 @@ const PALETTE_SIZE = 12; // colors.js PALETTE.length
 
 let population = null; // wasm Population
 let fitter = null; // wasm Fitter of the fit in progress
-let model = null; // wasm FitModel of the last fit (final or best so far)
+let model = null; // wasm FitModel of the last fit (final, or where a cancelled first fit stopped)
+let modelComplete = false; // `model` is a finished fit's: a cancelled new fit keeps it
 // The last finished fit's parts and colours on this population: a new fit keeps the colour of every part that
 // is the same (posemfa::articulate::graph::colour_parts_like), so two fits compare by eye.
 let lastFinal = null; // { labels, colours }
@@ -115,6 +118,7 @@ function replacePopulation(pop, synth = null) {
   fitToken++;
   model?.free();
   model = null;
+  modelComplete = false;
   population?.free();
   population = pop;
   lastFinal = null;
@@ -235,16 +239,23 @@ async function claimFit() {
   return token === fitToken;
 }
 
-// The model of a finished (or cancelled) fitter becomes the worker's model and goes to the page.
+// The model of a finished (or cancelled) fitter becomes the worker's model and goes to the page. A cancelled
+// fit of a population that already has a finished model leaves that model in place (where the new fit stopped
+// is no better than a finished fit): the page is told so ({ kept: true }, no model).
 function finishFit(f, id, t0) {
   const cancelled = !f.isDone();
-  const m = f.result();
   const fitMs = performance.now() - t0;
+  if (cancelled && model && modelComplete) {
+    post({ type: 'fitted', id, cancelled, kept: true, fitMs });
+    return;
+  }
+  const m = f.result();
   model?.free();
   model = m;
   const msg = modelMessage(m);
   msg.summary.fitMs = fitMs;
   msg.summary.cancelled = cancelled;
+  modelComplete = !!msg.summary.complete;
   post({ type: 'fitted', id, cancelled, fitMs, model: msg });
 }
 

@@ -96,3 +96,41 @@ test('the merge tree\'s slider stays put under a real mouse drag, and its value 
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('Cancel on a new fit of the same population keeps the finished fit, its verdict and figures, and says so', async () => {
+  const { page, context, log } = await session.open();
+  await fitted(page);
+  const before = await summary(page);
+  const parts = await page.evaluate(() => window.posemfa.fittedParts());
+  const verdict = await text(page, '[data-testid=diagnosis]');
+  assert.match(verdict, /^Articulated/);
+  const n = await fits(page);
+  // Cancel as soon as the new fit runs
+  await page.evaluate(() => new Promise((done) => {
+    const seen = new MutationObserver(() => {
+      if (document.body.dataset.state !== 'fitting') return;
+      seen.disconnect();
+      document.getElementById('cancel').click();
+      done();
+    });
+    seen.observe(document.body, { attributes: true, attributeFilter: ['data-state'] });
+    document.getElementById('fit').click();
+  }));
+  await nextFit(page, n);
+  const after = await summary(page);
+  assert.equal(after.cancelled, false, 'the model shown is the finished one');
+  assert.equal(after.parts, before.parts);
+  assert.deepEqual(after.logLikelihood, before.logLikelihood);
+  assert.deepEqual(await page.evaluate(() => window.posemfa.fittedParts()), parts);
+  assert.match(await text(page, '#stage'), /cancelled.*finished fit before it is kept/);
+  assert.doesNotMatch(await text(page, '#stage'), /best/);
+  assert.equal(await text(page, '[data-testid=diagnosis]'), verdict);
+  assert.equal(await text(page, '#loglik'), before.logLikelihood.at(-1).toFixed(2));
+  // the worker kept it too: the exported model is the finished fit's
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-json')]);
+  const json = JSON.parse(await readFile(await download.path(), 'utf8'));
+  assert.deepEqual(json.labels, parts.labels);
+  assert.equal(json.complete, true);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

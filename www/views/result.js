@@ -69,14 +69,17 @@ function fitStarted() {
   plot.set([], '');
 }
 
-function fitEnded(model) {
-  const { cancelled, fitMs, logLikelihood } = model.summary;
-  $('stage').textContent = cancelled ? 'cancelled: best state so far' : 'done';
-  if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
+// kept: a new fit was cancelled and this finished model stays (its figures are shown again).
+function fitEnded(model, { kept = false } = {}) {
+  const { cancelled, fitMs, logLikelihood, iterations } = model.summary;
+  // a cancelled first fit shows where it stopped: not "best", it may be below what a finished fit reaches
+  $('stage').textContent = kept ? 'new fit cancelled: the finished fit before it is kept' : cancelled ? 'cancelled: where the fit stopped' : 'done';
+  if (kept) $('iteration').textContent = `${iterations} in the final stage`;
+  else if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
   $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
   // the model's own final value (the plot's last point), not the last progress message seen
   $('loglik').textContent = logLikelihood?.length ? logLikelihood[logLikelihood.length - 1].toFixed(2) : '–';
-  plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'best model so far' : 'final stage'}: log-likelihood`);
+  plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'stopped early' : 'final stage'}: log-likelihood`);
 }
 
 export function installResult() {
@@ -93,7 +96,10 @@ export function installResult() {
     if (changed.has('fitId') && s.fitId !== null && s.phase === 'fitting') fitStarted();
     if (changed.has('model') && s.model) fitEnded(s.model);
     // a fit that failed or was superseded without a model: the Stage field does not stay at 'starting'
-    if (changed.has('fitId') && s.fitId === null && !changed.has('model')) $('stage').textContent = s.model ? 'done' : 'idle';
+    if (changed.has('fitId') && s.fitId === null && !changed.has('model')) {
+      if (s.keptAfterCancel && s.model) fitEnded(s.model, { kept: true });
+      else $('stage').textContent = s.model ? 'done' : 'idle';
+    }
     if (changed.has('pop') || changed.has('model')) showResult();
   });
 }
