@@ -24,8 +24,11 @@
 //                                                                   box), truth ({partNames, partOfVertex,
 //                                                                   colours} of a generated one, else null)
 //     { type: 'load-error', id, problems }                          the previous population is kept
-//     { type: 'progress', id, steps, trace, labels, colours, elapsedMs }   after every slice: the AECM
+//     { type: 'progress', id, steps, run, trace, labels, colours, elapsedMs }   after every slice: the AECM
 //                                                                   iterations made (one progress object each),
+//                                                                   the run in progress by its stage name
+//                                                                   ({name, number, fromTree, done},
+//                                                                   Fitter.currentStage),
 //                                                                   the current run's log-likelihood trace,
 //                                                                   labels and their colours
 //     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
@@ -214,7 +217,10 @@ async function fit({ id, params, fault = null }) {
       const trace = f.currentTrace();
       const labels = f.currentLabels();
       const colours = coloursOf(labels);
-      post({ type: 'progress', id, steps, trace, labels, colours, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer, colours.buffer]);
+      // {name, number, fromTree, done}: which of the pipeline's runs is in progress (src/parts/hierarchy.rs);
+      // done: none any more, the last one finished
+      const run = { ...f.currentStage(), done: f.isDone() };
+      post({ type: 'progress', id, steps, run, trace, labels, colours, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer, colours.buffer]);
       await yieldToEvents();
     }
     if (token !== fitToken) return; // a new fit or population superseded this one: it keeps nothing

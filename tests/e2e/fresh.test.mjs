@@ -134,3 +134,29 @@ test('Cancel on a new fit of the same population keeps the finished fit, its ver
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('the Stage field names each run of the fit (the merge tree\'s start, the part rule\'s rounds) with its number', async () => {
+  // a quadruped big enough that its first run spans several slices of the worker (40 ms each)
+  const { page, context, log } = await session.open('?preset=quadruped&vertices=12000&poses=10');
+  await fitted(page);
+  const n = await fits(page);
+  await page.evaluate(() => {
+    window.__stages = [];
+    new MutationObserver(() => {
+      const t = document.getElementById('stage').textContent;
+      if (window.__stages.at(-1) !== t) window.__stages.push(t);
+    }).observe(document.getElementById('stage'), { childList: true, characterData: true, subtree: true });
+    document.getElementById('fit').click();
+  });
+  await nextFit(page, n);
+  const stages = await page.evaluate(() => window.__stages);
+  const runs = stages.filter((t) => /\(run \d+\)$/.test(t));
+  assert.ok(runs.some((t) => /^fit from the merge tree's start \(run 1\)$/.test(t)), JSON.stringify(stages));
+  assert.ok(runs.some((t) => /^part rule, round 1: refit of the parts left \(run 2\)$/.test(t)), JSON.stringify(stages));
+  assert.ok(!stages.includes('final'), `a bare "final": ${JSON.stringify(stages)}`);
+  const numbers = runs.map((t) => Number(t.match(/\(run (\d+)\)$/)[1]));
+  assert.deepEqual(numbers, [...numbers].sort((a, b) => a - b), 'run numbers only go up');
+  assert.equal(stages.at(-1), 'done');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

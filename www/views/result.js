@@ -9,12 +9,23 @@ import { drawPartCurve } from './part-curve.js';
 
 const $ = (id) => document.getElementById(id);
 
-/** Algorithm 1's stage as words. */
-export function stageText(s) {
+/** Algorithm 1's stage as words; with `run` ({name, number, fromTree}: the pipeline's stage by name, from the
+ * worker, Fitter.currentStage), which of the final stage's runs it is: the merge tree's start, a round of the
+ * part rule, the refit with the count asked for. */
+export function stageText(s, run = null) {
   if (!s) return '–';
   if (s.kind === 'refine') return `refining part ${s.part + 1} of ${s.of} (${s.subParts} sub-parts)`;
+  if (s.kind === 'final' && run) {
+    if (run.name === 'final') return run.number > 1 ? 'the parts decided, refitted at the full tolerance' : run.fromTree ? "fit from the merge tree's start" : 'final AECM';
+    if (run.name === 'distinct') return `part rule, round ${run.number}: refit of the parts left`;
+    if (run.name === 'parts') return `refit with the part count asked for${run.number > 1 ? ` (try ${run.number})` : ''}`;
+  }
   return { coarse: 'coarse', final: 'final', done: 'done' }[s.kind] ?? s.kind;
 }
+
+// Which AECM run of the fit the progress is in (1 for the first): one more after every run that finished.
+let runsFinished = 0;
+let runsFor = null;
 
 function showPopulation(pop, source) {
   const tris = pop.faces.length / 3;
@@ -56,9 +67,10 @@ function showResult() {
   drawPartCurve($('part-curve'), curve);
 }
 
-/** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since). */
-export function showStep(step, stage = step.stage) {
-  $('stage').textContent = stageText(stage);
+/** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since; run:
+ * the pipeline's run by name, and its number among the fit's runs). */
+export function showStep(step, stage = step.stage, run = null, runNumber = null) {
+  $('stage').textContent = stageText(stage, run) + (runNumber ? ` (run ${runNumber})` : '');
   $('iteration').textContent = `${step.iteration} (total ${step.totalIterations})`;
   $('loglik').textContent = step.logLikelihood.toFixed(2);
 }
@@ -84,10 +96,13 @@ function fitEnded(model, { kept = false } = {}) {
 
 export function installResult() {
   onFitProgress((m) => {
+    if (runsFor !== m.id) [runsFor, runsFinished] = [m.id, 0];
     const last = m.steps[m.steps.length - 1];
+    // m.run is the run in progress now: one more than the runs finished so far (the last one when none is left)
+    runsFinished += m.steps.filter((s) => s.runFinished).length;
     if (last) {
-      showStep(last);
-      plot.set(m.trace, `${stageText(last.stage)}: log-likelihood`);
+      showStep(last, last.stage, m.run, runsFinished + (m.run?.done ? 0 : 1));
+      plot.set(m.trace, `${stageText(last.stage, m.run)}: log-likelihood`);
     }
     $('elapsed').textContent = `${(m.elapsedMs / 1000).toFixed(2)} s`;
   });
