@@ -160,3 +160,48 @@ test('the Stage field names each run of the fit (the merge tree\'s start, the pa
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('horse-poses: after "Refine 3" and the literal eq 18 example, the horse gets the default fit; the inspector\'s part is the colour and the export\'s, and says where eq 12 differs (needs ../shared)', async (t) => {
+  if (!existsSync(horseDir)) {
+    if (process.env.CI === 'true') assert.fail(`${horseDir} is absent, and CI=true`);
+    t.skip(`${horseDir} is absent`);
+    return;
+  }
+  const { page, context, log } = await session.open('#ex=literal-eq18');
+  await fitted(page);
+  await moveTree(page, 3);
+  let n = await fits(page);
+  await page.click('[data-testid=tree-refine]');
+  await nextFit(page, n);
+  assert.equal((await summary(page)).parts, 3);
+  // after Refine: the main view shows the refit's parts, not the merge tree's cut
+  await page.waitForFunction(() => /coloured by part \(3 parts\)/.test(document.getElementById('caption').textContent));
+  n = await fits(page);
+  const names = readdirSync(horseDir).filter((f) => f.endsWith('.obj'));
+  await page.setInputFiles('[data-testid=file-input]', names.map((f) => path.join(horseDir, f)));
+  await nextFit(page, n);
+  const s = await summary(page);
+  assert.ok(s.parts > 10, `the horse got ${s.parts} parts`);
+  assert.equal(s.converged, true, 'the exact Λ step converges on the horse');
+  // vertex 610 (on the flank, at the border of two parts): labelled by the part rule, favoured otherwise by eq 12
+  const parts = await page.evaluate(() => window.posemfa.fittedParts());
+  const colours = await page.evaluate(() => window.posemfa.partColours());
+  const label = parts.labels[610];
+  await page.evaluate(() => window.posemfa.inspect(610));
+  await page.waitForSelector('[data-testid=pick-why]');
+  const head = await page.locator('#info > div').first().locator('div').first();
+  assert.match(await head.innerText(), new RegExp(`^Vertex 610 .*: part ${label}\\b`));
+  const swatch = await head.locator('.swatch').evaluate((e) => getComputedStyle(e).backgroundColor);
+  const hex = colours[label];
+  assert.equal(swatch, `rgb(${[1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16)).join(', ')})`);
+  const why = await text(page, '[data-testid=pick-why]');
+  const rows = await page.locator('#info table').first().locator('tr').allInnerTexts();
+  const best = Number(rows[1].match(/part (\d+)/)[1]);
+  if (best === label) assert.match(why, /also the most likely by eq 12/);
+  else assert.match(why, new RegExp(`part ${label} is the fit's label .* eq 12's densities alone favour part ${best}$`));
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-json')]);
+  const json = JSON.parse(await readFile(await download.path(), 'utf8'));
+  assert.equal(json.labels[610], label, 'the export labels vertex 610 as the inspector and the colours do');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
