@@ -70,8 +70,10 @@ export async function loadFiles(got) {
   const { files, ignored, problems } = await got;
   const notes = ignored.length ? [{ file: null, line: null, message: `ignored (not a mesh, point cache, glTF buffer or .zip): ${ignored.join(', ')}` }] : [];
   if (problems.length || files.length === 0) {
-    if (!files.length) problems.push({ file: null, line: null, message: 'no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh, .fbx, .usd / .usda / .usdc / .usdz) in what was dropped or picked' });
-    showProblems([...problems, ...notes]);
+    // nothing to open: one problem, naming what was ignored (not a second one for it)
+    const none = ignored.length ? `; ignored: ${ignored.join(', ')}` : '';
+    if (!files.length) problems.push({ file: null, line: null, message: `no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh, .fbx, .usd / .usda / .usdc / .usdz) in what was dropped or picked${none}` });
+    showProblems(files.length ? [...problems, ...notes] : problems);
     update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
     return;
   }

@@ -161,6 +161,18 @@ test('the Stage field names each run of the fit (the merge tree\'s start, the pa
   await context.close();
 });
 
+test('one .txt dropped is one problem, naming the file ignored', async () => {
+  const { page, context } = await session.open();
+  await fitted(page);
+  await page.setInputFiles('[data-testid=file-input]', [{ name: 'notes.txt', mimeType: 'text/plain', buffer: Buffer.from('hello') }]);
+  await page.waitForFunction(() => window.posemfa.loadErrorCount() > 0);
+  const box = await text(page, '[data-testid=errors]');
+  assert.match(box, /^1 problem; the previous population is kept/);
+  assert.equal(await page.locator('[data-testid=errors] li').count(), 1);
+  assert.match(box, /no mesh file .*ignored: notes\.txt/);
+  await context.close();
+});
+
 test('horse-poses: after "Refine 3" and the literal eq 18 example, the horse gets the default fit; the inspector\'s part is the colour and the export\'s, and says where eq 12 differs (needs ../shared)', async (t) => {
   if (!existsSync(horseDir)) {
     if (process.env.CI === 'true') assert.fail(`${horseDir} is absent, and CI=true`);

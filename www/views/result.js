@@ -46,7 +46,7 @@ function showResult() {
   const s = state.model?.summary;
   $('parts-count').textContent = s ? s.parts : '–';
   // the merge tree (the default part rule) starts from its own cut, not from Algorithm 1's coarse and refined stages
-  const stages = state.model?.tree ? `started from the merge tree's ${s?.coarseParts} parts` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
+  const stages = state.model?.tree ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${s.rmseOriginal.toExponential(3)} original units` : '–';
   // a finished fit that stopped at the iteration cap says so (it is not converged)
