@@ -259,6 +259,15 @@ impl Fitter {
         to_js(&self.pipe.stage())
     }
 
+    /// The pipeline's stage in progress by its StageStats name: {name: "coarse" | "refine" | "final" |
+    /// "distinct" | "parts", number: how many stages of that name so far (1 for the first), fromTree: the fit
+    /// started from the merge tree's cut (the default part rule), not from Algorithm 1's coarse stage}.
+    #[wasm_bindgen(js_name = currentStage)]
+    pub fn current_stage(&self) -> Result<JsValue, JsValue> {
+        let (name, number, from_tree) = self.pipe.current_stage_name();
+        to_js(&serde_json::json!({ "name": name, "number": number, "fromTree": from_tree }))
+    }
+
     /// Labels of the AECM run in progress over ALL vertices (during the refinement: the coarse labels).
     #[wasm_bindgen(js_name = currentLabels)]
     pub fn current_labels(&self) -> Uint32Array {

@@ -12,7 +12,7 @@ import { state, update, subscribe } from './state.js';
 import { faultInjection, injectFault, onReady, generate, runExample, loadFiles, startFit, cancelFit, query } from './session.js';
 import { viewer } from './views/viewer-instance.js';
 import { installViews, renderView } from './views/render.js';
-import { installInspect } from './views/inspect.js';
+import { installInspect, pickVertex } from './views/inspect.js';
 import { installResult } from './views/result.js';
 import { installForm, fillParams, readParams, showExamples } from './controls/form.js';
 import { installPoses } from './controls/poses.js';
@@ -51,6 +51,8 @@ window.posemfa = {
   fittedParts: () => (state.model ? { labels: Array.from(state.model.labels), colours: Array.from(state.model.colours.final) } : null),
   /** The merge tree ({most, fewest, decided}, null without one) and the count its slider shows (null: the fit). */
   tree: () => (state.model?.tree ? { ...state.model.tree, shown: state.treeParts } : null),
+  /** Inspects vertex v of the first mesh shown, as a click on it does (the info box answers). */
+  inspect: (v) => pickVertex({ slot: 0, vertex: v }),
 };
 if (faultInjection) {
   /** Page tests only (?faultInjection=1): the next `times` fits make the wasm instance trap (a Rust panic). */

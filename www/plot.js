@@ -85,6 +85,6 @@ export class Plot {
     }
     g.stroke();
     g.fillText(`max ${fmt(hi)}`, right - g.measureText(`max ${fmt(hi)}`).width, 12);
-    g.fillText(`min ${fmt(lo)} · ${v.length} iterations${this.runs ? ` · ${this.runs.length} runs, each to its own scale` : ''}`, left, h - 2);
+    g.fillText(`min ${fmt(lo)} · ${v.length} iteration${v.length === 1 ? '' : 's'}${this.runs ? ` · ${this.runs.length} runs, each to its own scale` : ''}`, left, h - 2);
   }
 }

@@ -5,7 +5,7 @@ import { startWorker, worker as firstWorker } from './worker-client.js';
 import { WorkerClient, MAX_RESTARTS } from './protocol.js';
 import { state, update, subscribe } from './state.js';
 import { paletteColours } from './colors.js';
-import { checkedParams, fillParams } from './controls/form.js';
+import { checkedParams, fillParams, resetForNewPopulation } from './controls/form.js';
 import { showProblems, note } from './problems.js';
 
 const GREY = 0.78;
@@ -70,12 +70,15 @@ export async function loadFiles(got) {
   const { files, ignored, problems } = await got;
   const notes = ignored.length ? [{ file: null, line: null, message: `ignored (not a mesh, point cache, glTF buffer or .zip): ${ignored.join(', ')}` }] : [];
   if (problems.length || files.length === 0) {
-    if (!files.length) problems.push({ file: null, line: null, message: 'no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh, .fbx, .usd / .usda / .usdc / .usdz) in what was dropped or picked' });
-    showProblems([...problems, ...notes]);
+    // nothing to open: one problem, naming what was ignored (not a second one for it)
+    const none = ignored.length ? `; ignored: ${ignored.join(', ')}` : '';
+    if (!files.length) problems.push({ file: null, line: null, message: `no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh, .fbx, .usd / .usda / .usdc / .usdz) in what was dropped or picked${none}` });
+    showProblems(files.length ? [...problems, ...notes] : problems);
     update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
     return;
   }
-  update({ baseParams: state.defaults }); // the form's values stay; hidden ones back to the defaults
+  update({ baseParams: state.defaults }); // hidden parameters back to the defaults
+  resetForNewPopulation(state.defaults); // and the part count and the literal Λ step (seed, tolerance... stay)
   const label = files.length === 1 ? files[0].name : `${files.length} files`;
   // the page keeps the files' bytes (copies go to the worker): a restarted worker gets them again
   startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes);
@@ -120,7 +123,7 @@ function onLoaded(pop, fitId) {
   pop.source = source.label;
   showProblems(notes);
   update({
-    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null,
+    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, keptAfterCancel: false, treeParts: null,
     hoverPart: null, lastStep: null, mode: !pop.truth && state.mode === 'truth' ? 'parts' : state.mode,
     phase: fitId === null ? 'idle' : 'fitting',
   });
@@ -134,7 +137,7 @@ export async function startFit() {
   if (!params || !state.pop) return; // the form says which field, and what it allows
   showProblems([]);
   const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });
-  update({ fitId: id, lastStep: null, phase: 'fitting' });
+  update({ fitId: id, lastStep: null, keptAfterCancel: false, phase: 'fitting' });
   liveLabels = null;
   watchFit(id, done);
 }
@@ -181,7 +184,13 @@ function showProgress() {
 }
 const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
 
-function onFitted({ model }) {
+function onFitted({ model, kept: keptModel }) {
+  if (keptModel) {
+    // a new fit cancelled: the finished model stays shown (result.js says the new fit was cancelled)
+    kept = null;
+    update({ fitId: null, fitCount: state.fitCount + 1, keptAfterCancel: true, phase: 'fitted' });
+    return;
+  }
   const colours = {
     ...state.colours,
     final: paletteColours(model.labels, model.colours.final),
@@ -189,7 +198,8 @@ function onFitted({ model }) {
     refined: paletteColours(model.refinedLabels, model.colours.refined),
   };
   kept = null;
-  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, phase: 'fitted' });
+  // the new model's own parts (not a merge tree cut the slider showed for the one before)
+  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, keptAfterCancel: false, phase: 'fitted' });
 }
 
 // ------------------------------------------------------------------ questions about the model

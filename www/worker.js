@@ -24,13 +24,18 @@
 //                                                                   box), truth ({partNames, partOfVertex,
 //                                                                   colours} of a generated one, else null)
 //     { type: 'load-error', id, problems }                          the previous population is kept
-//     { type: 'progress', id, steps, trace, labels, colours, elapsedMs }   after every slice: the AECM
+//     { type: 'progress', id, steps, run, trace, labels, colours, elapsedMs }   after every slice: the AECM
 //                                                                   iterations made (one progress object each),
+//                                                                   the run in progress by its stage name
+//                                                                   ({name, number, fromTree, done},
+//                                                                   Fitter.currentStage),
 //                                                                   the current run's log-likelihood trace,
 //                                                                   labels and their colours
 //     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
 //                                                                   coarseLabels, refinedLabels, colours {final,
 //                                                                   coarse, refined}, latent
+//     { type: 'fitted', id, cancelled: true, kept: true, fitMs }    a cancelled fit of a population whose
+//                                                                   finished model stays (no model sent)
 //     { type: 'fit-error', id, message, problems }
 //     { type: 'reply', id, result } | { type: 'reply', id, error, problems }   answer to a query
 //     { type: 'crashed', message }                                  the wasm instance trapped: this worker stops
@@ -49,7 +54,8 @@ const PALETTE_SIZE = 12; // colors.js PALETTE.length
 
 let population = null; // wasm Population
 let fitter = null; // wasm Fitter of the fit in progress
-let model = null; // wasm FitModel of the last fit (final or best so far)
+let model = null; // wasm FitModel of the last fit (final, or where a cancelled first fit stopped)
+let modelComplete = false; // `model` is a finished fit's: a cancelled new fit keeps it
 // The last finished fit's parts and colours on this population: a new fit keeps the colour of every part that
 // is the same (posemfa::articulate::graph::colour_parts_like), so two fits compare by eye.
 let lastFinal = null; // { labels, colours }
@@ -115,6 +121,7 @@ function replacePopulation(pop, synth = null) {
   fitToken++;
   model?.free();
   model = null;
+  modelComplete = false;
   population?.free();
   population = pop;
   lastFinal = null;
@@ -210,7 +217,10 @@ async function fit({ id, params, fault = null }) {
       const trace = f.currentTrace();
       const labels = f.currentLabels();
       const colours = coloursOf(labels);
-      post({ type: 'progress', id, steps, trace, labels, colours, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer, colours.buffer]);
+      // {name, number, fromTree, done}: which of the pipeline's runs is in progress (src/parts/hierarchy.rs);
+      // done: none any more, the last one finished
+      const run = { ...f.currentStage(), done: f.isDone() };
+      post({ type: 'progress', id, steps, run, trace, labels, colours, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer, colours.buffer]);
       await yieldToEvents();
     }
     if (token !== fitToken) return; // a new fit or population superseded this one: it keeps nothing
@@ -235,16 +245,23 @@ async function claimFit() {
   return token === fitToken;
 }
 
-// The model of a finished (or cancelled) fitter becomes the worker's model and goes to the page.
+// The model of a finished (or cancelled) fitter becomes the worker's model and goes to the page. A cancelled
+// fit of a population that already has a finished model leaves that model in place (where the new fit stopped
+// is no better than a finished fit): the page is told so ({ kept: true }, no model).
 function finishFit(f, id, t0) {
   const cancelled = !f.isDone();
-  const m = f.result();
   const fitMs = performance.now() - t0;
+  if (cancelled && model && modelComplete) {
+    post({ type: 'fitted', id, cancelled, kept: true, fitMs });
+    return;
+  }
+  const m = f.result();
   model?.free();
   model = m;
   const msg = modelMessage(m);
   msg.summary.fitMs = fitMs;
   msg.summary.cancelled = cancelled;
+  modelComplete = !!msg.summary.complete;
   post({ type: 'fitted', id, cancelled, fitMs, model: msg });
 }
 

@@ -391,6 +391,16 @@ impl Pipeline {
         matches!(self.state, State::Done)
     }
 
+    /// The stage of [`StageStats`] in progress (the last one opened: "coarse", "refine", "final", "distinct",
+    /// "parts"), how many stages of that name have been opened so far (1 for the first), and whether the fit
+    /// started from the merge tree's cut (stage "tree") rather than Algorithm 1's coarse stage, for a page to say
+    /// which run it is in.
+    pub fn current_stage_name(&self) -> (&str, usize, bool) {
+        let name = self.stats.last().map_or("", |s| s.name.as_str());
+        let from_tree = self.stats.first().is_some_and(|s| s.name == "tree");
+        (name, self.stats.iter().filter(|s| s.name == name).count(), from_tree)
+    }
+
     /// The AECM run in progress (None when done).
     pub fn current_fit(&self) -> Option<&Fit> {
         match &self.state {

@@ -357,6 +357,7 @@ test('Cancel stops a fit within a slice and keeps its best state so far', async 
   assert.equal(s.complete, false);
   assert.ok(s.parts >= 1 && s.vertices === big.nVertices && Number.isFinite(s.rmse));
   assert.match(await page.locator('#stage').innerText(), /cancelled/);
+  assert.doesNotMatch(await page.locator('#stage').innerText(), /best/); // a state stopped early, not the best
   assert.ok(await page.locator('#cancel').isDisabled());
   assert.notEqual(await page.locator('[data-testid=parts-count]').innerText(), '–');
   await context.close();

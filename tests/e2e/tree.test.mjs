@@ -55,6 +55,9 @@ test('Refine fits the chosen count, and parts that stay keep their colours', asy
   await page.waitForFunction(() => window.posemfa.fitCount() >= 2, null, { timeout: 90000 });
   await fitted(page);
   assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, want);
+  // the main view shows the refit's parts, not the merge tree's cut the slider showed before
+  await page.waitForFunction((n) => document.getElementById('caption').textContent.endsWith(`coloured by part (${n} parts)`), want, { timeout: 10000 });
+  assert.equal((await page.evaluate(() => window.posemfa.tree())).shown, null);
   const after = await page.evaluate(() => window.posemfa.fittedParts());
   // parts that are the same (more than half of each in the other) keep their colour
   const overlap = new Map();

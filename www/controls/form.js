@@ -26,6 +26,15 @@ export function fillParams(p) {
   showFieldProblems([]);
 }
 
+/** A new population (files opened or dropped) starts from the defaults of the settings that change what is
+ * fitted rather than how closely: "Parts in the end" (a count the last population's Refine N set or the user
+ * typed for it) and the paper's literal Λ step (an example's). Seed, tolerance and the rest stay as typed. */
+export function resetForNewPopulation(defaults) {
+  const f = form();
+  f.targetParts.value = defaults.targetParts ?? '';
+  f.paperLambda.checked = defaults.lambdaRule === 'paper-eq18';
+}
+
 // "Parts in the end": empty or auto = Algorithm 1's own count (null); a whole number as a number; anything else
 // goes as typed (checkedParams refuses it before a fit).
 const bones = (v) => {

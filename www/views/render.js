@@ -9,6 +9,7 @@ import { viewer } from './viewer-instance.js';
 import { interpValues } from '../controls/interp-values.js';
 
 const $ = (id) => document.getElementById(id);
+const nParts = (n) => `${n} part${n === 1 ? '' : 's'}`;
 
 /** Colours of the parts now: the fitted model's, else the fit in progress', else grey. */
 export function partColours() {
@@ -36,9 +37,9 @@ const VIEWS = {
     if (model && state.treeParts !== null && state.colours.tree) {
       // the merge tree's partition the slider asks for (controls/tree.js); its export groups by the fitted parts
       const slots = [{ positions: P, colours: state.colours.tree, name: `pose ${poseName(pose)}`, what: { kind: 'pose', pose } }];
-      return { slots, caption: `Pose “${poseName(pose)}”, coloured by the merge tree's ${state.treeParts} parts (fitted: ${model.summary.parts})` };
+      return { slots, caption: `Pose “${poseName(pose)}”, coloured by the merge tree's ${nParts(state.treeParts)} (fitted: ${model.summary.parts})` };
     }
-    const by = model ? `part (${model.summary.parts} parts)` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
+    const by = model ? `part (${nParts(model.summary.parts)})` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
     return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, coloured by ${by}` };
   },
   stages(P, p) {
@@ -73,7 +74,7 @@ const VIEWS = {
         { positions: P, colours: state.colours.truth, name: 'ground truth', what: pose(p) },
         { positions: P, colours: state.colours.final.vertexColours, name: 'final', what: pose(p), parts: 'final' },
       ],
-      caption: `Pose “${poseName(p)}”: ground truth of the generator (${state.pop.truth.partNames.length} parts) | fitted (${state.model.summary.parts} parts)`,
+      caption: `Pose “${poseName(p)}”: ground truth of the generator (${nParts(state.pop.truth.partNames.length)}) | fitted (${nParts(state.model.summary.parts)})`,
     };
   },
   // The latent shape (eq 21) keeps every part in its own frame, centred on the origin: drawn as it is, the parts

@@ -9,12 +9,23 @@ import { drawPartCurve } from './part-curve.js';
 
 const $ = (id) => document.getElementById(id);
 
-/** Algorithm 1's stage as words. */
-export function stageText(s) {
+/** Algorithm 1's stage as words; with `run` ({name, number, fromTree}: the pipeline's stage by name, from the
+ * worker, Fitter.currentStage), which of the final stage's runs it is: the merge tree's start, a round of the
+ * part rule, the refit with the count asked for. */
+export function stageText(s, run = null) {
   if (!s) return '–';
   if (s.kind === 'refine') return `refining part ${s.part + 1} of ${s.of} (${s.subParts} sub-parts)`;
+  if (s.kind === 'final' && run) {
+    if (run.name === 'final') return run.number > 1 ? 'the parts decided, refitted at the full tolerance' : run.fromTree ? "fit from the merge tree's start" : 'final AECM';
+    if (run.name === 'distinct') return `part rule, round ${run.number}: refit of the parts left`;
+    if (run.name === 'parts') return `refit with the part count asked for${run.number > 1 ? ` (try ${run.number})` : ''}`;
+  }
   return { coarse: 'coarse', final: 'final', done: 'done' }[s.kind] ?? s.kind;
 }
+
+// Which AECM run of the fit the progress is in (1 for the first): one more after every run that finished.
+let runsFinished = 0;
+let runsFor = null;
 
 function showPopulation(pop, source) {
   const tris = pop.faces.length / 3;
@@ -35,10 +46,12 @@ function showResult() {
   const s = state.model?.summary;
   $('parts-count').textContent = s ? s.parts : '–';
   // the merge tree (the default part rule) starts from its own cut, not from Algorithm 1's coarse and refined stages
-  const stages = state.model?.tree ? `started from the merge tree's ${s?.coarseParts} parts` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
+  const stages = state.model?.tree ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${s.rmseOriginal.toExponential(3)} original units` : '–';
-  $('iterations').textContent = s ? `${s.iterations} in the final stage${s.converged ? ', converged' : ''}` : '–';
+  // a finished fit that stopped at the iteration cap says so (it is not converged)
+  const how = s?.converged ? ', converged' : s?.complete ? ', not converged: stopped at the iteration cap' : '';
+  $('iterations').textContent = s ? `${s.iterations} in the final stage${how}` : '–';
   $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
   $('truth-acc').textContent = accuracyText(s?.groundTruth);
   $('truth-acc').classList.toggle('good', s?.groundTruth?.ari >= 0.95);
@@ -54,9 +67,10 @@ function showResult() {
   drawPartCurve($('part-curve'), curve);
 }
 
-/** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since). */
-export function showStep(step, stage = step.stage) {
-  $('stage').textContent = stageText(stage);
+/** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since; run:
+ * the pipeline's run by name, and its number among the fit's runs). */
+export function showStep(step, stage = step.stage, run = null, runNumber = null) {
+  $('stage').textContent = stageText(stage, run) + (runNumber ? ` (run ${runNumber})` : '');
   $('iteration').textContent = `${step.iteration} (total ${step.totalIterations})`;
   $('loglik').textContent = step.logLikelihood.toFixed(2);
 }
@@ -67,22 +81,28 @@ function fitStarted() {
   plot.set([], '');
 }
 
-function fitEnded(model) {
-  const { cancelled, fitMs, logLikelihood } = model.summary;
-  $('stage').textContent = cancelled ? 'cancelled: best state so far' : 'done';
-  if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
+// kept: a new fit was cancelled and this finished model stays (its figures are shown again).
+function fitEnded(model, { kept = false } = {}) {
+  const { cancelled, fitMs, logLikelihood, iterations } = model.summary;
+  // a cancelled first fit shows where it stopped: not "best", it may be below what a finished fit reaches
+  $('stage').textContent = kept ? 'new fit cancelled: the finished fit before it is kept' : cancelled ? 'cancelled: where the fit stopped' : 'done';
+  if (kept) $('iteration').textContent = `${iterations} in the final stage`;
+  else if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
   $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
   // the model's own final value (the plot's last point), not the last progress message seen
   $('loglik').textContent = logLikelihood?.length ? logLikelihood[logLikelihood.length - 1].toFixed(2) : '–';
-  plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'best model so far' : 'final stage'}: log-likelihood`);
+  plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'stopped early' : 'final stage'}: log-likelihood`);
 }
 
 export function installResult() {
   onFitProgress((m) => {
+    if (runsFor !== m.id) [runsFor, runsFinished] = [m.id, 0];
     const last = m.steps[m.steps.length - 1];
+    // m.run is the run in progress now: one more than the runs finished so far (the last one when none is left)
+    runsFinished += m.steps.filter((s) => s.runFinished).length;
     if (last) {
-      showStep(last);
-      plot.set(m.trace, `${stageText(last.stage)}: log-likelihood`);
+      showStep(last, last.stage, m.run, runsFinished + (m.run?.done ? 0 : 1));
+      plot.set(m.trace, `${stageText(last.stage, m.run)}: log-likelihood`);
     }
     $('elapsed').textContent = `${(m.elapsedMs / 1000).toFixed(2)} s`;
   });
@@ -91,7 +111,10 @@ export function installResult() {
     if (changed.has('fitId') && s.fitId !== null && s.phase === 'fitting') fitStarted();
     if (changed.has('model') && s.model) fitEnded(s.model);
     // a fit that failed or was superseded without a model: the Stage field does not stay at 'starting'
-    if (changed.has('fitId') && s.fitId === null && !changed.has('model')) $('stage').textContent = s.model ? 'done' : 'idle';
+    if (changed.has('fitId') && s.fitId === null && !changed.has('model')) {
+      if (s.keptAfterCancel && s.model) fitEnded(s.model, { kept: true });
+      else $('stage').textContent = s.model ? 'done' : 'idle';
+    }
     if (changed.has('pop') || changed.has('model')) showResult();
   });
 }
