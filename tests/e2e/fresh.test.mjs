@@ -8,7 +8,7 @@ import assert from 'node:assert/strict';
 import { existsSync, readdirSync } from 'node:fs';
 import { readFile } from 'node:fs/promises';
 import path from 'node:path';
-import { pageSession, waitState, tubePopulation, asPayload, ROOT } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload, moveTreeSlider, ROOT } from './helpers.mjs';
 
 const session = pageSession();
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
@@ -26,15 +26,6 @@ async function nextFit(page, n) {
   await fitted(page);
 }
 
-async function moveTree(page, n) {
-  await page.evaluate((v) => {
-    const s = document.getElementById('tree-slider');
-    s.value = String(v);
-    s.dispatchEvent(new Event('input'));
-  }, n);
-  await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), n);
-}
-
 test('a new population starts with "Parts in the end" on auto and the exact Λ step, whatever the last one had', async () => {
   const { page, context, log } = await session.open('#ex=literal-eq18');
   await fitted(page);
@@ -43,7 +34,7 @@ test('a new population starts with "Parts in the end" on auto and the exact Λ s
   const parts = (await summary(page)).parts;
   const tree = await page.evaluate(() => window.posemfa.tree());
   const want = parts > tree.fewest + 1 ? parts - 1 : parts + 1;
-  await moveTree(page, want);
+  await moveTreeSlider(page, want);
   let n = await fits(page);
   await page.click('[data-testid=tree-refine]');
   await nextFit(page, n);
@@ -181,7 +172,7 @@ test('horse-poses: after "Refine 3" and the literal eq 18 example, the horse get
   }
   const { page, context, log } = await session.open('#ex=literal-eq18');
   await fitted(page);
-  await moveTree(page, 3);
+  await moveTreeSlider(page, 3);
   let n = await fits(page);
   await page.click('[data-testid=tree-refine]');
   await nextFit(page, n);

@@ -247,3 +247,15 @@ export async function canvasFingerprint(page) {
     return h >>> 0;
   });
 }
+
+// Moves the merge tree's parts slider to `n` as an input event does, waits until the page shows that count and
+// returns the slider's dataset.
+export async function moveTreeSlider(page, n) {
+  await page.evaluate((v) => {
+    const s = document.getElementById('tree-slider');
+    s.value = String(v);
+    s.dispatchEvent(new Event('input'));
+  }, n);
+  await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), n);
+  return page.evaluate(() => ({ ...document.getElementById('tree-slider').dataset }));
+}

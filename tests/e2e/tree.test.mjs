@@ -6,22 +6,12 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { existsSync, readdirSync } from 'node:fs';
 import path from 'node:path';
-import { pageSession, waitState, ROOT } from './helpers.mjs';
+import { pageSession, waitState, moveTreeSlider, ROOT } from './helpers.mjs';
 
 const session = pageSession();
 
 async function fitted(page) {
   assert.equal(await waitState(page, ['fitted', 'error'], 90000), 'fitted');
-}
-
-async function move(page, n) {
-  await page.evaluate((v) => {
-    const s = document.getElementById('tree-slider');
-    s.value = String(v);
-    s.dispatchEvent(new Event('input'));
-  }, n);
-  await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), n);
-  return page.evaluate(() => ({ ...document.getElementById('tree-slider').dataset }));
 }
 
 test('the slider shows every count of the merge tree, each partition with that many parts', async () => {
@@ -33,7 +23,7 @@ test('the slider shows every count of the merge tree, each partition with that m
   assert.equal(await page.locator('#tree').isHidden(), false);
   let slowest = 0;
   for (let n = tree.most; n >= tree.fewest; n--) {
-    const d = await move(page, n);
+    const d = await moveTreeSlider(page, n);
     assert.equal(Number(d.parts), n, `count ${n}`);
     slowest = Math.max(slowest, Number(d.ms));
     assert.match(await page.locator('#tree-count').innerText(), new RegExp(`^${n} ${n === 1 ? 'part' : 'parts'} `)); // "1 part", not "1 parts"
@@ -50,7 +40,7 @@ test('Refine fits the chosen count, and parts that stay keep their colours', asy
   const before = await page.evaluate(() => window.posemfa.fittedParts());
   const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
   const want = parts - 2;
-  await move(page, want);
+  await moveTreeSlider(page, want);
   await page.click('[data-testid=tree-refine]');
   await page.waitForFunction(() => window.posemfa.fitCount() >= 2, null, { timeout: 90000 });
   await fitted(page);
@@ -98,7 +88,7 @@ test('on horse-poses every count of the tree shows at once (needs ../shared)', a
   const tree = await page.evaluate(() => window.posemfa.tree());
   const times = [];
   for (let n = tree.most; n >= tree.fewest; n--) {
-    const d = await move(page, n);
+    const d = await moveTreeSlider(page, n);
     assert.equal(Number(d.parts), n, `count ${n}`);
     times.push(Number(d.ms));
   }
@@ -135,10 +125,10 @@ test('the pose thumbnails take the merge tree\'s colours with the slider, and th
   const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
   const other = tree.fewest === parts ? tree.most : tree.fewest;
   assert.notEqual(other, parts);
-  await move(page, other);
+  await moveTreeSlider(page, other);
   const moved = await thumbnails(page, fit.drawn);
   moved.hashes.forEach((h, i) => assert.notEqual(h, fit.hashes[i], `thumbnail ${i} kept the fitted parts' colours at ${other} parts`));
-  await move(page, parts);
+  await moveTreeSlider(page, parts);
   const back = await thumbnails(page, moved.drawn);
   assert.deepEqual(back.hashes, fit.hashes, 'back at the fit\'s count: the fitted parts\' colours');
   assert.deepEqual(log.errors, []);
