@@ -357,26 +357,32 @@ impl Fit {
     }
 
     fn model_of(&self, comps: &[Component], labels: Vec<u32>) -> Model {
-        let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
-        let mut h = Vec::new();
-        let latent: Vec<Vec3> = (0..self.data.n_vertices)
-            .map(|j| {
-                let k = labels[j] as usize;
-                let e = comps[k].posterior_mean(&wbs[k], self.data.vertex_into(j, &mut h));
-                [comps[k].lambda[0] * e[0], comps[k].lambda[1] * e[1], comps[k].lambda[2] * e[2]]
-            })
-            .collect();
-        let parts = super::data::from_frame(&self.data, comps);
-        Model {
-            n_shapes: self.data.n_shapes,
-            n_vertices: self.data.n_vertices,
-            parts,
-            labels,
-            latent,
-            log_likelihood: self.trace.clone(),
-            iterations: self.trace.len(),
-            converged: self.converged,
-        }
+        Model { log_likelihood: self.trace.clone(), iterations: self.trace.len(), converged: self.converged, ..model_of(&self.data, comps, labels) }
+    }
+}
+
+/// The model of components `comps` (frame of `data`) with the given labels, before any AECM iteration: every
+/// vertex's latent point v_j = Λ_{I_j} E[z | h_j] under its label's component (eq 21), translations in unit-box
+/// coordinates.
+pub fn model_of(data: &Data, comps: &[Component], labels: Vec<u32>) -> Model {
+    let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
+    let mut h = Vec::new();
+    let latent: Vec<Vec3> = (0..data.n_vertices)
+        .map(|j| {
+            let k = labels[j] as usize;
+            let e = comps[k].posterior_mean(&wbs[k], data.vertex_into(j, &mut h));
+            [comps[k].lambda[0] * e[0], comps[k].lambda[1] * e[1], comps[k].lambda[2] * e[2]]
+        })
+        .collect();
+    Model {
+        n_shapes: data.n_shapes,
+        n_vertices: data.n_vertices,
+        parts: super::data::from_frame(data, comps),
+        labels,
+        latent,
+        log_likelihood: Vec::new(),
+        iterations: 0,
+        converged: false,
     }
 }
 
