@@ -235,15 +235,20 @@ impl Fitter {
         to_js(&p)
     }
 
-    /// Steps until `budget_ms` has passed or the fit is done; returns the progress objects of every
-    /// iteration made.
+    /// Steps until `budget_ms` has passed, a run of the pipeline has finished or the fit is done; returns the
+    /// progress objects of every iteration made, each with the run it belongs to (`run`: {name, number,
+    /// fromTree} as `currentStage` gave it before the step). A slice never goes on past the end of a run, so a
+    /// page that shows the last step of every slice names every run, however fast it is.
     pub fn run(&mut self, budget_ms: f64) -> Result<Array, JsValue> {
         let t0 = crate::clock::now_ms();
         let out = Array::new();
         while !self.pipe.is_done() {
+            let run = self.current_stage()?;
             let p = self.pipe.step()?;
-            out.push(&to_js(&p)?);
-            if crate::clock::now_ms() - t0 >= budget_ms {
+            let obj = to_js(&p)?;
+            js_sys::Reflect::set(&obj, &"run".into(), &run).map_err(|_| js_err("reflect"))?;
+            out.push(&obj);
+            if p.run_finished || crate::clock::now_ms() - t0 >= budget_ms {
                 break;
             }
         }

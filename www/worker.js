@@ -25,8 +25,10 @@
 //                                                                   colours} of a generated one, else null)
 //     { type: 'load-error', id, problems }                          the previous population is kept
 //     { type: 'progress', id, steps, run, trace, labels, colours, elapsedMs }   after every slice: the AECM
-//                                                                   iterations made (one progress object each),
-//                                                                   the run in progress by its stage name
+//                                                                   iterations made (one progress object each,
+//                                                                   with the run it belongs to; a slice ends
+//                                                                   where a run ends, Fitter.run),
+//                                                                   the run in progress after it by its stage name
 //                                                                   ({name, number, fromTree, done},
 //                                                                   Fitter.currentStage),
 //                                                                   the current run's log-likelihood trace,

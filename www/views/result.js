@@ -98,10 +98,13 @@ export function installResult() {
   onFitProgress((m) => {
     if (runsFor !== m.id) [runsFor, runsFinished] = [m.id, 0];
     const last = m.steps[m.steps.length - 1];
-    // m.run is the run in progress now: one more than the runs finished so far (the last one when none is left)
+    // the Stage field names the run of the slice's last step (step.run, Fitter.run: a slice never goes past the
+    // end of a run, so every run is named once at least) and its number: one more than the runs finished before
+    // it; the plot shows the run in progress now (m.run)
+    const before = runsFinished + m.steps.slice(0, -1).filter((s) => s.runFinished).length;
     runsFinished += m.steps.filter((s) => s.runFinished).length;
     if (last) {
-      showStep(last, last.stage, m.run, runsFinished + (m.run?.done ? 0 : 1));
+      showStep(last, last.stage, last.run ?? m.run, before + 1);
       plot.set(m.trace, `${stageText(last.stage, m.run)}: log-likelihood`);
     }
     $('elapsed').textContent = `${(m.elapsedMs / 1000).toFixed(2)} s`;
