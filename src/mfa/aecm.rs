@@ -111,6 +111,12 @@ impl Fit {
         Ok(Fit::from_components_owned(data, EStep::with_layout(layout), comps, params, owners))
     }
 
+    /// [`Fit::from_components`] with the E-step's layout of `data` already built (a run that goes on from
+    /// another run's components on the same data).
+    pub fn from_components_laid_out(data: Data, layout: Blocked, comps: Vec<Component>, params: &Params) -> Fit {
+        Fit::from_components_owned(data, EStep::with_layout(layout), comps, params, None)
+    }
+
     pub fn from_components(data: Data, comps: Vec<Component>, params: &Params) -> Fit {
         let estep = EStep::new(&data);
         Fit::from_components_owned(data, estep, comps, params, None)
