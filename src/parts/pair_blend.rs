@@ -92,11 +92,6 @@ impl<'a> Blends<'a> {
         Blends { data, faces, labels, adjacent, members, motions, own }
     }
 
-    /// Parts adjacent to part `k`.
-    pub fn adjacent(&self, k: usize) -> &[usize] {
-        &self.adjacent[k]
-    }
-
     /// C_j's motions, with part k's replaced by `halves` when given.
     fn offered<'b>(&'b self, j: usize, k: usize, halves: Option<&'b [Component; 2]>, out: &mut Vec<&'b Component>) {
         out.clear();
