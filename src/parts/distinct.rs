@@ -196,7 +196,7 @@ fn norm4(a: &[f64; 4]) -> f64 {
 /// The best rigid trajectory of a vertex (`h`, one point per shape) under a part's motion: the mean of its points
 /// brought back by the part's inverse motions, placed again in every shape (what [`motion_residual`] measures
 /// against).
-fn rigid_trajectory(part: &crate::mfa::Component, h: &[[f64; 3]], out: &mut [[f64; 3]]) {
+pub(crate) fn rigid_trajectory(part: &crate::mfa::Component, h: &[[f64; 3]], out: &mut [[f64; 3]]) {
     let ns = h.len();
     let mut mean = [0.0; 3];
     for (i, &p) in h.iter().enumerate() {

@@ -9,6 +9,7 @@
 //! - [`merge_tree`]: patches merged greedily by the part rule's score, every merge recorded (the default start
 //!   and the count read off the tree).
 //! - [`distinct`]: the default part rule: flesh between parts dissolved, parts without a distinct motion merged.
+//! - [`pair_blend`]: what a blend of two parts' rigid motions leaves of a vertex, and a split's drop of it.
 //! - [`part_count`]: an exact part count asked for (`--bones N`).
 //! - [`label_fit`]: the mixture fitted to given labels.
 //! - [`multires`]: the coarse and refinement stages on a well-spread vertex subset, labels carried to all.
@@ -21,6 +22,7 @@ pub mod motion_labels;
 pub mod islands;
 pub mod merge_tree;
 pub mod distinct;
+pub mod pair_blend;
 pub mod part_count;
 pub mod label_fit;
 pub mod multires;
