@@ -646,13 +646,13 @@ impl Pipeline {
     /// The part rule left the loose first run's parts as they were: the AECM goes on from that run's components
     /// at the fit's own tolerance (a new stage "final"; the run stopped at `refine_tol` was a few iterations short
     /// of `tol`, and a start again from its labels took 17 iterations on horse-poses, 39 on lion-poses). From
-    /// `labels` as [`Pipeline::refit`] when the motion labels have fewer parts than the run had components.
+    /// `labels` as [`Pipeline::refit`] when the motion labels have another number of parts than the run had
+    /// components.
     fn go_on(&mut self, labels: &[u32]) -> Result<State> {
-        let comps = self.loose_components.take().expect("set by the loose first run");
         let parts = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
-        if comps.len() != parts {
+        let Some(comps) = self.loose_components.take().filter(|c| c.len() == parts) else {
             return self.refit("final", labels);
-        }
+        };
         self.loose_start = false;
         self.stats.push(StageStats { name: "final".into(), ..Default::default() });
         self.stage_started_ms = crate::clock::now_ms();
