@@ -130,7 +130,7 @@ impl Default for Params {
 /// What each field of the page's fit form (and the same CLI flags) allows, in words: the one text the page, the
 /// CLI and [`Params::validate`] give.
 pub const ALLOWED_PARTS: &str = "a whole number from 1 to 512 (try 11)";
-pub const ALLOWED_SEED: &str = "a whole number from 0 to 18446744073709551615 (try 0)";
+pub const ALLOWED_SEED: &str = "a whole number from 0 to 2^64 - 1 (try 0)";
 pub const ALLOWED_TOL: &str = "a positive number (try 1e-3)";
 pub const ALLOWED_VARIANCE_FLOOR: &str = "a number in (0, 1) unit-box units² (try 1e-7)";
 pub const ALLOWED_TARGET_PARTS: &str = "a positive whole number, or auto (Algorithm 1's own count)";
@@ -156,7 +156,15 @@ impl Params {
             if t.strip_prefix('-').is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit())) {
                 return Err(format!("'{t}' is negative: it must be {allowed}"));
             }
-            t.parse::<u64>().map_err(|_| format!("'{t}' is not a whole number: it must be {allowed}"))
+            if let Ok(n) = t.parse::<u64>() {
+                return Ok(n);
+            }
+            // a whole number written another way (1e9, 12.0): its value, which the range check then judges
+            match t.parse::<f64>() {
+                Ok(x) if x.is_finite() && x >= 0.0 && x.fract() == 0.0 && x < u64::MAX as f64 => Ok(x as u64),
+                Ok(x) if x.is_finite() && x.fract() == 0.0 => Err(format!("'{t}' is too large: it must be {allowed}")),
+                _ => Err(format!("'{t}' is not a whole number: it must be {allowed}")),
+            }
         };
         let number = |allowed: &str| -> std::result::Result<f64, String> {
             if t.is_empty() {
@@ -254,8 +262,10 @@ impl Params {
     pub fn problems(&self) -> Vec<(&'static str, String)> {
         let mut out: Vec<(&'static str, String)> = Vec::new();
         let mut bad = |f: &'static str, m: String| out.push((f, m));
-        if self.parts == 0 || self.parts > 512 {
+        if self.parts == 0 {
             bad("parts", format!("= {} must be {ALLOWED_PARTS}", self.parts));
+        } else if self.parts > 512 {
+            bad("parts", format!("= {} is too large: it must be {ALLOWED_PARTS}", self.parts));
         }
         if !(self.tol > 0.0 && self.tol.is_finite()) {
             bad("tol", format!("= {} must be {ALLOWED_TOL}", self.tol));
@@ -373,6 +383,12 @@ mod tests {
         assert!(base.with_fields(&[("tol", "NaN")]).is_err() && base.with_fields(&[("tol", "-1e-3")]).is_err());
         assert!(base.with_fields(&[("varianceFloor", "2")]).unwrap_err()[0].message.contains("(0, 1)"));
         assert!(base.with_fields(&[("targetParts", "0")]).unwrap_err()[0].field == "targetParts");
+        // a whole number in exponent form is read as its value, then judged by its range
+        assert_eq!(base.with_fields(&[("parts", "1.2e1")]).unwrap().parts, 12);
+        let big = base.with_fields(&[("parts", "1e9")]).unwrap_err();
+        assert_eq!(big[0].message, format!("1000000000 is too large: it must be {ALLOWED_PARTS}"));
+        assert_eq!(base.with_fields(&[("seed", "1e30")]).unwrap_err()[0].message, format!("'1e30' is too large: it must be {ALLOWED_SEED}"));
+        assert_eq!(base.with_fields(&[("parts", "2.5")]).unwrap_err()[0].message, format!("'2.5' is not a whole number: it must be {ALLOWED_PARTS}"));
         // a negative count is named as negative, with what is allowed
         let neg = base.with_fields(&[("targetParts", "-3")]).unwrap_err();
         assert_eq!(neg[0].message, format!("'-3' is negative: it must be {ALLOWED_TARGET_PARTS}"));

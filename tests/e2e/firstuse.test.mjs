@@ -173,6 +173,21 @@ test('bad parameters: each field named and outlined with what it allows, no fit,
   await page.click('#fit');
   await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 1);
   assert.match(await text(page, '[data-testid=param-errors]'), /^Initial parts: 0 must be a whole number from 1 to 512/);
+  // what the line under the form says once the core's (asynchronous) check of `typed` in Initial parts matches
+  // `expected` (the error names the text shown if it never does)
+  const partsError = async (typed, expected) => {
+    await page.fill('#params [name=parts]', '');
+    await page.focus('#params [name=parts]');
+    await page.keyboard.type(typed);
+    await page.click('#fit');
+    await page.waitForFunction((re) => new RegExp(re).test(document.querySelector('[data-testid=param-errors]').textContent), expected.source, { timeout: 15000 })
+      .catch(async () => assert.fail(`${typed}: ${await text(page, '[data-testid=param-errors]')}`));
+    assert.equal(await page.locator('[data-testid=param-errors] li').count(), 1);
+  };
+  // a whole number in exponent form is read as the number it is, and named as too large
+  await partsError('1e9', /^Initial parts: 1000000000 is too large: it must be a whole number from 1 to 512/);
+  // text the number field cannot read (it reads as empty) is named as no number, not as an empty field
+  await partsError('1e', /^Initial parts: is not a number: it must be a whole number from 1 to 512/);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

@@ -91,8 +91,12 @@ export function checkedParams({ vertices = null } = {}) {
   if (!checker) return Promise.resolve(readParams());
   checkedFor = vertices;
   const fields = Object.fromEntries(TEXT_FIELDS.map((n) => [n, String(form()[n].value)]));
+  // a number field holding text that is no number reads as empty (the browser keeps the text to itself): the
+  // core's "is empty" would contradict what the user sees
+  const unreadable = (name) => form()[name].validity?.badInput;
   const mine = checker(base(), fields, vertices).then((r) => {
-    if (mine === checking) showFieldProblems(r.problems);
+    const problems = r.problems.map((p) => (unreadable(p.field) ? { ...p, message: p.message.replace(/^is empty:/, 'is not a number:') } : p));
+    if (mine === checking) showFieldProblems(problems);
     return r.params;
   });
   checking = mine;

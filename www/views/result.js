@@ -14,7 +14,7 @@ const $ = (id) => document.getElementById(id);
  * part rule, the refit with the count asked for. */
 export function stageText(s, run = null) {
   if (!s) return '–';
-  if (s.kind === 'refine') return `refining part ${s.part + 1} of ${s.of} (${s.subParts} sub-parts)`;
+  if (s.kind === 'refine') return `refining part ${s.part + 1} of ${s.of} (${s.subParts} sub-part${s.subParts === 1 ? '' : 's'})`;
   if (s.kind === 'final' && run) {
     if (run.name === 'final') return run.number > 1 ? 'the parts decided, refitted at the full tolerance' : run.fromTree ? "fit from the merge tree's start" : 'final AECM';
     if (run.name === 'distinct') return `part rule, round ${run.number}: refit of the parts left`;
@@ -30,7 +30,7 @@ let runsFor = null;
 function showPopulation(pop, source) {
   const tris = pop.faces.length / 3;
   $('pop-info').textContent = `${pop.nShapes} poses × ${pop.nVertices} vertices, ${tris} triangles (${pop.source})`;
-  if (pop.truth) $('pop-info').textContent += `. Ground truth: ${pop.truth.partNames.length} parts.`;
+  if (pop.truth) $('pop-info').textContent += `. Ground truth: ${pop.truth.partNames.length} part${pop.truth.partNames.length === 1 ? '' : 's'}.`;
   // where the poses came from, as the core says it (mesh::load); generated populations have none
   const provenance = pop.truth ? '' : pop.provenance;
   $('pop-source').hidden = !provenance;
