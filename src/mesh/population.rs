@@ -231,6 +231,8 @@ impl Population {
             if faces_of_first && mesh.positions.len() == first.positions.len() {
                 continue;
             }
+            // two files of one name (dropped from two folders): "1.obj has ... but 1.obj has" would say nothing
+            let first_name = &if name == first_name { format!("the first file, also named {first_name},") } else { first_name.clone() };
             if mesh.positions.len() != first.positions.len() {
                 return Err(Error::Population {
                     file: name.clone(),
@@ -537,5 +539,14 @@ mod tests {
         assert!(e.to_string().contains("b.obj") && e.to_string().contains("4 vertices"), "{e}");
         let e = Population::from_meshes(vec![("a.obj".into(), tri(0.0))]).unwrap_err();
         assert!(e.to_string().contains("at least 2"), "{e}");
+    }
+
+    #[test]
+    fn a_mismatch_between_two_files_of_one_name_tells_them_apart() {
+        // 1.obj of a horse and 1.obj of a lion, dropped together from two folders
+        let mut m = tri(0.0);
+        m.positions.push([0.0, 0.0, 1.0]);
+        let e = Population::from_meshes(vec![("1.obj".into(), tri(0.0)), ("1.obj".into(), m)]).unwrap_err();
+        assert!(e.to_string().contains("has 4 vertices but the first file, also named 1.obj, has 3"), "{e}");
     }
 }
