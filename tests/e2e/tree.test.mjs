@@ -46,7 +46,9 @@ test('Refine fits the chosen count, and parts that stay keep their colours', asy
   await fitted(page);
   assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, want);
   // the main view shows the refit's parts, not the merge tree's cut the slider showed before
-  await page.waitForFunction((n) => document.getElementById('caption').textContent.endsWith(`coloured by part (${n} parts)`), want, { timeout: 10000 });
+  await page.waitForFunction((n) => document.getElementById('caption').textContent.includes(`coloured by part (${n} parts`), want, { timeout: 10000 });
+  // more parts than the 12 colours: the caption says that parts apart from each other can share one
+  assert.match(await page.textContent('#caption'), new RegExp(`coloured by part \\(${want} parts; 12 colours, so parts that do not touch can share one\\)$`));
   assert.equal((await page.evaluate(() => window.posemfa.tree())).shown, null);
   const after = await page.evaluate(() => window.posemfa.fittedParts());
   // parts that are the same (more than half of each in the other) keep their colour

@@ -4,12 +4,14 @@
 // a Shown descriptor of src/export/shown.rs), so the OBJ export can ask the core for the same mesh.
 import { state, update, subscribe } from '../state.js';
 import { query } from '../session.js';
-import { errorColours, RAMP_CSS } from '../colors.js';
+import { errorColours, RAMP_CSS, PALETTE } from '../colors.js';
 import { viewer } from './viewer-instance.js';
 import { interpValues } from '../controls/interp-values.js';
 
 const $ = (id) => document.getElementById(id);
 const nParts = (n) => `${n} part${n === 1 ? '' : 's'}`;
+// more parts than colours: neighbouring parts always differ (the core's part graph), others can share a colour
+const partsShown = (n) => nParts(n) + (n > PALETTE.length ? `; ${PALETTE.length} colours, so parts that do not touch can share one` : '');
 
 /** Colours of the parts now: the fitted model's, else the fit in progress', else grey. */
 export function partColours() {
@@ -37,9 +39,9 @@ const VIEWS = {
     if (model && state.treeParts !== null && state.colours.tree) {
       // the merge tree's partition the slider asks for (controls/tree.js); its export groups by the fitted parts
       const slots = [{ positions: P, colours: state.colours.tree, name: `pose ${poseName(pose)}`, what: { kind: 'pose', pose } }];
-      return { slots, caption: `Pose “${poseName(pose)}”, coloured by the merge tree's ${nParts(state.treeParts)} (fitted: ${model.summary.parts})` };
+      return { slots, caption: `Pose “${poseName(pose)}”, coloured by the merge tree's ${partsShown(state.treeParts)} (fitted: ${model.summary.parts})` };
     }
-    const by = model ? `part (${nParts(model.summary.parts)})` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
+    const by = model ? `part (${partsShown(model.summary.parts)})` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
     return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, coloured by ${by}` };
   },
   stages(P, p) {
