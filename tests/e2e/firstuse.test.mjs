@@ -455,6 +455,12 @@ test('pose mode at 1280x800: every pose-space slider\'s label is one line, its s
   await page.waitForFunction(() => document.querySelectorAll('#pose-modes label').length > 0);
   const labels = await lines(page, '#pose-modes label');
   assert.ok(labels.length >= 1);
+  // the status counts the modes and, when there are more than sliders, says which ones have one
+  const status = await text(page, '[data-testid=pose-status]');
+  const [, modes] = status.match(/^\d+ bones, (\d+) pose modes/) ?? [];
+  assert.ok(modes, status);
+  assert.equal(labels.length, Math.min(Number(modes), 6), status);
+  if (Number(modes) > 6) assert.match(status, /\(sliders for the 6 largest\)$/);
   for (const l of labels) {
     assert.equal(l.lines, 1, `"${l.text}" takes ${l.lines} lines`);
     assert.ok(l.height <= l.oneLine * 1.3, `"${l.text}" is ${l.height} px high (one line: ${l.oneLine} px)`);

@@ -18,6 +18,9 @@ const DRAG = 0.01; // radians per pixel
 // What pose mode shows: the skeleton of the poser, the current mesh and angles, the undo stack, added frames.
 const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, undo: [], frames: null, frame: 0, playing: false };
 
+// the pose space's modes come largest first (the core's PCA of the training poses); the first few get a slider
+const MODE_SLIDERS = 6;
+
 /** The mesh pose mode shows (for views/render.js), or null before the poser is ready. */
 export async function poseView() {
   await ensureStarted();
@@ -48,7 +51,9 @@ async function ensureStarted() {
     pose.frames = null;
     pose.showFrames = false;
     fillControls();
-    $('pose-status').textContent = `${r.skeleton.order.length} bones, ${r.skeleton.nModes} pose modes`;
+    const n = r.skeleton.nModes;
+    const sliders = Math.min(n, MODE_SLIDERS);
+    $('pose-status').textContent = `${r.skeleton.order.length} bones, ${n} pose modes${n > sliders ? ` (sliders for the ${sliders} largest)` : ''}`;
     document.body.dataset.pose = 'ready';
   })();
   try {
@@ -63,7 +68,7 @@ function fillControls() {
   sel.replaceChildren(...pose.skeleton.order.map((k) => Object.assign(document.createElement('option'), { value: String(k), textContent: pose.skeleton.names[k] })));
   const box = $('pose-modes');
   box.replaceChildren();
-  const shown = Math.min(pose.skeleton.nModes, 6);
+  const shown = Math.min(pose.skeleton.nModes, MODE_SLIDERS);
   for (let m = 0; m < shown; m++) {
     const [lo, hi] = pose.skeleton.range[m];
     const pad = 0.25 * (hi - lo);
