@@ -25,6 +25,9 @@ pub const RIGID_RMSE: f64 = 1e-4;
 #[serde(rename_all = "camelCase")]
 pub struct Diagnosis {
     pub articulated: bool,
+    /// No verdict: the parts, a count the user fixed with no part rule behind it, explain too little, and too few
+    /// parts cannot be told from a population that deforms smoothly (`articulated` is then false).
+    pub undecided: bool,
     /// One sentence for people: the verdict, the figures behind it and, when not articulated, what to use instead.
     pub reason: String,
     /// RMSE of the best single rigid motion of the whole shape (unit-box units).
@@ -74,6 +77,18 @@ fn rigid_rmse(pop: &Population, labels: &[u32]) -> f64 {
 /// (`parts_rmse`, `explained`, `parts`) stay the asked model's.
 pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     let asked = diagnose(pop, &result.model);
+    if result.count_unjudged && !asked.articulated && asked.single_body_rmse >= RIGID_RMSE {
+        let reason = format!(
+            "{} rigid part{} (the count asked for, with the part rule off) explain {:.1} % of the motion that one rigid              body leaves (RMSE {:.2e} down to {:.2e}; articulated shapes measure {:.1} % and more): too few parts may be              all that is wrong. Fit with the part rule on (\"Refine the parts\", the default) for a verdict",
+            asked.parts,
+            if asked.parts == 1 { "" } else { "s" },
+            100.0 * asked.explained.max(0.0),
+            asked.single_body_rmse,
+            asked.parts_rmse,
+            100.0 * MIN_EXPLAINED
+        );
+        return Diagnosis { undecided: true, reason, ..asked };
+    }
     let Some(labels) = result.decided_labels.as_ref() else { return asked };
     let decided = super::labels::compact(labels);
     let n = decided.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
@@ -138,7 +153,7 @@ pub fn diagnose(pop: &Population, model: &Model) -> Diagnosis {
             ),
         )
     };
-    Diagnosis { articulated, reason, single_body_rmse: single, parts_rmse, explained, parts }
+    Diagnosis { articulated, undecided: false, reason, single_body_rmse: single, parts_rmse, explained, parts }
 }
 
 #[cfg(test)]
@@ -184,6 +199,26 @@ mod tests {
         let r = fit(&g.population, &Params { target_parts: Some(6), ..Params::default() }, &mut |_| true).unwrap();
         let d = diagnose_fit(&g.population, &r);
         assert!(!d.articulated && d.reason.contains("deformation model"), "{d:?}");
+    }
+
+    #[test]
+    fn few_parts_the_user_fixed_without_the_part_rule_get_no_verdict() {
+        // Algorithm 1's coarse stage alone at m = 4: a quadruped's 4 parts explain too little, and that says
+        // nothing about the quadruped
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
+        let r = fit(&g.population, &Params { parts: 4, refine: false, ..Params::default() }, &mut |_| true).unwrap();
+        assert!(r.count_unjudged);
+        assert!(!diagnose(&g.population, &r.model).articulated);
+        let d = diagnose_fit(&g.population, &r);
+        assert!(d.undecided && !d.articulated, "{d:?}");
+        assert!(d.reason.contains("the count asked for, with the part rule off") && !d.reason.contains("deformation model"), "{}", d.reason);
+        // enough parts fixed by hand: the verdict stands
+        let r = fit(&g.population, &Params { parts: 40, refine: false, ..Params::default() }, &mut |_| true).unwrap();
+        let d = diagnose_fit(&g.population, &r);
+        assert!(!d.undecided && d.articulated, "{d:?}");
+        // with the part rule on, the verdict is the rule's (no such hedge)
+        let r = fit(&g.population, &Params::default(), &mut |_| true).unwrap();
+        assert!(!r.count_unjudged && !diagnose_fit(&g.population, &r).undecided);
     }
 
     #[test]

@@ -90,6 +90,10 @@ pub struct FitResult {
     pub merge_tree: Option<super::merge_tree::MergeTree>,
     /// [`PartRule::Tree`]: the count the part rule read off `merge_tree`.
     pub tree_count: Option<usize>,
+    /// The part count is the user's own, with no rule behind it (`refine` off: Algorithm 1's coarse stage alone,
+    /// m = `parts`), so too few parts cannot be told from a shape that is no articulated one
+    /// ([`super::diagnosis::diagnose_fit`]).
+    pub count_unjudged: bool,
 }
 
 struct Refinement {
@@ -873,6 +877,7 @@ impl Pipeline {
             decided_labels: self.decided_labels.clone(),
             merge_tree: self.merge_tree.clone(),
             tree_count: self.tree_count,
+            count_unjudged: !self.params.refine,
         }
     }
 

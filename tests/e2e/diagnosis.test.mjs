@@ -36,3 +36,24 @@ test('the quadruped is diagnosed articulated with its 18 parts, the blob is not,
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('a few parts the user fixed with the part rule off get no verdict, not "Not articulated"', async () => {
+  const { page, context, log } = await session.open('');
+  await waitState(page, ['fitted', 'idle', 'error'], 60000);
+  // Algorithm 1's coarse stage alone with 4 parts: too few for the quadruped's 18, which says nothing about it
+  await page.uncheck('#params [name=refine]');
+  await page.fill('#params [name=parts]', '4');
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  await page.click('#fit');
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f && document.body.dataset.state === 'fitted', n, { timeout: 60000, polling: 20 });
+  const s = await page.evaluate(() => window.posemfa.summary());
+  // (a part cut in two pieces by the coarse stage becomes two parts: 4 or a few more)
+  assert.ok(s.parts >= 4 && s.parts <= 8, `${s.parts} parts`);
+  assert.equal(s.diagnosis.undecided, true, JSON.stringify(s.diagnosis));
+  const text = await page.locator('[data-testid=diagnosis]').innerText();
+  assert.match(text, new RegExp(`^No verdict: ${s.parts} rigid parts \\(the count asked for, with the part rule off\\) explain`));
+  assert.doesNotMatch(text, /deformation model/);
+  assert.equal(await page.locator('[data-testid=diagnosis].fails').count(), 0);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

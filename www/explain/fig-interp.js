@@ -164,7 +164,7 @@ export class Limit extends Figure {
     const s = this.v.model.summary;
     if (this.name === 'blob') {
       const d = s.diagnosis;
-      return `${s.parts} part${s.parts === 1 ? '' : 's'}, RMSE ${s.rmse.toExponential(2)} (unit box): ${d.articulated ? 'articulated' : 'not articulated'}, rigid parts explain ${(100 * Math.max(d.explained, 0)).toFixed(1)} % of the motion (articulated shapes: 99 % and more).`;
+      return `${s.parts} part${s.parts === 1 ? '' : 's'}, RMSE ${s.rmse.toExponential(2)} (unit box): ${d.undecided ? 'too few parts for a verdict' : d.articulated ? 'articulated' : 'not articulated'}, rigid parts explain ${(100 * Math.max(d.explained, 0)).toFixed(1)} % of the motion (articulated shapes: 99 % and more).`;
     }
     const { partNames } = this.v.pop.truth;
     const l = this.legs;

@@ -59,9 +59,9 @@ function showResult() {
   // a fit stopped early gets no verdict (the core's words say why)
   const d = s?.diagnosis;
   $('diagnosis').hidden = !d && !s?.unfinished;
-  $('diagnosis').classList.toggle('fails', d ? !d.articulated : false);
+  $('diagnosis').classList.toggle('fails', d ? !d.articulated && !d.undecided : false);
   $('diagnosis').classList.toggle('unfinished', !d && !!s?.unfinished);
-  $('diagnosis').textContent = d ? `${d.articulated ? 'Articulated' : 'Not articulated'}: ${d.reason}.` : s?.unfinished ? `${s.unfinished[0].toUpperCase()}${s.unfinished.slice(1)}.` : '';
+  $('diagnosis').textContent = d ? `${d.undecided ? 'No verdict' : d.articulated ? 'Articulated' : 'Not articulated'}: ${d.reason}.` : s?.unfinished ? `${s.unfinished[0].toUpperCase()}${s.unfinished.slice(1)}.` : '';
   const curve = s?.partCurve ?? [];
   $('part-curve').hidden = curve.length === 0;
   drawPartCurve($('part-curve'), curve);
