@@ -93,7 +93,7 @@ pub fn examples() -> Vec<Example> {
         Example {
             id: "literal-eq18",
             title: "Fails on purpose: the paper's literal eq 18",
-            note: "Λ from eigenvalues of the per-shape covariances is not a maximisation step: what fails is the fit, not the parts. The log-likelihood drops and AECM can cycle (see the plot) until it stops at the iteration cap, not converged, while the parts may still come out right. The default exact Λ step never lowers it.",
+            note: "Λ from per-shape covariance eigenvalues is no maximisation step: the fit fails, not the parts. The log-likelihood drops and AECM cycles to the iteration cap, unconverged (see the plot). The exact Λ step never lowers it.",
             fails_on_purpose: true,
             spec: q.clone(),
             params: Params { lambda_rule: LambdaRule::PaperEq18, max_iter: 60, ..Params::default() },
