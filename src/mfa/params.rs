@@ -238,6 +238,13 @@ impl Params {
         }
     }
 
+    /// These parameters for Algorithm 1's refinement runs (a sub-part's AECM, and the cuts the exact part count
+    /// makes the same way): the refinement's tolerance and cap, no SQUAREM (they stop loose and only hand labels
+    /// on).
+    pub fn for_refinement(&self) -> Params {
+        Params { max_iter: self.refine_max_iter, tol: self.refine_tol, accelerate: false, ..self.clone() }
+    }
+
     /// The most parts a population of `n_vertices` vertices can have: every part needs at least
     /// `min_part_vertices` vertices ([`crate::parts::part_count::check_target`] refuses more).
     pub fn most_parts(&self, n_vertices: usize) -> usize {

@@ -193,6 +193,14 @@ fn norm4(a: &[f64; 4]) -> f64 {
     dot4(a, a).sqrt()
 }
 
+/// The least of Σ_i |e_a^i - w d^i|² over w in [0, 1], from its parabola's coefficients aa = Σ|e_a|²,
+/// ab = Σ e_a·d and bb = Σ|d|² (e_a = h - T_a, d = T_b - T_a): what a blend (1 - w) T_a + w T_b of two rigid
+/// trajectories leaves of a vertex's points h (w = 0 when T_a = T_b).
+pub fn two_bone_blend(aa: f64, ab: f64, bb: f64) -> f64 {
+    let w = if bb > 0.0 { (ab / bb).clamp(0.0, 1.0) } else { 0.0 };
+    (aa - 2.0 * w * ab + w * w * bb).max(0.0)
+}
+
 /// The best rigid trajectory of a vertex (`h`, one point per shape) under a part's motion: the mean of its points
 /// brought back by the part's inverse motions, placed again in every shape (what [`motion_residual`] measures
 /// against).
@@ -247,8 +255,7 @@ pub fn blend_fit_ratio(model: &Model, pop: &Population, k: usize, members: &[usi
                         bb += d * d;
                     }
                 }
-                let w = if bb > 0.0 { (ab / bb).clamp(0.0, 1.0) } else { 0.0 };
-                blend += (aa - 2.0 * w * ab + w * w * bb).max(0.0);
+                blend += two_bone_blend(aa, ab, bb);
             }
             best = best.min(blend);
         }

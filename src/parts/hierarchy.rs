@@ -657,20 +657,23 @@ impl Pipeline {
         let Some(comps) = self.loose_components.take().filter(|c| c.len() == parts) else {
             return self.refit("final", labels);
         };
-        self.loose_start = false;
-        self.stats.push(StageStats { name: "final".into(), ..Default::default() });
-        self.stage_started_ms = crate::clock::now_ms();
+        self.open_run("final");
         let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
         Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.params)))
     }
 
     /// A new stage `stage`: the final AECM again on all vertices, from `labels`.
     fn refit(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
+        self.open_run(stage);
+        Ok(State::Final(self.fit_all(labels)?))
+    }
+
+    /// The stage of a new run after the loose first one ([`Pipeline::go_on`], [`Pipeline::refit`]).
+    fn open_run(&mut self, stage: &str) {
         self.loose_start = false;
         self.loose_components = None;
         self.stats.push(StageStats { name: stage.into(), ..Default::default() });
         self.stage_started_ms = crate::clock::now_ms();
-        Ok(State::Final(self.fit_all(labels)?))
     }
 
     /// An AECM run on all vertices from `labels`, with the final stage's parameters.
@@ -680,7 +683,7 @@ impl Pipeline {
     }
 
     fn sub_params(&self) -> Params {
-        Params { max_iter: self.params.refine_max_iter, tol: self.params.refine_tol, accelerate: false, ..self.params.clone() }
+        self.params.for_refinement()
     }
 
     /// The coarse stage's model of all vertices (with multi-resolution: its components' E-step on all of them).

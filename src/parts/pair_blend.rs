@@ -28,7 +28,7 @@
 //! classification log-likelihood of the part alone does not see (a cut between two bones a blend already
 //! explains gains log-likelihood without helping the rig).
 
-use super::distinct::rigid_trajectory;
+use super::distinct::{rigid_trajectory, two_bone_blend};
 use super::labels::adjacency;
 use crate::geometry::Vec3;
 use crate::mfa::data::Data;
@@ -58,13 +58,9 @@ pub fn pair_blend_residual(h: &[Vec3], parts: &[&Component], errors: &mut Vec<Ve
     let mut best = diag.iter().copied().fold(f64::INFINITY, f64::min);
     for a in 0..m {
         for b in a + 1..m {
+            // e_b = e_a - d: Σ e_a·d = G_aa - G_ab, Σ|d|² = G_aa - 2 G_ab + G_bb
             let gab = dot(a, b);
-            let (down, curve) = (diag[a] - gab, diag[a] - 2.0 * gab + diag[b]);
-            if curve <= 0.0 {
-                continue;
-            }
-            let w = (down / curve).clamp(0.0, 1.0);
-            best = best.min((diag[a] - 2.0 * w * down + w * w * curve).max(0.0));
+            best = best.min(two_bone_blend(diag[a], diag[a] - gab, diag[a] - 2.0 * gab + diag[b]));
         }
     }
     best

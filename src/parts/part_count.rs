@@ -158,12 +158,7 @@ impl<'a> Counter<'a> {
             }
         }
         // the refinement's AECM runs (Algorithm 1's sub-part fits)
-        let refine = Params {
-            max_iter: self.params.refine_max_iter,
-            tol: self.params.refine_tol,
-            accelerate: false,
-            ..self.params.clone()
-        };
+        let refine = self.params.for_refinement();
         let mut cuts: Vec<Cut> = Vec::new();
         for rule in 0..2 {
             if rule == 1 {
