@@ -265,7 +265,7 @@ impl Fitter {
     }
 
     /// The pipeline's stage in progress by its StageStats name: {name: "coarse" | "refine" | "final" |
-    /// "distinct" | "parts", number: how many stages of that name so far (1 for the first), fromTree: the fit
+    /// "distinct" | "parts" | "all vertices", number: how many stages of that name so far (1 for the first), fromTree: the fit
     /// started from the merge tree's cut (the default part rule), not from Algorithm 1's coarse stage}.
     #[wasm_bindgen(js_name = currentStage)]
     pub fn current_stage(&self) -> Result<JsValue, JsValue> {
@@ -276,11 +276,7 @@ impl Fitter {
     /// Labels of the AECM run in progress over ALL vertices (during the refinement: the coarse labels).
     #[wasm_bindgen(js_name = currentLabels)]
     pub fn current_labels(&self) -> Uint32Array {
-        let labels = match self.pipe.current_fit() {
-            Some(f) if self.pipe.current_vertices().is_none() => f.labels(),
-            _ => self.pipe.current_model().labels,
-        };
-        Uint32Array::from(labels.as_slice())
+        Uint32Array::from(self.pipe.current_labels().as_slice())
     }
 
     /// Responsibilities of the run in progress, `[j * parts + k]` for the run's vertices (see
@@ -308,8 +304,8 @@ impl Fitter {
     pub fn current_colours(&self, n_colours: usize) -> Uint32Array {
         let Some(f) = self.pipe.current_fit() else { return Uint32Array::new_with_length(0) };
         let k = f.n_parts();
-        let mut labels = f.labels();
-        if let Some(vertices) = self.pipe.current_vertices() {
+        let mut labels = if self.pipe.on_coarse_mesh() { self.pipe.current_labels() } else { f.labels() };
+        if let Some(vertices) = self.pipe.current_vertices().filter(|_| !self.pipe.on_coarse_mesh()) {
             let mut all = vec![k as u32; self.pop.n_vertices()];
             for (&v, &l) in vertices.iter().zip(&labels) {
                 all[v] = l;

@@ -187,6 +187,22 @@ impl Population {
         self.points = std::sync::Arc::new(shapes.iter().flatten().map(|&p| narrow(p)).collect());
     }
 
+    /// The population of the listed vertices only (`vertices[c]` becomes vertex c), with `faces` over the new
+    /// numbering: the same shapes, names and unit box (the coordinates are copied as stored, so every reader
+    /// sees the same numbers as in `self`). For a coarse mesh of a large population.
+    pub fn restricted(&self, vertices: &[usize], faces: Vec<[u32; 3]>) -> Population {
+        debug_assert!(faces.iter().flatten().all(|&v| (v as usize) < vertices.len()));
+        let points = self.shapes().flat_map(|s| vertices.iter().map(move |&j| s.points[j])).collect();
+        Population {
+            names: self.names.clone(),
+            faces,
+            points: std::sync::Arc::new(points),
+            n_vertices: vertices.len(),
+            normalization: self.normalization,
+            source: self.source.clone(),
+        }
+    }
+
     /// Validates, orders by natural sort of the names, and normalises into the unit box.
     pub fn from_meshes(named: Vec<(String, Mesh)>) -> Result<Population> {
         Population::from_meshes_sharing(named, false)

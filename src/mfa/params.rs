@@ -65,6 +65,11 @@ pub struct Params {
     /// well-spread vertices and only the final AECM on all of them; 0 runs every stage on all vertices (the full
     /// hierarchy). Only with `refine`. Default 2000.
     pub subset_vertices: usize,
+    /// A coarse mesh for the part decisions ([`crate::parts::coarse_mesh`]): with the merge tree's part rule and
+    /// at least twice this many vertices ([`crate::parts::hierarchy::COARSE_FACTOR`]), the tree, the AECM runs and
+    /// the part rule's decisions run on about this many well-spread vertices with their own triangles, and only
+    /// the last AECM on all vertices, from the coarse fit's parts; 0 decides on all vertices. Default 8000.
+    pub coarse_vertices: usize,
     /// How the parts are found and counted. Default [`PartRule::Tree`].
     pub part_rule: PartRule,
     /// [`PartRule::Distinct`]: two adjacent parts stay apart only if moving both by one rigid motion raises the
@@ -112,6 +117,7 @@ impl Default for Params {
             restarts: 4,
             refine: true,
             subset_vertices: 2000,
+            coarse_vertices: 8000,
             part_rule: PartRule::Tree,
             distinct_ratio: 4.0,
             blend_ratio: 0.1,
@@ -316,6 +322,12 @@ impl Params {
                 format!("= {} must be 0 (every stage on all vertices) or at least 64 (try 2000)", self.subset_vertices),
             );
         }
+        if self.coarse_vertices > 0 && self.coarse_vertices < 500 {
+            bad(
+                "coarseVertices",
+                format!("= {} must be 0 (decide on all vertices) or at least 500 (try 8000)", self.coarse_vertices),
+            );
+        }
         if self.target_parts == Some(0) {
             bad("targetParts", format!("= 0 must be {ALLOWED_TARGET_PARTS}"));
         }
@@ -343,6 +355,7 @@ const FIELDS: &[(&str, &str)] = &[
     ("minPartVertices", "min_part_vertices"),
     ("refineTol", "refine_tol"),
     ("subsetVertices", "subset_vertices"),
+    ("coarseVertices", "coarse_vertices"),
     ("targetParts", "target_parts"),
     ("refineMaxIter", "refine_max_iter"),
 ];

@@ -209,6 +209,18 @@ enum State {
 /// file is written in (the subset's grid is axis-aligned; every other step uses distances only).
 pub const SUBSET_FACTOR: usize = 5;
 
+/// [`PartRule::Tree`] decides on a coarse mesh ([`super::coarse_mesh`]) only on populations with at least this
+/// many times `coarse_vertices` vertices (16 000 at the default 8 000): below that the decisions on all
+/// vertices cost little more, and horse-gallop (8 431 vertices), the lion and the generated 12 000-vertex
+/// creatures decide on every vertex as before.
+pub const COARSE_FACTOR: usize = 2;
+
+/// The population whose parts a [`Pipeline`] decides on a coarse mesh, and that mesh.
+struct Fine {
+    pop: Population,
+    mesh: super::coarse_mesh::CoarseMesh,
+}
+
 pub struct Pipeline {
     pop: Population,
     params: Params,
@@ -243,6 +255,9 @@ pub struct Pipeline {
     /// The whole population's data and their E-step layout, built once: a run on all vertices takes them and
     /// hands them back when it finishes (no second copy), the label fits read them.
     full: Option<(Data, Blocked)>,
+    /// [`PartRule::Tree`] on a large population: while the parts are decided, `pop` is the coarse mesh's
+    /// population and this holds the whole one; the last AECM runs on all vertices ([`Pipeline::to_all_vertices`]).
+    fine: Option<Box<Fine>>,
 }
 
 /// [`PartRule::Tree`]'s start when the part rule chooses the count: the patches' tree is cut where a merge first
@@ -336,6 +351,7 @@ impl Pipeline {
             loose_start: false,
             loose_components: None,
             full: None,
+            fine: None,
         })
     }
 
@@ -344,12 +360,24 @@ impl Pipeline {
     /// part; the start's flesh goes ([`dissolve_start_flesh`]) and the final AECM runs from what is left. With
     /// an exact part count, the cut at [`TREE_COUNT_START_RATIO`] instead, flesh and all.
     fn from_tree(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
-        let data = Data::from_population(pop);
+        let coarse = (params.coarse_vertices > 0 && pop.n_vertices() >= COARSE_FACTOR * params.coarse_vertices)
+            .then(|| super::coarse_mesh::CoarseMesh::build(pop, params.coarse_vertices));
+        if let Some(c) = coarse.as_ref().filter(|_| std::env::var_os("POSEMFA_DEBUG").is_some()) {
+            let ms = crate::clock::now_ms() - t0;
+            eprintln!("coarse mesh: {} vertices, {} triangles ({ms:.1} ms)", c.pop.n_vertices(), c.pop.faces.len());
+        }
+        let work = coarse.as_ref().map_or_else(|| pop.clone(), |c| c.pop.clone());
+        let data = Data::from_population(&work);
         // (the memory for the start's count is checked once the tree gives it)
         crate::mfa::aecm::check_population(&data, params.parts, 1)?;
-        let (cut, labels) = tree_start(pop, &data, params)?;
+        let (cut, labels) = tree_start(&work, &data, params)?;
+        if coarse.is_some() {
+            // the last run is on every vertex: its memory, for at most the start's count, before any run
+            let most = labels.iter().max().map_or(1, |&l| l as usize + 1).max(params.target_parts.unwrap_or(0));
+            crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
+        }
         let mut p = Pipeline {
-            pop: pop.clone(),
+            pop: work,
             params: params.clone(),
             state: State::Done,
             coarse: None,
@@ -369,6 +397,7 @@ impl Pipeline {
             loose_start: true,
             loose_components: None,
             full: None,
+            fine: coarse.map(|mesh| Box::new(Fine { pop: pop.clone(), mesh })),
         };
         p.close_stage(Some("final"));
         // the first run only feeds the part rule's decisions: at the refinement's loose tolerance (from a
@@ -379,8 +408,15 @@ impl Pipeline {
         Ok(p)
     }
 
+    /// The population fitted (all its vertices, also while the parts are decided on a coarse mesh).
     pub fn population(&self) -> &Population {
-        &self.pop
+        self.fine.as_ref().map_or(&self.pop, |f| &f.pop)
+    }
+
+    /// Whether the run in progress is on a coarse mesh's vertices ([`super::coarse_mesh`]; then
+    /// [`Pipeline::current_vertices`] are its seeds).
+    pub fn on_coarse_mesh(&self) -> bool {
+        self.fine.is_some()
     }
 
     pub fn params(&self) -> &Params {
@@ -424,8 +460,51 @@ impl Pipeline {
         match &self.state {
             State::Refine(r) => Some(&r.members[r.part]),
             State::Coarse(_) => self.subset.as_deref(),
-            _ => None,
+            State::Final(_) => self.fine.as_ref().map(|f| f.mesh.seeds.as_slice()),
+            State::Done => None,
         }
+    }
+
+    /// Labels of every vertex under the run in progress: the run's own; on a coarse mesh, each patch's label on
+    /// all of the patch's vertices; during the refinement, the coarse stage's.
+    pub fn current_labels(&self) -> Vec<u32> {
+        match self.current_fit() {
+            Some(f) if self.current_vertices().is_none() => f.labels(),
+            Some(f) if self.fine.is_some() => self.everywhere(&f.labels()),
+            _ => self.current_model().labels,
+        }
+    }
+
+    /// Labels (or any per-vertex values) of the coarse mesh's vertices carried to every vertex of their patch;
+    /// as they are when the pipeline is on all vertices.
+    fn everywhere<T: Copy>(&self, per_vertex: &[T]) -> Vec<T> {
+        match &self.fine {
+            Some(f) if per_vertex.len() == f.mesh.seeds.len() => f.mesh.to_fine(per_vertex),
+            _ => per_vertex.to_vec(),
+        }
+    }
+
+    /// A model of the coarse mesh's vertices as a model of every vertex: each vertex takes its patch's part,
+    /// and its latent position is its own positions brought back by that part's motions (mean over the poses).
+    /// The model as it is on all vertices.
+    fn model_everywhere(&self, model: Model) -> Model {
+        let Some(f) = self.fine.as_ref().filter(|f| model.n_vertices == f.mesh.seeds.len()) else { return model };
+        let labels = f.mesh.to_fine(&model.labels);
+        let ns = f.pop.n_shapes();
+        let latent = labels
+            .iter()
+            .enumerate()
+            .map(|(j, &l)| {
+                let part = &model.parts[l as usize];
+                let mut v = [0.0; 3];
+                for i in 0..ns {
+                    let p = part.unplace(i, f.pop.point(i, j));
+                    (0..3).for_each(|c| v[c] += p[c] / ns as f64);
+                }
+                v
+            })
+            .collect();
+        Model { n_vertices: labels.len(), labels, latent, ..model }
     }
 
     fn account(&mut self, fit: &Fit) {
@@ -513,7 +592,10 @@ impl Pipeline {
                 self.account(&fit);
                 self.close_stage(None);
                 let model = fit.model();
-                if self.loose_start {
+                if self.fine.is_some() {
+                    // (in the unit box: the last run is on other data, [`Pipeline::to_all_vertices`])
+                    self.loose_components = Some(model.parts.clone());
+                } else if self.loose_start {
                     self.loose_components = Some(fit.components().to_vec());
                 }
                 self.full = Some(fit.into_laid_out());
@@ -554,11 +636,11 @@ impl Pipeline {
             // short band part leans toward its neighbours' vertices; see label_fit)
             super::label_fit::fit_to_labels(&mut model, &full_data(&mut self.full, &self.pop).0, &self.params);
             fitted = true;
-            let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
+                let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
             if dissolved > 0 {
                 super::islands::connect_parts(&mut model, &self.pop, false, self.params.min_part_vertices);
             }
-            let before = model.n_parts();
+                let before = model.n_parts();
             let (merged, curve) = if self.params.part_rule == PartRule::Tree {
                 self.decide_on_tree(&model.labels)
             } else {
@@ -587,6 +669,10 @@ impl Pipeline {
                 }
                 return self.refit("distinct", &merged);
             }
+            if self.fine.is_some() {
+                // nothing to remove, on a coarse mesh: the last run, on all vertices, goes on from these parts
+                return self.to_all_vertices(model);
+            }
             if self.loose_start {
                 // nothing to remove: the first run goes on at the fit's own tolerance
                 return self.go_on(&merged);
@@ -598,6 +684,9 @@ impl Pipeline {
                 // the model is final: with the part rule's motion labels, its parts are fitted to them
                 if distinct && rounds == 0 && !fitted {
                     super::label_fit::fit_to_labels(&mut model, &full_data(&mut self.full, &self.pop).0, &self.params);
+                }
+                if self.fine.is_some() {
+                    return self.to_all_vertices(model);
                 }
                 self.final_model = Some(model);
                 // the data are not read any more: free them before the caller reads the result
@@ -662,6 +751,39 @@ impl Pipeline {
         Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.params)))
     }
 
+    /// The parts decided on the coarse mesh go to every vertex: the decisions' labels and merge tree to every
+    /// vertex of each patch, and the last AECM runs on all vertices from the coarse fit's components (a new stage
+    /// "all vertices"; as [`Pipeline::go_on`], no new start from labels). After it the part rule does not decide
+    /// again: [`Pipeline::finish`] only moves the boundaries by motion and makes the parts connected.
+    fn to_all_vertices(&mut self, model: Model) -> Result<State> {
+        let fine = self.fine.take().expect("called on a coarse mesh");
+        let to_fine = |l: &mut Vec<u32>| {
+            if l.len() == fine.mesh.seeds.len() {
+                *l = fine.mesh.to_fine(l);
+            }
+        };
+        to_fine(&mut self.coarse_labels);
+        to_fine(&mut self.refined_labels);
+        if let Some(d) = self.decided_labels.as_mut() {
+            to_fine(d);
+        }
+        if let Some(t) = self.merge_tree.as_mut() {
+            to_fine(&mut t.leaves);
+        }
+        // the coarse AECM's own components (soft boundaries), unless the labels of the model have other parts
+        // (its components are then the labels' rigid fits)
+        let run = self.loose_components.take().filter(|c| c.len() == model.n_parts());
+        self.pop = fine.pop;
+        self.full = None;
+        self.decide_rounds = usize::MAX;
+        self.open_run("all vertices");
+        crate::memory::check(self.pop.n_vertices(), self.pop.n_shapes(), model.n_parts(), crate::memory::budget_bytes()?)?;
+        let data = Data::from_population(&self.pop);
+        let comps = crate::mfa::data::to_frame(&data, run.as_deref().unwrap_or(&model.parts));
+        let (data, layout) = lay_out(data);
+        Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.params)))
+    }
+
     /// A new stage `stage`: the final AECM again on all vertices, from `labels`.
     fn refit(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
         self.open_run(stage);
@@ -679,7 +801,16 @@ impl Pipeline {
     /// An AECM run on all vertices from `labels`, with the final stage's parameters.
     fn fit_all(&mut self, labels: &[u32]) -> Result<Fit> {
         let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
-        Fit::from_labels_laid_out(data, layout, labels, &self.params)
+        // on a coarse mesh every run only decides: at the loose tolerance (the last run, on all vertices, is at
+        // `tol`)
+        let loose;
+        let params = if self.fine.is_some() {
+            loose = Params { tol: self.params.refine_tol.max(self.params.tol), ..self.params.clone() };
+            &loose
+        } else {
+            &self.params
+        };
+        Fit::from_labels_laid_out(data, layout, labels, params)
     }
 
     fn sub_params(&self) -> Params {
@@ -859,6 +990,12 @@ impl Pipeline {
             (None, State::Coarse(f)) => self.coarse_model(f),
             (None, _) => self.coarse.clone().expect("coarse model exists after the coarse stage"),
         };
+        // (a fit stopped while deciding on a coarse mesh: its parts on every vertex)
+        let model = self.model_everywhere(model);
+        let merge_tree = self.merge_tree.clone().map(|mut t| {
+            t.leaves = self.everywhere(&t.leaves);
+            t
+        });
         let n_distinct = |l: &[u32]| {
             let mut v = l.to_vec();
             v.sort_unstable();
@@ -872,13 +1009,13 @@ impl Pipeline {
                 final_parts: model.n_parts(),
             },
             model,
-            coarse_labels: self.coarse_labels.clone(),
-            refined_labels: self.refined_labels.clone(),
+            coarse_labels: self.everywhere(&self.coarse_labels),
+            refined_labels: self.everywhere(&self.refined_labels),
             stats: self.stats.clone(),
             complete: self.is_done(),
             part_curve: self.part_curve.clone(),
-            decided_labels: self.decided_labels.clone(),
-            merge_tree: self.merge_tree.clone(),
+            decided_labels: self.decided_labels.as_deref().map(|d| self.everywhere(d)),
+            merge_tree,
             tree_count: self.tree_count,
             count_unjudged: !self.params.refine,
         }
@@ -889,7 +1026,7 @@ impl Pipeline {
     pub fn current_model(&self) -> Model {
         match &self.state {
             State::Coarse(f) => self.coarse_model(f),
-            State::Final(f) => f.model(),
+            State::Final(f) => self.model_everywhere(f.model()),
             _ => self.result().model,
         }
     }
@@ -903,7 +1040,11 @@ impl Pipeline {
 fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32>, Vec<u32>)> {
     // the patches' own yardstick, not the variance floor: on clean data the patches fit far below the floor,
     // and the floor as the yardstick merged the generated hand's fingertips before the AECM
+    let t0 = crate::clock::now_ms();
     let mut tree = super::merge_tree::MergeTree::build(pop, PATCH_VARIANCE_FLOOR);
+    if std::env::var_os("POSEMFA_DEBUG").is_some() {
+        eprintln!("tree built ({:.1} ms)", crate::clock::now_ms() - t0);
+    }
     let exact = params.target_parts.is_some();
     let ratio = if exact { TREE_COUNT_START_RATIO } else { TREE_START_RATIO };
     if !exact {
@@ -1075,5 +1216,42 @@ mod tests {
         assert!(second.len() < first.len(), "{} iterations after {}", second.len(), first.len());
         let result = pipe.result();
         assert_eq!(result.model.n_parts(), 18);
+    }
+
+    #[test]
+    fn parts_decided_on_a_coarse_mesh_are_the_parts_of_all_vertices() {
+        // 3 000 vertices, decided on a coarse mesh of 1 000 (at least COARSE_FACTOR times as many)
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
+        let pop = &g.population;
+        let nv = pop.n_vertices();
+        let params = Params { coarse_vertices: 1000, ..Params::default() };
+        let mut pipe = Pipeline::new(pop, &params).unwrap();
+        assert!(pipe.on_coarse_mesh());
+        assert_eq!(pipe.population().n_vertices(), nv);
+        assert_eq!(pipe.current_vertices().map(|v| v.len()), Some(1000), "the first run is on the coarse mesh");
+        assert_eq!(pipe.current_labels().len(), nv);
+        // a fit stopped while deciding gives a model of every vertex
+        pipe.step().unwrap();
+        let early = pipe.result();
+        assert_eq!((early.model.labels.len(), early.model.latent.len()), (nv, nv));
+        let result = pipe.run(&mut |_| true).unwrap();
+        assert!(!pipe.on_coarse_mesh());
+        let names: Vec<&str> = result.stats.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!((names[0], *names.last().unwrap()), ("tree", "all vertices"), "{names:?}");
+        // everything per vertex is per vertex of the population
+        assert_eq!(result.model.n_vertices, nv);
+        let tree = result.merge_tree.as_ref().expect("the merge tree is kept");
+        assert_eq!(tree.leaves.len(), nv);
+        assert_eq!((result.coarse_labels.len(), result.refined_labels.len()), (nv, nv));
+        // the parts: the creature's, as the decisions on all vertices find them
+        let all = fit(pop, &Params { coarse_vertices: 0, ..Params::default() }, &mut |_| true).unwrap();
+        assert_eq!(result.model.n_parts(), all.model.n_parts());
+        let truth = adjusted_rand_index(&result.model.labels, &g.part_of_vertex);
+        let same = adjusted_rand_index(&result.model.labels, &all.model.labels);
+        assert!(truth > 0.95 && same > 0.95, "adjusted Rand against the truth {truth}, against the fit on all vertices {same}");
+        // and the fit of all vertices is converged at the fit's tolerance, as good as the one decided there
+        assert!(result.model.converged);
+        let (rmse, rmse_all) = (result.model.rmse(pop), all.model.rmse(pop));
+        assert!(rmse < 1.05 * rmse_all, "RMSE {rmse} against {rmse_all}");
     }
 }

@@ -250,12 +250,29 @@ fn edges(pop: &Population) -> Vec<(u32, u32, f64)> {
     e.sort_unstable();
     e.dedup();
     let ns = pop.n_shapes() as f64;
-    e.into_iter()
-        .map(|(a, b)| {
-            let len: f64 = pop.shapes().map(|s| crate::geometry::norm(crate::geometry::sub(s.get(a as usize), s.get(b as usize)))).sum();
-            (a, b, len / ns)
-        })
-        .collect()
+    // shape by shape (each shape's points are read in one sweep), each edge's sum in the order of the shapes
+    let mut len = vec![0.0; e.len()];
+    for s in pop.shapes() {
+        for (l, &(a, b)) in len.iter_mut().zip(&e) {
+            *l += crate::geometry::norm(crate::geometry::sub(s.get(a as usize), s.get(b as usize)));
+        }
+    }
+    e.into_iter().zip(len).map(|((a, b), l)| (a, b, l / ns)).collect()
+}
+
+/// A vertex by its distance, for a max-heap: the largest distance first, then the lowest id.
+#[derive(PartialEq)]
+struct Far(f64, u32);
+impl Eq for Far {}
+impl PartialOrd for Far {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Far {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.0.total_cmp(&o.0).then(o.1.cmp(&self.1))
+    }
 }
 
 #[derive(PartialEq)]
@@ -282,6 +299,11 @@ pub fn patch_count(n_vertices: usize) -> usize {
 /// poses; the first seed is vertex 0, every connected piece of the mesh gets one), each vertex to its nearest
 /// seed. A vertex on no triangle goes to the patch of the nearest vertex on one (mean shape).
 pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
+    seeded_patches(pop, count).0
+}
+
+/// [`patches`] with the seed vertex of every patch (`seeds[p]` is patch p's).
+pub fn seeded_patches(pop: &Population, count: usize) -> (Vec<u32>, Vec<usize>) {
     let nv = pop.n_vertices();
     let mut adj: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nv];
     for (a, b, w) in edges(pop) {
@@ -292,11 +314,17 @@ pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
     let mut dist = vec![f64::INFINITY; nv];
     let mut owner = vec![u32::MAX; nv];
     let mut heap = BinaryHeap::new();
-    let mut seeds = 0u32;
+    // one entry per vertex, at least its distance (distances only fall), the largest first: an entry above its
+    // vertex's distance goes back in at that distance until the top one is exact, and that vertex is the
+    // farthest (any other's distance is at most its entry, at most the top's) without a scan of the mesh per seed
+    let mut farthest: BinaryHeap<Far> = (0..nv).filter(|&j| on_mesh[j]).map(|j| Far(f64::INFINITY, j as u32)).collect();
+    let mut seeds: Vec<usize> = Vec::new();
     let mut next = (0..nv).find(|&j| on_mesh[j]);
     while let Some(s) = next {
+        let patch = seeds.len() as u32;
+        seeds.push(s);
         dist[s] = 0.0;
-        owner[s] = seeds;
+        owner[s] = patch;
         heap.push(Near(0.0, s as u32));
         while let Some(Near(d, v)) = heap.pop() {
             if d > dist[v as usize] {
@@ -306,21 +334,19 @@ pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
                 let nd = d + w;
                 if nd < dist[u as usize] {
                     dist[u as usize] = nd;
-                    owner[u as usize] = seeds;
+                    owner[u as usize] = patch;
                     heap.push(Near(nd, u));
                 }
             }
         }
-        seeds += 1;
-        if seeds as usize >= count {
+        if seeds.len() >= count {
             break;
         }
         // the farthest vertex on the mesh (an unreached piece first); ties to the lowest id
-        let far = (0..nv).filter(|&j| on_mesh[j]).fold(None::<(f64, usize)>, |best, j| match best {
-            Some((d, _)) if dist[j] <= d => best,
-            _ => Some((dist[j], j)),
-        });
-        next = far.filter(|&(d, _)| d > 0.0).map(|(_, j)| j);
+        while let Some(mut top) = farthest.peek_mut().filter(|f| f.0 != dist[f.1 as usize]) {
+            top.0 = dist[top.1 as usize];
+        }
+        next = farthest.peek().filter(|f| f.0 > 0.0).map(|f| f.1 as usize);
     }
     // vertices on no triangle: the patch of the nearest vertex on one, in the mean shape
     if on_mesh.iter().any(|&m| !m) {
@@ -346,7 +372,7 @@ pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
             }
         }
     }
-    owner
+    (owner, seeds)
 }
 
 #[derive(PartialEq)]

@@ -8,6 +8,7 @@
 //! - [`islands`]: every part one connected piece of the mesh (islands moved to the best adjacent part).
 //! - [`merge_tree`]: patches merged greedily by the part rule's score, every merge recorded (the default start
 //!   and the count read off the tree).
+//! - [`coarse_mesh`]: a registered coarse mesh of a large population (the patches' seeds), to decide on.
 //! - [`distinct`]: the default part rule: flesh between parts dissolved, parts without a distinct motion merged.
 //! - [`pair_blend`]: what a blend of two parts' rigid motions leaves of a vertex, and a split's drop of it.
 //! - [`part_count`]: an exact part count asked for (`--bones N`).
@@ -21,6 +22,7 @@ pub mod labels;
 pub mod motion_labels;
 pub mod islands;
 pub mod merge_tree;
+pub mod coarse_mesh;
 pub mod distinct;
 pub mod pair_blend;
 pub mod part_count;

@@ -18,6 +18,7 @@ export function stageText(s, run = null) {
   if (s.kind === 'final' && run) {
     if (run.name === 'final') return run.number > 1 ? 'the parts decided, refitted at the full tolerance' : run.fromTree ? "fit from the merge tree's start" : 'final AECM';
     if (run.name === 'distinct') return `part rule, round ${run.number}: refit of the parts left`;
+    if (run.name === 'all vertices') return 'the parts decided on a coarse mesh, fitted on all vertices';
     if (run.name === 'parts') return `refit with the part count asked for${run.number > 1 ? ` (try ${run.number})` : ''}`;
   }
   return { coarse: 'coarse', final: 'final', done: 'done' }[s.kind] ?? s.kind;

@@ -189,6 +189,10 @@ pub struct FitArgs {
     /// all (0 = all)
     #[arg(long, value_name = "N", default_value_t = Params::default().subset_vertices)]
     subset: usize,
+    /// With at least 2N vertices: the part decisions on a coarse mesh of about N vertices, the last AECM on all
+    /// (0 = decide on all vertices)
+    #[arg(long, value_name = "N", default_value_t = Params::default().coarse_vertices)]
+    coarse: usize,
     /// Exact part count: auto (Algorithm 1's own) or N (split / merge until N)
     #[arg(long, value_name = "N", default_value = "auto", value_parser = bones)]
     bones: Bones,
@@ -211,6 +215,7 @@ impl FitArgs {
             max_subparts: self.max_subparts,
             refine_tol: self.refine_tol,
             subset_vertices: self.subset,
+            coarse_vertices: self.coarse,
             target_parts: self.bones.0,
             ..Params::default()
         };
