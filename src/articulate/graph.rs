@@ -386,18 +386,10 @@ pub fn colour_parts_like(labels: &[u32], faces: &[[u32; 3]], n_colours: usize, p
     let mut colour: Vec<Option<usize>> = vec![None; n_parts];
     let mut used = vec![0usize; n_colours];
     if let Some((before, before_colours)) = previous.filter(|(b, _)| b.len() == labels.len()) {
-        let mut overlap: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
-        let mut before_size: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
-        for (&l, &b) in labels.iter().zip(before) {
-            *overlap.entry((l, b)).or_insert(0) += 1;
-            *before_size.entry(b).or_insert(0) += 1;
-        }
-        let mut same: Vec<((u32, u32), usize)> = overlap.into_iter().collect();
-        same.sort_unstable();
-        for ((l, b), n) in same {
-            let c = before_colours.get(b as usize).map(|&c| c as usize).filter(|&c| c < n_colours);
-            if let Some(c) = c.filter(|_| 2 * n > size[l as usize] && 2 * n > before_size[&b]) {
-                colour[l as usize] = Some(c);
+        for (l, b) in crate::parts::labels::same_parts(labels, before).into_iter().enumerate() {
+            let c = b.and_then(|b| before_colours.get(b as usize)).map(|&c| c as usize).filter(|&c| c < n_colours);
+            if let Some(c) = c {
+                colour[l] = Some(c);
                 used[c] += 1;
             }
         }

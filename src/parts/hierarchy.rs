@@ -258,6 +258,9 @@ pub struct Pipeline {
     /// [`PartRule::Tree`] on a large population: while the parts are decided, `pop` is the coarse mesh's
     /// population and this holds the whole one; the last AECM runs on all vertices ([`Pipeline::to_all_vertices`]).
     fine: Option<Box<Fine>>,
+    /// On a coarse mesh: the model of the last AECM run (the run's components, in the unit box, and labels),
+    /// where the next run goes on from ([`Pipeline::refit_warm`], [`Pipeline::to_all_vertices`]).
+    coarse_run: Option<Model>,
 }
 
 /// [`PartRule::Tree`]'s start when the part rule chooses the count: the patches' tree is cut where a merge first
@@ -352,6 +355,7 @@ impl Pipeline {
             loose_components: None,
             full: None,
             fine: None,
+            coarse_run: None,
         })
     }
 
@@ -398,6 +402,7 @@ impl Pipeline {
             loose_components: None,
             full: None,
             fine: coarse.map(|mesh| Box::new(Fine { pop: pop.clone(), mesh })),
+            coarse_run: None,
         };
         p.close_stage(Some("final"));
         // the first run only feeds the part rule's decisions: at the refinement's loose tolerance (from a
@@ -593,8 +598,7 @@ impl Pipeline {
                 self.close_stage(None);
                 let model = fit.model();
                 if self.fine.is_some() {
-                    // (in the unit box: the last run is on other data, [`Pipeline::to_all_vertices`])
-                    self.loose_components = Some(model.parts.clone());
+                    self.coarse_run = Some(model.clone());
                 } else if self.loose_start {
                     self.loose_components = Some(fit.components().to_vec());
                 }
@@ -666,6 +670,9 @@ impl Pipeline {
                         None => super::part_count::labels_with_count(&self.pop, &merged, n, &self.params)?.0,
                     };
                     return self.refit("parts", &labels);
+                }
+                if self.fine.is_some() {
+                    return self.refit_warm("distinct", &merged);
                 }
                 return self.refit("distinct", &merged);
             }
@@ -772,7 +779,7 @@ impl Pipeline {
         }
         // the coarse AECM's own components (soft boundaries), unless the labels of the model have other parts
         // (its components are then the labels' rigid fits)
-        let run = self.loose_components.take().filter(|c| c.len() == model.n_parts());
+        let run = self.coarse_run.take().map(|m| m.parts).filter(|c| c.len() == model.n_parts());
         self.pop = fine.pop;
         self.full = None;
         self.decide_rounds = usize::MAX;
@@ -782,6 +789,27 @@ impl Pipeline {
         let comps = crate::mfa::data::to_frame(&data, run.as_deref().unwrap_or(&model.parts));
         let (data, layout) = lay_out(data);
         Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.params)))
+    }
+
+    /// On a coarse mesh, after a round of the part rule that removed parts: the AECM again from `labels`, each part
+    /// that is still a part of the last run ([`super::labels::same_parts`]) from that run's component, the others
+    /// (a merge's union) from their labels. On the subdivided horse-gallop the refit after the first round took
+    /// 22 iterations from labels and 10 from there (the fit's RMSE 0.00301 and 0.00313, at 23 parts both).
+    fn refit_warm(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
+        let last = self.coarse_run.take().filter(|m| m.labels.len() == labels.len());
+        self.open_run(stage);
+        let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
+        let mut comps = crate::mfa::init::components_from_labels(&data, labels, self.params.variance_floor);
+        if let Some(last) = last {
+            let before = crate::mfa::data::to_frame(&data, &last.parts);
+            for (c, same) in comps.iter_mut().zip(super::labels::same_parts(labels, &last.labels)) {
+                if let Some(b) = same {
+                    // (the weight stays the labels' share: the run's weights sum to one over its own parts)
+                    *c = Component { weight: c.weight, ..before[b as usize].clone() };
+                }
+            }
+        }
+        Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.run_params())))
     }
 
     /// A new stage `stage`: the final AECM again on all vertices, from `labels`.
@@ -801,16 +829,16 @@ impl Pipeline {
     /// An AECM run on all vertices from `labels`, with the final stage's parameters.
     fn fit_all(&mut self, labels: &[u32]) -> Result<Fit> {
         let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
-        // on a coarse mesh every run only decides: at the loose tolerance (the last run, on all vertices, is at
-        // `tol`)
-        let loose;
-        let params = if self.fine.is_some() {
-            loose = Params { tol: self.params.refine_tol.max(self.params.tol), ..self.params.clone() };
-            &loose
-        } else {
-            &self.params
-        };
-        Fit::from_labels_laid_out(data, layout, labels, params)
+        Fit::from_labels_laid_out(data, layout, labels, &self.run_params())
+    }
+
+    /// The parameters of a run after the first: the fit's own, but on a coarse mesh, where every run only decides,
+    /// at the loose tolerance (the last run, on all vertices, is at `tol`).
+    fn run_params(&self) -> Params {
+        match self.fine {
+            Some(_) => Params { tol: self.params.refine_tol.max(self.params.tol), ..self.params.clone() },
+            None => self.params.clone(),
+        }
     }
 
     fn sub_params(&self) -> Params {

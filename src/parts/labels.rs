@@ -37,6 +37,28 @@ pub(crate) fn adjacency(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> (
     (adjacent, members)
 }
 
+/// For each part of `labels`, the part of `before` (labels of the same vertices) that is the same part: the
+/// one holding more than half of its vertices, and more than half of whose vertices it holds (at most one).
+pub fn same_parts(labels: &[u32], before: &[u32]) -> Vec<Option<u32>> {
+    let count = |l: &[u32]| {
+        let mut n = vec![0usize; l.iter().map(|&x| x as usize + 1).max().unwrap_or(0)];
+        l.iter().for_each(|&x| n[x as usize] += 1);
+        n
+    };
+    let (size, before_size) = (count(labels), count(before));
+    let mut shared: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
+    for (&l, &b) in labels.iter().zip(before) {
+        *shared.entry((l, b)).or_insert(0) += 1;
+    }
+    let mut same = vec![None; size.len()];
+    for ((l, b), n) in shared {
+        if 2 * n > size[l as usize] && 2 * n > before_size[b as usize] {
+            same[l as usize] = Some(b);
+        }
+    }
+    same
+}
+
 /// The vertex-weighted median of per-part values.
 pub fn weighted_median(values: &[f64], weights: &[usize]) -> f64 {
     let mut by: Vec<(f64, usize)> = values.iter().copied().zip(weights.iter().copied()).collect();
@@ -50,4 +72,21 @@ pub fn weighted_median(values: &[f64], weights: &[usize]) -> f64 {
         }
     }
     by.last().map_or(0.0, |x| x.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_part_is_the_same_part_when_most_of_each_is_shared() {
+        // before: parts 0 (4 vertices), 1 (4), 2 (2); now part 2 went into part 1 (renumbered 0), and part 0 of
+        // before was cut in halves (1 and 2)
+        let before = [0, 0, 0, 0, 1, 1, 1, 1, 2, 2];
+        let now = [1, 1, 2, 2, 0, 0, 0, 0, 0, 0];
+        // part 0 now holds all of before's part 1 and 4 of its own 6 vertices: the same part; the halves hold half
+        // of before's part 0 each, not more: new parts
+        assert_eq!(same_parts(&now, &before), vec![Some(1), None, None]);
+        assert_eq!(same_parts(&before, &before), vec![Some(0), Some(1), Some(2)]);
+    }
 }
