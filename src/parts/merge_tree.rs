@@ -238,6 +238,20 @@ pub fn spread_poses(pop: &Population, most: usize) -> Vec<usize> {
 
 /// The mesh's edges (i < j, sorted, unique) with their length averaged over the poses.
 fn edges(pop: &Population) -> Vec<(u32, u32, f64)> {
+    let e = edge_list(pop);
+    let ns = pop.n_shapes() as f64;
+    // shape by shape (each shape's points are read in one sweep), each edge's sum in the order of the shapes
+    let mut len = vec![0.0; e.len()];
+    for s in pop.shapes() {
+        for (l, &(a, b)) in len.iter_mut().zip(&e) {
+            *l += crate::geometry::norm(crate::geometry::sub(s.get(a as usize), s.get(b as usize)));
+        }
+    }
+    e.into_iter().zip(len).map(|((a, b), l)| (a, b, l / ns)).collect()
+}
+
+/// The mesh's edges (i < j, sorted, unique).
+fn edge_list(pop: &Population) -> Vec<(u32, u32)> {
     let mut e: Vec<(u32, u32)> = Vec::with_capacity(pop.faces.len() * 3);
     for f in &pop.faces {
         for s in 0..3 {
@@ -249,15 +263,7 @@ fn edges(pop: &Population) -> Vec<(u32, u32, f64)> {
     }
     e.sort_unstable();
     e.dedup();
-    let ns = pop.n_shapes() as f64;
-    // shape by shape (each shape's points are read in one sweep), each edge's sum in the order of the shapes
-    let mut len = vec![0.0; e.len()];
-    for s in pop.shapes() {
-        for (l, &(a, b)) in len.iter_mut().zip(&e) {
-            *l += crate::geometry::norm(crate::geometry::sub(s.get(a as usize), s.get(b as usize)));
-        }
-    }
-    e.into_iter().zip(len).map(|((a, b), l)| (a, b, l / ns)).collect()
+    e
 }
 
 /// A vertex by its distance, for a max-heap: the largest distance first, then the lowest id.
@@ -299,14 +305,16 @@ pub fn patch_count(n_vertices: usize) -> usize {
 /// poses; the first seed is vertex 0, every connected piece of the mesh gets one), each vertex to its nearest
 /// seed. A vertex on no triangle goes to the patch of the nearest vertex on one (mean shape).
 pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
-    seeded_patches(pop, count).0
+    seeded_patches(pop, count, false).0
 }
 
-/// [`patches`] with the seed vertex of every patch (`seeds[p]` is patch p's).
-pub fn seeded_patches(pop: &Population, count: usize) -> (Vec<u32>, Vec<usize>) {
+/// [`patches`] with the seed vertex of every patch (`seeds[p]` is patch p's); with `hops`, every edge counts
+/// as length 1 (the patches then depend on the mesh's connectivity alone, not on the poses).
+pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, Vec<usize>) {
     let nv = pop.n_vertices();
     let mut adj: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nv];
-    for (a, b, w) in edges(pop) {
+    let edges = if hops { edge_list(pop).into_iter().map(|(a, b)| (a, b, 1.0)).collect() } else { edges(pop) };
+    for (a, b, w) in edges {
         adj[a as usize].push((b, w));
         adj[b as usize].push((a, w));
     }
