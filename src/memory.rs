@@ -12,7 +12,9 @@
 //!   allocator's slack (wasm's linear memory never shrinks, so a large block freed where a larger one is
 //!   needed stays unused). Measured in wasm (`node scripts/bench-wasm.mjs INPUT --node`, issue 27, see
 //!   docs/speed.md): 49.6 bytes per (vertex, shape) at 20 k x 200 (where the terms below vanish), 59.1 at
-//!   42 k x 11; 7 copies of 24 bytes (168) before;
+//!   42 k x 11; 7 copies of 24 bytes (168) before. Deciding the parts on a coarse mesh
+//!   ([`crate::parts::coarse_mesh`]) adds its own copy of 8 000 vertices' coordinates and data (24 bytes per
+//!   coarse vertex and shape): 59.5 at 20 k x 200, still 59.1 at 42 k x 11, within the 24 bytes above;
 //! - the responsibilities, dense when labels are read, 8 bytes per (vertex, component);
 //! - 128 bytes per vertex of labels, latent points, k-means distances, the sparse responsibilities of the
 //!   CM steps (40 bytes per pair, one or two pairs per vertex) and such;
