@@ -369,9 +369,18 @@ impl Pipeline {
     /// part; the start's flesh goes ([`dissolve_start_flesh`]) and the final AECM runs from what is left. With
     /// an exact part count, the cut at [`TREE_COUNT_START_RATIO`] instead, flesh and all.
     fn from_tree(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
-        let on_coarse = params.coarse_vertices > 0 && pop.n_vertices() >= COARSE_FACTOR * params.coarse_vertices;
-        // (the last run's data first: see [`Fine::full`])
+        // (an exact count the coarse mesh cannot hold is made on all vertices)
+        let on_coarse = params.coarse_vertices > 0
+            && pop.n_vertices() >= COARSE_FACTOR * params.coarse_vertices
+            && params.target_parts.is_none_or(|n| {
+                super::part_count::check_target(n, params.coarse_vertices, params.min_part_vertices).is_ok()
+            });
+        // (the last run's data first: see [`Fine::full`]); the data are judged on every vertex (a motion of a few
+        // vertices no seed holds is still motion)
         let full = on_coarse.then(|| lay_out(Data::from_population(pop)));
+        if let Some((data, _)) = &full {
+            crate::mfa::aecm::check_population(data, params.parts, 1)?;
+        }
         let coarse = on_coarse.then(|| super::coarse_mesh::CoarseMesh::build(pop, params.coarse_vertices));
         if let Some(c) = coarse.as_ref().filter(|_| std::env::var_os("POSEMFA_DEBUG").is_some()) {
             let ms = crate::clock::now_ms() - t0;
@@ -380,11 +389,13 @@ impl Pipeline {
         let work = coarse.as_ref().map_or_else(|| pop.clone(), |c| c.pop.clone());
         let data = Data::from_population(&work);
         // (the memory for the start's count is checked once the tree gives it)
-        crate::mfa::aecm::check_population(&data, params.parts, 1)?;
+        if full.is_none() {
+            crate::mfa::aecm::check_population(&data, params.parts, 1)?;
+        }
         let (cut, labels) = tree_start(&work, &data, params)?;
         if coarse.is_some() {
-            // the last run is on every vertex: its memory, for at most the start's count, before any run
-            let most = labels.iter().max().map_or(1, |&l| l as usize + 1).max(params.target_parts.unwrap_or(0));
+            // the last run is on every vertex: its memory, for at most the cut's count, before any run
+            let most = cut.iter().max().map_or(1, |&l| l as usize + 1).max(params.target_parts.unwrap_or(0));
             crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
         }
         let mut p = Pipeline {
@@ -682,8 +693,9 @@ impl Pipeline {
                 }
                 return self.refit("distinct", &merged);
             }
-            if self.fine.is_some() {
+            if self.fine.is_some() && self.params.target_parts.is_none_or(|n| n == model.n_parts()) {
                 // nothing to remove, on a coarse mesh: the last run, on all vertices, goes on from these parts
+                // (with another count asked for, it is made below, on the coarse mesh)
                 return self.to_all_vertices(model);
             }
             if self.loose_start {
@@ -769,6 +781,13 @@ impl Pipeline {
     /// "all vertices"; as [`Pipeline::go_on`], no new start from labels). After it the part rule does not decide
     /// again: [`Pipeline::finish`] only moves the boundaries by motion and makes the parts connected.
     fn to_all_vertices(&mut self, model: Model) -> Result<State> {
+        let (nv, ns) = (self.population().n_vertices(), self.population().n_shapes());
+        let budget = crate::memory::budget_bytes();
+        if let Err(e) = budget.and_then(|b| crate::memory::check(nv, ns, model.n_parts(), b)) {
+            // the parts decided stay the result (on every vertex) when the last run does not fit
+            self.final_model = Some(self.model_everywhere(model));
+            return Err(e);
+        }
         let fine = self.fine.take().expect("called on a coarse mesh");
         let to_fine = |l: &mut Vec<u32>| {
             if l.len() == fine.mesh.seeds.len() {
@@ -783,16 +802,22 @@ impl Pipeline {
         if let Some(t) = self.merge_tree.as_mut() {
             to_fine(&mut t.leaves);
         }
-        // the coarse AECM's own components (soft boundaries), unless the labels of the model have other parts
-        // (its components are then the labels' rigid fits)
-        let run = self.last_run.take().map(|m| m.parts).filter(|c| c.len() == model.n_parts());
+        // each part from the coarse AECM's own component (soft boundaries) where it is a part of that run
+        // ([`super::labels::same_parts`]); a part the motion labels or the islands made, from the labels' rigid fit
+        let mut comps = model.parts.clone();
+        if let Some(last) = self.last_run.take().filter(|m| m.labels.len() == model.labels.len()) {
+            for (c, same) in comps.iter_mut().zip(super::labels::same_parts(&model.labels, &last.labels)) {
+                if let Some(b) = same {
+                    *c = last.parts[b as usize].clone();
+                }
+            }
+        }
         self.pop = fine.pop;
         self.full = None;
         self.decide_rounds = usize::MAX;
         self.open_run("all vertices");
-        crate::memory::check(self.pop.n_vertices(), self.pop.n_shapes(), model.n_parts(), crate::memory::budget_bytes()?)?;
         let (data, layout) = fine.full;
-        let comps = crate::mfa::data::to_frame(&data, run.as_deref().unwrap_or(&model.parts));
+        let comps = crate::mfa::data::to_frame(&data, &comps);
         Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.params)))
     }
 
@@ -1288,6 +1313,39 @@ mod tests {
         let (w, c) = (warm.model(), cold.model());
         assert_eq!(w.n_parts(), c.n_parts());
         assert!(adjusted_rand_index(&w.labels, &c.labels) > 0.99);
+    }
+
+    #[test]
+    fn an_exact_count_is_made_on_the_coarse_mesh() {
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
+        let params = Params { coarse_vertices: 1000, target_parts: Some(12), ..Params::default() };
+        let result = fit(&g.population, &params, &mut |_| true).unwrap();
+        assert_eq!(result.model.n_parts(), 12);
+        let names: Vec<&str> = result.stats.iter().map(|s| s.name.as_str()).collect();
+        let (parts, all) = (names.iter().position(|&n| n == "parts"), names.iter().position(|&n| n == "all vertices"));
+        assert!(parts.is_some() && parts < all, "the count on the coarse mesh, then all vertices: {names:?}");
+        // a count the coarse mesh cannot hold (4 vertices a part) is made on all vertices
+        let many = Params { coarse_vertices: 1000, target_parts: Some(300), ..Params::default() };
+        assert!(!Pipeline::new(&g.population, &many).unwrap().on_coarse_mesh());
+    }
+
+    #[test]
+    fn a_population_is_judged_on_all_its_vertices_not_the_coarse_mesh() {
+        // only 30 vertices that are no seed of the coarse mesh move: the population moves
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 4, ..Spec::default() }).unwrap();
+        let mut pop = g.population.clone();
+        let seeds = super::super::coarse_mesh::CoarseMesh::build(&pop, 1000).seeds;
+        let mut shapes = vec![pop.shape(0).to_vec(); pop.n_shapes()];
+        let movers: Vec<usize> = (0..pop.n_vertices()).filter(|j| !seeds.contains(j)).take(30).collect();
+        for (i, s) in shapes.iter_mut().enumerate() {
+            for &j in &movers {
+                s[j][2] += 0.01 * i as f64;
+            }
+        }
+        pop.set_shapes(&shapes);
+        let params = Params { coarse_vertices: 1000, ..Params::default() };
+        let pipe = Pipeline::new(&pop, &params).expect("the population moves");
+        assert!(pipe.on_coarse_mesh());
     }
 
     #[test]

@@ -301,9 +301,9 @@ pub fn patch_count(n_vertices: usize) -> usize {
     (n_vertices / PATCH_VERTICES).clamp(1, MAX_PATCHES).min(n_vertices)
 }
 
-/// Cuts the mesh into `count` compact patches: geodesic farthest-point seeds (edge lengths averaged over the
-/// poses; the first seed is vertex 0, every connected piece of the mesh gets one), each vertex to its nearest
-/// seed. A vertex on no triangle goes to the patch of the nearest vertex on one (mean shape).
+/// Cuts the mesh into `count` compact patches (more when the mesh has more connected pieces): geodesic
+/// farthest-point seeds (edge lengths averaged over the poses; the first seed is vertex 0, every connected piece
+/// of the mesh gets one), each vertex to its nearest seed. A vertex on no triangle goes to the patch of the nearest vertex on one (mean shape).
 pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
     seeded_patches(pop, count, false).0
 }
@@ -347,14 +347,16 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
                 }
             }
         }
-        if seeds.len() >= count {
-            break;
-        }
         // the farthest vertex on the mesh (an unreached piece first); ties to the lowest id
         while let Some(mut top) = farthest.peek_mut().filter(|f| f.0 != dist[f.1 as usize]) {
             top.0 = dist[top.1 as usize];
         }
         next = farthest.peek().filter(|f| f.0 > 0.0).map(|f| f.1 as usize);
+        if seeds.len() >= count {
+            // past `count` only for a piece of the mesh that no seed reaches (every vertex on a triangle gets a
+            // patch, also in a soup of more unwelded pieces than `count`)
+            next = next.filter(|&j| dist[j].is_infinite());
+        }
     }
     // vertices on no triangle: the patch of the nearest vertex on one, in the mean shape
     if on_mesh.iter().any(|&m| !m) {
@@ -726,6 +728,21 @@ mod tests {
             }
         }
         assert!(seen.iter().all(|&s| s));
+    }
+
+    #[test]
+    fn every_piece_of_a_triangle_soup_gets_a_patch_past_the_count() {
+        // 50 unwelded triangles, 10 patches asked for: each triangle is a piece no other seed reaches
+        let faces: Vec<[u32; 3]> = (0..50u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        let shape = |s: f64| -> Vec<[f64; 3]> {
+            (0..150).map(|j| [(j / 3) as f64 / 50.0, (j % 3) as f64 * 0.01 * s, 0.0]).collect()
+        };
+        let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], faces, vec![shape(1.0), shape(2.0)]).unwrap();
+        let (owner, seeds) = seeded_patches(&pop, 10, false);
+        assert_eq!(seeds.len(), 50);
+        assert!(owner.iter().all(|&o| (o as usize) < seeds.len()));
+        // and a count past the pieces is the farthest-point count, as on any mesh
+        assert_eq!(seeded_patches(&pop, 100, true).1.len(), 100);
     }
 
     /// The lazily evaluated merges are the eager greedy's: replaying the tree, every merge it made was the
