@@ -266,11 +266,13 @@ impl Fitter {
 
     /// The pipeline's stage in progress by its StageStats name: {name: "coarse" | "refine" | "final" |
     /// "distinct" | "parts" | "all vertices", number: how many stages of that name so far (1 for the first), fromTree: the fit
-    /// started from the merge tree's cut (the default part rule), not from Algorithm 1's coarse stage}.
+    /// started from the merge tree's cut (the default part rule), not from Algorithm 1's coarse stage,
+    /// coarseVertices: the coarse mesh's vertex count while the parts are decided on one, else null}.
     #[wasm_bindgen(js_name = currentStage)]
     pub fn current_stage(&self) -> Result<JsValue, JsValue> {
         let (name, number, from_tree) = self.pipe.current_stage_name();
-        to_js(&serde_json::json!({ "name": name, "number": number, "fromTree": from_tree }))
+        let coarse = self.pipe.on_coarse_mesh().then(|| self.pipe.current_vertices().map_or(0, |v| v.len()));
+        to_js(&serde_json::json!({ "name": name, "number": number, "fromTree": from_tree, "coarseVertices": coarse }))
     }
 
     /// Labels of the AECM run in progress over ALL vertices (during the refinement: the coarse labels).

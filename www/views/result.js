@@ -9,17 +9,19 @@ import { drawPartCurve } from './part-curve.js';
 
 const $ = (id) => document.getElementById(id);
 
-/** Algorithm 1's stage as words; with `run` ({name, number, fromTree}: the pipeline's stage by name, from the
+/** Algorithm 1's stage as words; with `run` ({name, number, fromTree, coarseVertices}: the pipeline's stage by name, from the
  * worker, Fitter.currentStage), which of the final stage's runs it is: the merge tree's start, a round of the
  * part rule, the refit with the count asked for. */
 export function stageText(s, run = null) {
   if (!s) return '–';
   if (s.kind === 'refine') return `refining part ${s.part + 1} of ${s.of} (${s.subParts} sub-part${s.subParts === 1 ? '' : 's'})`;
   if (s.kind === 'final' && run) {
-    if (run.name === 'final') return run.number > 1 ? 'the parts decided, refitted at the full tolerance' : run.fromTree ? "fit from the merge tree's start" : 'final AECM';
-    if (run.name === 'distinct') return `part rule, round ${run.number}: refit of the parts left`;
+    // a large mesh's parts are decided on a coarse mesh of its vertices, then fitted on all of them
+    const where = run.coarseVertices ? `, on a coarse mesh of ${run.coarseVertices} vertices` : '';
+    if (run.name === 'final') return (run.number > 1 ? 'the parts decided, refitted at the full tolerance' : run.fromTree ? "fit from the merge tree's start" : 'final AECM') + where;
+    if (run.name === 'distinct') return `part rule, round ${run.number}: refit of the parts left${where}`;
     if (run.name === 'all vertices') return 'the parts decided on a coarse mesh, fitted on all vertices';
-    if (run.name === 'parts') return `refit with the part count asked for${run.number > 1 ? ` (try ${run.number})` : ''}`;
+    if (run.name === 'parts') return `refit with the part count asked for${run.number > 1 ? ` (try ${run.number})` : ''}${where}`;
   }
   return { coarse: 'coarse', final: 'final', done: 'done' }[s.kind] ?? s.kind;
 }
