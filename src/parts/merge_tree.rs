@@ -266,33 +266,20 @@ fn edge_list(pop: &Population) -> Vec<(u32, u32)> {
     e
 }
 
-/// A vertex by its distance, for a max-heap: the largest distance first, then the lowest id.
+/// A vertex keyed by its distance, for a max-heap ([`BinaryHeap`]): with `NEAREST` the smallest distance
+/// first (Dijkstra's front), else the largest (the farthest vertex); ties to the lowest id.
 #[derive(PartialEq)]
-struct Far(f64, u32);
-impl Eq for Far {}
-impl PartialOrd for Far {
+struct Keyed<const NEAREST: bool>(f64, u32);
+impl<const N: bool> Eq for Keyed<N> {}
+impl<const N: bool> PartialOrd for Keyed<N> {
     fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
         Some(self.cmp(o))
     }
 }
-impl Ord for Far {
+impl<const N: bool> Ord for Keyed<N> {
     fn cmp(&self, o: &Self) -> Ordering {
-        self.0.total_cmp(&o.0).then(o.1.cmp(&self.1))
-    }
-}
-
-#[derive(PartialEq)]
-struct Near(f64, u32);
-impl Eq for Near {}
-impl PartialOrd for Near {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Near {
-    // a min-heap on distance, then vertex id
-    fn cmp(&self, o: &Self) -> Ordering {
-        o.0.total_cmp(&self.0).then(o.1.cmp(&self.1))
+        let by_distance = self.0.total_cmp(&o.0);
+        (if N { by_distance.reverse() } else { by_distance }).then(o.1.cmp(&self.1))
     }
 }
 
@@ -321,11 +308,11 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
     let on_mesh: Vec<bool> = adj.iter().map(|a| !a.is_empty()).collect();
     let mut dist = vec![f64::INFINITY; nv];
     let mut owner = vec![u32::MAX; nv];
-    let mut heap = BinaryHeap::new();
+    let mut heap: BinaryHeap<Keyed<true>> = BinaryHeap::new();
     // one entry per vertex, at least its distance (distances only fall), the largest first: an entry above its
     // vertex's distance goes back in at that distance until the top one is exact, and that vertex is the
     // farthest (any other's distance is at most its entry, at most the top's) without a scan of the mesh per seed
-    let mut farthest: BinaryHeap<Far> = (0..nv).filter(|&j| on_mesh[j]).map(|j| Far(f64::INFINITY, j as u32)).collect();
+    let mut farthest: BinaryHeap<Keyed<false>> = (0..nv).filter(|&j| on_mesh[j]).map(|j| Keyed(f64::INFINITY, j as u32)).collect();
     let mut seeds: Vec<usize> = Vec::new();
     let mut next = (0..nv).find(|&j| on_mesh[j]);
     while let Some(s) = next {
@@ -333,8 +320,8 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
         seeds.push(s);
         dist[s] = 0.0;
         owner[s] = patch;
-        heap.push(Near(0.0, s as u32));
-        while let Some(Near(d, v)) = heap.pop() {
+        heap.push(Keyed(0.0, s as u32));
+        while let Some(Keyed(d, v)) = heap.pop() {
             if d > dist[v as usize] {
                 continue;
             }
@@ -343,7 +330,7 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
                 if nd < dist[u as usize] {
                     dist[u as usize] = nd;
                     owner[u as usize] = patch;
-                    heap.push(Near(nd, u));
+                    heap.push(Keyed(nd, u));
                 }
             }
         }
