@@ -251,6 +251,12 @@ impl Params {
         Params { max_iter: self.refine_max_iter, tol: self.refine_tol, accelerate: false, ..self.clone() }
     }
 
+    /// These parameters for a final-stage run that only decides (the merge tree's first run, every run on a
+    /// coarse mesh): the refinement's looser tolerance, when it is looser; SQUAREM and the cap as they are.
+    pub fn at_loose_tolerance(&self) -> Params {
+        Params { tol: self.refine_tol.max(self.tol), ..self.clone() }
+    }
+
     /// The most parts a population of `n_vertices` vertices can have: every part needs at least
     /// `min_part_vertices` vertices ([`crate::parts::part_count::check_target`] refuses more).
     pub fn most_parts(&self, n_vertices: usize) -> usize {

@@ -221,8 +221,8 @@ struct Fine {
     mesh: super::coarse_mesh::CoarseMesh,
     /// The whole population's data and E-step layout for the last run, made before the coarse mesh: the
     /// largest block of the fit is then taken first, and the blocks of the coarse mesh and its runs, freed
-    /// before the last run, do not leave it to be placed above them (in wasm, where linear memory only grows, that raised the peak of the
-    /// generated 42 k x 11 quadruped from 59 to 69 bytes per vertex-pose).
+    /// before the last run, do not leave it to be placed above them (in wasm, where linear memory only grows,
+    /// made last they raised the generated 42 k x 11 quadruped's peak from 59 to 69 bytes per vertex-pose).
     full: (Data, Blocked),
 }
 
@@ -425,7 +425,7 @@ impl Pipeline {
         p.close_stage(Some("final"));
         // the first run only feeds the part rule's decisions: at the refinement's loose tolerance (from a
         // generous over-segmentation a converged run took 64 iterations on the 12 k hand, the loose one 10)
-        let loose = Params { tol: params.refine_tol.max(params.tol), ..params.clone() };
+        let loose = params.at_loose_tolerance();
         let (data, layout) = lay_out(data);
         p.state = State::Final(Fit::from_labels_laid_out(data, layout, &labels, &loose)?);
         Ok(p)
@@ -657,11 +657,11 @@ impl Pipeline {
             // short band part leans toward its neighbours' vertices; see label_fit)
             super::label_fit::fit_to_labels(&mut model, &full_data(&mut self.full, &self.pop).0, &self.params);
             fitted = true;
-                let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
+            let dissolved = super::distinct::dissolve_flesh(&mut model, &self.pop, self.params.blend_ratio);
             if dissolved > 0 {
                 super::islands::connect_parts(&mut model, &self.pop, false, self.params.min_part_vertices);
             }
-                let before = model.n_parts();
+            let before = model.n_parts();
             let (merged, curve) = if self.params.part_rule == PartRule::Tree {
                 self.decide_on_tree(&model.labels)
             } else {
@@ -788,20 +788,13 @@ impl Pipeline {
             self.final_model = Some(self.model_everywhere(model));
             return Err(e);
         }
+        self.coarse_labels = self.everywhere(&self.coarse_labels);
+        self.refined_labels = self.everywhere(&self.refined_labels);
+        self.decided_labels = self.decided_labels.as_deref().map(|d| self.everywhere(d));
+        if let Some(leaves) = self.merge_tree.as_ref().map(|t| self.everywhere(&t.leaves)) {
+            self.merge_tree.as_mut().expect("just read").leaves = leaves;
+        }
         let fine = self.fine.take().expect("called on a coarse mesh");
-        let to_fine = |l: &mut Vec<u32>| {
-            if l.len() == fine.mesh.seeds.len() {
-                *l = fine.mesh.to_fine(l);
-            }
-        };
-        to_fine(&mut self.coarse_labels);
-        to_fine(&mut self.refined_labels);
-        if let Some(d) = self.decided_labels.as_mut() {
-            to_fine(d);
-        }
-        if let Some(t) = self.merge_tree.as_mut() {
-            to_fine(&mut t.leaves);
-        }
         // each part from the coarse AECM's own component (soft boundaries) where it is a part of that run
         // ([`super::labels::same_parts`]); a part the motion labels or the islands made, from the labels' rigid fit
         let mut comps = model.parts.clone();
@@ -870,7 +863,7 @@ impl Pipeline {
     /// at the loose tolerance (the last run, on all vertices, is at `tol`).
     fn run_params(&self) -> Params {
         match self.fine {
-            Some(_) => Params { tol: self.params.refine_tol.max(self.params.tol), ..self.params.clone() },
+            Some(_) => self.params.at_loose_tolerance(),
             None => self.params.clone(),
         }
     }
