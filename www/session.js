@@ -185,6 +185,8 @@ function showProgress() {
 const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
 
 function onFitted({ model, kept: keptModel }) {
+  // the last slice's progress, if its frame has not come yet, is shown first: every run is named before 'done'
+  if (pendingProgress) showProgress();
   if (keptModel) {
     // a new fit cancelled: the finished model stays shown (result.js says the new fit was cancelled)
     kept = null;

@@ -135,9 +135,12 @@ test('the Stage field names each run of the fit (the merge tree\'s start, the pa
   const n = await fits(page);
   await page.evaluate(() => {
     window.__stages = [];
-    new MutationObserver(() => {
-      const t = document.getElementById('stage').textContent;
-      if (window.__stages.at(-1) !== t) window.__stages.push(t);
+    // every text the field took, from the records (two changes in one task reach one callback)
+    new MutationObserver((records) => {
+      for (const r of records) {
+        const texts = r.type === 'characterData' ? [r.target.data] : [...r.addedNodes].map((n) => n.textContent);
+        for (const t of texts) if (window.__stages.at(-1) !== t) window.__stages.push(t);
+      }
     }).observe(document.getElementById('stage'), { childList: true, characterData: true, subtree: true });
     document.getElementById('fit').click();
   });
