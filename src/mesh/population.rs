@@ -50,6 +50,18 @@ pub struct Population {
     /// Where the shapes came from, for people: "11 OBJ files", "48 morph targets of mesh 'horse' in
     /// horse.glb, ...", "241 frames of animation 'Walk' (sampled at its keyframes, 24 fps) ...".
     pub source: String,
+    /// The poses in farthest-first order, worked out once for these coordinates ([`Population::pose_order`]).
+    pose_order: PoseOrder,
+}
+
+/// A slot for [`Population::pose_order`], shared by the clones that share the coordinates. Not part of a
+/// population's value: two populations with equal coordinates are equal whether or not it is filled.
+#[derive(Debug, Clone, Default)]
+struct PoseOrder(std::sync::Arc<std::sync::OnceLock<Vec<usize>>>);
+impl PartialEq for PoseOrder {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// One shape of a [`Population`]: its vertices' unit-box coordinates, widened to f64 when read.
@@ -185,6 +197,14 @@ impl Population {
     pub fn set_shapes(&mut self, shapes: &[Vec<[f64; 3]>]) {
         assert!(shapes.iter().all(|s| s.len() == self.n_vertices), "every shape needs {} vertices", self.n_vertices);
         self.points = std::sync::Arc::new(shapes.iter().flatten().map(|&p| narrow(p)).collect());
+        self.pose_order = PoseOrder::default();
+    }
+
+    /// An order of the poses that depends on the coordinates alone (the part rule's farthest-first order,
+    /// [`crate::parts::merge_tree::spread_poses`]): `compute` runs the first time it is asked for, and the
+    /// population and its clones keep the answer until their shapes are replaced.
+    pub fn pose_order(&self, compute: impl FnOnce() -> Vec<usize>) -> &[usize] {
+        self.pose_order.0.get_or_init(compute)
     }
 
     /// The population of the listed vertices only (`vertices[c]` becomes vertex c), with `faces` over the new
@@ -200,6 +220,7 @@ impl Population {
             n_vertices: vertices.len(),
             normalization: self.normalization,
             source: self.source.clone(),
+            pose_order: PoseOrder::default(),
         }
     }
 
@@ -325,7 +346,7 @@ impl Population {
             names.push(name);
         }
         let source = format!("{} shapes", names.len());
-        Ok(Population { names, faces, points: std::sync::Arc::new(points), n_vertices, normalization, source })
+        Ok(Population { names, faces, points: std::sync::Arc::new(points), n_vertices, normalization, source, pose_order: PoseOrder::default() })
     }
 
     /// Reads every file (name, bytes) with the reader its extension calls for ([`super::load`]: OBJ, PLY,

@@ -204,6 +204,25 @@ pub fn spread_poses(pop: &Population, most: usize) -> Vec<usize> {
     if ns <= most {
         return (0..ns).collect();
     }
+    // each next pose does not depend on how many are asked for: the order's first SPREAD_ORDER poses are
+    // worked out once per population (the tree, the flesh test and every round ask again)
+    let mut chosen = if most <= SPREAD_ORDER {
+        pop.pose_order(|| farthest_first(pop, SPREAD_ORDER))[..most].to_vec()
+    } else {
+        farthest_first(pop, most)
+    };
+    chosen.sort_unstable();
+    chosen
+}
+
+/// The most poses of [`spread_poses`]'s order that a population keeps ([`Population::pose_order`]): as many as
+/// its largest use asks for (the flesh test's 24 reference poses).
+const SPREAD_ORDER: usize = 24;
+
+/// The first `most` poses (at most all) in [`spread_poses`]'s order, unsorted.
+fn farthest_first(pop: &Population, most: usize) -> Vec<usize> {
+    let ns = pop.n_shapes();
+    let most = most.min(ns);
     // distances on at most 2 000 evenly spaced vertices, gathered pose by pose
     let nv = pop.n_vertices();
     let stride = nv.div_ceil(2000).max(1);
@@ -232,7 +251,6 @@ pub fn spread_poses(pop: &Population, most: usize) -> Vec<usize> {
             near[i] = near[i].min(dist(&points[next], i));
         }
     }
-    chosen.sort_unstable();
     chosen
 }
 
@@ -730,6 +748,27 @@ mod tests {
         assert!(owner.iter().all(|&o| (o as usize) < seeds.len()));
         // and a count past the pieces is the farthest-point count, as on any mesh
         assert_eq!(seeded_patches(&pop, 100, true).1.len(), 100);
+    }
+
+    /// The poses kept once per population are the ones worked out afresh for every count asked for, and new
+    /// shapes are asked about afresh.
+    #[test]
+    fn the_kept_pose_order_gives_each_count_what_a_fresh_search_does() {
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 300, poses: 30, seed: 5, ..Spec::default() }).unwrap();
+        let mut pop = g.population.clone();
+        for most in [2, 5, TREE_POSES, SPREAD_ORDER, 29] {
+            let mut fresh = farthest_first(&pop, most);
+            fresh.sort_unstable();
+            assert_eq!(spread_poses(&pop, most), fresh, "{most} poses");
+        }
+        assert_eq!(spread_poses(&pop, 30), (0..30).collect::<Vec<_>>());
+        // the same shapes in reverse order: another order is worked out for them
+        let before = spread_poses(&pop, TREE_POSES);
+        let mut shapes = pop.unit_shapes();
+        shapes.reverse();
+        pop.set_shapes(&shapes);
+        let after = spread_poses(&pop, TREE_POSES);
+        assert_eq!(after, before.iter().rev().map(|&i| 29 - i).collect::<Vec<_>>());
     }
 
     /// The lazily evaluated merges are the eager greedy's: replaying the tree, every merge it made was the
