@@ -166,6 +166,8 @@ let liveLabels = null;
 let liveShown = 0;
 function onProgress(m) {
   update({ lastStep: m.steps[m.steps.length - 1] ?? state.lastStep });
+  // a run that ended is shown before the next run's steps join it: a slow frame must not skip a run's name
+  if (pendingProgress?.steps.some((s) => s.runFinished)) showProgress();
   if (!pendingProgress) requestAnimationFrame(showProgress);
   pendingProgress = { ...m, steps: [...(pendingProgress?.steps ?? []), ...m.steps] };
 }
