@@ -68,7 +68,9 @@ pub struct Params {
     /// A coarse mesh for the part decisions ([`crate::parts::coarse_mesh`]): with the merge tree's part rule and
     /// at least twice this many vertices ([`crate::parts::hierarchy::COARSE_FACTOR`]), the tree, the AECM runs and
     /// the part rule's decisions run on about this many well-spread vertices with their own triangles, and only
-    /// the last AECM on all vertices, from the coarse fit's parts; 0 decides on all vertices. Default 8000.
+    /// the last AECM on all vertices, from the coarse fit's parts; 0 decides on all vertices. With fewer than 20
+    /// poses the coarse mesh is larger, as many vertex-poses as this many vertices in 20 poses
+    /// ([`crate::parts::hierarchy::coarse_target`]). Default 8000.
     pub coarse_vertices: usize,
     /// How the parts are found and counted. Default [`PartRule::Tree`].
     pub part_rule: PartRule,

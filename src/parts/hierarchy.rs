@@ -210,10 +210,28 @@ enum State {
 pub const SUBSET_FACTOR: usize = 5;
 
 /// [`PartRule::Tree`] decides on a coarse mesh ([`super::coarse_mesh`]) only on populations with at least this
-/// many times `coarse_vertices` vertices (16 000 at the default 8 000): below that the decisions on all
+/// many times its size ([`coarse_target`]; 16 000 vertices at the default 8 000 and 20 poses or more): below that the decisions on all
 /// vertices cost little more, and horse-gallop (8 431 vertices), the lion and the generated 12 000-vertex
 /// creatures decide on every vertex as before.
 pub const COARSE_FACTOR: usize = 2;
+
+/// With fewer poses than this, the coarse mesh has more vertices ([`coarse_target`]).
+pub const COARSE_POSES: usize = 20;
+
+/// The coarse mesh's size for `coarse_vertices` ([`Params::coarse_vertices`]) and `n_shapes` poses: at least
+/// `coarse_vertices x COARSE_POSES` vertex-poses, i.e. `coarse_vertices` from 20 poses on and more below (16 000
+/// at 10 poses by default). The decisions read the poses' motion at the coarse vertices, and a population of few
+/// poses gives them less to read per vertex; the runs' cost goes with the vertex-poses, so it stays bounded. On
+/// 10-11 poses at 8 000 vertices the decisions moved more than on all vertices over the 9 standard runs of
+/// `posemfa robustness` (the lion subdivided twice 18-22 parts, once 17-20, horse-poses subdivided 23-26); at
+/// this size 19-20, 19-20 (on all vertices: under 2 x 16 000) and 26-27.
+pub fn coarse_target(coarse_vertices: usize, n_shapes: usize) -> usize {
+    if n_shapes >= COARSE_POSES {
+        coarse_vertices
+    } else {
+        coarse_vertices * COARSE_POSES / n_shapes.max(1)
+    }
+}
 
 /// The population whose parts a [`Pipeline`] decides on a coarse mesh, and that mesh.
 struct Fine {
@@ -370,10 +388,11 @@ impl Pipeline {
     /// an exact part count, the cut at [`TREE_COUNT_START_RATIO`] instead, flesh and all.
     fn from_tree(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
         // (an exact count the coarse mesh cannot hold is made on all vertices)
+        let target = coarse_target(params.coarse_vertices, pop.n_shapes());
         let on_coarse = params.coarse_vertices > 0
-            && pop.n_vertices() >= COARSE_FACTOR * params.coarse_vertices
+            && pop.n_vertices() >= COARSE_FACTOR * target
             && params.target_parts.is_none_or(|n| {
-                super::part_count::check_target(n, params.coarse_vertices, params.min_part_vertices).is_ok()
+                super::part_count::check_target(n, target, params.min_part_vertices).is_ok()
             });
         // (the last run's data first: see [`Fine::full`]); the data are judged on every vertex (a motion of a few
         // vertices no seed holds is still motion)
@@ -381,7 +400,7 @@ impl Pipeline {
         if let Some((data, _)) = &full {
             crate::mfa::aecm::check_population(data, params.parts, 1)?;
         }
-        let coarse = on_coarse.then(|| super::coarse_mesh::CoarseMesh::build(pop, params.coarse_vertices));
+        let coarse = on_coarse.then(|| super::coarse_mesh::CoarseMesh::build(pop, target));
         if let Some(c) = coarse.as_ref().filter(|_| std::env::var_os("POSEMFA_DEBUG").is_some()) {
             let ms = crate::clock::now_ms() - t0;
             eprintln!("coarse mesh: {} vertices, {} triangles ({ms:.1} ms)", c.pop.n_vertices(), c.pop.faces.len());
@@ -1310,7 +1329,7 @@ mod tests {
 
     #[test]
     fn an_exact_count_is_made_on_the_coarse_mesh() {
-        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 20, ..Spec::default() }).unwrap();
         let params = Params { coarse_vertices: 1000, target_parts: Some(12), ..Params::default() };
         let result = fit(&g.population, &params, &mut |_| true).unwrap();
         assert_eq!(result.model.n_parts(), 12);
@@ -1323,9 +1342,24 @@ mod tests {
     }
 
     #[test]
+    fn fewer_poses_get_a_larger_coarse_mesh() {
+        // 10 poses of 24 000 vertices: a coarse mesh of 16 000 would be more than half of them, so all vertices
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 24000, poses: 10, ..Spec::default() }).unwrap();
+        assert!(!Pipeline::new(&g.population, &Params::default()).unwrap().on_coarse_mesh());
+        assert_eq!(coarse_target(8000, 10), 16000);
+        assert_eq!(coarse_target(8000, 11), 14545);
+        assert_eq!((coarse_target(8000, 20), coarse_target(8000, 200)), (8000, 8000));
+        // 24 000 vertices in 20 poses: the default 8 000
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 24000, poses: 20, ..Spec::default() }).unwrap();
+        let pipe = Pipeline::new(&g.population, &Params::default()).unwrap();
+        assert!(pipe.on_coarse_mesh());
+        assert_eq!(pipe.current_vertices().map(|v| v.len()), Some(8000));
+    }
+
+    #[test]
     fn a_population_is_judged_on_all_its_vertices_not_the_coarse_mesh() {
         // only 30 vertices that are no seed of the coarse mesh move: the population moves
-        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 4, ..Spec::default() }).unwrap();
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 20, ..Spec::default() }).unwrap();
         let mut pop = g.population.clone();
         let seeds = super::super::coarse_mesh::CoarseMesh::build(&pop, 1000).seeds;
         let mut shapes = vec![pop.shape(0).to_vec(); pop.n_shapes()];
@@ -1343,8 +1377,9 @@ mod tests {
 
     #[test]
     fn parts_decided_on_a_coarse_mesh_are_the_parts_of_all_vertices() {
-        // 3 000 vertices, decided on a coarse mesh of 1 000 (at least COARSE_FACTOR times as many)
-        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
+        // 3 000 vertices, decided on a coarse mesh of 1 000 (at least COARSE_FACTOR times as many; 20 poses:
+        // with fewer the coarse mesh is larger)
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 20, ..Spec::default() }).unwrap();
         let pop = &g.population;
         let nv = pop.n_vertices();
         let params = Params { coarse_vertices: 1000, ..Params::default() };

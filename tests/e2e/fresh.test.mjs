@@ -129,8 +129,9 @@ test('Cancel on a new fit of the same population keeps the finished fit, its ver
 });
 
 test('the Stage field names each run of the fit (the merge tree\'s start, the part rule\'s rounds) with its number', async () => {
-  // a quadruped big enough that its first run spans several slices of the worker (40 ms each)
-  const { page, context, log } = await session.open('?preset=quadruped&vertices=24000&poses=10');
+  // a quadruped big enough that its first run spans several slices of the worker (40 ms each), and whose parts
+  // are decided on a coarse mesh (8 000 vertices at 20 poses; with fewer poses it would be larger than half)
+  const { page, context, log } = await session.open('?preset=quadruped&vertices=24000&poses=20');
   await fitted(page);
   const n = await fits(page);
   await page.evaluate(() => {

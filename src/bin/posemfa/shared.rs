@@ -190,7 +190,7 @@ pub struct FitArgs {
     #[arg(long, value_name = "N", default_value_t = Params::default().subset_vertices)]
     subset: usize,
     /// With at least 2N vertices: the part decisions on a coarse mesh of about N vertices, the last AECM on all
-    /// (0 = decide on all vertices)
+    /// (N x 20 / poses with fewer than 20 poses; 0 = decide on all vertices)
     #[arg(long, value_name = "N", default_value_t = Params::default().coarse_vertices)]
     coarse: usize,
     /// Exact part count: auto (Algorithm 1's own) or N (split / merge until N)
