@@ -817,11 +817,9 @@ impl Pipeline {
         // each part from the coarse AECM's own component (soft boundaries) where it is a part of that run
         // ([`super::labels::same_parts`]); a part the motion labels or the islands made, from the labels' rigid fit
         let mut comps = model.parts.clone();
-        if let Some(last) = self.last_run.take().filter(|m| m.labels.len() == model.labels.len()) {
-            for (c, same) in comps.iter_mut().zip(super::labels::same_parts(&model.labels, &last.labels)) {
-                if let Some(b) = same {
-                    *c = last.parts[b as usize].clone();
-                }
+        for (c, last) in comps.iter_mut().zip(self.last_run_parts(&model.labels)) {
+            if let Some(last) = last {
+                *c = last;
             }
         }
         self.pop = fine.pop;
@@ -842,20 +840,32 @@ impl Pipeline {
     /// skinned characters' parts away from their skeletons (adjusted Rand 0.811 / 0.830 / 0.878 -> 0.779 / 0.785
     /// / 0.846).
     fn refit_warm(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
-        let last = self.last_run.take().filter(|m| m.labels.len() == labels.len());
+        let last = self.last_run_parts(labels);
         self.open_run(stage);
         let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
         let mut comps = crate::mfa::init::components_from_labels(&data, labels, self.params.variance_floor);
-        if let Some(last) = last {
-            let before = crate::mfa::data::to_frame(&data, &last.parts);
-            for (c, same) in comps.iter_mut().zip(super::labels::same_parts(labels, &last.labels)) {
-                if let Some(b) = same {
-                    // (the weight stays the labels' share: the run's weights sum to one over its own parts)
-                    *c = Component { weight: c.weight, ..before[b as usize].clone() };
-                }
+        for (c, last) in comps.iter_mut().zip(last) {
+            if let Some(last) = last {
+                // (the weight stays the labels' share: the run's weights sum to one over its own parts)
+                let moved = crate::mfa::data::to_frame(&data, std::slice::from_ref(&last)).pop().expect("one component");
+                *c = Component { weight: c.weight, ..moved };
             }
         }
         Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.run_params())))
+    }
+
+    /// The last AECM run's component (unit-box translations) of each part of `labels` that is still a part of
+    /// that run ([`super::labels::same_parts`]: more than half of each in the other), None for the others (a
+    /// merge's union, a part the motion labels or the islands made). The run is let go.
+    fn last_run_parts(&mut self, labels: &[u32]) -> Vec<Option<Component>> {
+        let parts = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+        match self.last_run.take().filter(|m| m.labels.len() == labels.len()) {
+            Some(last) => super::labels::same_parts(labels, &last.labels)
+                .into_iter()
+                .map(|same| same.map(|b| last.parts[b as usize].clone()))
+                .collect(),
+            None => vec![None; parts],
+        }
     }
 
     /// A new stage `stage`: the final AECM again on all vertices, from `labels`.
