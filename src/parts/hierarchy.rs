@@ -279,10 +279,10 @@ pub struct Pipeline {
     /// hands them back when it finishes (no second copy), the label fits read them.
     full: Option<(Data, Blocked)>,
     /// [`PartRule::Tree`] on a large population: while the parts are decided, `pop` is the coarse mesh's
-    /// population and this holds the whole one; the last AECM runs on all vertices ([`Pipeline::to_all_vertices`]).
+    /// population and this holds the whole one; the last AECM runs on all vertices ([`Pipeline::finish_on_all_vertices`]).
     fine: Option<Box<Fine>>,
     /// The model of the last final-stage AECM run (the run's components, in the unit box, and its labels): on a
-    /// coarse mesh the next run goes on from it ([`Pipeline::refit_warm`], [`Pipeline::to_all_vertices`]).
+    /// coarse mesh the next run goes on from it ([`Pipeline::refit_warm`], [`Pipeline::finish_on_all_vertices`]).
     last_run: Option<Model>,
 }
 
@@ -715,7 +715,7 @@ impl Pipeline {
             if self.fine.is_some() && self.params.target_parts.is_none_or(|n| n == model.n_parts()) {
                 // nothing to remove, on a coarse mesh: the last run, on all vertices, goes on from these parts
                 // (with another count asked for, it is made below, on the coarse mesh)
-                return self.to_all_vertices(model);
+                return self.finish_on_all_vertices(model);
             }
             if self.loose_start {
                 // nothing to remove: the first run goes on at the fit's own tolerance
@@ -730,7 +730,7 @@ impl Pipeline {
                     super::label_fit::fit_to_labels(&mut model, &full_data(&mut self.full, &self.pop).0, &self.params);
                 }
                 if self.fine.is_some() {
-                    return self.to_all_vertices(model);
+                    return self.finish_on_all_vertices(model);
                 }
                 self.final_model = Some(model);
                 // the data are not read any more: free them before the caller reads the result
@@ -799,7 +799,7 @@ impl Pipeline {
     /// vertex of each patch, and the last AECM runs on all vertices from the coarse fit's components (a new stage
     /// "all vertices"; as [`Pipeline::go_on`], no new start from labels). After it the part rule does not decide
     /// again: [`Pipeline::finish`] only moves the boundaries by motion and makes the parts connected.
-    fn to_all_vertices(&mut self, model: Model) -> Result<State> {
+    fn finish_on_all_vertices(&mut self, model: Model) -> Result<State> {
         let (nv, ns) = (self.population().n_vertices(), self.population().n_shapes());
         let budget = crate::memory::budget_bytes();
         if let Err(e) = budget.and_then(|b| crate::memory::check(nv, ns, model.n_parts(), b)) {
