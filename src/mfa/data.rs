@@ -306,15 +306,27 @@ pub fn from_frame(data: &Data, comps: &[Component]) -> Vec<Component> {
     shifted(comps, &data.offsets, 1.0)
 }
 
+/// One component with unit-box translations moved to the centred frame of `data` ([`to_frame`] of one, without
+/// a copy).
+pub fn component_to_frame(data: &Data, mut c: Component) -> Component {
+    shift(&mut c, &data.offsets, -1.0);
+    c
+}
+
+/// Adds `sign` x the shape's offset to every translation of `c`.
+fn shift(c: &mut Component, offsets: &[crate::geometry::Vec3], sign: f64) {
+    for (t, o) in c.translations.iter_mut().zip(offsets) {
+        *t = [t[0] + sign * o[0], t[1] + sign * o[1], t[2] + sign * o[2]];
+    }
+}
+
 /// Copies of `comps` with `sign` x the shape's offset added to every translation.
 fn shifted(comps: &[Component], offsets: &[crate::geometry::Vec3], sign: f64) -> Vec<Component> {
     comps
         .iter()
         .map(|c| {
             let mut c = c.clone();
-            for (t, o) in c.translations.iter_mut().zip(offsets) {
-                *t = [t[0] + sign * o[0], t[1] + sign * o[1], t[2] + sign * o[2]];
-            }
+            shift(&mut c, offsets, sign);
             c
         })
         .collect()

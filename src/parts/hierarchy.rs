@@ -847,8 +847,7 @@ impl Pipeline {
         for (c, last) in comps.iter_mut().zip(last) {
             if let Some(last) = last {
                 // (the weight stays the labels' share: the run's weights sum to one over its own parts)
-                let moved = crate::mfa::data::to_frame(&data, std::slice::from_ref(&last)).pop().expect("one component");
-                *c = Component { weight: c.weight, ..moved };
+                *c = Component { weight: c.weight, ..crate::mfa::data::component_to_frame(&data, last) };
             }
         }
         Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.run_params())))
