@@ -757,11 +757,10 @@ impl Pipeline {
     fn decide_on_tree(&mut self, labels: &[u32]) -> (Vec<u32>, Vec<super::distinct::CurvePoint>) {
         let leaves = compact(labels);
         let mut tree = super::merge_tree::MergeTree::from_leaves(&self.pop, leaves, self.params.variance_floor);
-        if let Some(first) = &self.merge_tree {
-            // the first round's typical variance stays the yardstick: a refit's larger parts have larger variances,
-            // and with its own yardstick every round would merge a few more (lion-poses: 43 -> 40 -> 36 -> 34)
-            tree.rescore(first.typical);
-        }
+        // the first round's typical variance stays the yardstick: a refit's larger parts have larger variances,
+        // and with its own yardstick every round would merge a few more (lion-poses: 43 -> 40 -> 36 -> 34)
+        let yardstick = self.merge_tree.as_ref().map_or_else(|| tree.middle_typical(), |first| first.typical);
+        tree.rescore(yardstick);
         let count = tree.decided_count(self.params.distinct_ratio);
         let merged = tree.labels_at(count);
         let curve = tree.curve(count);

@@ -63,6 +63,11 @@ pub struct MergeTree {
     /// The vertex-weighted median variance of the leaves' rigid fits (at least the variance floor), fixed
     /// before any merge (a merge's larger variance must not make the next merge look cheap).
     pub typical: f64,
+    /// The geometric mean of the leaves' variances over their middle vertices (between the [`MIDDLE_BAND`] and
+    /// 1 - [`MIDDLE_BAND`] quantiles by vertex; at least the variance floor): the part rule's yardstick on the
+    /// fitted parts' tree ([`MergeTree::middle_typical`]).
+    #[serde(skip)]
+    pub middle: f64,
 }
 
 /// Additive statistics of a node over the tree's poses.
@@ -445,10 +450,15 @@ fn yardstick_merges(m: usize) -> usize {
     (3 * m / 4).min(m.saturating_sub(PART_NODES).max(m / 2))
 }
 
-/// The vertex-weighted median of the nodes' variances.
-fn typical_variance(nodes: &[Option<Node>]) -> f64 {
+/// Where the middle of the leaves' variances starts and ends, as quantiles by vertex ([`MergeTree::middle`]).
+pub const MIDDLE_BAND: f64 = 0.3;
+
+/// The vertex-weighted median of the nodes' variances, and their geometric mean over the middle band of
+/// vertices ([`MIDDLE_BAND`]).
+fn typical_variances(nodes: &[Option<Node>]) -> (f64, f64) {
     let (values, sizes): (Vec<f64>, Vec<usize>) = nodes.iter().flatten().map(|n| (n.variance(), n.size)).unzip();
-    super::labels::weighted_median(&values, &sizes)
+    let middle = super::labels::weighted_log_mean_between(&values, &sizes, MIDDLE_BAND, 1.0 - MIDDLE_BAND);
+    (super::labels::weighted_median(&values, &sizes), middle)
 }
 
 impl MergeTree {
@@ -514,7 +524,8 @@ impl MergeTree {
             Fit { rise: raw.max(0.0) / (3.0 * q as f64 * small.max(1) as f64), raw, sse, rot }
         };
         let size_of = |nodes: &[Option<Node>], a: u32| nodes[a as usize].as_ref().expect("live").size;
-        let typical = typical_variance(&nodes).max(floor);
+        let (typical, middle) = typical_variances(&nodes);
+        let (typical, middle) = (typical.max(floor), middle.max(floor));
         // Lazy candidates. Every adjacent pair is in the heap once, keyed by its rise or by a lower bound of it:
         // a bound that reaches the top gets its rigid fit and goes back in with its exact rise, an exact one on
         // top is the cheapest merge. Bounds only postpone fits, so the merges are the eager greedy's, in order
@@ -576,7 +587,7 @@ impl MergeTree {
             adjacent[a as usize].clear();
             adjacent[b as usize].clear();
         }
-        MergeTree { leaves, n_leaves, merges, typical }
+        MergeTree { leaves, n_leaves, merges, typical, middle }
     }
 
     /// What merging two pieces of one part typically costs: the mean rise of the tree's cheapest merges, from
@@ -595,6 +606,16 @@ impl MergeTree {
             return self.typical;
         }
         self.merges[..k].iter().map(|x| x.rise).sum::<f64>() / k as f64
+    }
+
+    /// The part rule's yardstick on the tree of a fit's parts: [`MergeTree::middle`]. The median
+    /// ([`MergeTree::typical`]) falls where the parts' variances climb steeply, so a small change of the data
+    /// moves it far: on horse-gallop with each pose dropped in turn it moved 1.09-1.67e-6 and the count split
+    /// into two families (23-24 and 26-28 parts). The mean of the logs over the middle 40 % of vertices averages
+    /// across that climb: 25-28 parts, and the lion's 20-23 became 20-22 (docs/decisions.md, twenty-fourth
+    /// session). Its level is the median's where the logs are spread evenly around it.
+    pub fn middle_typical(&self) -> f64 {
+        self.middle
     }
 
     /// Scores the merges against another typical variance.
