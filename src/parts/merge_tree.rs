@@ -334,6 +334,7 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
     let mut dist = vec![f64::INFINITY; nv];
     let mut owner = vec![u32::MAX; nv];
     let mut heap: BinaryHeap<Keyed<true>> = BinaryHeap::new();
+    let mut queue: std::collections::VecDeque<u32> = std::collections::VecDeque::new();
     // one entry per vertex, at least its distance (distances only fall), the largest first: an entry above its
     // vertex's distance goes back in at that distance until the top one is exact, and that vertex is the
     // farthest (any other's distance is at most its entry, at most the top's) without a scan of the mesh per seed
@@ -345,7 +346,23 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
         seeds.push(s);
         dist[s] = 0.0;
         owner[s] = patch;
-        heap.push(Keyed(0.0, s as u32));
+        if hops {
+            // every edge of length 1: a breadth-first search visits in order of distance, as the heap would, and
+            // reaches (strictly closer than before) the same vertices with the same distances
+            queue.push_back(s as u32);
+            while let Some(v) = queue.pop_front() {
+                let nd = dist[v as usize] + 1.0;
+                for &(u, _) in &adj[v as usize] {
+                    if nd < dist[u as usize] {
+                        dist[u as usize] = nd;
+                        owner[u as usize] = patch;
+                        queue.push_back(u);
+                    }
+                }
+            }
+        } else {
+            heap.push(Keyed(0.0, s as u32));
+        }
         while let Some(Keyed(d, v)) = heap.pop() {
             if d > dist[v as usize] {
                 continue;
