@@ -75,7 +75,8 @@ pub fn weighted_median(values: &[f64], weights: &[usize]) -> f64 {
 }
 
 /// The geometric mean of `values` over the weight between the quantiles `lo` and `hi` (0 <= lo < hi <= 1),
-/// each value counted by the part of its weight inside that band.
+/// each value counted by the part of its weight inside that band. Values of 0 (or below) have no logarithm and are
+/// left out; with none left, the weighted median.
 pub fn weighted_log_mean_between(values: &[f64], weights: &[usize], lo: f64, hi: f64) -> f64 {
     let mut by: Vec<(f64, usize)> = values.iter().copied().zip(weights.iter().copied()).collect();
     by.sort_by(|x, y| x.0.total_cmp(&y.0));

@@ -60,8 +60,10 @@ pub struct MergeTree {
     pub n_leaves: usize,
     /// In order; merge m makes node `n_leaves + m`.
     pub merges: Vec<Merge>,
-    /// The vertex-weighted median variance of the leaves' rigid fits (at least the variance floor), fixed
-    /// before any merge (a merge's larger variance must not make the next merge look cheap).
+    /// What the scores are divided by: when the tree is built, the vertex-weighted median variance of the
+    /// leaves' rigid fits (at least the variance floor), fixed before any merge (a merge's larger variance must
+    /// not make the next merge look cheap); [`MergeTree::rescore`] sets another (the start's
+    /// [`MergeTree::merge_yardstick`], the decision's [`MergeTree::middle_typical`]).
     pub typical: f64,
     /// The geometric mean of the leaves' variances over their middle vertices (between the [`MIDDLE_BAND`] and
     /// 1 - [`MIDDLE_BAND`] quantiles by vertex; at least the variance floor): the part rule's yardstick on the
