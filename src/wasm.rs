@@ -90,8 +90,21 @@ impl WasmPopulation {
         if names.len() != files.len() {
             return Err(js_err("names and files differ in length"));
         }
-        let pairs = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
-        match Population::from_files_all_errors(pairs) {
+        // poses of one mesh file each are copied in and read one at a time (their text is most of the memory)
+        use crate::mesh::load::FileKind;
+        let one_each = names.iter().all(|n| matches!(FileKind::of(n), FileKind::Obj | FileKind::Ply));
+        let read = if one_each {
+            Population::from_mesh_files_one_at_a_time(&names, |i, buffer| {
+                // the last file's bytes go before the next one's come (a buffer kept for the largest file, grown
+                // by doubling, held 7 bytes per vertex-pose more at the peak on horse-poses subdivided)
+                *buffer = Vec::new();
+                *buffer = files[i].to_vec();
+                Ok(())
+            })
+        } else {
+            Population::from_files_all_errors(names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect())
+        };
+        match read {
             Ok(p) => Ok(WasmPopulation { inner: Rc::new(p) }),
             Err(errors) => Err(thrown(&errors.iter().map(Error::problem).collect::<Vec<_>>())),
         }

@@ -244,66 +244,12 @@ impl Population {
         }
         named.sort_by(|a, b| natural_cmp(&a.0, &b.0));
         let (first_name, first) = (&named[0].0, &named[0].1);
-        if first.positions.is_empty() {
-            return Err(Error::Population { file: first_name.clone(), message: "has no vertices".into() });
-        }
-        if first.faces.is_empty() {
-            return Err(Error::Population {
-                file: first_name.clone(),
-                message: "has no triangles; posemfa needs triangle meshes (f lines)".into(),
-            });
-        }
-        if let Some(k) = first.faces.iter().position(|f| f.iter().any(|&v| v as usize >= first.positions.len())) {
-            return Err(Error::Population {
-                file: first_name.clone(),
-                message: format!(
-                    "triangle {} is {:?} (1-based) but the mesh has {} vertices; every index must name a vertex",
-                    k + 1,
-                    first.faces[k].map(|x| x as u64 + 1),
-                    first.positions.len()
-                ),
-            });
-        }
+        check_first_mesh(first_name, first)?;
         for (name, mesh) in &named[1..] {
             if faces_of_first && mesh.positions.len() == first.positions.len() {
                 continue;
             }
-            // two files of one name (dropped from two folders): "1.obj has ... but 1.obj has" would say nothing
-            let first_name = &if name == first_name { format!("the first file, also named {first_name},") } else { first_name.clone() };
-            if mesh.positions.len() != first.positions.len() {
-                return Err(Error::Population {
-                    file: name.clone(),
-                    message: format!(
-                        "has {} vertices but {} has {}; every shape must be the same mesh in another pose",
-                        mesh.positions.len(),
-                        first_name,
-                        first.positions.len()
-                    ),
-                });
-            }
-            if mesh.faces.len() != first.faces.len() {
-                return Err(Error::Population {
-                    file: name.clone(),
-                    message: format!(
-                        "has {} triangles but {} has {}; every shape must share the same faces",
-                        mesh.faces.len(),
-                        first_name,
-                        first.faces.len()
-                    ),
-                });
-            }
-            if let Some(k) = (0..mesh.faces.len()).find(|&k| mesh.faces[k] != first.faces[k]) {
-                return Err(Error::Population {
-                    file: name.clone(),
-                    message: format!(
-                        "triangle {} is {:?} but in {} it is {:?} (1-based); every shape must share the same faces",
-                        k + 1,
-                        mesh.faces[k].map(|x| x + 1),
-                        first_name,
-                        first.faces[k].map(|x| x + 1)
-                    ),
-                });
-            }
+            check_same_mesh(first_name, first, name, mesh)?;
         }
         for (name, mesh) in &named {
             if let Some(j) = mesh.positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
@@ -366,6 +312,87 @@ impl Population {
     pub fn from_files_all_errors(mut files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
         files.sort_by(|a, b| natural_cmp(&a.0, &b.0));
         Population::from_loaded(files).map_err(|e| if e.is_empty() { vec![Error::Io("no files were given".into())] } else { e })
+    }
+
+    /// [`Population::from_files_all_errors`] for poses of one OBJ or PLY file each, read one file at a time:
+    /// `fetch(i, buffer)` puts the bytes of `names[i]` in the buffer (emptied first; one buffer for all), asked
+    /// for once each in natural order of the names, so each file's text goes as soon as it is read. The page hands dropped files over this way (with every text in
+    /// its memory at once, an OBJ population's peak was the text: horse-poses 111 bytes per vertex-pose, now
+    /// 82) and so does [`Population::from_paths`]. Only the first mesh keeps its faces; every other is checked
+    /// against them as it is read, as [`Population::from_meshes`] checks it. The same population and the same
+    /// errors; a file `fetch` cannot give comes before them all (in the order of `names`).
+    pub fn from_mesh_files_one_at_a_time(
+        names: &[String],
+        mut fetch: impl FnMut(usize, &mut Vec<u8>) -> Result<()>,
+    ) -> std::result::Result<Population, Vec<Error>> {
+        use super::load::FileKind;
+        if names.is_empty() {
+            return Err(vec![Error::Io("no files were given".into())]);
+        }
+        let mut order: Vec<usize> = (0..names.len()).collect();
+        order.sort_by(|&a, &b| natural_cmp(&names[a], &names[b]));
+        let other: Vec<Error> = order
+            .iter()
+            .filter(|&&i| !matches!(FileKind::of(&names[i]), FileKind::Obj | FileKind::Ply))
+            .map(|&i| Error::Population {
+                file: names[i].clone(),
+                message: "is not an OBJ or PLY file: read a set with it by Population::from_files_all_errors".into(),
+            })
+            .collect();
+        if !other.is_empty() {
+            return Err(other);
+        }
+        let (mut named, mut errors): (Vec<(String, Mesh)>, Vec<Error>) = (Vec::with_capacity(names.len()), Vec::new());
+        let mut unread: Vec<(usize, Error)> = Vec::new();
+        let mut bytes = Vec::new();
+        // the first error the whole set's checks would meet, reported only when every file reads
+        let mut mismatch: Option<Error> = None;
+        for &i in &order {
+            bytes.clear();
+            if let Err(e) = fetch(i, &mut bytes) {
+                unread.push((i, e));
+                continue;
+            }
+            let mut mesh = match super::load::read_mesh(&names[i], &bytes) {
+                Ok(m) => m,
+                Err(e) => {
+                    errors.push(e);
+                    continue;
+                }
+            };
+            // (a reader's vector grows by doubling: what is kept holds no more than its points)
+            mesh.positions.shrink_to_fit();
+            match named.first() {
+                None => {
+                    mismatch = check_first_mesh(&names[i], &mesh).err();
+                    named.push((names[i].clone(), mesh));
+                }
+                Some((first_name, first)) => {
+                    if mismatch.is_none() {
+                        mismatch = check_same_mesh(first_name, first, &names[i], &mesh).err();
+                    }
+                    named.push((names[i].clone(), Mesh { positions: mesh.positions, faces: Vec::new() }));
+                }
+            }
+        }
+        if !unread.is_empty() {
+            unread.sort_by_key(|u| u.0);
+            return Err(unread.into_iter().map(|u| u.1).collect());
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        // (with fewer than two shapes, that is the error)
+        if let Some(e) = mismatch.filter(|_| named.len() >= 2) {
+            return Err(vec![e]);
+        }
+        let (n_obj, n_ply) = order.iter().fold((0, 0), |(o, p), &i| match FileKind::of(&names[i]) {
+            FileKind::Ply => (o, p + 1),
+            _ => (o + 1, p),
+        });
+        let mut population = Population::from_meshes_sharing(named, true).map_err(|e| vec![e])?;
+        population.source = super::load::mesh_files_source(n_obj, n_ply);
+        Ok(population)
     }
 
     fn from_loaded(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
@@ -462,52 +489,89 @@ impl Population {
     }
 
     /// The end of [`Population::from_paths_with`] for one OBJ or PLY file per pose, with the same result and
-    /// the same error as reading every file first: each file is read into one reused buffer and parsed
-    /// straight away, in natural order, so the files' bytes are never all in memory (36 MB of fresh pages,
-    /// a fault per 4 KB, for horse-gallop). The error is the first file that cannot be read in the given
-    /// order (every file is still read after a parse error, to find it), else the first file that does not
-    /// parse in natural order, else what [`Population::from_meshes`] says.
+    /// the same error as reading every file first ([`Population::from_mesh_files_one_at_a_time`]): each file
+    /// is read into one reused buffer and parsed straight away, in natural order, so the files' bytes are never
+    /// all in memory (36 MB of fresh pages, a fault per 4 KB, for horse-gallop). The error is the first file
+    /// that cannot be read in the given order, else the first file that does not parse in natural order, else
+    /// what [`Population::from_meshes`] says.
     fn from_mesh_paths(files: Vec<std::path::PathBuf>) -> Result<Population> {
         use std::io::Read;
-        let mut named: Vec<(String, usize, std::path::PathBuf)> = files
-            .into_iter()
-            .enumerate()
-            .map(|(k, f)| (f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(), k, f))
-            .collect();
-        // Stable, as the sort of (name, bytes) it stands for.
-        named.sort_by(|a, b| natural_cmp(&a.0, &b.0));
-        let (mut n_obj, mut n_ply) = (0, 0);
-        let mut poses = Vec::with_capacity(named.len());
-        let mut unread: Option<(usize, Error)> = None;
-        let mut unparsed: Option<Error> = None;
-        let mut bytes = Vec::new();
-        for (name, k, f) in named {
-            bytes.clear();
-            if let Err(e) = std::fs::File::open(&f).and_then(|mut file| file.read_to_end(&mut bytes)) {
-                if unread.as_ref().is_none_or(|(first, _)| k < *first) {
-                    unread = Some((k, Error::Io(format!("cannot read {}: {e}", f.display()))));
-                }
-                continue;
-            }
-            if unread.is_some() || unparsed.is_some() {
-                continue;
-            }
-            match super::load::FileKind::of(&name) {
-                super::load::FileKind::Ply => n_ply += 1,
-                _ => n_obj += 1,
-            }
-            match super::load::read_mesh(&name, &bytes) {
-                Ok(mesh) => poses.push((name, mesh)),
-                Err(e) => unparsed = Some(e),
-            }
-        }
-        if let Some(e) = unread.map(|u| u.1).or(unparsed) {
-            return Err(e);
-        }
-        let mut population = Population::from_meshes(poses)?;
-        population.source = super::load::mesh_files_source(n_obj, n_ply);
-        Ok(population)
+        let names: Vec<String> = files.iter().map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect();
+        Population::from_mesh_files_one_at_a_time(&names, |i, buffer| {
+            std::fs::File::open(&files[i])
+                .and_then(|mut file| file.read_to_end(buffer))
+                .map(|_| ())
+                .map_err(|e| Error::Io(format!("cannot read {}: {e}", files[i].display())))
+        })
+        .map_err(|mut e| e.swap_remove(0))
     }
+}
+
+/// What [`Population::from_meshes`] asks of the first mesh in natural order: vertices, triangles, and every
+/// triangle's indices naming a vertex.
+fn check_first_mesh(first_name: &str, first: &Mesh) -> Result<()> {
+    if first.positions.is_empty() {
+        return Err(Error::Population { file: first_name.to_string(), message: "has no vertices".into() });
+    }
+    if first.faces.is_empty() {
+        return Err(Error::Population {
+            file: first_name.to_string(),
+            message: "has no triangles; posemfa needs triangle meshes (f lines)".into(),
+        });
+    }
+    if let Some(k) = first.faces.iter().position(|f| f.iter().any(|&v| v as usize >= first.positions.len())) {
+        return Err(Error::Population {
+            file: first_name.to_string(),
+            message: format!(
+                "triangle {} is {:?} (1-based) but the mesh has {} vertices; every index must name a vertex",
+                k + 1,
+                first.faces[k].map(|x| x as u64 + 1),
+                first.positions.len()
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// What [`Population::from_meshes`] asks of every other mesh: the first one's vertex count and its very faces.
+fn check_same_mesh(first_name: &str, first: &Mesh, name: &str, mesh: &Mesh) -> Result<()> {
+    // two files of one name (dropped from two folders): "1.obj has ... but 1.obj has" would say nothing
+    let first_name = &if name == first_name { format!("the first file, also named {first_name},") } else { first_name.to_string() };
+    if mesh.positions.len() != first.positions.len() {
+        return Err(Error::Population {
+            file: name.to_string(),
+            message: format!(
+                "has {} vertices but {} has {}; every shape must be the same mesh in another pose",
+                mesh.positions.len(),
+                first_name,
+                first.positions.len()
+            ),
+        });
+    }
+    if mesh.faces.len() != first.faces.len() {
+        return Err(Error::Population {
+            file: name.to_string(),
+            message: format!(
+                "has {} triangles but {} has {}; every shape must share the same faces",
+                mesh.faces.len(),
+                first_name,
+                first.faces.len()
+            ),
+        });
+    }
+    if let Some(k) = (0..mesh.faces.len()).find(|&k| mesh.faces[k] != first.faces[k]) {
+        return Err(Error::Population {
+            file: name.to_string(),
+            message: format!(
+                "triangle {} is {:?} but in {} it is {:?} (1-based); every shape must share the same faces",
+                k + 1,
+                mesh.faces[k].map(|x| x + 1),
+                first_name,
+                first.faces[k].map(|x| x + 1)
+            ),
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -516,6 +580,64 @@ mod tests {
 
     fn tri(offset: f64) -> Mesh {
         Mesh { positions: vec![[offset, 0.0, 0.0], [1.0 + offset, 0.0, 0.0], [0.0, 2.0, 0.0]], faces: vec![[0, 1, 2]] }
+    }
+
+    /// OBJ text of a quad (two triangles), its first vertex moved by `dx`; `faces` replaces the f lines.
+    fn quad_obj(dx: f64, faces: &str) -> Vec<u8> {
+        format!("v {dx} 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n{faces}").into_bytes()
+    }
+
+    /// Both readers on one set of files: the one-at-a-time reader must ask for each file once, in natural order.
+    fn both(files: &[(&str, Vec<u8>)]) -> (std::result::Result<Population, Vec<Error>>, std::result::Result<Population, Vec<Error>>) {
+        let all = Population::from_files_all_errors(files.iter().map(|(n, b)| (n.to_string(), b.clone())).collect());
+        let names: Vec<String> = files.iter().map(|(n, _)| n.to_string()).collect();
+        let mut asked = Vec::new();
+        let one = Population::from_mesh_files_one_at_a_time(&names, |i, buffer| {
+            asked.push(names[i].clone());
+            buffer.extend_from_slice(&files[i].1);
+            Ok(())
+        });
+        let mut want = names.clone();
+        want.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(asked, want, "each file once, in natural order");
+        (all, one)
+    }
+
+    fn messages(r: &std::result::Result<Population, Vec<Error>>) -> Vec<String> {
+        r.as_ref().err().map(|e| e.iter().map(|x| x.to_string()).collect()).unwrap_or_default()
+    }
+
+    #[test]
+    fn files_read_one_at_a_time_give_the_same_population_and_the_same_errors() {
+        let f = "f 1 2 3\nf 1 3 4\n";
+        // a good set, given out of order: the same population, source and all
+        let (all, one) = both(&[("10.obj", quad_obj(0.3, f)), ("2.obj", quad_obj(0.1, f)), ("1.obj", quad_obj(0.0, f))]);
+        let (all, one) = (all.unwrap(), one.unwrap());
+        assert_eq!(one.names, all.names);
+        assert_eq!(one.faces, all.faces);
+        assert_eq!(one.points, all.points);
+        assert_eq!(one.source, all.source);
+        assert_eq!(one.normalization.scale, all.normalization.scale);
+        // other faces in 2.obj, another vertex count in 10.obj: the first of them in natural order, as before
+        let bad: Vec<(&str, Vec<u8>)> = vec![
+            ("10.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n".to_vec()),
+            ("1.obj", quad_obj(0.0, f)),
+            ("2.obj", quad_obj(0.1, "f 1 2 4\nf 2 3 4\n")),
+        ];
+        let (all, one) = both(&bad);
+        assert_eq!(messages(&one), messages(&all));
+        assert!(messages(&one)[0].contains("2.obj"), "{:?}", messages(&one));
+        // and with a file that does not read: that file's error alone, from both
+        let mut worse = bad.clone();
+        worse.push(("3.obj", b"v 0 0 zero\n".to_vec()));
+        let (all, one) = both(&worse);
+        assert_eq!(messages(&one), messages(&all));
+        assert!(messages(&one).iter().all(|m| m.contains("3.obj")), "{:?}", messages(&one));
+        // the first mesh's own faults come first; one file alone is too few
+        let (all, one) = both(&[("1.obj", quad_obj(0.0, "")), ("2.obj", quad_obj(0.1, f))]);
+        assert_eq!(messages(&one), messages(&all));
+        let (all, one) = both(&[("1.obj", quad_obj(0.0, "f 1 2 9\n"))]);
+        assert_eq!(messages(&one), messages(&all));
     }
 
     #[test]
