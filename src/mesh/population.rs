@@ -537,27 +537,14 @@ fn check_first_mesh(first_name: &str, first: &Mesh) -> Result<()> {
 fn check_same_mesh(first_name: &str, first: &Mesh, name: &str, mesh: &Mesh) -> Result<()> {
     // two files of one name (dropped from two folders): "1.obj has ... but 1.obj has" would say nothing
     let first_name = &if name == first_name { format!("the first file, also named {first_name},") } else { first_name.to_string() };
+    let differ = |what: &str, here: usize, there: usize, rule: &str| {
+        Err(Error::Population { file: name.to_string(), message: format!("has {here} {what} but {first_name} has {there}; {rule}") })
+    };
     if mesh.positions.len() != first.positions.len() {
-        return Err(Error::Population {
-            file: name.to_string(),
-            message: format!(
-                "has {} vertices but {} has {}; every shape must be the same mesh in another pose",
-                mesh.positions.len(),
-                first_name,
-                first.positions.len()
-            ),
-        });
+        return differ("vertices", mesh.positions.len(), first.positions.len(), "every shape must be the same mesh in another pose");
     }
     if mesh.faces.len() != first.faces.len() {
-        return Err(Error::Population {
-            file: name.to_string(),
-            message: format!(
-                "has {} triangles but {} has {}; every shape must share the same faces",
-                mesh.faces.len(),
-                first_name,
-                first.faces.len()
-            ),
-        });
+        return differ("triangles", mesh.faces.len(), first.faces.len(), "every shape must share the same faces");
     }
     if let Some(k) = (0..mesh.faces.len()).find(|&k| mesh.faces[k] != first.faces[k]) {
         return Err(Error::Population {

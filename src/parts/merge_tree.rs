@@ -69,7 +69,7 @@ pub struct MergeTree {
     /// 1 - [`MIDDLE_BAND`] quantiles by vertex; at least the variance floor): the part rule's yardstick on the
     /// fitted parts' tree ([`MergeTree::middle_typical`]).
     #[serde(skip)]
-    pub middle: f64,
+    middle: f64,
 }
 
 /// Additive statistics of a node over the tree's poses.
