@@ -107,6 +107,12 @@ pub fn widen(p: [f32; 3]) -> [f64; 3] {
     [p[0] as f64, p[1] as f64, p[2] as f64]
 }
 
+/// Above this many bytes of f64 poses, [`Population::from_mesh_files_one_at_a_time`] reads its files twice
+/// rather than hold every pose in f64 until the unit box is known (24 bytes per vertex-pose beside the
+/// population's 12). 8 MB is about 350 000 vertex-poses: smaller populations are read once (a second reading
+/// would add about 90 % to their load time for a few MB).
+pub const READ_TWICE_ABOVE_BYTES: usize = 8 << 20;
+
 /// A unit-box coordinate as stored (rounded to nearest f32).
 #[inline(always)]
 pub fn narrow(p: [f64; 3]) -> [f32; 3] {
@@ -251,37 +257,14 @@ impl Population {
             }
             check_same_mesh(first_name, first, name, mesh)?;
         }
-        for (name, mesh) in &named {
-            if let Some(j) = mesh.positions.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
-                return Err(Error::Population {
-                    file: name.clone(),
-                    message: format!("vertex {} has a non-finite coordinate; fix or remove it", j + 1),
-                });
-            }
+        if let Some(e) = named.iter().find_map(|(name, mesh)| first_non_finite(name, mesh)) {
+            return Err(e);
         }
         // The smallest fit (one part) of this population must fit in the memory budget: refuse now, before
         // the normalised copy is made.
         crate::memory::check(first.positions.len(), named.len(), 1, crate::memory::budget_bytes()?)?;
         let (lo, hi) = crate::geometry::bounds(named.iter().flat_map(|(_, mesh)| &mesh.positions));
-        let side = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
-        if !(side > 0.0) {
-            return Err(Error::Population {
-                file: first_name.clone(),
-                message: "all vertices of all shapes are at one point; there is no shape to fit: load the real meshes"
-                    .into(),
-            });
-        }
-        // 1/side must be finite too (a subnormal extent, say 1e-310, would give an infinite scale and NaN).
-        if !side.is_finite() || !(1.0 / side).is_finite() {
-            return Err(Error::Population {
-                file: first_name.clone(),
-                message: format!(
-                    "the shapes span {side:e} units, which double precision cannot scale into a unit box; \
-                     rescale the meshes (the same way for every pose) to an ordinary size"
-                ),
-            });
-        }
-        let normalization = Normalization { offset: lo, scale: 1.0 / side };
+        let normalization = unit_box(first_name, lo, hi)?;
         let faces = first.faces.clone();
         let n_vertices = first.positions.len();
         let mut names = Vec::with_capacity(named.len());
@@ -315,15 +298,30 @@ impl Population {
     }
 
     /// [`Population::from_files_all_errors`] for poses of one OBJ or PLY file each, read one file at a time:
-    /// `fetch(i, buffer)` puts the bytes of `names[i]` in the buffer (emptied first; one buffer for all), asked
-    /// for once each in natural order of the names, so each file's text goes as soon as it is read. The page hands dropped files over this way (with every text in
-    /// its memory at once, an OBJ population's peak was the text: horse-poses 111 bytes per vertex-pose, now
-    /// 82) and so does [`Population::from_paths`]. Only the first mesh keeps its faces; every other is checked
-    /// against them as it is read, as [`Population::from_meshes`] checks it. The same population and the same
-    /// errors; a file `fetch` cannot give comes before them all (in the order of `names`).
+    /// `fetch(i, buffer)` puts the bytes of `names[i]` in the buffer (emptied first), asked for in natural order
+    /// of the names, so each file's text goes as soon as it is read. The page hands dropped files over this way
+    /// (with every text in its memory at once, an OBJ population's peak was the text: horse-poses 111 bytes per
+    /// vertex-pose, now 82) and so does [`Population::from_paths`]. Only the first mesh keeps its faces; every
+    /// other is checked against them as it is read, as [`Population::from_meshes`] checks it. The same
+    /// population and the same errors; a file `fetch` cannot give comes before them all (in the order of
+    /// `names`).
+    ///
+    /// A population whose poses would take more than [`READ_TWICE_ABOVE_BYTES`] in f64 is read twice: the
+    /// first pass checks every file and finds the unit box, the second stores each pose straight into the f32
+    /// population (the same numbers: the unit box is the same minimum and maximum). Its peak is then the
+    /// population's 12 bytes per vertex-pose and one file, not the 36 of every pose in f64 and in f32 together.
     pub fn from_mesh_files_one_at_a_time(
         names: &[String],
+        fetch: impl FnMut(usize, &mut Vec<u8>) -> Result<()>,
+    ) -> std::result::Result<Population, Vec<Error>> {
+        Population::read_one_at_a_time(names, fetch, READ_TWICE_ABOVE_BYTES)
+    }
+
+    /// [`Population::from_mesh_files_one_at_a_time`], reading twice above `read_twice_above` bytes of f64 poses.
+    fn read_one_at_a_time(
+        names: &[String],
         mut fetch: impl FnMut(usize, &mut Vec<u8>) -> Result<()>,
+        read_twice_above: usize,
     ) -> std::result::Result<Population, Vec<Error>> {
         use super::load::FileKind;
         if names.is_empty() {
@@ -347,6 +345,11 @@ impl Population {
         let mut bytes = Vec::new();
         // the first error the whole set's checks would meet, reported only when every file reads
         let mut mismatch: Option<Error> = None;
+        // read twice: only the first pose's positions are kept; the unit box and the first non-finite
+        // coordinate are found as the files go by
+        let mut twice = false;
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut non_finite: Option<Error> = None;
         for &i in &order {
             bytes.clear();
             if let Err(e) = fetch(i, &mut bytes) {
@@ -362,16 +365,28 @@ impl Population {
             };
             // (a reader's vector grows by doubling: what is kept holds no more than its points)
             mesh.positions.shrink_to_fit();
+            if twice {
+                (lo, hi) = crate::geometry::bounds([lo, hi].iter().chain(&mesh.positions));
+                if non_finite.is_none() {
+                    non_finite = first_non_finite(&names[i], &mesh);
+                }
+            }
             match named.first() {
                 None => {
                     mismatch = check_first_mesh(&names[i], &mesh).err();
+                    twice = names.len() >= 2 && mesh.positions.len() * names.len() * 24 > read_twice_above;
+                    if twice {
+                        (lo, hi) = crate::geometry::bounds(&mesh.positions);
+                        non_finite = first_non_finite(&names[i], &mesh);
+                    }
                     named.push((names[i].clone(), mesh));
                 }
                 Some((first_name, first)) => {
                     if mismatch.is_none() {
                         mismatch = check_same_mesh(first_name, first, &names[i], &mesh).err();
                     }
-                    named.push((names[i].clone(), Mesh { positions: mesh.positions, faces: Vec::new() }));
+                    let positions = if twice { Vec::new() } else { mesh.positions };
+                    named.push((names[i].clone(), Mesh { positions, faces: Vec::new() }));
                 }
             }
         }
@@ -390,9 +405,45 @@ impl Population {
             FileKind::Ply => (o, p + 1),
             _ => (o + 1, p),
         });
-        let mut population = Population::from_meshes_sharing(named, true).map_err(|e| vec![e])?;
-        population.source = super::load::mesh_files_source(n_obj, n_ply);
-        Ok(population)
+        let source = super::load::mesh_files_source(n_obj, n_ply);
+        if !twice {
+            let mut population = Population::from_meshes_sharing(named, true).map_err(|e| vec![e])?;
+            population.source = source;
+            return Ok(population);
+        }
+        // the checks of from_meshes_sharing, in its order, then the second pass
+        if let Some(e) = non_finite {
+            return Err(vec![e]);
+        }
+        let n_vertices = named[0].1.positions.len();
+        crate::memory::check(n_vertices, named.len(), 1, crate::memory::budget_bytes().map_err(|e| vec![e])?)
+            .map_err(|e| vec![e])?;
+        let normalization = unit_box(&named[0].0, lo, hi).map_err(|e| vec![e])?;
+        let mut points = Vec::with_capacity(named.len() * n_vertices);
+        points.extend(named[0].1.positions.iter().map(|&p| narrow(normalization.to_unit(p))));
+        named[0].1.positions = Vec::new();
+        for &i in &order[1..] {
+            bytes.clear();
+            let again = fetch(i, &mut bytes).and_then(|_| super::load::read_mesh(&names[i], &bytes)).map_err(|e| vec![e])?;
+            if again.positions.len() != n_vertices || first_non_finite(&names[i], &again).is_some() {
+                return Err(vec![Error::Population {
+                    file: names[i].clone(),
+                    message: "changed while it was read (the second reading differs from the first); load the population again".into(),
+                }]);
+            }
+            points.extend(again.positions.iter().map(|&p| narrow(normalization.to_unit(p))));
+        }
+        let mut faces = std::mem::take(&mut named[0].1.faces);
+        faces.shrink_to_fit();
+        Ok(Population {
+            names: named.into_iter().map(|n| n.0).collect(),
+            faces,
+            points: std::sync::Arc::new(points),
+            n_vertices,
+            normalization,
+            source,
+            pose_order: PoseOrder::default(),
+        })
     }
 
     fn from_loaded(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
@@ -507,6 +558,36 @@ impl Population {
     }
 }
 
+/// The unit box of points within `lo`..`hi`: the offset `lo` and one scale for every axis, 1 over the largest
+/// side; an error (named by `first_name`, the population's first file) when there is no extent to scale.
+fn unit_box(first_name: &str, lo: [f64; 3], hi: [f64; 3]) -> Result<Normalization> {
+    let side = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+    if !(side > 0.0) {
+        return Err(Error::Population {
+            file: first_name.to_string(),
+            message: "all vertices of all shapes are at one point; there is no shape to fit: load the real meshes"
+                .into(),
+        });
+    }
+    // 1/side must be finite too (a subnormal extent, say 1e-310, would give an infinite scale and NaN).
+    if !side.is_finite() || !(1.0 / side).is_finite() {
+        return Err(Error::Population {
+            file: first_name.to_string(),
+            message: format!(
+                "the shapes span {side:e} units, which double precision cannot scale into a unit box; \
+                 rescale the meshes (the same way for every pose) to an ordinary size"
+            ),
+        });
+    }
+    Ok(Normalization { offset: lo, scale: 1.0 / side })
+}
+
+/// The error for the first vertex of `mesh` with a non-finite coordinate, if any.
+fn first_non_finite(name: &str, mesh: &Mesh) -> Option<Error> {
+    let j = mesh.positions.iter().position(|p| p.iter().any(|c| !c.is_finite()))?;
+    Some(Error::Population { file: name.to_string(), message: format!("vertex {} has a non-finite coordinate; fix or remove it", j + 1) })
+}
+
 /// What [`Population::from_meshes`] asks of the first mesh in natural order: vertices, triangles, and every
 /// triangle's indices naming a vertex.
 fn check_first_mesh(first_name: &str, first: &Mesh) -> Result<()> {
@@ -574,20 +655,39 @@ mod tests {
         format!("v {dx} 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n{faces}").into_bytes()
     }
 
-    /// Both readers on one set of files: the one-at-a-time reader must ask for each file once, in natural order.
+    /// Both readers on one set of files, the one-at-a-time reader reading once and reading twice: it must ask
+    /// for each file once in natural order, or (twice) for every file in natural order and then again for all
+    /// but the first when all of them read. Both ways must give the same population or the same errors.
     fn both(files: &[(&str, Vec<u8>)]) -> (std::result::Result<Population, Vec<Error>>, std::result::Result<Population, Vec<Error>>) {
         let all = Population::from_files_all_errors(files.iter().map(|(n, b)| (n.to_string(), b.clone())).collect());
         let names: Vec<String> = files.iter().map(|(n, _)| n.to_string()).collect();
-        let mut asked = Vec::new();
-        let one = Population::from_mesh_files_one_at_a_time(&names, |i, buffer| {
-            asked.push(names[i].clone());
-            buffer.extend_from_slice(&files[i].1);
-            Ok(())
-        });
         let mut want = names.clone();
         want.sort_by(|a, b| natural_cmp(a, b));
+        let mut read = |read_twice_above: usize| {
+            let mut asked = Vec::new();
+            let one = Population::read_one_at_a_time(&names, |i, buffer| {
+                asked.push(names[i].clone());
+                buffer.extend_from_slice(&files[i].1);
+                Ok(())
+            }, read_twice_above);
+            (one, asked)
+        };
+        let (once, asked) = read(usize::MAX);
         assert_eq!(asked, want, "each file once, in natural order");
-        (all, one)
+        let (twice, asked) = read(0);
+        let mut again = want.clone();
+        if asked.len() > want.len() {
+            again.extend_from_slice(&want[1..]);
+        }
+        assert_eq!(asked, again, "every file in natural order, then all but the first again");
+        match (&once, &twice) {
+            (Ok(a), Ok(b)) => {
+                assert_eq!(a, b);
+                assert_eq!((&a.source, a.normalization.scale, a.normalization.offset), (&b.source, b.normalization.scale, b.normalization.offset));
+            }
+            _ => assert_eq!(messages(&once), messages(&twice)),
+        }
+        (all, once)
     }
 
     fn messages(r: &std::result::Result<Population, Vec<Error>>) -> Vec<String> {
@@ -625,6 +725,35 @@ mod tests {
         assert_eq!(messages(&one), messages(&all));
         let (all, one) = both(&[("1.obj", quad_obj(0.0, "f 1 2 9\n"))]);
         assert_eq!(messages(&one), messages(&all));
+    }
+
+    #[test]
+    fn files_read_twice_give_the_later_checks_errors_and_see_a_changed_file() {
+        let f = "f 1 2 3\nf 1 3 4\n";
+        // (the readers refuse non-finite numbers themselves) an extent too wide to scale, then every vertex at
+        // one point: both readers agree
+        let (all, one) = both(&[("1.obj", quad_obj(-1e308, f)), ("2.obj", quad_obj(1e308, f))]);
+        assert_eq!(messages(&one), messages(&all));
+        assert!(messages(&one)[0].contains("cannot scale into a unit box"), "{:?}", messages(&one));
+        let dot = b"v 0 0 0\nv 0 0 0\nv 0 0 0\nv 0 0 0\nf 1 2 3\nf 1 3 4\n".to_vec();
+        let (all, one) = both(&[("1.obj", dot.clone()), ("2.obj", dot)]);
+        assert_eq!(messages(&one), messages(&all));
+        assert!(messages(&one)[0].contains("at one point"), "{:?}", messages(&one));
+        // a file that has another vertex count when it is read the second time
+        let names = vec!["1.obj".to_string(), "2.obj".to_string()];
+        let mut reads = 0;
+        let changed = Population::read_one_at_a_time(&names, |i, buffer| {
+            reads += 1;
+            let dx = if reads == 3 { "0 0 0\nv 0.5" } else { "0.1" };
+            buffer.extend_from_slice(&quad_obj(0.0, f));
+            if i == 1 {
+                buffer.clear();
+                buffer.extend_from_slice(format!("v {dx} 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n{f}").as_bytes());
+            }
+            Ok(())
+        }, 0);
+        let m = messages(&changed);
+        assert!(m.len() == 1 && m[0].contains("2.obj") && m[0].contains("changed while it was read"), "{m:?}");
     }
 
     #[test]
