@@ -363,13 +363,15 @@ impl Population {
                     continue;
                 }
             };
-            // (a reader's vector grows by doubling: what is kept holds no more than its points)
-            mesh.positions.shrink_to_fit();
             if twice {
                 (lo, hi) = crate::geometry::bounds([lo, hi].iter().chain(&mesh.positions));
                 if non_finite.is_none() {
                     non_finite = first_non_finite(&names[i], &mesh);
                 }
+            }
+            // (a reader's vector grows by doubling: what is kept holds no more than its points)
+            if !twice {
+                mesh.positions.shrink_to_fit();
             }
             match named.first() {
                 None => {
