@@ -110,7 +110,7 @@ pub fn widen(p: [f32; 3]) -> [f64; 3] {
 /// Above this many bytes of f64 poses, [`Population::from_mesh_files_one_at_a_time`] reads its files twice
 /// rather than hold every pose in f64 until the unit box is known (24 bytes per vertex-pose beside the
 /// population's 12). 8 MB is about 350 000 vertex-poses: smaller populations are read once (a second reading
-/// would add about 90 % to their load time for a few MB).
+/// would add 40-70 % to their load time, in Node, for a few MB).
 pub const READ_TWICE_ABOVE_BYTES: usize = 8 << 20;
 
 /// A unit-box coordinate as stored (rounded to nearest f32).
