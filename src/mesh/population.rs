@@ -665,7 +665,7 @@ mod tests {
         let names: Vec<String> = files.iter().map(|(n, _)| n.to_string()).collect();
         let mut want = names.clone();
         want.sort_by(|a, b| natural_cmp(a, b));
-        let mut read = |read_twice_above: usize| {
+        let read = |read_twice_above: usize| {
             let mut asked = Vec::new();
             let one = Population::read_one_at_a_time(&names, |i, buffer| {
                 asked.push(names[i].clone());
