@@ -6,14 +6,15 @@
 //! - `data/horse-poses` there: the horse population must load with 8431 vertices / 16843 triangles per file and
 //!   one common face list.
 //!
-//! Positions are also checked against a naive reading of the `v` lines (file order), and triangles against
-//! tobj, an independent OBJ reader (same corners, same order).
+//! Positions are also checked against a naive reading of the `v` lines (file order) and against the
+//! positions-only reading (`parse_obj_positions`), and triangles against tobj, an independent OBJ reader (same
+//! corners, same order).
 //!
 //! When a folder is missing, the tests that need it are counted as skipped, and fail under CI=true
 //! (`common::shared_dir`): the data are not part of the repository.
 
 use posemfa::error::Error;
-use posemfa::mesh::obj::parse_obj;
+use posemfa::mesh::obj::{parse_obj, parse_obj_positions};
 use posemfa::mesh::Mesh;
 use std::path::{Path, PathBuf};
 
@@ -181,6 +182,12 @@ fn manifest_outcomes() {
     let (mut loads, mut rejects) = (0, 0);
     for (file, expect) in &entries {
         let bytes = std::fs::read(dir.join(file)).expect("read corpus file");
+        // the second reading of a large population reads only the positions: the same ones
+        if let Ok(m) = parse_obj(file, &bytes) {
+            if parse_obj_positions(file, &bytes).as_ref() != Ok(&m.positions) {
+                failures.push(format!("{file}: the positions-only reading differs from the full one"));
+            }
+        }
         match check(file, &bytes, expect) {
             Ok(how) => {
                 if how.starts_with("loads") {

@@ -151,6 +151,15 @@ pub fn read_mesh(name: &str, bytes: &[u8]) -> Result<Mesh> {
     }
 }
 
+/// The vertex positions of one OBJ or PLY file that [`read_mesh`] has read without error, as it gives them
+/// (OBJ files skip their one-line faces: [`obj::parse_obj_positions`]).
+pub fn read_positions(name: &str, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
+    match FileKind::of(name) {
+        FileKind::Obj => obj::parse_obj_positions(name, bytes),
+        _ => read_mesh(name, bytes).map(|m| m.positions),
+    }
+}
+
 fn set_error(file: &str, message: String) -> Vec<Error> {
     vec![Error::Population { file: file.to_string(), message }]
 }

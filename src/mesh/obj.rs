@@ -43,7 +43,15 @@ use crate::error::{Error, Result};
 
 /// Parses one OBJ file. `name` is used in error messages.
 pub fn parse_obj(name: &str, bytes: &[u8]) -> Result<Mesh> {
-    parse(bytes).map_err(|f| Error::Obj { file: name.to_string(), line: f.line, message: f.message })
+    parse(bytes, false).map_err(|f| Error::Obj { file: name.to_string(), line: f.line, message: f.message })
+}
+
+/// The vertex positions of an OBJ file, as [`parse_obj`] gives them, read faster: one-line `f` statements are
+/// skipped to their line end instead of read (a statement continued by a backslash still goes through the
+/// full reader). For a file [`parse_obj`] has already accepted: a face this skips is not checked (the second
+/// reading of a large population, [`crate::mesh::Population::from_mesh_files_one_at_a_time`]).
+pub fn parse_obj_positions(name: &str, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
+    parse(bytes, true).map(|m| m.positions).map_err(|f| Error::Obj { file: name.to_string(), line: f.line, message: f.message })
 }
 
 /// An error before the file name is attached. `line` is 1-based, 0 for the whole file.
@@ -59,13 +67,16 @@ fn fail<T>(line: usize, message: String) -> std::result::Result<T, Fail> {
 
 type Res<T> = std::result::Result<T, Fail>;
 
-fn parse(bytes: &[u8]) -> Res<Mesh> {
+/// `skip_faces`: one-line `f` statements are passed over unread ([`parse_obj_positions`]).
+fn parse(bytes: &[u8], skip_faces: bool) -> Res<Mesh> {
     let text = decode(bytes)?;
-    let mut reader = Reader::default();
+    let mut reader = Reader { skip_faces, ..Reader::default() };
     // A capacity guess from the file's size (bounded by the bytes present, never by a number in the file):
     // pages reserved but never written cost nothing, and growing a vector copies it.
     reader.mesh.positions.reserve(text.len() / 64);
-    reader.mesh.faces.reserve(text.len() / 32);
+    if !skip_faces {
+        reader.mesh.faces.reserve(text.len() / 32);
+    }
     let mut lines = PhysicalLines { rest: text, done: false };
     let mut joined: Vec<u8> = Vec::new();
     let mut lineno = 0usize;
@@ -246,6 +257,17 @@ fn split_continuation(line: &[u8]) -> (&[u8], bool) {
     }
 }
 
+/// The text after the physical line that starts `text`, when that line has a line end and is not continued by
+/// a backslash (what [`PhysicalLines`] and [`split_continuation`] would find).
+fn skip_line(text: &[u8]) -> Option<&[u8]> {
+    let i = memchr::memchr2(b'\n', b'\r', text)?;
+    let (line, end) = text.split_at(i);
+    if split_continuation(line).1 {
+        return None;
+    }
+    after_line_end(end)
+}
+
 /// Physical lines ended by LF, CRLF or a lone CR.
 struct PhysicalLines<'a> {
     rest: &'a [u8],
@@ -396,6 +418,8 @@ struct Reader {
     normals: usize,
     /// Position indices of the element being read (reused: no allocation per line).
     corners: Vec<u32>,
+    /// One-line `f` statements are skipped, not read ([`parse_obj_positions`]).
+    skip_faces: bool,
 }
 
 impl Reader {
@@ -450,6 +474,7 @@ impl Reader {
                 let after = after_line_end(skip_blank(rest))?;
                 self.push_vertex(xyz).then_some(after)
             }
+            [b'f', b' ' | b'\t' | 0x0C, rest @ ..] if self.skip_faces => skip_line(rest),
             [b'f', b' ' | b'\t' | 0x0C, rest @ ..] => {
                 let after = after_line_end(self.corners_fast(rest)?)?;
                 self.push_fan().then_some(after)
@@ -898,6 +923,29 @@ mod tests {
         assert_err("v 0 0 \\\n0 # note \\\nf 1 1 1\n", 2, &["backslash", "line 3", "`f`"]);
         // A continuation that reaches an empty line ends there: the error names the first line and the span.
         assert_err("# x\nv -1 \\\n 0 \\\n\n 1\nv 1 0 0\n", 2, &["2 coordinates", "lines 2-4"]);
+    }
+
+    /// The positions-only reading gives the full reading's positions, whatever the faces and line ends look
+    /// like, continued `f` statements and comments included.
+    #[test]
+    fn positions_only_reading_gives_the_same_positions() {
+        let texts = [
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "v 0 0 0\r\nv 1 0 0\r\nf 1 2 -1\r\nv 0 1 0\r\nvt 0 0\r\nvt 1 0\r\nvt 0 1\r\nf 1/1 2/2 3/3\r\n",
+            "v 0 0 0\rv 1 0 0\rv 0 1 0\rvn 0 0 1\rf 1//1 2//1 3//1\rv 5 5 5",
+            // a face continued onto the next line, one whose comment ends in a backslash, one at the end
+            "v -1 \\\n 0 1\nv 1 0 0\nv 0 1 0\nf 1 \\\n2 3\nv 2 2 2\nf 1 2 4 # c \\\n\nv 3 3 3\nf 1 2 3",
+            // a face line ending in blanks, a tab after f, a quad, vt / vn lines, objects and groups
+            "o a\nv 0 0 0\nv 1 0 0\nvt 0 0\nvn 0 0 1\nv 1 1 0\nv 0 1 0\nf\t1 2 3 4  \t\ng b\nf 1/1/1 2/1/1 3/1/1\nv 9 9 9\n",
+        ];
+        for t in texts {
+            let full = parse_obj("t.obj", t.as_bytes()).unwrap_or_else(|e| panic!("{t:?}: {e}"));
+            assert!(!full.faces.is_empty());
+            assert_eq!(parse_obj_positions("t.obj", t.as_bytes()).unwrap(), full.positions, "{t:?}");
+        }
+        // (it skips the faces it does not read: a face the full reading refuses passes unread)
+        assert!(parse_obj("t.obj", b"v 0 0 0\nf 1 2 3\n").is_err());
+        assert_eq!(parse_obj_positions("t.obj", b"v 0 0 0\nf 1 2 3\n").unwrap(), vec![[0.0; 3]]);
     }
 
     #[test]

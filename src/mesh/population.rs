@@ -110,7 +110,7 @@ pub fn widen(p: [f32; 3]) -> [f64; 3] {
 /// Above this many bytes of f64 poses, [`Population::from_mesh_files_one_at_a_time`] reads its files twice
 /// rather than hold every pose in f64 until the unit box is known (24 bytes per vertex-pose beside the
 /// population's 12). 8 MB is about 350 000 vertex-poses: smaller populations are read once (a second reading
-/// would add 40-70 % to their load time, in Node, for a few MB).
+/// would add 35-50 % to their load time, in Node, for a few MB).
 pub const READ_TWICE_ABOVE_BYTES: usize = 8 << 20;
 
 /// A unit-box coordinate as stored (rounded to nearest f32).
@@ -307,8 +307,9 @@ impl Population {
     /// `names`).
     ///
     /// A population whose poses would take more than [`READ_TWICE_ABOVE_BYTES`] in f64 is read twice: the
-    /// first pass checks every file and finds the unit box, the second stores each pose straight into the f32
-    /// population (the same numbers: the unit box is the same minimum and maximum). Its peak is then the
+    /// first pass checks every file and finds the unit box, the second reads only the positions
+    /// ([`super::load::read_positions`]) and stores each pose straight into the f32 population (the same numbers:
+    /// the unit box is the same minimum and maximum). Its peak is then the
     /// population's 12 bytes per vertex-pose and one file, not the 36 of every pose in f64 and in f32 together.
     pub fn from_mesh_files_one_at_a_time(
         names: &[String],
@@ -426,7 +427,8 @@ impl Population {
         named[0].1.positions = Vec::new();
         for &i in &order[1..] {
             bytes.clear();
-            let again = fetch(i, &mut bytes).and_then(|_| super::load::read_mesh(&names[i], &bytes)).map_err(|e| vec![e])?;
+            let again = fetch(i, &mut bytes).and_then(|_| super::load::read_positions(&names[i], &bytes)).map_err(|e| vec![e])?;
+            let again = Mesh { positions: again, faces: Vec::new() };
             if again.positions.len() != n_vertices || first_non_finite(&names[i], &again).is_some() {
                 return Err(vec![Error::Population {
                     file: names[i].clone(),
