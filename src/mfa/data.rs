@@ -216,6 +216,11 @@ impl Data {
 
     /// The first vertex and shape (0-based) with a non-finite coordinate, and that coordinate.
     pub fn first_non_finite(&self) -> Option<(usize, usize, f64)> {
+        // one pass over the stored values first (every lane holds a vertex's value, the last block's spare lanes
+        // a copy of its last vertex's): vertex by vertex only when one is not finite
+        if self.layout.h.iter().flatten().all(|v| v.is_finite()) {
+            return None;
+        }
         (0..self.n_vertices).find_map(|j| {
             (0..self.n_shapes).find_map(|i| self.point(j, i).into_iter().find(|v| !v.is_finite()).map(|v| (j, i, v)))
         })
@@ -330,4 +335,25 @@ fn shifted(comps: &[Component], offsets: &[crate::geometry::Vec3], sign: f64) ->
             c
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The first non-finite value in (vertex, shape) order, found whatever block and lane it is stored in, and
+    /// none in finite data.
+    #[test]
+    fn the_first_non_finite_value_by_vertex_then_shape() {
+        let (nv, ns) = (11, 3);
+        let h: Vec<f64> = (0..nv * ns * 3).map(|a| (a as f64 * 0.37).sin()).collect();
+        assert_eq!(Data::from_f64(nv, ns, &h, vec![[0.0; 3]; ns]).first_non_finite(), None);
+        let at = |j: usize, i: usize, c: usize| (j * ns + i) * 3 + c;
+        let mut bad = h.clone();
+        bad[at(9, 0, 2)] = f64::INFINITY;
+        bad[at(7, 2, 1)] = f64::NAN;
+        bad[at(7, 1, 0)] = f64::NEG_INFINITY;
+        let found = Data::from_f64(nv, ns, &bad, vec![[0.0; 3]; ns]).first_non_finite();
+        assert_eq!(found.map(|(j, i, v)| (j, i, v)), Some((7, 1, f64::NEG_INFINITY)));
+    }
 }
