@@ -230,14 +230,20 @@ impl Data {
 /// Shapes in farthest-first order: shape 0, then repeatedly the shape whose smallest summed squared vertex
 /// distance to the shapes already taken is largest, for as many shapes as the early-exit checks look at (8);
 /// the rest follow in their own order. The distances are summed over at most [`ORDER_SAMPLE`] evenly spaced
-/// vertices (the order only decides how early the bounds prune; every order gives the same E-step).
+/// vertices (the order only decides how early the bounds prune; every order gives the same E-step). `at` gives
+/// stored f32 values, widened.
 fn farthest_first_shapes(nv: usize, ns: usize, at: &dyn Fn(usize, usize) -> Vec3) -> Vec<usize> {
     let stride = nv.div_ceil(ORDER_SAMPLE).max(1);
+    // the sampled vertices of every shape, read once (each shape's distances are summed many times); `at`
+    // gives stored f32 values widened, so they are kept in f32 exactly
+    let sampled: Vec<Vec<[f32; 3]>> =
+        (0..ns).map(|i| (0..nv).step_by(stride).map(|j| at(j, i).map(|c| c as f32)).collect()).collect();
     let dist = |a: usize, b: usize| -> f64 {
-        (0..nv)
-            .step_by(stride)
-            .map(|j| {
-                let (va, vb) = (at(j, a), at(j, b));
+        sampled[a]
+            .iter()
+            .zip(&sampled[b])
+            .map(|(va, vb)| {
+                let (va, vb) = (va.map(f64::from), vb.map(f64::from));
                 let d = [va[0] - vb[0], va[1] - vb[1], va[2] - vb[2]];
                 d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
             })
