@@ -13,7 +13,6 @@
 
 use super::merge_tree::seeded_patches;
 use crate::mesh::Population;
-use std::collections::{BTreeMap, BTreeSet};
 
 /// A population's coarse mesh (module doc).
 pub struct CoarseMesh {
@@ -29,41 +28,51 @@ impl CoarseMesh {
     /// The coarse mesh of about `target` vertices (fewer when the mesh has fewer vertices on its triangles).
     pub fn build(pop: &Population, target: usize) -> CoarseMesh {
         let (patch, seeds) = seeded_patches(pop, target, true);
-        let mut faces: Vec<[u32; 3]> = Vec::new();
-        let mut held: BTreeSet<[u32; 3]> = BTreeSet::new();
-        // patch pairs that share an edge of the mesh, and whether a triangle holds them
-        let mut pairs: BTreeMap<(u32, u32), bool> = BTreeMap::new();
-        for f in &pop.faces {
+        // patch pairs that share an edge of the mesh (sorted), and the triangles where three patches meet: the
+        // first of each three in the mesh's order, as the mesh orients it
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        let mut three: Vec<([u32; 3], usize, [u32; 3])> = Vec::new();
+        for (t, f) in pop.faces.iter().enumerate() {
             let p = f.map(|v| patch[v as usize]);
             for s in 0..3 {
                 let (a, b) = (p[s], p[(s + 1) % 3]);
                 if a != b {
-                    pairs.entry((a.min(b), a.max(b))).or_insert(false);
+                    pairs.push((a.min(b), a.max(b)));
                 }
             }
             if p[0] != p[1] && p[1] != p[2] && p[0] != p[2] {
                 let mut key = p;
                 key.sort_unstable();
-                if held.insert(key) {
-                    faces.push(p);
-                }
+                three.push((key, t, p));
             }
         }
+        pairs.sort_unstable();
+        pairs.dedup();
+        three.sort_unstable();
+        three.dedup_by_key(|x| x.0);
+        three.sort_unstable_by_key(|x| x.1);
+        let mut faces: Vec<[u32; 3]> = three.into_iter().map(|x| x.2).collect();
+        // which pairs a triangle holds
+        let mut held = vec![false; pairs.len()];
         for f in &faces {
             for s in 0..3 {
                 let (a, b) = (f[s], f[(s + 1) % 3]);
-                pairs.insert((a.min(b), a.max(b)), true);
+                if let Ok(k) = pairs.binary_search(&(a.min(b), a.max(b))) {
+                    held[k] = true;
+                }
             }
         }
         // a pair no triangle holds: a triangle with the first patch (lowest id) next to both, else a degenerate
         // one, so that every pair of touching patches is an edge of the coarse mesh
-        let mut around: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); seeds.len()];
-        for &(a, b) in pairs.keys() {
-            around[a as usize].insert(b);
-            around[b as usize].insert(a);
+        let mut around: Vec<Vec<u32>> = vec![Vec::new(); seeds.len()];
+        for &(a, b) in &pairs {
+            around[a as usize].push(b);
+            around[b as usize].push(a);
         }
-        for (&(a, b), _) in pairs.iter().filter(|(_, &held)| !held) {
-            let c = around[a as usize].intersection(&around[b as usize]).next().copied().unwrap_or(b);
+        around.iter_mut().for_each(|x| x.sort_unstable());
+        for (&(a, b), _) in pairs.iter().zip(&held).filter(|(_, &h)| !h) {
+            let (x, y) = (&around[a as usize], &around[b as usize]);
+            let c = x.iter().find(|c| y.binary_search(c).is_ok()).copied().unwrap_or(b);
             faces.push([a, b, c]);
         }
         CoarseMesh { pop: pop.restricted(&seeds, faces), seeds, patch }

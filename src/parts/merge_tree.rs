@@ -326,13 +326,28 @@ pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
 /// as length 1 (the patches then depend on the mesh's connectivity alone, not on the poses).
 pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, Vec<usize>) {
     let nv = pop.n_vertices();
-    let mut adj: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nv];
-    let edges = if hops { edge_list(pop).into_iter().map(|(a, b)| (a, b, 1.0)).collect() } else { edges(pop) };
-    for (a, b, w) in edges {
-        adj[a as usize].push((b, w));
-        adj[b as usize].push((a, w));
+    let edges: Vec<(u32, u32, f64)> =
+        if hops { edge_list(pop).into_iter().map(|(a, b)| (a, b, 1.0)).collect() } else { edges(pop) };
+    // each vertex's neighbours (with the edges' lengths) side by side in one array, in the edges' order
+    let mut start = vec![0usize; nv + 1];
+    for &(a, b, _) in &edges {
+        start[a as usize + 1] += 1;
+        start[b as usize + 1] += 1;
     }
-    let on_mesh: Vec<bool> = adj.iter().map(|a| !a.is_empty()).collect();
+    for v in 0..nv {
+        start[v + 1] += start[v];
+    }
+    let mut neighbours = vec![(0u32, 0.0f64); start[nv]];
+    let mut fill = start.clone();
+    for &(a, b, w) in &edges {
+        neighbours[fill[a as usize]] = (b, w);
+        fill[a as usize] += 1;
+        neighbours[fill[b as usize]] = (a, w);
+        fill[b as usize] += 1;
+    }
+    drop((edges, fill));
+    let adj = |v: u32| &neighbours[start[v as usize]..start[v as usize + 1]];
+    let on_mesh: Vec<bool> = (0..nv).map(|v| start[v + 1] > start[v]).collect();
     let mut dist = vec![f64::INFINITY; nv];
     let mut owner = vec![u32::MAX; nv];
     let mut heap: BinaryHeap<Keyed<true>> = BinaryHeap::new();
@@ -340,7 +355,15 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
     // one entry per vertex, at least its distance (distances only fall), the largest first: an entry above its
     // vertex's distance goes back in at that distance until the top one is exact, and that vertex is the
     // farthest (any other's distance is at most its entry, at most the top's) without a scan of the mesh per seed
-    let mut farthest: BinaryHeap<Keyed<false>> = (0..nv).filter(|&j| on_mesh[j]).map(|j| Keyed(f64::INFINITY, j as u32)).collect();
+    let mut farthest: BinaryHeap<Keyed<false>> = if hops {
+        BinaryHeap::new()
+    } else {
+        (0..nv).filter(|&j| on_mesh[j]).map(|j| Keyed(f64::INFINITY, j as u32)).collect()
+    };
+    // by hops, the same farthest vertex from buckets: `level[d]` holds (lowest id first) the vertices that came
+    // to distance d, some since gone closer; `unreached` the vertices no seed reaches yet, by id
+    let mut level: Vec<BinaryHeap<std::cmp::Reverse<u32>>> = Vec::new();
+    let mut unreached = (0..nv as u32).filter(|&j| on_mesh[j as usize]).peekable();
     let mut seeds: Vec<usize> = Vec::new();
     let mut next = (0..nv).find(|&j| on_mesh[j]);
     while let Some(s) = next {
@@ -354,22 +377,48 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
             queue.push_back(s as u32);
             while let Some(v) = queue.pop_front() {
                 let nd = dist[v as usize] + 1.0;
-                for &(u, _) in &adj[v as usize] {
+                for &(u, _) in adj(v) {
                     if nd < dist[u as usize] {
                         dist[u as usize] = nd;
                         owner[u as usize] = patch;
                         queue.push_back(u);
+                        let d = nd as usize;
+                        if level.len() <= d {
+                            level.resize_with(d + 1, BinaryHeap::new);
+                        }
+                        level[d].push(std::cmp::Reverse(u));
                     }
                 }
             }
-        } else {
-            heap.push(Keyed(0.0, s as u32));
+            // the farthest vertex: an unreached one first (lowest id), else the lowest id at the largest distance
+            while unreached.next_if(|&j| dist[j as usize].is_finite()).is_some() {}
+            next = match unreached.peek() {
+                Some(&j) => Some(j as usize),
+                None => loop {
+                    let d = level.len().wrapping_sub(1);
+                    let Some(top) = level.last_mut() else { break None };
+                    match top.peek() {
+                        Some(&std::cmp::Reverse(j)) if dist[j as usize] as usize == d => break (d > 0).then_some(j as usize),
+                        Some(_) => {
+                            top.pop();
+                        }
+                        None => {
+                            level.pop();
+                        }
+                    }
+                },
+            };
+            if seeds.len() >= count {
+                next = next.filter(|&j| dist[j].is_infinite());
+            }
+            continue;
         }
+        heap.push(Keyed(0.0, s as u32));
         while let Some(Keyed(d, v)) = heap.pop() {
             if d > dist[v as usize] {
                 continue;
             }
-            for &(u, w) in &adj[v as usize] {
+            for &(u, w) in adj(v) {
                 let nd = d + w;
                 if nd < dist[u as usize] {
                     dist[u as usize] = nd;
@@ -800,6 +849,61 @@ mod tests {
         assert!(owner.iter().all(|&o| (o as usize) < seeds.len()));
         // and a count past the pieces is the farthest-point count, as on any mesh
         assert_eq!(seeded_patches(&pop, 100, true).1.len(), 100);
+    }
+
+    /// By hops, the seeds and patches are farthest-point sampling done the slow way: after each seed, every
+    /// vertex's hop distance to the nearest seed (a breadth-first search from each seed), the next seed the
+    /// farthest vertex (an unreached piece first, ties to the lowest id), and each vertex in the patch of the
+    /// first seed at its distance. On a mesh of two pieces (a strip, a fan) and vertices on no triangle.
+    #[test]
+    fn seeds_by_hops_are_the_plain_farthest_point_sampling() {
+        let mut faces: Vec<[u32; 3]> = (0..30u32).map(|t| if t % 2 == 0 { [t, t + 1, t + 2] } else { [t + 1, t, t + 2] }).collect();
+        faces.extend((0..9u32).map(|k| [40, 41 + k, 42 + k]));
+        let nv = 53;
+        let shape = |s: f64| -> Vec<[f64; 3]> { (0..nv).map(|j| [j as f64 / nv as f64, (j % 2) as f64 * 0.1 * s, 0.0]).collect() };
+        let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], faces.clone(), vec![shape(1.0), shape(2.0)]).unwrap();
+        let mut adj = vec![Vec::new(); nv];
+        for f in &faces {
+            for s in 0..3 {
+                adj[f[s] as usize].push(f[(s + 1) % 3] as usize);
+                adj[f[(s + 1) % 3] as usize].push(f[s] as usize);
+            }
+        }
+        let hops_from = |s: usize| {
+            let mut d = vec![usize::MAX; nv];
+            d[s] = 0;
+            let mut queue = std::collections::VecDeque::from([s]);
+            while let Some(v) = queue.pop_front() {
+                for &u in &adj[v] {
+                    if d[u] == usize::MAX {
+                        d[u] = d[v] + 1;
+                        queue.push_back(u);
+                    }
+                }
+            }
+            d
+        };
+        for count in [1, 2, 5, 12, 40] {
+            let mut seeds = vec![0usize];
+            let mut from: Vec<Vec<usize>> = vec![hops_from(0)];
+            let nearest = |from: &Vec<Vec<usize>>, j: usize| from.iter().map(|d| d[j]).min().unwrap();
+            loop {
+                // (vertices 32-39, 51 and 52 are on no triangle: never seeds)
+                let far = (0..nv).filter(|&j| !adj[j].is_empty()).max_by(|&a, &b| nearest(&from, a).cmp(&nearest(&from, b)).then(b.cmp(&a))).unwrap();
+                let d = nearest(&from, far);
+                if d == 0 || (seeds.len() >= count && d != usize::MAX) {
+                    break;
+                }
+                seeds.push(far);
+                from.push(hops_from(far));
+            }
+            let (owner, got) = seeded_patches(&pop, count, true);
+            assert_eq!(got, seeds, "{count} seeds");
+            for j in (0..nv).filter(|&j| !adj[j].is_empty()) {
+                let d = nearest(&from, j);
+                assert_eq!(owner[j] as usize, (0..seeds.len()).find(|&k| from[k][j] == d).unwrap(), "{count} seeds, vertex {j}");
+            }
+        }
     }
 
     /// The poses kept once per population are the ones worked out afresh for every count asked for, and new
