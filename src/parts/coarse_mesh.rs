@@ -28,52 +28,63 @@ impl CoarseMesh {
     /// The coarse mesh of about `target` vertices (fewer when the mesh has fewer vertices on its triangles).
     pub fn build(pop: &Population, target: usize) -> CoarseMesh {
         let (patch, seeds) = seeded_patches(pop, target, true);
-        // patch pairs that share an edge of the mesh (sorted), and the triangles where three patches meet: the
-        // first of each three in the mesh's order, as the mesh orients it
-        let mut pairs: Vec<(u32, u32)> = Vec::new();
-        let mut three: Vec<([u32; 3], usize, [u32; 3])> = Vec::new();
-        for (t, f) in pop.faces.iter().enumerate() {
+        // per patch: the patches it shares an edge of the mesh with (and whether a triangle holds the pair), and
+        // the triangles where three patches meet that it is the lowest of (the first of each three in the mesh's
+        // order, as the mesh orients it). Small lists: a patch has a few neighbours, and in wasm a large block
+        // the freed memory cannot hold grows the instance for good.
+        let n = seeds.len();
+        let mut around: Vec<Vec<(u32, bool)>> = vec![Vec::new(); n];
+        let mut lowest_of: Vec<Vec<(u32, u32)>> = vec![Vec::new(); n];
+        let mut faces: Vec<[u32; 3]> = Vec::new();
+        for f in &pop.faces {
             let p = f.map(|v| patch[v as usize]);
             for s in 0..3 {
                 let (a, b) = (p[s], p[(s + 1) % 3]);
                 if a != b {
-                    pairs.push((a.min(b), a.max(b)));
+                    for (x, y) in [(a, b), (b, a)] {
+                        if !around[x as usize].iter().any(|e| e.0 == y) {
+                            around[x as usize].push((y, false));
+                        }
+                    }
                 }
             }
             if p[0] != p[1] && p[1] != p[2] && p[0] != p[2] {
                 let mut key = p;
                 key.sort_unstable();
-                three.push((key, t, p));
-            }
-        }
-        pairs.sort_unstable();
-        pairs.dedup();
-        three.sort_unstable();
-        three.dedup_by_key(|x| x.0);
-        three.sort_unstable_by_key(|x| x.1);
-        let mut faces: Vec<[u32; 3]> = three.into_iter().map(|x| x.2).collect();
-        // which pairs a triangle holds
-        let mut held = vec![false; pairs.len()];
-        for f in &faces {
-            for s in 0..3 {
-                let (a, b) = (f[s], f[(s + 1) % 3]);
-                if let Ok(k) = pairs.binary_search(&(a.min(b), a.max(b))) {
-                    held[k] = true;
+                let list = &mut lowest_of[key[0] as usize];
+                if !list.contains(&(key[1], key[2])) {
+                    list.push((key[1], key[2]));
+                    faces.push(p);
                 }
             }
         }
-        // a pair no triangle holds: a triangle with the first patch (lowest id) next to both, else a degenerate
-        // one, so that every pair of touching patches is an edge of the coarse mesh
-        let mut around: Vec<Vec<u32>> = vec![Vec::new(); seeds.len()];
-        for &(a, b) in &pairs {
-            around[a as usize].push(b);
-            around[b as usize].push(a);
+        drop(lowest_of);
+        for f in &faces {
+            for s in 0..3 {
+                let (a, b) = (f[s], f[(s + 1) % 3]);
+                for (x, y) in [(a, b), (b, a)] {
+                    if let Some(e) = around[x as usize].iter_mut().find(|e| e.0 == y) {
+                        e.1 = true;
+                    }
+                }
+            }
         }
         around.iter_mut().for_each(|x| x.sort_unstable());
-        for (&(a, b), _) in pairs.iter().zip(&held).filter(|(_, &h)| !h) {
-            let (x, y) = (&around[a as usize], &around[b as usize]);
-            let c = x.iter().find(|c| y.binary_search(c).is_ok()).copied().unwrap_or(b);
-            faces.push([a, b, c]);
+        // a pair no triangle holds (in order of the pair): a triangle with the first patch (lowest id) next to
+        // both, else a degenerate one, so that every pair of touching patches is an edge of the coarse mesh
+        for a in 0..n as u32 {
+            for &(b, held) in &around[a as usize] {
+                if b <= a || held {
+                    continue;
+                }
+                let next_to_b = &around[b as usize];
+                let c = around[a as usize]
+                    .iter()
+                    .map(|e| e.0)
+                    .find(|c| next_to_b.binary_search_by_key(c, |e| e.0).is_ok())
+                    .unwrap_or(b);
+                faces.push([a, b, c]);
+            }
         }
         CoarseMesh { pop: pop.restricted(&seeds, faces), seeds, patch }
     }

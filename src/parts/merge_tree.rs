@@ -326,27 +326,34 @@ pub fn patches(pop: &Population, count: usize) -> Vec<u32> {
 /// as length 1 (the patches then depend on the mesh's connectivity alone, not on the poses).
 pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, Vec<usize>) {
     let nv = pop.n_vertices();
-    let edges: Vec<(u32, u32, f64)> =
-        if hops { edge_list(pop).into_iter().map(|(a, b)| (a, b, 1.0)).collect() } else { edges(pop) };
-    // each vertex's neighbours (with the edges' lengths) side by side in one array, in the edges' order
-    let mut start = vec![0usize; nv + 1];
-    for &(a, b, _) in &edges {
+    // each vertex's neighbours side by side in one array (u32 offsets per vertex), in the edges' order, and by
+    // lengths the edges' lengths beside them (small arrays: in wasm a large block the freed memory cannot hold
+    // grows the instance for good)
+    let (pairs, lengths): (Vec<(u32, u32)>, Vec<f64>) =
+        if hops { (edge_list(pop), Vec::new()) } else { edges(pop).into_iter().map(|(a, b, w)| ((a, b), w)).unzip() };
+    let mut start = vec![0u32; nv + 1];
+    for &(a, b) in &pairs {
         start[a as usize + 1] += 1;
         start[b as usize + 1] += 1;
     }
     for v in 0..nv {
         start[v + 1] += start[v];
     }
-    let mut neighbours = vec![(0u32, 0.0f64); start[nv]];
-    let mut fill = start.clone();
-    for &(a, b, w) in &edges {
-        neighbours[fill[a as usize]] = (b, w);
-        fill[a as usize] += 1;
-        neighbours[fill[b as usize]] = (a, w);
-        fill[b as usize] += 1;
+    let mut neighbour = vec![0u32; start[nv] as usize];
+    let mut length = vec![0.0f64; if hops { 0 } else { neighbour.len() }];
+    let mut fill: Vec<u32> = start[..nv].to_vec();
+    for (e, &(a, b)) in pairs.iter().enumerate() {
+        for (x, y) in [(a, b), (b, a)] {
+            let at = fill[x as usize] as usize;
+            neighbour[at] = y;
+            if !hops {
+                length[at] = lengths[e];
+            }
+            fill[x as usize] += 1;
+        }
     }
-    drop((edges, fill));
-    let adj = |v: u32| &neighbours[start[v as usize]..start[v as usize + 1]];
+    drop((pairs, lengths, fill));
+    let range = |v: u32| start[v as usize] as usize..start[v as usize + 1] as usize;
     let on_mesh: Vec<bool> = (0..nv).map(|v| start[v + 1] > start[v]).collect();
     let mut dist = vec![f64::INFINITY; nv];
     let mut owner = vec![u32::MAX; nv];
@@ -377,7 +384,7 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
             queue.push_back(s as u32);
             while let Some(v) = queue.pop_front() {
                 let nd = dist[v as usize] + 1.0;
-                for &(u, _) in adj(v) {
+                for &u in &neighbour[range(v)] {
                     if nd < dist[u as usize] {
                         dist[u as usize] = nd;
                         owner[u as usize] = patch;
@@ -418,7 +425,7 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
             if d > dist[v as usize] {
                 continue;
             }
-            for &(u, w) in adj(v) {
+            for (&u, &w) in neighbour[range(v)].iter().zip(&length[range(v)]) {
                 let nd = d + w;
                 if nd < dist[u as usize] {
                     dist[u as usize] = nd;
