@@ -359,9 +359,10 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
     let mut owner = vec![u32::MAX; nv];
     let mut heap: BinaryHeap<Keyed<true>> = BinaryHeap::new();
     let mut queue: std::collections::VecDeque<u32> = std::collections::VecDeque::new();
-    // one entry per vertex, at least its distance (distances only fall), the largest first: an entry above its
-    // vertex's distance goes back in at that distance until the top one is exact, and that vertex is the
-    // farthest (any other's distance is at most its entry, at most the top's) without a scan of the mesh per seed
+    // by lengths, one entry per vertex, at least its distance (distances only fall), the largest first: an entry
+    // above its vertex's distance goes back in at that distance until the top one is exact, and that vertex is
+    // the farthest (any other's distance is at most its entry, at most the top's) without a scan of the mesh
+    // per seed
     let mut farthest: BinaryHeap<Keyed<false>> = if hops {
         BinaryHeap::new()
     } else {
