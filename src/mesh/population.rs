@@ -257,7 +257,7 @@ impl Population {
             }
             check_same_mesh(first_name, first, name, mesh)?;
         }
-        if let Some(e) = named.iter().find_map(|(name, mesh)| first_non_finite(name, mesh)) {
+        if let Some(e) = named.iter().find_map(|(name, mesh)| first_non_finite(name, &mesh.positions)) {
             return Err(e);
         }
         // The smallest fit (one part) of this population must fit in the memory budget: refuse now, before
@@ -367,7 +367,7 @@ impl Population {
             if twice {
                 (lo, hi) = crate::geometry::bounds([lo, hi].iter().chain(&mesh.positions));
                 if non_finite.is_none() {
-                    non_finite = first_non_finite(&names[i], &mesh);
+                    non_finite = first_non_finite(&names[i], &mesh.positions);
                 }
             }
             // (a reader's vector grows by doubling: what is kept holds no more than its points)
@@ -380,7 +380,7 @@ impl Population {
                     twice = names.len() >= 2 && mesh.positions.len() * names.len() * 24 > read_twice_above;
                     if twice {
                         (lo, hi) = crate::geometry::bounds(&mesh.positions);
-                        non_finite = first_non_finite(&names[i], &mesh);
+                        non_finite = first_non_finite(&names[i], &mesh.positions);
                     }
                     named.push((names[i].clone(), mesh));
                 }
@@ -428,14 +428,13 @@ impl Population {
         for &i in &order[1..] {
             bytes.clear();
             let again = fetch(i, &mut bytes).and_then(|_| super::load::read_positions(&names[i], &bytes)).map_err(|e| vec![e])?;
-            let again = Mesh { positions: again, faces: Vec::new() };
-            if again.positions.len() != n_vertices || first_non_finite(&names[i], &again).is_some() {
+            if again.len() != n_vertices || first_non_finite(&names[i], &again).is_some() {
                 return Err(vec![Error::Population {
                     file: names[i].clone(),
                     message: "changed while it was read (the second reading differs from the first); load the population again".into(),
                 }]);
             }
-            points.extend(again.positions.iter().map(|&p| narrow(normalization.to_unit(p))));
+            points.extend(again.iter().map(|&p| narrow(normalization.to_unit(p))));
         }
         let mut faces = std::mem::take(&mut named[0].1.faces);
         faces.shrink_to_fit();
@@ -586,9 +585,9 @@ fn unit_box(first_name: &str, lo: [f64; 3], hi: [f64; 3]) -> Result<Normalizatio
     Ok(Normalization { offset: lo, scale: 1.0 / side })
 }
 
-/// The error for the first vertex of `mesh` with a non-finite coordinate, if any.
-fn first_non_finite(name: &str, mesh: &Mesh) -> Option<Error> {
-    let j = mesh.positions.iter().position(|p| p.iter().any(|c| !c.is_finite()))?;
+/// The error for the first of `positions` (file `name`'s) with a non-finite coordinate, if any.
+fn first_non_finite(name: &str, positions: &[[f64; 3]]) -> Option<Error> {
+    let j = positions.iter().position(|p| p.iter().any(|c| !c.is_finite()))?;
     Some(Error::Population { file: name.to_string(), message: format!("vertex {} has a non-finite coordinate; fix or remove it", j + 1) })
 }
 
