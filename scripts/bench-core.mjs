@@ -30,11 +30,10 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200 } =
     while (!fitter.isDone()) fitter.run(1e9);
     const model = fitter.result();
     runs.push(performance.now() - t);
-    // as the page's worker does: the model's summary (its diagnosis) while the fitter is still alive, then the
-    // fitter freed (before the kernel limits lay the data out again)
+    // as the page's worker does (finishFit): the fitter freed, then the model's summary (its diagnosis)
+    fitter.free();
     summary = model.summary();
     if (memoryAfterFit === null) memoryAfterFit = wasm.memoryBytes();
-    fitter.free();
     // the kernels right after each fit, so that each fraction compares two measurements of the same moment
     kernel = model.kernelLimit(kernelMs);
     fractions.push(kernel.fraction);

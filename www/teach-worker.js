@@ -28,7 +28,7 @@ const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 export class Teacher {
   /**
    * wasm: the bindings; post(msg, transfer); claim(): async, stops any other fit and resolves to true
-   * when this one may start; finish(fitter, id, t0): posts the model of a finished fitter.
+   * when this one may start; finish(fitter, id, t0): posts the model of a finished fitter and frees the fitter.
    */
   constructor({ wasm, post, claim, finish, yieldToEvents, paletteSize }) {
     Object.assign(this, { wasm, post, claim, finish, yieldToEvents, paletteSize });
@@ -84,11 +84,7 @@ export class Teacher {
       const id = this.id;
       this.fitter = null;
       this.id = null;
-      try {
-        this.finish(f, id, this.t0);
-      } finally {
-        f.free();
-      }
+      this.finish(f, id, this.t0); // (frees the fitter)
     }
   }
 

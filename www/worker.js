@@ -213,6 +213,7 @@ async function fit({ id, params, fault = null }) {
   fitter = f;
   cancelRequested = false;
   const token = fitToken;
+  let handedOver = false; // finishFit frees the fitter
   try {
     while (!f.isDone() && !cancelRequested) {
       const steps = f.run(SLICE_MS);
@@ -226,12 +227,13 @@ async function fit({ id, params, fault = null }) {
       await yieldToEvents();
     }
     if (token !== fitToken) return; // a new fit or population superseded this one: it keeps nothing
+    handedOver = true;
     finishFit(f, id, t0);
   } catch (e) {
     if (isCrash(e)) return crashed(e);
     fitError(id, e);
   } finally {
-    if (!dead) f.free();
+    if (!dead && !handedOver) f.free();
     if (fitter === f) fitter = null;
   }
 }
@@ -249,15 +251,23 @@ async function claimFit() {
 
 // The model of a finished (or cancelled) fitter becomes the worker's model and goes to the page. A cancelled
 // fit of a population that already has a finished model leaves that model in place (where the new fit stopped
-// is no better than a finished fit): the page is told so ({ kept: true }, no model).
+// is no better than a finished fit): the page is told so ({ kept: true }, no model). Frees the fitter, before
+// the model's summary: its diagnosis then reuses the fitter's memory instead of growing the instance (wasm
+// memory never shrinks: on the generated 42 k x 11 this is 63.6 -> 59.1 bytes per vertex-pose at the peak).
 function finishFit(f, id, t0) {
-  const cancelled = !f.isDone();
+  let cancelled;
+  let m = null;
+  try {
+    cancelled = !f.isDone();
+    if (!(cancelled && model && modelComplete)) m = f.result();
+  } finally {
+    if (!dead) f.free();
+  }
   const fitMs = performance.now() - t0;
-  if (cancelled && model && modelComplete) {
+  if (!m) {
     post({ type: 'fitted', id, cancelled, kept: true, fitMs });
     return;
   }
-  const m = f.result();
   model?.free();
   model = m;
   const msg = modelMessage(m);
