@@ -29,13 +29,21 @@ pub fn motion_residual(part: &crate::mfa::Component, h: &[[f64; 3]]) -> f64 {
         heap.resize(ns, [0.0; 3]);
         &mut heap
     };
-    let mut mean = [0.0; 3];
     for ((i, &p), slot) in h.iter().enumerate().zip(ys.iter_mut()) {
-        let y = part.unplace(i, p);
+        *slot = part.unplace(i, p);
+    }
+    spread_about_mean(ys)
+}
+
+/// Σ_i |y_i - ȳ|² of the points `ys`, with ȳ summed as y_i / n in order (so [`motion_residual`] and its bound
+/// add the same way).
+fn spread_about_mean(ys: &[[f64; 3]]) -> f64 {
+    let n = ys.len() as f64;
+    let mut mean = [0.0; 3];
+    for y in ys {
         for a in 0..3 {
-            mean[a] += y[a] / ns as f64;
+            mean[a] += y[a] / n;
         }
-        *slot = y;
     }
     ys.iter().map(|y| (0..3).map(|a| (y[a] - mean[a]).powi(2)).sum::<f64>()).sum()
 }
@@ -46,15 +54,10 @@ pub fn motion_residual(part: &crate::mfa::Component, h: &[[f64; 3]]) -> f64 {
 fn motion_residual_bound(part: &crate::mfa::Component, h: &[[f64; 3]], some: &[usize]) -> f64 {
     debug_assert!(some.len() <= BOUND_SHAPES);
     let mut ys = [[0.0; 3]; BOUND_SHAPES];
-    let n = some.len() as f64;
-    let mut mean = [0.0; 3];
     for (&i, slot) in some.iter().zip(ys.iter_mut()) {
         *slot = part.unplace(i, h[i]);
-        for a in 0..3 {
-            mean[a] += slot[a] / n;
-        }
     }
-    ys[..some.len()].iter().map(|y| (0..3).map(|a| (y[a] - mean[a]).powi(2)).sum::<f64>()).sum()
+    spread_about_mean(&ys[..some.len()])
 }
 
 /// Most shapes [`label_by_motion`] bounds a neighbour's residual with before it works the residual out.
