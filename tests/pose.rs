@@ -161,7 +161,7 @@ fn subset(pop: &Population, keep: impl Fn(usize) -> bool) -> Population {
     let idx: Vec<usize> = (0..pop.n_shapes()).filter(|&i| keep(i)).collect();
     Population::from_unit_shapes(
         idx.iter().map(|&i| pop.names[i].clone()).collect(),
-        pop.faces.clone(),
+        pop.faces.to_vec(),
         idx.iter().map(|&i| pop.unit_shapes()[i].iter().map(|&p| pop.normalization.to_original(p)).collect()).collect(),
     )
     .unwrap()

@@ -16,7 +16,7 @@ const NEW: [Preset; 3] = [Preset::Spider, Preset::Giraffe, Preset::Hand];
 /// degenerate triangle, and that it encloses positive volume (outward normals) in every shape.
 fn check_closed_sphere(pop: &Population, what: &str) {
     let nv = pop.n_vertices();
-    let faces = &pop.faces;
+    let faces: &[[u32; 3]] = &pop.faces;
     let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
     for (k, f) in faces.iter().enumerate() {
         assert!(f.iter().all(|&v| (v as usize) < nv), "{what}: triangle {k} has an index out of range");

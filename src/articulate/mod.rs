@@ -217,7 +217,7 @@ impl Articulation {
         let joints = joints::joints(&graph, model, &pop.faces, &shapes);
         let mut part_area = vec![0.0; n_parts];
         for s in &shapes {
-            for f in &pop.faces {
+            for f in pop.faces.iter() {
                 let a = graph::triangle_area(s[f[0] as usize], s[f[1] as usize], s[f[2] as usize]) / 3.0;
                 for v in f {
                     part_area[model.labels[*v as usize] as usize] += a / pop.n_shapes() as f64;
@@ -240,7 +240,7 @@ impl Articulation {
         let smooth_weights = skin::smooth_weights(&graph, &model.labels, &model.latent, &pop.faces, &shapes, band);
         Ok(Articulation {
             model: model.clone(),
-            faces: pop.faces.clone(),
+            faces: pop.faces.to_vec(),
             edges: graph::mesh_edges(&pop.faces),
             shapes,
             rigid,

@@ -141,7 +141,7 @@ mod tests {
     #[test]
     fn meshes_are_objects_and_parts_are_groups_with_every_face_once() {
         let mut pop = population();
-        pop.faces = vec![[0, 1, 2], [2, 1, 0], [1, 2, 0]];
+        pop.faces = std::sync::Arc::new(vec![[0, 1, 2], [2, 1, 0], [1, 2, 0]]);
         let p0 = Shown::Pose { pose: 0 }.positions(&pop, None, None).unwrap();
         let p1 = Shown::Pose { pose: 1 }.positions(&pop, None, None).unwrap();
         let labels = [1u32, 1, 0];

@@ -41,7 +41,7 @@ pub struct Population {
     /// Shape names in the order used (natural sort).
     pub names: Vec<String>,
     /// Triangles shared by every shape.
-    pub faces: Vec<[u32; 3]>,
+    pub faces: std::sync::Arc<Vec<[u32; 3]>>,
     /// `points[i * n_vertices + j]`: vertex j of shape i, unit-box coordinates in f32.
     points: std::sync::Arc<Vec<[f32; 3]>>,
     n_vertices: usize,
@@ -221,7 +221,7 @@ impl Population {
         let points = self.shapes().flat_map(|s| vertices.iter().map(move |&j| s.points[j])).collect();
         Population {
             names: self.names.clone(),
-            faces,
+            faces: std::sync::Arc::new(faces),
             points: std::sync::Arc::new(points),
             n_vertices: vertices.len(),
             normalization: self.normalization,
@@ -275,7 +275,7 @@ impl Population {
             names.push(name);
         }
         let source = format!("{} shapes", names.len());
-        Ok(Population { names, faces, points: std::sync::Arc::new(points), n_vertices, normalization, source, pose_order: PoseOrder::default() })
+        Ok(Population { names, faces: std::sync::Arc::new(faces), points: std::sync::Arc::new(points), n_vertices, normalization, source, pose_order: PoseOrder::default() })
     }
 
     /// Reads every file (name, bytes) with the reader its extension calls for ([`super::load`]: OBJ, PLY,
@@ -440,7 +440,7 @@ impl Population {
         faces.shrink_to_fit();
         Ok(Population {
             names: named.into_iter().map(|n| n.0).collect(),
-            faces,
+            faces: std::sync::Arc::new(faces),
             points: std::sync::Arc::new(points),
             n_vertices,
             normalization,

@@ -79,7 +79,7 @@ impl Midpoints {
 pub fn subdivide(pop: &Population, levels: usize, budget: u64) -> Result<(Vec<[u32; 3]>, Vec<Vec<[f64; 3]>>)> {
     crate::memory::check_subdivision(pop.n_vertices(), pop.faces.len(), pop.n_shapes(), levels, budget)?;
     let norm = pop.normalization;
-    let mut faces = pop.faces.clone();
+    let mut faces = pop.faces.to_vec();
     let mut shapes: Vec<Vec<[f64; 3]>> = pop.shapes().map(|s| s.iter().map(|p| norm.to_original(p)).collect()).collect();
     for _ in 0..levels {
         let step = Midpoints::of(&faces, shapes.first().map_or(0, Vec::len))?;

@@ -280,7 +280,7 @@ fn edges(pop: &Population) -> Vec<(u32, u32, f64)> {
 /// The mesh's edges (i < j, sorted, unique).
 fn edge_list(pop: &Population) -> Vec<(u32, u32)> {
     let mut e: Vec<(u32, u32)> = Vec::with_capacity(pop.faces.len() * 3);
-    for f in &pop.faces {
+    for f in pop.faces.iter() {
         for s in 0..3 {
             let (a, b) = (f[s], f[(s + 1) % 3]);
             if a != b {
@@ -574,7 +574,7 @@ impl MergeTree {
         // node adjacency: mesh edges between patches, and every other connected piece of the mesh linked to
         // its nearest one (so the tree ends in one node)
         let mut adjacent: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); n_leaves];
-        for f in &pop.faces {
+        for f in pop.faces.iter() {
             for s in 0..3 {
                 let (a, b) = (leaves[f[s] as usize], leaves[f[(s + 1) % 3] as usize]);
                 if a != b {
@@ -955,7 +955,7 @@ mod tests {
             rigid_sse(st, &mut rot)
         };
         let mut edges: BTreeSet<(u32, u32)> = BTreeSet::new();
-        for f in &pop.faces {
+        for f in pop.faces.iter() {
             for s in 0..3 {
                 let (a, b) = (tree.leaves[f[s] as usize], tree.leaves[f[(s + 1) % 3] as usize]);
                 if a != b {

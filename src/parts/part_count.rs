@@ -197,7 +197,7 @@ impl<'a> Counter<'a> {
     fn adjacent_pairs(&self) -> BTreeSet<(usize, usize)> {
         let labels = self.labels();
         let mut pairs = BTreeSet::new();
-        for f in &self.pop.faces {
+        for f in self.pop.faces.iter() {
             for e in 0..3 {
                 let (a, b) = (labels[f[e] as usize] as usize, labels[f[(e + 1) % 3] as usize] as usize);
                 if a != b {
