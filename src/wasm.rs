@@ -220,6 +220,8 @@ impl Fitter {
     /// The parameters read from JS and the pipeline `make` builds from them.
     fn with(population: &WasmPopulation, params: JsValue, make: fn(&Population, &Params) -> crate::error::Result<Pipeline>) -> Result<Fitter, JsValue> {
         let params: Params = from_js(params, "parameters")?;
+        // the fit needs the memory more than a view of the last model does (rebuilt when asked again)
+        forget_articulation(None);
         let pipe = make(&population.inner, &params)?;
         Ok(Fitter { pipe, pop: population.inner.clone() })
     }
@@ -588,18 +590,39 @@ fn articulate_options(opts: JsValue) -> Result<crate::articulate::Options, JsVal
     from_js(opts, "interpolation options")
 }
 
+/// Lets go of the cached articulation (its training shapes and rigid reconstructions in f64: 48 bytes per
+/// vertex-pose). Wasm memory never shrinks, so what is held while a large block is asked for raises the peak for
+/// good: the cache goes before a new articulation is built, when a fit starts and with the model it belongs to.
+/// On horse-poses subdivided (Node), an interpolation after each of three fits took the instance to 162.8 bytes
+/// per vertex-pose with the cache kept, 94.4 (the first interpolation's own peak) with it let go.
+fn forget_articulation(only_of: Option<&Rc<FitResult>>) {
+    ARTICULATION.with(|cache| {
+        let mut cache = cache.borrow_mut();
+        let ours = |weak: &std::rc::Weak<FitResult>| only_of.is_none_or(|r| std::ptr::eq(weak.as_ptr(), Rc::as_ptr(r)));
+        if cache.as_ref().is_some_and(|(weak, _)| ours(weak)) {
+            *cache = None;
+        }
+    });
+}
+
 impl FitModel {
     fn articulation(&self) -> Result<Rc<crate::articulate::Articulation>, JsValue> {
-        ARTICULATION.with(|cache| {
-            if let Some((weak, art)) = &*cache.borrow() {
-                if weak.upgrade().is_some_and(|r| Rc::ptr_eq(&r, &self.result)) {
-                    return Ok(art.clone());
-                }
-            }
-            let art = Rc::new(crate::articulate::Articulation::new(&self.result.model, &self.pop)?);
-            *cache.borrow_mut() = Some((Rc::downgrade(&self.result), art.clone()));
-            Ok(art)
-        })
+        let cached = ARTICULATION.with(|cache| {
+            cache.borrow().as_ref().filter(|(weak, _)| weak.upgrade().is_some_and(|r| Rc::ptr_eq(&r, &self.result))).map(|(_, art)| art.clone())
+        });
+        if let Some(art) = cached {
+            return Ok(art);
+        }
+        forget_articulation(None);
+        let art = Rc::new(crate::articulate::Articulation::new(&self.result.model, &self.pop)?);
+        ARTICULATION.with(|cache| *cache.borrow_mut() = Some((Rc::downgrade(&self.result), art.clone())));
+        Ok(art)
+    }
+}
+
+impl Drop for FitModel {
+    fn drop(&mut self) {
+        forget_articulation(Some(&self.result));
     }
 }
 

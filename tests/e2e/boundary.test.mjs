@@ -110,6 +110,34 @@ test('what the article shows is measured by the core: placed latent shape, dista
   assert.match(thrown(() => pop.alongLongestAxis(9)).message, /no shape 9/);
 });
 
+test('the articulation a view asks for is let go when a fit starts or its model is freed, and rebuilt the same when asked again', () => {
+  const a = fitted();
+  const { model: b } = fitted();
+  const fitB = () => {
+    const f = new w.Fitter(a.pop, { ...w.defaultParams(), targetParts: 2 });
+    while (!f.isDone()) f.run(1000);
+    const m = f.result();
+    f.free();
+    return m;
+  };
+  const first = a.model.interpolate(0, 1, 0.5, {});
+  // another model's articulation replaces A's in the cache; A's comes back the same, not B's
+  const other = fitB();
+  const twoParts = other.interpolate(0, 1, 0.5, {});
+  assert.ok(first.some((x, k) => Math.abs(x - twoParts[k]) > 1e-4), 'the 2-part model interpolates otherwise');
+  assert.deepEqual(a.model.interpolate(0, 1, 0.5, {}), first);
+  // a new fit lets go of it; asked again during or after that fit, it is rebuilt
+  const f = new w.Fitter(a.pop, { ...w.defaultParams(), parts: 3 });
+  assert.deepEqual(a.model.interpolate(0, 1, 0.5, {}), first);
+  f.free();
+  // the model whose articulation is cached is freed: the next model builds its own
+  a.model.free();
+  assert.deepEqual(other.interpolate(0, 1, 0.5, {}), twoParts);
+  assert.equal(b.interpolate(0, 1, 0.5, {}).length, first.length);
+  other.free();
+  b.free();
+});
+
 test('misspelled fields of parameters, generator specs, options and mesh descriptors are errors naming the field', () => {
   const { pop, model } = fitted();
   const cases = [
