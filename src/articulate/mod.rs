@@ -162,7 +162,7 @@ impl RigidMotion {
 #[derive(Debug, Clone)]
 pub struct Articulation {
     pub model: Model,
-    pub faces: Vec<[u32; 3]>,
+    pub faces: std::sync::Arc<Vec<[u32; 3]>>,
     /// Mesh edges ([`graph::mesh_edges`]).
     pub edges: Vec<[u32; 2]>,
     /// Training shapes, unit box.
@@ -240,7 +240,7 @@ impl Articulation {
         let smooth_weights = skin::smooth_weights(&graph, &model.labels, &model.latent, &pop.faces, &shapes, band);
         Ok(Articulation {
             model: model.clone(),
-            faces: pop.faces.to_vec(),
+            faces: pop.faces.clone(),
             edges: graph::mesh_edges(&pop.faces),
             shapes,
             rigid,
