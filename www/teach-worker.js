@@ -28,10 +28,11 @@ const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 export class Teacher {
   /**
    * wasm: the bindings; post(msg, transfer); claim(): async, stops any other fit and resolves to true
-   * when this one may start; finish(fitter, id, t0): posts the model of a finished fitter and frees the fitter.
+   * when this one may start; finish(fitter, id, t0): posts the model of a finished fitter (and frees the
+   * fitter); release(fitter): frees a fitter unless that was done already.
    */
-  constructor({ wasm, post, claim, finish, yieldToEvents, paletteSize }) {
-    Object.assign(this, { wasm, post, claim, finish, yieldToEvents, paletteSize });
+  constructor({ wasm, post, claim, finish, release, yieldToEvents, paletteSize }) {
+    Object.assign(this, { wasm, post, claim, finish, release, yieldToEvents, paletteSize });
     this.fitter = null;
     this.id = null;
     this.running = false;
@@ -84,7 +85,11 @@ export class Teacher {
       const id = this.id;
       this.fitter = null;
       this.id = null;
-      this.finish(f, id, this.t0); // (frees the fitter)
+      try {
+        this.finish(f, id, this.t0);
+      } finally {
+        this.release(f);
+      }
     }
   }
 

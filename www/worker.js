@@ -213,7 +213,6 @@ async function fit({ id, params, fault = null }) {
   fitter = f;
   cancelRequested = false;
   const token = fitToken;
-  let handedOver = false; // finishFit frees the fitter
   try {
     while (!f.isDone() && !cancelRequested) {
       const steps = f.run(SLICE_MS);
@@ -227,13 +226,12 @@ async function fit({ id, params, fault = null }) {
       await yieldToEvents();
     }
     if (token !== fitToken) return; // a new fit or population superseded this one: it keeps nothing
-    handedOver = true;
     finishFit(f, id, t0);
   } catch (e) {
     if (isCrash(e)) return crashed(e);
     fitError(id, e);
   } finally {
-    if (!dead && !handedOver) f.free();
+    if (!dead) release(f);
     if (fitter === f) fitter = null;
   }
 }
@@ -249,20 +247,23 @@ async function claimFit() {
   return token === fitToken;
 }
 
+// Frees a fitter once, whoever lets go of it first (finishFit, or the loop that ran it when finishFit did not).
+const released = new WeakSet();
+function release(f) {
+  if (released.has(f)) return;
+  released.add(f);
+  f.free();
+}
+
 // The model of a finished (or cancelled) fitter becomes the worker's model and goes to the page. A cancelled
 // fit of a population that already has a finished model leaves that model in place (where the new fit stopped
 // is no better than a finished fit): the page is told so ({ kept: true }, no model). Frees the fitter, before
 // the model's summary: its diagnosis then reuses the fitter's memory instead of growing the instance (wasm
 // memory never shrinks: on the generated 42 k x 11 this is 63.6 -> 59.1 bytes per vertex-pose at the peak).
 function finishFit(f, id, t0) {
-  let cancelled;
-  let m = null;
-  try {
-    cancelled = !f.isDone();
-    if (!(cancelled && model && modelComplete)) m = f.result();
-  } finally {
-    if (!dead) f.free();
-  }
+  const cancelled = !f.isDone();
+  const m = cancelled && model && modelComplete ? null : f.result();
+  release(f);
   const fitMs = performance.now() - t0;
   if (!m) {
     post({ type: 'fitted', id, cancelled, kept: true, fitMs });
@@ -277,7 +278,7 @@ function finishFit(f, id, t0) {
   post({ type: 'fitted', id, cancelled, fitMs, model: msg });
 }
 
-const teacher = new Teacher({ wasm, post, claim: claimFit, finish: finishFit, yieldToEvents, paletteSize: PALETTE_SIZE });
+const teacher = new Teacher({ wasm, post, claim: claimFit, finish: finishFit, release, yieldToEvents, paletteSize: PALETTE_SIZE });
 let teachQueue = Promise.resolve();
 
 // Teaching messages: errors end the teaching fit and are reported like a fit's.
