@@ -48,6 +48,7 @@ class Session {
       post: (msg, transfer) => this.post(msg, transfer),
       claim: () => this.claim(),
       finish: (f, id, t0) => this.finish(f, id, t0),
+      release: (f) => f.free(), // (this.finish does not free the fitter; the Teacher calls this once after it)
       yieldToEvents,
       paletteSize: PALETTE_SIZE,
     });
