@@ -22,6 +22,9 @@ export PATH="$HOME/.cargo/bin:$PATH"
 export CARGO_TERM_PROGRESS_WHEN=never
 export CARGO_TERM_COLOR=never
 export NO_COLOR=1
+# No incremental caches: a run of every stage builds each crate once or twice, and the caches only took disk
+# (580 MB of target/debug/incremental).
+export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 
 all_stages=(native wasm-node wasm-chromium page)
 stages=("$@")
@@ -45,7 +48,19 @@ total_fail=0
 total_ignored=0
 t_all=$(date +%s)
 
-banner() { printf '\n==================== [test %s] %s ====================\n' "$1" "$2"; }
+banner() { printf '\n==================== [test %s] %s ====================\n' "$1" "$2"; disk; }
+
+# What the build has taken and what is left: a full run fills about 1.5 GB of target/ (Cargo.toml, profile.dev).
+disk() {
+  local used free
+  used=$(du -sh target 2>/dev/null | cut -f1 || true)
+  free=$(df -Ph . | awk 'NR == 2 { print $4 }')
+  printf '[test] disk: target/ %s, %s free\n' "${used:-0}" "$free"
+}
+free_kb=$(df -Pk . | awk 'NR == 2 { print $4 }')
+if [ "${free_kb:-0}" -lt 3000000 ]; then
+  printf '[test] WARNING: only %s MB free here; a full run needs about 2.5 GB (target/ and node_modules/)\n' "$(( free_kb / 1024 ))"
+fi
 
 # Counts from the closing lines of cargo test / wasm-bindgen-test-runner ("test result: ok. N passed; M failed;
 # K ignored") and of node's test runner ("# pass N" / "ℹ pass N", "# skipped N").
@@ -104,6 +119,7 @@ run_stage() {
 print_summary() {
   printf '\n==================== [test] summary (%d s) ====================\n' "$(( $(date +%s) - t_all ))"
   printf '  %s\n' "${summary[@]}"
+  disk
 }
 
 # ------------------------------------------------------------------ 1. native
@@ -149,8 +165,8 @@ if want page; then
   banner page "build:wasm + vite build, then Playwright page tests (tests/e2e/*.test.mjs)"
   t0=$(date +%s)
   # The CLI the page tests run (gltf, pose, pose-cli, rig) is built here, outside any test's time limit: after
-  # `cargo test` (stage native) `cargo build` recompiles the crate (its dependencies' features differ without
-  # the dev-dependencies), which alone can take minutes on a loaded machine.
+  # stage native it is there already (the native dev-dependencies change no feature: Cargo.toml), but the page
+  # stage alone builds it, which can take minutes on a loaded machine.
   if ! { timeout 900 bash scripts/build-wasm.sh && timeout 300 node_modules/.bin/vite build --logLevel warn \
     && timeout 900 cargo build --quiet --bin posemfa; }; then
     summary+=("$(printf '%-14s FAILED after %4d s: build:wasm, vite build or the CLI' page "$(( $(date +%s) - t0 ))")")
