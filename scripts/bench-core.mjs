@@ -4,7 +4,10 @@
 
 const median = (xs) => [...xs].sort((a, b) => a - b)[(xs.length - 1) >> 1];
 
-export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200 } = {}) {
+// refits: that many more fits after the timed ones, in the same instance, as the page fits again: the last
+// model parked while the next fit runs (www/worker.js, claimFit), then freed; the memory after each
+// (peak_memory_bytes_refits, in bytes: linear memory only grows).
+export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, refits = 0 } = {}) {
   const t0 = performance.now();
   let pop;
   let truth = null;
@@ -35,26 +38,42 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200 } =
     summary = model.summary();
     if (memoryAfterFit === null) memoryAfterFit = wasm.memoryBytes();
     // the kernels right after each fit, so that each fraction compares two measurements of the same moment
-    kernel = model.kernelLimit(kernelMs);
-    fractions.push(kernel.fraction);
+    // (kernelMs 0: none, so that the memory figures after the fits are the fits' own)
+    kernel = kernelMs > 0 ? model.kernelLimit(kernelMs) : null;
+    if (kernel) fractions.push(kernel.fraction);
     if (truth && r === repeat - 1) groundTruth = truth.groundTruth(model);
     model.free();
   }
+  const memoryRefits = [];
+  let kept = null;
+  for (let r = 0; r < refits; r++) {
+    const parked = kept?.park();
+    const fitter = new wasm.Fitter(pop, { seed });
+    while (!fitter.isDone()) fitter.run(1e9);
+    const model = fitter.result();
+    fitter.free();
+    parked?.free();
+    model.summary();
+    kept = model;
+    memoryRefits.push(wasm.memoryBytes());
+  }
+  kept?.free();
   const stages = summary.stageStats.map((s, i) => ({
     stage: s.name, ms: s.ms, iterations: s.iterations, aecm_runs: s.aecmRuns, estep_ms: s.estepMs,
     estep_gflop: s.estepFlops / 1e9, estep_gflop_f32: s.estepFlopsF32 / 1e9,
     estep_gflops_per_s: s.estepMs > 0 ? s.estepFlops / s.estepMs / 1e6 : 0,
-    estep_fraction_of_limit: kernel.stageFractions[i],
+    estep_fraction_of_limit: kernel?.stageFractions[i] ?? null,
   }));
   const out = {
     input: input.label, shapes: pop.nShapes, vertices: pop.nVertices,
     load_ms: loadMs, fit_ms_median: median(runs), fit_ms_all: runs,
     parts: summary.parts, rmse: summary.rmse, iterations: stages.reduce((a, s) => a + s.iterations, 0),
     stages,
-    kernel_limit_f64: kernel.f64, kernel_limit_f32: kernel.f32,
-    estep_fraction_of_limit: median(fractions), estep_fraction_of_limit_all: fractions,
+    kernel_limit_f64: kernel?.f64 ?? null, kernel_limit_f32: kernel?.f32 ?? null,
+    estep_fraction_of_limit: kernel ? median(fractions) : null, estep_fraction_of_limit_all: fractions,
     peak_memory_bytes: wasm.memoryBytes(),
     peak_memory_bytes_load: memoryAfterLoad, peak_memory_bytes_fit: memoryAfterFit,
+    peak_memory_bytes_refits: memoryRefits,
     ground_truth: groundTruth,
   };
   pop.free();

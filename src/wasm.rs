@@ -498,6 +498,85 @@ impl FitModel {
     }
 }
 
+/// A finished model set aside while a new fit runs ([`FitModel::park`]): its per-vertex arrays (labels, latent
+/// points, the stages' labels, the merge tree's leaves: 44 bytes a vertex) wait in JS typed arrays, outside the
+/// wasm memory, and come back with [`ParkedModel::restore`] when the new fit is cancelled and the old model stays,
+/// or when it is asked something meanwhile. Wasm memory never shrinks: held through a new fit's tree stage, those
+/// arrays and the holes they leave raised a refit's peak on the generated 42 k x 11 population from 56.9 to 61.1
+/// and 67.1 bytes per vertex-pose (issue 27).
+#[wasm_bindgen]
+pub struct ParkedModel {
+    kept: Parked,
+    pop: Rc<Population>,
+}
+
+enum Parked {
+    /// The result with its per-vertex arrays taken out, and those arrays in JS.
+    Taken { result: FitResult, labels: Uint32Array, latent: Float64Array, coarse: Uint32Array, refined: Uint32Array, decided: Option<Uint32Array>, leaves: Option<Uint32Array> },
+    /// Another holder shares the result, so taking its arrays out would free nothing: it is kept as it is.
+    Shared(Rc<FitResult>),
+}
+
+fn take_u32(v: &mut Vec<u32>) -> Uint32Array {
+    let a = Uint32Array::from(v.as_slice());
+    *v = Vec::new();
+    a
+}
+
+#[wasm_bindgen]
+impl FitModel {
+    /// Sets this model aside while a new fit runs (see [`ParkedModel`]); this object is spent, the parked one
+    /// gives it back.
+    pub fn park(self) -> ParkedModel {
+        let rc = self.result.clone();
+        let pop = self.pop.clone();
+        drop(self); // its articulation goes with it
+        let kept = match Rc::try_unwrap(rc) {
+            Ok(mut result) => {
+                let latent = Float64Array::from(result.model.latent.as_flattened());
+                result.model.latent = Vec::new();
+                Parked::Taken {
+                    labels: take_u32(&mut result.model.labels),
+                    latent,
+                    coarse: take_u32(&mut result.coarse_labels),
+                    refined: take_u32(&mut result.refined_labels),
+                    decided: result.decided_labels.as_mut().map(take_u32),
+                    leaves: result.merge_tree.as_mut().map(|t| take_u32(&mut t.leaves)),
+                    result,
+                }
+            }
+            Err(shared) => Parked::Shared(shared),
+        };
+        ParkedModel { kept, pop }
+    }
+}
+
+#[wasm_bindgen]
+impl ParkedModel {
+    /// The model as it was before [`FitModel::park`]; this object is spent.
+    pub fn restore(self) -> FitModel {
+        let result = match self.kept {
+            Parked::Shared(rc) => rc,
+            Parked::Taken { mut result, labels, latent, coarse, refined, decided, leaves } => {
+                result.model.labels = labels.to_vec();
+                let mut points = vec![[0.0; 3]; latent.length() as usize / 3];
+                latent.copy_to(points.as_flattened_mut());
+                result.model.latent = points;
+                result.coarse_labels = coarse.to_vec();
+                result.refined_labels = refined.to_vec();
+                if let (Some(d), Some(a)) = (result.decided_labels.as_mut(), decided) {
+                    *d = a.to_vec();
+                }
+                if let (Some(t), Some(a)) = (result.merge_tree.as_mut(), leaves) {
+                    t.leaves = a.to_vec();
+                }
+                Rc::new(result)
+            }
+        };
+        FitModel { result, pop: self.pop }
+    }
+}
+
 /// Bytes of wasm linear memory: it only grows, so this is the peak of the instance so far.
 #[wasm_bindgen(js_name = memoryBytes)]
 pub fn memory_bytes() -> f64 {

@@ -1,11 +1,14 @@
 // Pose mode's questions to the worker (issue 28), merged into the worker's QUERIES: each asks the Rust core's
 // Poser (src/export/pose_glb.rs, through src/wasm.rs) and returns plain data or typed arrays. The poser belongs
-// to the model it was made from: a new model (or population) needs a new poseStart.
-export function poseQueries(getModel) {
+// to the model it was made from: a new model (or population) needs a new poseStart. getModel(): the worker's
+// model; generation(): what changes whenever that model is replaced (by default the model object itself; the
+// page's worker gives a number, because a model parked through a new fit and restored is the same model in a
+// new wasm object).
+export function poseQueries(getModel, generation = getModel) {
   let poser = null;
   let owner = null;
   const current = () => {
-    if (!poser || owner !== getModel()) throw new Error('pose mode: the model changed; open pose mode again');
+    if (!poser || owner !== generation()) throw new Error('pose mode: the model changed; open pose mode again');
     return poser;
   };
   const posed = (p) => ({ positions: p.positions(), angles: p.angles() });
@@ -13,8 +16,8 @@ export function poseQueries(getModel) {
     poseStart: (opts) => {
       poser?.free();
       poser = null;
-      owner = getModel();
-      poser = owner.poser(opts ?? {});
+      owner = generation();
+      poser = getModel().poser(opts ?? {});
       return { skeleton: poser.skeleton(), ...posed(poser) };
     },
     poseTurn: (bone, axis, angle) => {

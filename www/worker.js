@@ -57,6 +57,11 @@ const PALETTE_SIZE = 12; // colors.js PALETTE.length
 let population = null; // wasm Population
 let fitter = null; // wasm Fitter of the fit in progress
 let model = null; // wasm FitModel of the last fit (final, or where a cancelled first fit stopped)
+// While a new fit runs, the last model is parked (wasm ParkedModel: its per-vertex arrays wait in JS, so the new
+// fit does not grow the instance around them; issue 27) and `model` is null. liveModel() brings it back: when
+// the new fit is cancelled and the model stays, or when the page asks it something meanwhile.
+let parked = null;
+let modelGeneration = 0; // bumped whenever the model is replaced (not when it is parked and restored)
 let modelComplete = false; // `model` is a finished fit's: a cancelled new fit keeps it
 // The last finished fit's parts and colours on this population: a new fit keeps the colour of every part that
 // is the same (posemfa::articulate::graph::colour_parts_like), so two fits compare by eye.
@@ -121,8 +126,7 @@ function replacePopulation(pop, synth = null) {
   stopFit();
   teacher.drop();
   fitToken++;
-  model?.free();
-  model = null;
+  dropModel();
   modelComplete = false;
   population?.free();
   population = pop;
@@ -237,14 +241,37 @@ async function fit({ id, params, fault = null }) {
 }
 
 // Stops the fit in progress, if any, and waits until its loop has let go (it keeps nothing: it was
-// superseded). False when another fit or population superseded this request meanwhile.
+// superseded); then parks the last model for the new fit. False when another fit or population superseded
+// this request meanwhile.
 async function claimFit() {
   const token = ++fitToken;
   if (fitter) {
     cancelRequested = true;
     while (fitter) await yieldToEvents();
   }
-  return token === fitToken;
+  if (token !== fitToken) return false;
+  if (model) {
+    parked = model.park(); // spends `model`
+    model = null;
+  }
+  return true;
+}
+
+// The last model, restored first if it is parked (null when there is none).
+function liveModel() {
+  if (parked) {
+    model = parked.restore(); // spends `parked`
+    parked = null;
+  }
+  return model;
+}
+
+function dropModel() {
+  model?.free();
+  parked?.free();
+  model = null;
+  parked = null;
+  modelGeneration++;
 }
 
 // Frees a fitter once, whoever lets go of it first (finishFit, or the loop that ran it when finishFit did not).
@@ -262,14 +289,15 @@ function release(f) {
 // memory never shrinks: on the generated 42 k x 11 this is 63.6 -> 59.1 bytes per vertex-pose at the peak).
 function finishFit(f, id, t0) {
   const cancelled = !f.isDone();
-  const m = cancelled && model && modelComplete ? null : f.result();
+  const m = cancelled && (model || parked) && modelComplete ? null : f.result();
   release(f);
   const fitMs = performance.now() - t0;
   if (!m) {
+    liveModel();
     post({ type: 'fitted', id, cancelled, kept: true, fitMs });
     return;
   }
-  model?.free();
+  dropModel();
   model = m;
   const msg = modelMessage(m);
   msg.summary.fitMs = fitMs;
@@ -297,9 +325,9 @@ async function teach(data) {
 // Questions about the model or the population; each returns plain data or typed arrays. `shown`: a mesh
 // descriptor ({kind: 'pose' | 'linear' | ..., see Shown in src/export/shown.rs}).
 const POPULATION_QUERIES = {
-  linearInterpolate: (i, j, t) => (model ?? population).linearInterpolate(i, j, t),
-  objText: (shown, header) => (model ?? population).objText(shown, header),
-  objScene: (meshes, header) => (model ?? population).objScene(meshes, header),
+  linearInterpolate: (i, j, t) => (liveModel() ?? population).linearInterpolate(i, j, t),
+  objText: (shown, header) => (liveModel() ?? population).objText(shown, header),
+  objScene: (meshes, header) => (liveModel() ?? population).objScene(meshes, header),
   originalLengths: (values) => population.originalLengths(Float64Array.from(values)),
 };
 const QUERIES = {
@@ -320,7 +348,7 @@ const QUERIES = {
       : population.partColours(labels, PALETTE_SIZE);
     return { labels, colours };
   },
-  ...poseQueries(() => model), // pose mode (issue 28): www/pose-queries.js
+  ...poseQueries(() => model, () => modelGeneration), // pose mode (issue 28): www/pose-queries.js
 };
 
 // Questions that need no population: the fit form's fields checked by the core.
@@ -333,6 +361,7 @@ function query({ id, method, args }) {
     const q = FREE_QUERIES[method] ?? POPULATION_QUERIES[method] ?? QUERIES[method];
     if (!q) throw new Error(`unknown query ${method}`);
     if (!population && !FREE_QUERIES[method]) throw new Error('no population loaded');
+    if (!FREE_QUERIES[method]) liveModel();
     if (!model && !POPULATION_QUERIES[method] && !FREE_QUERIES[method]) throw new Error('no fitted model yet');
     const result = q(...(args ?? []));
     post({ type: 'reply', id, result }, ArrayBuffer.isView(result) ? [result.buffer] : []);

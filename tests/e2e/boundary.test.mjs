@@ -138,6 +138,36 @@ test('the articulation a view asks for is let go when a fit starts or its model 
   b.free();
 });
 
+test('a model parked while a new fit runs comes back the same: labels, latent shape, tree, JSON, views', () => {
+  const a = fitted();
+  const before = {
+    labels: a.model.labels(), latent: a.model.latent(), coarse: a.model.coarseLabels(), refined: a.model.refinedLabels(),
+    tree: a.model.treeCounts(), json: a.model.toJson(), pose: a.model.reconstruct(1), mid: a.model.interpolate(0, 1, 0.5, {}),
+  };
+  const fewest = before.tree.fewest;
+  const treeLabels = a.model.treeLabels(fewest);
+  const parked = a.model.park();
+  assert.throws(() => a.model.labels(), 'the parked FitModel object is spent');
+  // a new fit of the same population runs meanwhile and is dropped (as a cancelled refit)
+  const f = new w.Fitter(a.pop, { ...w.defaultParams(), targetParts: 2 });
+  while (!f.isDone()) f.run(1000);
+  f.result().free();
+  f.free();
+  const m = parked.restore();
+  assert.throws(() => parked.restore(), 'the ParkedModel object is spent');
+  assert.deepEqual(m.labels(), before.labels);
+  assert.deepEqual(m.latent(), before.latent);
+  assert.deepEqual(m.coarseLabels(), before.coarse);
+  assert.deepEqual(m.refinedLabels(), before.refined);
+  assert.deepEqual(m.treeCounts(), before.tree);
+  assert.deepEqual(m.treeLabels(fewest), treeLabels);
+  assert.equal(m.toJson(), before.json);
+  assert.deepEqual(m.reconstruct(1), before.pose);
+  assert.deepEqual(m.interpolate(0, 1, 0.5, {}), before.mid);
+  m.free();
+  a.pop.free();
+});
+
 test('misspelled fields of parameters, generator specs, options and mesh descriptors are errors naming the field', () => {
   const { pop, model } = fitted();
   const cases = [
