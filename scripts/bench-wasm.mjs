@@ -7,8 +7,9 @@
 // `posemfa bench`): time per stage, AECM iterations, E-step GFLOP/s, the measured kernel limit and the E-step's
 // fraction of it, peak wasm memory (linear memory only grows, and every input runs in a fresh instance): after
 // the load (peak_memory_bytes_load), after the first fit and its summary as the page's worker does them
-// (peak_memory_bytes_fit) and at the end, after the kernel limits (peak_memory_bytes; --kernel-ms 0: none); with --refits N, after
-// each of N more fits made as the page fits again, the last model parked meanwhile (peak_memory_bytes_refits).
+// (peak_memory_bytes_fit) and at the end, after the kernel limits (peak_memory_bytes; --kernel-ms 0: none);
+// with --refits N, after each of N more fits made as the page fits again, the last model parked meanwhile
+// (peak_memory_bytes_refits).
 // Needs `npm run build:wasm` (www/pkg for Chromium, pkg-node for Node).
 // --baseline DIR: DIR is another checkout (e.g. today's main, `git archive main | tar -x -C DIR`) with its own
 // `npm run build:wasm` done; each input is then fitted alternately by DIR's module and by this one, in the same
