@@ -175,8 +175,8 @@ dual_test! {
         let skinned = SkinnedRig::from_rig(&rig);
         let d = skinned.diagonal();
         let nv = skinned.n_vertices();
-        let own: f64 = (0..train.n_shapes()).map(|i| sse(&rig.pose(i), &art.shapes[i])).sum();
-        let resolved = solve_frames(&skinned, &art.shapes).unwrap();
+        let own: f64 = (0..train.n_shapes()).map(|i| sse(&rig.pose(i), &art.shape(i))).sum();
+        let resolved = solve_frames(&skinned, &art.shapes()).unwrap();
         let again: f64 = resolved.sse.iter().sum();
         assert!(again <= own * 1.0001 + 1e-18, "the solve on the training poses: {again} > the rig's own {own}");
         // held-out poses, in the training population's unit box

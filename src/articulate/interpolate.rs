@@ -98,6 +98,8 @@ impl Articulation {
     /// Step 4, rigid: x_j = R^t v_j + b^t (+ eq 24's residual).
     pub fn place_rigid(&self, motions: &[RigidMotion], i: usize, j: usize, t: f64, residual: bool) -> Vec<Vec3> {
         let m = &self.model;
+        // (the end shapes and their reconstructions only for the residual)
+        let ends = residual.then(|| [self.shape(i), self.rigid(i), self.shape(j), self.rigid(j)]);
         (0..self.n_vertices())
             .map(|v| {
                 let k = m.labels[v] as usize;
@@ -106,8 +108,9 @@ impl Articulation {
                     return x;
                 }
                 let c = &m.parts[k];
-                let ei = sub(self.shapes[i][v], self.rigid[i][v]);
-                let ej = sub(self.shapes[j][v], self.rigid[j][v]);
+                let [yi, ri, yj, rj] = ends.as_ref().expect("made when residual");
+                let ei = sub(yi[v], ri[v]);
+                let ej = sub(yj[v], rj[v]);
                 let local = lerp(mat_t_vec(&c.rotations[i], ei), mat_t_vec(&c.rotations[j], ej), t);
                 add(x, mat_vec(&motions[k].rotation, local))
             })
@@ -124,7 +127,7 @@ impl Articulation {
         t: f64,
         opts: &Options,
     ) -> Vec<Vec3> {
-        let (yi, yj) = if opts.residual { (&self.shapes[i], &self.shapes[j]) } else { (&self.rigid[i], &self.rigid[j]) };
+        let (yi, yj) = if opts.residual { (self.shape(i), self.shape(j)) } else { (self.rigid(i), self.rigid(j)) };
         let from_i: Vec<RigidMotion> =
             (0..self.n_parts()).map(|k| motions[k].then_after(&self.training_motion(k, i).inverse())).collect();
         let from_j: Vec<RigidMotion> =
@@ -155,7 +158,7 @@ impl Articulation {
         self.check_shape(i)?;
         self.check_shape(j)?;
         check_t(t)?;
-        linear_blend(&self.shapes[i], &self.shapes[j], t)
+        linear_blend(&self.shape(i), &self.shape(j), t)
     }
 
     /// Which segment of a key sequence s falls in, and where in it: s in [0, keys.len() - 1].

@@ -46,7 +46,7 @@ pub mod rig;
 pub mod skin;
 
 use crate::error::{Error, Result};
-use crate::geometry::{add, mat_mul, mat_t_vec, mat_vec, scale, transpose, Mat3, Vec3};
+use crate::geometry::{add, dot, mat_mul, mat_t_vec, mat_vec, scale, sub, transpose, Mat3, Vec3};
 use crate::mesh::{Normalization, Population};
 use crate::mfa::Model;
 use graph::{PartGraph, Tree, TreeRule};
@@ -165,10 +165,12 @@ pub struct Articulation {
     pub faces: std::sync::Arc<Vec<[u32; 3]>>,
     /// Mesh edges ([`graph::mesh_edges`]).
     pub edges: Vec<[u32; 2]>,
-    /// Training shapes, unit box.
-    pub shapes: Vec<Vec<Vec3>>,
-    /// Their rigid reconstructions (eq 22).
-    pub rigid: Vec<Vec<Vec3>>,
+    /// The training shapes (unit box), shared with the population fitted ([`Population`]'s f32 points): a
+    /// shape and its rigid reconstruction are made when asked for ([`Articulation::shape`],
+    /// [`Articulation::rigid`]). Held in f64, the shapes and their reconstructions took 48 bytes per vertex-pose
+    /// for as long as the page's interpolation view was open, and raised a 42 k x 11 population's peak from 57
+    /// to 96 bytes per vertex-pose (issue 27).
+    pub population: Population,
     pub normalization: Normalization,
     pub graph: PartGraph,
     /// Joint of every adjacent pair, keyed (smaller, larger).
@@ -235,15 +237,13 @@ impl Articulation {
             .filter(|&k| graph.vertex_count[k] > 0)
             .max_by(|&a, &b| part_area[a].total_cmp(&part_area[b]).then(b.cmp(&a)))
             .expect("at least one used part");
-        let rigid: Vec<Vec<Vec3>> = (0..model.n_shapes).map(|i| model.reconstruct(i)).collect();
         let rigid_weights = SkinWeights::rigid(&model.labels);
         let smooth_weights = skin::smooth_weights(&graph, &model.labels, &model.latent, &pop.faces, &shapes, band);
         Ok(Articulation {
             model: model.clone(),
             faces: pop.faces.clone(),
             edges: graph::mesh_edges(&pop.faces),
-            shapes,
-            rigid,
+            population: pop.clone(),
             normalization: pop.normalization,
             graph,
             joints,
@@ -257,6 +257,34 @@ impl Articulation {
 
     pub fn n_shapes(&self) -> usize {
         self.model.n_shapes
+    }
+
+    /// Training shape i (unit box).
+    pub fn shape(&self, i: usize) -> Vec<Vec3> {
+        self.population.shape(i).to_vec()
+    }
+
+    /// Every training shape (unit box), `[i][j]`: 24 bytes per vertex-pose while it lives.
+    pub fn shapes(&self) -> Vec<Vec<Vec3>> {
+        self.population.unit_shapes()
+    }
+
+    /// Training shape i rebuilt rigidly from the latent shape (eq 22).
+    pub fn rigid(&self, i: usize) -> Vec<Vec3> {
+        self.model.reconstruct(i)
+    }
+
+    /// RMSE of the rigid reconstructions against the training shapes (unit box), one shape at a time.
+    pub fn rigid_rmse(&self) -> f64 {
+        let (mut s, mut n) = (0.0, 0usize);
+        for i in 0..self.n_shapes() {
+            for (p, q) in self.population.shape(i).iter().zip(self.rigid(i)) {
+                let d = sub(p, q);
+                s += dot(d, d);
+                n += 1;
+            }
+        }
+        (s / n.max(1) as f64).sqrt()
     }
 
     pub fn n_vertices(&self) -> usize {

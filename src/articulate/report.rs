@@ -75,10 +75,11 @@ pub struct Stretch {
 pub fn edge_stretch(art: &Articulation, positions: &[Vec3], i: usize, j: usize, t: f64) -> Stretch {
     let edges = mesh_edges(&art.faces);
     let (mut all, mut boundary) = (Vec::with_capacity(edges.len()), Vec::new());
+    let (yi, yj) = (art.shape(i), art.shape(j));
     for e in &edges {
         let (a, b) = (e[0] as usize, e[1] as usize);
-        let li = norm(sub(art.shapes[i][a], art.shapes[i][b]));
-        let lj = norm(sub(art.shapes[j][a], art.shapes[j][b]));
+        let li = norm(sub(yi[a], yi[b]));
+        let lj = norm(sub(yj[a], yj[b]));
         let reference = (1.0 - t) * li + t * lj;
         if !(reference > 0.0) {
             continue;
@@ -146,8 +147,8 @@ fn figures(art: &Articulation, name: &str, opts: Option<Options>, i: usize, j: u
         }
     };
     let residual = opts.map_or(true, |o| o.residual);
-    let (target_i, target_j) = if residual { (&art.shapes[i], &art.shapes[j]) } else { (&art.rigid[i], &art.rigid[j]) };
-    let endpoint_error = [max_distance(&at(0.0)?, target_i), max_distance(&at(1.0)?, target_j)];
+    let (target_i, target_j) = if residual { (art.shape(i), art.shape(j)) } else { (art.rigid(i), art.rigid(j)) };
+    let endpoint_error = [max_distance(&at(0.0)?, &target_i), max_distance(&at(1.0)?, &target_j)];
     let mid = at(t)?;
     Ok(MethodFigures {
         name: name.to_string(),
@@ -162,8 +163,8 @@ fn figures(art: &Articulation, name: &str, opts: Option<Options>, i: usize, j: u
 pub fn report(art: &Articulation, i: usize, j: usize, t: f64) -> Result<Report> {
     art.check_shape(i)?;
     art.check_shape(j)?;
-    let vi = signed_volume(&art.shapes[i], &art.faces);
-    let vj = signed_volume(&art.shapes[j], &art.faces);
+    let vi = signed_volume(&art.shape(i), &art.faces);
+    let vj = signed_volume(&art.shape(j), &art.faces);
     let v_ref = (1.0 - t) * vi + t * vj;
     let d = Options::default();
     let smooth = Options { skin: Skin::Smooth, ..d };
@@ -185,7 +186,7 @@ pub fn report(art: &Articulation, i: usize, j: usize, t: f64) -> Result<Report> 
         shapes: art.n_shapes(),
         vertices: art.n_vertices(),
         parts: art.n_parts(),
-        rmse: rmse(&art.shapes, &art.rigid),
+        rmse: art.rigid_rmse(),
         from: i + 1,
         to: j + 1,
         t,

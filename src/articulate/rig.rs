@@ -349,9 +349,9 @@ pub fn build(art: &Articulation, opts: &RigOptions) -> Result<Rig> {
     let joint_points: Vec<Vec3> =
         (0..n_parts).map(|k| if tree.contains(k) { art.training_motion(k, bind).apply(art.node_offset(&tree, k)) } else { [0.0; 3] }).collect();
     let (rest, weights) = match opts.weights {
-        RigWeights::Rigid => (art.rigid[bind].clone(), art.rigid_weights.capped(opts.influences)),
-        RigWeights::Smooth => (art.shapes[bind].clone(), art.smooth_weights.capped(opts.influences)),
-        RigWeights::Fitted => (art.rigid[bind].clone(), art.rigid_weights.clone()),
+        RigWeights::Rigid => (art.rigid(bind), art.rigid_weights.capped(opts.influences)),
+        RigWeights::Smooth => (art.shape(bind), art.smooth_weights.capped(opts.influences)),
+        RigWeights::Fitted => (art.rigid(bind), art.rigid_weights.clone()),
     };
     let mut rig = Rig { rest, weights, bones: mfa_bones, tree, joint_points, joints: opts.joints, trace: Vec::new() };
     if opts.weights == RigWeights::Fitted {
@@ -376,8 +376,8 @@ impl RigidMotion {
     }
 }
 
-struct Solver<'a> {
-    targets: &'a [Vec<Vec3>],
+struct Solver {
+    targets: Vec<Vec<Vec3>>,
     /// The targets vertex by vertex: `by_vertex[v * n_s + i]` is vertex v in pose i (a vertex's poses contiguous,
     /// for the per-vertex solves).
     by_vertex: Vec<Vec3>,
@@ -502,8 +502,8 @@ impl OwnPart {
 }
 
 
-impl<'a> Solver<'a> {
-    fn new(art: &'a Articulation, rig: &Rig, opts: &RigOptions) -> Solver<'a> {
+impl Solver {
+    fn new(art: &Articulation, rig: &Rig, opts: &RigOptions) -> Solver {
         let nv = art.n_vertices();
         let n_parts = art.n_parts();
         let in_tree: Vec<bool> = (0..n_parts).map(|k| rig.tree.contains(k)).collect();
@@ -539,7 +539,8 @@ impl<'a> Solver<'a> {
         }
         let edges = mesh_edges(&art.faces);
         let neighbours = VertexNeighbours::new(&edges, nv);
-        let bind = &art.shapes[opts.bind_pose];
+        let targets = art.shapes();
+        let bind = &targets[opts.bind_pose];
         let edge2 = edges
             .iter()
             .map(|e| {
@@ -548,15 +549,15 @@ impl<'a> Solver<'a> {
             })
             .sum::<f64>()
             / edges.len().max(1) as f64;
-        let ns = art.shapes.len();
+        let ns = targets.len();
         let mut by_vertex = vec![[0.0; 3]; nv * ns];
-        for (i, shape) in art.shapes.iter().enumerate() {
+        for (i, shape) in targets.iter().enumerate() {
             for (v, &p) in shape.iter().enumerate() {
                 by_vertex[v * ns + i] = p;
             }
         }
         let target_norms = (0..nv).map(|v| by_vertex[v * ns..(v + 1) * ns].iter().map(|&p| dot(p, p)).sum()).collect();
-        Solver { targets: &art.shapes, by_vertex, target_norms, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
+        Solver { targets, by_vertex, target_norms, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
     }
 
     fn sse(&self, rig: &Rig) -> f64 {
@@ -935,7 +936,7 @@ fn bone_step(sums: &[f64; 12], pairs: &[(usize, PairSums)], bones: &[RigidMotion
     RigidMotion { rotation: rot, translation: sub(scale(wr, 1.0 / w2), mat_vec(&rot, ubar)) }
 }
 
-impl Solver<'_> {
+impl Solver {
     /// One pass of the fixed-joint bone solve over every pose: in tree order, the root's subtree (everything)
     /// takes the rigid motion, and every other bone's subtree the rotation about the bone's joint, that best
     /// carries the subtree's share of every vertex onto what the rest leaves of its target (an exact block
@@ -1053,7 +1054,7 @@ impl Solver<'_> {
     }
 }
 
-impl Solver<'_> {
+impl Solver {
     /// The bind positions that the current weights and bones carry best onto every pose: per vertex
     /// (Σ_i L_iᵀ L_i) u = Σ_i L_iᵀ (v_i - c_i), with L_i, c_i the blended linear part and translation. Returns the
     /// squared error over all poses at the new bind positions (what [`Solver::sse`] gives, from the same sums).

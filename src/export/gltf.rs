@@ -285,6 +285,7 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
     if opts.morphs == Morphs::Residual {
         for i in 0..ns {
             let mut d: Vec<f32> = Vec::with_capacity(3 * art.n_vertices());
+            let shape = art.shape(i);
             for v in 0..art.n_vertices() {
                 let mut l = crate::geometry::Mat3::zeros();
                 let mut c = [0.0; 3];
@@ -295,7 +296,7 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
                         c[a] += w * m.translation[a];
                     }
                 }
-                let want = sub(art.shapes[i][v], c);
+                let want = sub(shape[v], c);
                 let x = solve3(&l, want).ok_or_else(|| {
                     Error::Data(format!("pose {i}, vertex {v}: the blended bone motion is singular, no morph target can fix it"))
                 })?;
@@ -790,7 +791,7 @@ pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
         .enumerate()
         .map(|(i, f)| {
             f.iter()
-                .zip(&art.rigid[i])
+                .zip(&art.rigid(i))
                 .map(|(x, r)| crate::geometry::norm(sub(art.normalization.to_unit(*x), *r)))
                 .fold(0.0, f64::max)
         })
