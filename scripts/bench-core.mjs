@@ -6,8 +6,10 @@ const median = (xs) => [...xs].sort((a, b) => a - b)[(xs.length - 1) >> 1];
 
 // refits: that many more fits after the timed ones, in the same instance, as the page fits again: the last
 // model parked while the next fit runs (www/worker.js, claimFit), then freed; the memory after each
-// (peak_memory_bytes_refits, in bytes: linear memory only grows).
-export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, refits = 0 } = {}) {
+// (peak_memory_bytes_refits, in bytes: linear memory only grows). interpolate: after the first fit and after
+// each refit, the view the page's Interpolation tab shows (poses 1 -> 2 at t = 0.5), and the memory after it
+// (peak_memory_bytes_view, peak_memory_bytes_refit_views).
+export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, refits = 0, interpolate = false } = {}) {
   const t0 = performance.now();
   let pop;
   let truth = null;
@@ -22,6 +24,7 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, re
   // lay the data out again), is the peak of each
   const memoryAfterLoad = wasm.memoryBytes();
   let memoryAfterFit = null;
+  let memoryAfterView = null;
   const runs = [];
   const fractions = [];
   let summary;
@@ -36,7 +39,13 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, re
     // as the page's worker does (finishFit): the fitter freed, then the model's summary (its diagnosis)
     fitter.free();
     summary = model.summary();
-    if (memoryAfterFit === null) memoryAfterFit = wasm.memoryBytes();
+    if (memoryAfterFit === null) {
+      memoryAfterFit = wasm.memoryBytes();
+      if (interpolate) {
+        model.interpolate(0, 1, 0.5, {});
+        memoryAfterView = wasm.memoryBytes();
+      }
+    }
     // the kernels right after each fit, so that each fraction compares two measurements of the same moment
     // (kernelMs 0: none, so that the memory figures after the fits are the fits' own)
     kernel = kernelMs > 0 ? model.kernelLimit(kernelMs) : null;
@@ -45,6 +54,7 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, re
     model.free();
   }
   const memoryRefits = [];
+  const memoryRefitViews = [];
   let kept = null;
   for (let r = 0; r < refits; r++) {
     const parked = kept?.park();
@@ -56,6 +66,10 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, re
     model.summary();
     kept = model;
     memoryRefits.push(wasm.memoryBytes());
+    if (interpolate) {
+      model.interpolate(0, 1, 0.5, {});
+      memoryRefitViews.push(wasm.memoryBytes());
+    }
   }
   kept?.free();
   const stages = summary.stageStats.map((s, i) => ({
@@ -74,6 +88,7 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, re
     peak_memory_bytes: wasm.memoryBytes(),
     peak_memory_bytes_load: memoryAfterLoad, peak_memory_bytes_fit: memoryAfterFit,
     peak_memory_bytes_refits: memoryRefits,
+    peak_memory_bytes_view: memoryAfterView, peak_memory_bytes_refit_views: memoryRefitViews,
     ground_truth: groundTruth,
   };
   pop.free();

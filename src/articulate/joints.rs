@@ -70,20 +70,24 @@ pub fn area_centroid(tris: &[usize], faces: &[[u32; 3]], positions: &[Vec3]) -> 
     }
 }
 
-/// Every contact's joint, keyed (smaller, larger) like [`PartGraph::contacts`]. `shapes[i][j]`: vertex j of
-/// training shape i (unit box).
-pub fn joints(graph: &PartGraph, model: &Model, faces: &[[u32; 3]], shapes: &[Vec<Vec3>]) -> BTreeMap<(usize, usize), Joint> {
+/// Every contact's joint, keyed (smaller, larger) like [`PartGraph::contacts`]. `shapes`: the training shapes in
+/// order (unit box), read one at a time.
+pub fn joints<S: AsRef<[Vec3]>>(graph: &PartGraph, model: &Model, faces: &[[u32; 3]], shapes: impl IntoIterator<Item = S>) -> BTreeMap<(usize, usize), Joint> {
+    let mut points: Vec<Vec<Vec3>> = vec![Vec::new(); graph.contacts.len()];
+    for s in shapes {
+        let s = s.as_ref();
+        for (contact, p) in graph.contacts.values().zip(points.iter_mut()) {
+            p.push(match contact {
+                Contact::Triangles(t) => area_centroid(t, faces, s),
+                Contact::Virtual(u, v) => scale(add(s[*u as usize], s[*v as usize]), 0.5),
+            });
+        }
+    }
     graph
         .contacts
-        .iter()
-        .map(|(&(a, b), contact)| {
-            let points: Vec<Vec3> = shapes
-                .iter()
-                .map(|s| match contact {
-                    Contact::Triangles(t) => area_centroid(t, faces, s),
-                    Contact::Virtual(u, v) => scale(add(s[*u as usize], s[*v as usize]), 0.5),
-                })
-                .collect();
+        .keys()
+        .zip(points)
+        .map(|(&(a, b), points)| {
             let latent_a = model.parts[a].latent_image(&points);
             let latent_b = model.parts[b].latent_image(&points);
             ((a, b), Joint { a, b, points, latent_a, latent_b })

@@ -118,13 +118,27 @@ pub fn part_radii(labels: &[u32], latent: &[Vec3], n_parts: usize) -> Vec<f64> {
     (0..n_parts).map(|k| (r2[k] / f64::max(n[k], 1.0)).sqrt()).collect()
 }
 
+/// Every edge's length averaged over `shapes`, read one shape at a time.
+pub fn mean_edge_lengths<S: AsRef<[Vec3]>>(edges: &[[u32; 2]], shapes: impl IntoIterator<Item = S>) -> Vec<f64> {
+    let mut sum = vec![0.0; edges.len()];
+    let mut n = 0usize;
+    for s in shapes {
+        let s = s.as_ref();
+        for (e, x) in edges.iter().zip(sum.iter_mut()) {
+            *x += norm(sub(s[e[0] as usize], s[e[1] as usize]));
+        }
+        n += 1;
+    }
+    sum.iter().map(|x| x / n.max(1) as f64).collect()
+}
+
 /// Smooth weights (module doc). `band` scales every blend half-width; `shapes` gives the edge lengths.
-pub fn smooth_weights(
+pub fn smooth_weights<S: AsRef<[Vec3]>>(
     graph: &PartGraph,
     labels: &[u32],
     latent: &[Vec3],
     faces: &[[u32; 3]],
-    shapes: &[Vec<Vec3>],
+    shapes: impl IntoIterator<Item = S>,
     band: f64,
 ) -> SkinWeights {
     let nv = labels.len();
@@ -137,10 +151,7 @@ pub fn smooth_weights(
         .collect();
     // CSR adjacency with mean edge lengths.
     let edges = mesh_edges(faces);
-    let edge_len: Vec<f64> = edges
-        .iter()
-        .map(|e| shapes.iter().map(|s| norm(sub(s[e[0] as usize], s[e[1] as usize]))).sum::<f64>() / shapes.len().max(1) as f64)
-        .collect();
+    let edge_len = mean_edge_lengths(&edges, shapes);
     let neighbours = VertexNeighbours::new(&edges, nv);
     // raw[v]: (part, raw weight) pairs; the own part first.
     let mut raw: Vec<Vec<(u32, f64)>> = labels.iter().map(|&l| vec![(l, 1.0)]).collect();
