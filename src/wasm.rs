@@ -669,11 +669,12 @@ fn articulate_options(opts: JsValue) -> Result<crate::articulate::Options, JsVal
     from_js(opts, "interpolation options")
 }
 
-/// Lets go of the cached articulation (its training shapes and rigid reconstructions in f64: 48 bytes per
-/// vertex-pose). Wasm memory never shrinks, so what is held while a large block is asked for raises the peak for
-/// good: the cache goes before a new articulation is built, when a fit starts and with the model it belongs to.
-/// On horse-poses subdivided (Node), an interpolation after each of three fits took the instance to 162.8 bytes
-/// per vertex-pose with the cache kept, 94.4 (the first interpolation's own peak) with it let go.
+/// Lets go of the cached articulation (its model's copy, graph, joints and skinning weights: per vertex, not per
+/// vertex-pose, since it shares the population's points). Wasm memory never shrinks, so what is held while a
+/// large block is asked for raises the peak for good: the cache goes before a new articulation is built, when a
+/// fit starts and with the model it belongs to. On horse-poses subdivided (Node), an interpolation after each of
+/// three fits took the instance to 162.8 bytes per vertex-pose with the cache kept (when the articulation still
+/// held the shapes in f64), 94.4 with it let go, and 58.3, the fit's own peak, once it read the population.
 fn forget_articulation(only_of: Option<&Rc<FitResult>>) {
     ARTICULATION.with(|cache| {
         let mut cache = cache.borrow_mut();
