@@ -377,7 +377,10 @@ impl RigidMotion {
 }
 
 struct Solver {
-    targets: Vec<Vec<Vec3>>,
+    /// The training poses, read one at a time (an f64 copy of them all would be 24 bytes per vertex-pose).
+    targets: crate::mesh::Population,
+    /// How many.
+    ns: usize,
     /// The targets vertex by vertex: `by_vertex[v * n_s + i]` is vertex v in pose i (a vertex's poses contiguous,
     /// for the per-vertex solves).
     by_vertex: Vec<Vec3>,
@@ -539,8 +542,8 @@ impl Solver {
         }
         let edges = mesh_edges(&art.faces);
         let neighbours = VertexNeighbours::new(&edges, nv);
-        let targets = art.shapes();
-        let bind = &targets[opts.bind_pose];
+        let targets = art.population.clone();
+        let bind = &art.shape(opts.bind_pose);
         let edge2 = edges
             .iter()
             .map(|e| {
@@ -549,19 +552,19 @@ impl Solver {
             })
             .sum::<f64>()
             / edges.len().max(1) as f64;
-        let ns = targets.len();
+        let ns = targets.n_shapes();
         let mut by_vertex = vec![[0.0; 3]; nv * ns];
-        for (i, shape) in targets.iter().enumerate() {
-            for (v, &p) in shape.iter().enumerate() {
+        for (i, shape) in targets.shapes().enumerate() {
+            for (v, p) in shape.iter().enumerate() {
                 by_vertex[v * ns + i] = p;
             }
         }
         let target_norms = (0..nv).map(|v| by_vertex[v * ns..(v + 1) * ns].iter().map(|&p| dot(p, p)).sum()).collect();
-        Solver { targets, by_vertex, target_norms, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
+        Solver { targets, ns, by_vertex, target_norms, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
     }
 
     fn sse(&self, rig: &Rig) -> f64 {
-        self.targets.iter().enumerate().map(|(i, target)| pose_sse(rig, i, target)).sum()
+        self.targets.shapes().enumerate().map(|(i, target)| pose_sse(rig, i, &target.to_vec())).sum()
     }
 
     /// One pass of the weight solve (module doc), Jacobi in the smoothness term. `scratch` keeps the working
@@ -586,7 +589,7 @@ impl Solver {
 
     /// One pass of the bone solve over every pose (module doc); the bind pose's bones stay the identity.
     fn bones(&self, rig: &mut Rig) {
-        bone_pass(&self.by_vertex, self.targets.len(), Some(self.bind), &rig.rest, &rig.weights, &rig.tree.order, &mut rig.bones);
+        bone_pass(&self.by_vertex, self.ns, Some(self.bind), &rig.rest, &rig.weights, &rig.tree.order, &mut rig.bones);
     }
 }
 
@@ -712,7 +715,7 @@ avx2_fn! {
     /// Under `avx2_fn!`: the same bits, with AVX2 where the CPU has it.
     #[inline(never)]
     fn vertex_weights(solver: &Solver, v: usize, rig: &Rig, scratch: &mut WeightScratch, out: &mut Vec<(u32, f64)>) {
-        let ns = solver.targets.len();
+        let ns = solver.ns;
         let old = &rig.weights;
         let WeightScratch { qp, cols, h, f, w, start, allowed, order, dense_nbr, own, .. } = scratch;
         {
@@ -961,10 +964,11 @@ impl Solver {
         let order = rig.tree.order.clone();
         let mut share = vec![[0.0; 3]; nv];
         let mut mass = vec![0.0; nv];
-        for i in 0..self.targets.len() {
+        for i in 0..self.ns {
             if i == self.bind {
                 continue;
             }
+            let target = self.targets.shape(i).to_vec();
             let mut pred = vec![[0.0; 3]; nv];
             for (v, p) in pred.iter_mut().enumerate() {
                 for (k, w) in rig.weights.influences(v) {
@@ -997,7 +1001,7 @@ impl Solver {
                         let (mut rb, mut sb) = ([0.0; 3], [0.0; 3]);
                         for &v in verts {
                             let v = v as usize;
-                            rb = add(rb, sub(self.targets[i][v], sub(pred[v], share[v])));
+                            rb = add(rb, sub(target[v], sub(pred[v], share[v])));
                             sb = add(sb, share[v]);
                         }
                         rb = scale(rb, 1.0 / n);
@@ -1005,7 +1009,7 @@ impl Solver {
                         let mut cm = Mat3::zeros();
                         for &v in verts {
                             let v = v as usize;
-                            let r = sub(sub(self.targets[i][v], sub(pred[v], share[v])), rb);
+                            let r = sub(sub(target[v], sub(pred[v], share[v])), rb);
                             let s = sub(share[v], sb);
                             for a in 0..3 {
                                 for b in 0..3 {
@@ -1022,7 +1026,7 @@ impl Solver {
                         let mut cm = Mat3::zeros();
                         for &v in verts {
                             let v = v as usize;
-                            let r = sub(sub(self.targets[i][v], sub(pred[v], share[v])), scale(c, mass[v]));
+                            let r = sub(sub(target[v], sub(pred[v], share[v])), scale(c, mass[v]));
                             let s = sub(share[v], scale(c, mass[v]));
                             for a in 0..3 {
                                 for b in 0..3 {
@@ -1064,7 +1068,7 @@ impl Solver {
     /// per pair of bones P_kl = Σ_i R_kᵀ R_l, q_kl = Σ_i R_kᵀ t_l, τ_kl = Σ_i t_k · t_l and per vertex and bone
     /// z_k = Σ_i R_kᵀ v_i, s_k = Σ_i t_k · v_i: one pass over the poses per influence, none per pair.
     fn rest(&self, rig: &mut Rig) -> f64 {
-        let ns = self.targets.len();
+        let ns = self.ns;
         let n_parts = rig.bones[0].len();
         // bone-major motions: [R | t] row-major (3 x 4) of bone k in pose i at k ns + i
         let mut motions = vec![[0.0; 12]; n_parts * ns];
@@ -1115,7 +1119,7 @@ avx2_fn! {
     /// Under `avx2_fn!`: the same bits, with AVX2 where the CPU has it.
     #[inline(never)]
     fn vertex_rest(solver: &Solver, v: usize, rig: &Rig, motions: &[[f64; 12]], pairs: &[[f64; 13]], n_parts: usize) -> (Option<Vec3>, f64) {
-        let ns = solver.targets.len();
+        let ns = solver.ns;
         let targets = &solver.by_vertex[v * ns..(v + 1) * ns];
         let infl = &rig.weights.influences[v];
         let mut a = [0.0; 9];

@@ -631,6 +631,34 @@ pub fn play_glb(glb: &[u8]) -> Result<GlbPlayback> {
 /// Plays the clip named `clip` of a .glb at every keyframe, as [`play_glb`] does (e.g. `frames`,
 /// [`super::pose_glb`]).
 pub fn play_glb_clip(glb: &[u8], clip: &str) -> Result<GlbPlayback> {
+    let (mut frames, mut joint_positions) = (Vec::new(), Vec::new());
+    let rig = play_glb_clip_each(glb, clip, |_, frame, joints| {
+        frames.push(frame);
+        joint_positions.push(joints);
+        Ok(())
+    })?;
+    Ok(GlbPlayback { rest: rig.rest, frames, joint_positions, joint_parent: rig.joint_parent, clips: rig.clips })
+}
+
+/// What [`play_glb_clip_each`] returns besides the frames it hands over.
+#[derive(Debug, Clone)]
+pub struct GlbRig {
+    /// Bind positions (the mesh's POSITION), original units.
+    pub rest: Vec<Vec3>,
+    /// Parent of every skin joint (index in skin order), None for the skeleton's root.
+    pub joint_parent: Vec<Option<usize>>,
+    pub clips: Vec<String>,
+    /// Keyframes of the clip played.
+    pub keys: usize,
+}
+
+/// [`play_glb_clip`] one keyframe at a time: `each(key, skinned positions, joint positions)` as each is played,
+/// so that no more than one frame is held (a whole clip in f64 is 24 bytes per vertex and keyframe).
+pub fn play_glb_clip_each(
+    glb: &[u8],
+    clip: &str,
+    mut each: impl FnMut(usize, Vec<Vec3>, Vec<Vec3>) -> Result<()>,
+) -> Result<GlbRig> {
     let (root, bin) = parse_glb(glb)?;
     let err = |m: &str| Error::Data(format!("glb playback: {m}"));
     let skin = root.skins.first().ok_or_else(|| err("no skin"))?;
@@ -687,8 +715,6 @@ pub fn play_glb_clip(glb: &[u8], clip: &str) -> Result<GlbPlayback> {
         channels.push((ch.target.node.value(), ch.target.path, read_floats(&root, &bin, smp.output)?));
     }
     let rest: Vec<Vec3> = (0..nv).map(|v| [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]]).collect();
-    let mut frames = Vec::with_capacity(n_keys);
-    let mut joint_positions = Vec::with_capacity(n_keys);
     for key in 0..n_keys {
         let mut local: Vec<(Vec3, [f64; 4], Vec3)> = root
             .nodes
@@ -770,10 +796,9 @@ pub fn play_glb_clip(glb: &[u8], clip: &str) -> Result<GlbPlayback> {
             }
             out.push(x);
         }
-        frames.push(out);
-        joint_positions.push(jpos);
+        each(key, out, jpos)?;
     }
-    Ok(GlbPlayback { rest, frames, joint_positions, joint_parent, clips: root.animations.iter().filter_map(|a| a.name.clone()).collect() })
+    Ok(GlbRig { rest, joint_parent, clips: root.animations.iter().filter_map(|a| a.name.clone()).collect(), keys: n_keys })
 }
 
 /// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe ([`play_glb`]) and

@@ -51,19 +51,42 @@ pub fn rig_error(pop: &Population, play: &GlbPlayback, rest: usize) -> Result<Ri
     if play.rest.len() != pop.n_vertices() {
         return Err(Error::Data(format!("the rig has {} vertices, the population {}", play.rest.len(), pop.n_vertices())));
     }
-    if rest >= pop.n_shapes() {
-        return Err(Error::Request(format!("rest pose {rest} (0-based): the population has {} poses", pop.n_shapes())));
-    }
-    let rest_pose: Vec<Vec3> = pop.shape(rest).iter().map(|u| pop.normalization.to_original(u)).collect();
-    let diagonal = bbox_diagonal(&rest_pose);
-    if !(diagonal > 0.0) {
-        return Err(Error::Data("the rest pose has an empty bounding box".into()));
-    }
-    let nv = pop.n_vertices() as f64;
-    let mut poses = Vec::with_capacity(pop.n_shapes());
-    let mut total = 0.0;
-    let mut max_error: f64 = 0.0;
+    let mut sum = ErrorSum::new(pop, rest)?;
     for (i, frame) in play.frames.iter().enumerate() {
+        sum.add(i, frame)?;
+    }
+    Ok(sum.finish())
+}
+
+/// [`rig_error`] one frame at a time, in pose order (the same sums in the same order).
+struct ErrorSum<'a> {
+    pop: &'a Population,
+    diagonal: f64,
+    poses: Vec<PoseError>,
+    total: f64,
+    max_error: f64,
+}
+
+impl<'a> ErrorSum<'a> {
+    fn new(pop: &'a Population, rest: usize) -> Result<ErrorSum<'a>> {
+        if rest >= pop.n_shapes() {
+            return Err(Error::Request(format!("rest pose {rest} (0-based): the population has {} poses", pop.n_shapes())));
+        }
+        let rest_pose: Vec<Vec3> = pop.shape(rest).iter().map(|u| pop.normalization.to_original(u)).collect();
+        let diagonal = bbox_diagonal(&rest_pose);
+        if !(diagonal > 0.0) {
+            return Err(Error::Data("the rest pose has an empty bounding box".into()));
+        }
+        Ok(ErrorSum { pop, diagonal, poses: Vec::with_capacity(pop.n_shapes()), total: 0.0, max_error: 0.0 })
+    }
+
+    /// Frame `i` (original units), after frames 0..i.
+    fn add(&mut self, i: usize, frame: &[Vec3]) -> Result<()> {
+        let pop = self.pop;
+        if i != self.poses.len() || i >= pop.n_shapes() {
+            return Err(Error::Data(format!("keyframe {i} of a clip for {} training poses", pop.n_shapes())));
+        }
+        let nv = pop.n_vertices() as f64;
         let mut sq = 0.0;
         let mut worst: f64 = 0.0;
         for (x, u) in frame.iter().zip(pop.shape(i).iter()) {
@@ -71,17 +94,22 @@ pub fn rig_error(pop: &Population, play: &GlbPlayback, rest: usize) -> Result<Ri
             sq += d * d;
             worst = worst.max(d);
         }
-        total += sq;
-        max_error = max_error.max(worst);
-        poses.push(PoseError { name: pop.names[i].clone(), e_rms: 1000.0 * (sq / (3.0 * nv)).sqrt() / diagonal, max_error: worst });
+        self.total += sq;
+        self.max_error = self.max_error.max(worst);
+        self.poses.push(PoseError { name: pop.names[i].clone(), e_rms: 1000.0 * (sq / (3.0 * nv)).sqrt() / self.diagonal, max_error: worst });
+        Ok(())
     }
-    Ok(RigError {
-        e_rms: 1000.0 * (total / (3.0 * nv * pop.n_shapes() as f64)).sqrt() / diagonal,
-        max_error,
-        max_error_over_diagonal: max_error / diagonal,
-        diagonal,
-        poses,
-    })
+
+    fn finish(self) -> RigError {
+        let nv = self.pop.n_vertices() as f64;
+        RigError {
+            e_rms: 1000.0 * (self.total / (3.0 * nv * self.pop.n_shapes() as f64)).sqrt() / self.diagonal,
+            max_error: self.max_error,
+            max_error_over_diagonal: self.max_error / self.diagonal,
+            diagonal: self.diagonal,
+            poses: self.poses,
+        }
+    }
 }
 
 /// The pose a rig is bound in by default: the file whose name (without extension) is `reference`, else the
@@ -145,8 +173,19 @@ pub fn export_rig(art: &Articulation, pop: &Population, opts: &GltfOptions) -> R
     let t1 = crate::clock::now_ms();
     let glb = super::gltf::write_glb(art, &rig, opts)?;
     let t2 = crate::clock::now_ms();
-    let play = super::gltf::play_glb(&glb)?;
-    let error = rig_error(pop, &play, opts.bind_pose)?;
+    // (played a frame at a time: the whole clip in f64 would be 24 bytes per vertex-pose)
+    let mut sum = ErrorSum::new(pop, opts.bind_pose)?;
+    let played = super::gltf::play_glb_clip_each(&glb, "training poses", |i, frame, _| sum.add(i, &frame))?;
+    if played.keys != pop.n_shapes() || played.rest.len() != pop.n_vertices() {
+        return Err(Error::Data(format!(
+            "the rig written has {} keyframes of {} vertices for {} poses of {}",
+            played.keys,
+            played.rest.len(),
+            pop.n_shapes(),
+            pop.n_vertices()
+        )));
+    }
+    let error = sum.finish();
     let t3 = crate::clock::now_ms();
-    Ok(RigExport { glb, error, bones: play.joint_parent.len(), rig_ms: t1 - t, write_ms: t2 - t1, evaluate_ms: t3 - t2 })
+    Ok(RigExport { glb, error, bones: played.joint_parent.len(), rig_ms: t1 - t, write_ms: t2 - t1, evaluate_ms: t3 - t2 })
 }
