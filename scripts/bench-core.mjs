@@ -8,8 +8,10 @@ const median = (xs) => [...xs].sort((a, b) => a - b)[(xs.length - 1) >> 1];
 // model parked while the next fit runs (www/worker.js, claimFit), then freed; the memory after each
 // (peak_memory_bytes_refits, in bytes: linear memory only grows). interpolate: after the first fit and after
 // each refit, the view the page's Interpolation tab shows (poses 1 -> 2 at t = 0.5), and the memory after it
-// (peak_memory_bytes_view, peak_memory_bytes_refit_views).
-export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, refits = 0, interpolate = false } = {}) {
+// (peak_memory_bytes_view, peak_memory_bytes_refit_views). rig: 'rigid' | 'smooth' | 'fitted' | 'pose': after
+// the first fit (and its view), the rig the page exports with those weights, or pose mode's poser, and the
+// memory after it (peak_memory_bytes_rig).
+export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, refits = 0, interpolate = false, rig = null } = {}) {
   const t0 = performance.now();
   let pop;
   let truth = null;
@@ -25,6 +27,7 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, re
   const memoryAfterLoad = wasm.memoryBytes();
   let memoryAfterFit = null;
   let memoryAfterView = null;
+  let memoryAfterRig = null;
   const runs = [];
   const fractions = [];
   let summary;
@@ -45,6 +48,9 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, re
         model.interpolate(0, 1, 0.5, {});
         memoryAfterView = wasm.memoryBytes();
       }
+      if (rig === 'pose') model.poser({}).free();
+      else if (rig) model.rig({ weights: rig });
+      if (rig) memoryAfterRig = wasm.memoryBytes();
     }
     // the kernels right after each fit, so that each fraction compares two measurements of the same moment
     // (kernelMs 0: none, so that the memory figures after the fits are the fits' own)
@@ -89,6 +95,7 @@ export function benchOne(wasm, input, { repeat = 3, seed = 0, kernelMs = 200, re
     peak_memory_bytes_load: memoryAfterLoad, peak_memory_bytes_fit: memoryAfterFit,
     peak_memory_bytes_refits: memoryRefits,
     peak_memory_bytes_view: memoryAfterView, peak_memory_bytes_refit_views: memoryRefitViews,
+    peak_memory_bytes_rig: memoryAfterRig,
     ground_truth: groundTruth,
   };
   pop.free();

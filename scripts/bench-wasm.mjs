@@ -1,6 +1,6 @@
 // Benchmark of the whole pipeline in wasm, one thread, in headless Chromium (default) or in Node:
 //   node scripts/bench-wasm.mjs [INPUT...] [--node] [--repeat N] [--seed S] [--kernel-ms MS] [--refits N]
-//                               [--interpolate] [--baseline DIR]
+//                               [--interpolate] [--rig rigid|smooth|fitted|pose] [--baseline DIR]
 // INPUT: a folder of registered OBJ files, or synth:PRESET[:VERTICES[:POSES[:SEED]]] (a generated population).
 // Default inputs: ../shared/data/horse-poses, ../shared/data/horse-gallop, synth:quadruped:50000:20 (a folder
 // that is absent is reported and skipped). Prints one JSON object per input (the same figures as
@@ -10,7 +10,8 @@
 // (peak_memory_bytes_fit) and at the end, after the kernel limits (peak_memory_bytes; --kernel-ms 0: none);
 // with --refits N, after each of N more fits made as the page fits again, the last model parked meanwhile
 // (peak_memory_bytes_refits); with --interpolate, after an interpolation viewed after the first fit and after
-// each refit (peak_memory_bytes_view, peak_memory_bytes_refit_views).
+// each refit (peak_memory_bytes_view, peak_memory_bytes_refit_views); with --rig, after the rig the page
+// exports with those weights (or pose mode's poser) made after the first fit (peak_memory_bytes_rig).
 // Needs `npm run build:wasm` (www/pkg for Chromium, pkg-node for Node).
 // --baseline DIR: DIR is another checkout (e.g. today's main, `git archive main | tar -x -C DIR`) with its own
 // `npm run build:wasm` done; each input is then fitted alternately by DIR's module and by this one, in the same
@@ -38,7 +39,12 @@ const settings = {
   kernelMs: Number(opt('--kernel-ms', '300')),
   refits: Number(opt('--refits', '0')),
   interpolate: flag('--interpolate'),
+  rig: opt('--rig', null),
 };
+if (settings.rig && !['rigid', 'smooth', 'fitted', 'pose'].includes(settings.rig)) {
+  console.error(`bench-wasm: --rig ${settings.rig}: use rigid, smooth, fitted or pose`);
+  process.exit(2);
+}
 const baselineDir = opt('--baseline', null);
 const inNode = flag('--node');
 const inputs = args.length ? args : [
@@ -46,7 +52,7 @@ const inputs = args.length ? args : [
 ];
 for (const a of args) {
   if (a.startsWith('--')) {
-    console.error(`bench-wasm: unknown option ${a} (options: --node --repeat N --seed S --kernel-ms MS --refits N --interpolate --baseline DIR)`);
+    console.error(`bench-wasm: unknown option ${a} (options: --node --repeat N --seed S --kernel-ms MS --refits N --interpolate --rig W --baseline DIR)`);
     process.exit(2);
   }
 }
@@ -86,7 +92,8 @@ async function compared(label, one) {
     estep_fraction_of_limit: x.estep_fraction_of_limit, peak_memory_bytes: x.peak_memory_bytes,
     peak_memory_bytes_load: x.peak_memory_bytes_load, peak_memory_bytes_fit: x.peak_memory_bytes_fit,
     peak_memory_bytes_refits: x.peak_memory_bytes_refits, peak_memory_bytes_view: x.peak_memory_bytes_view,
-    peak_memory_bytes_refit_views: x.peak_memory_bytes_refit_views, ground_truth: x.ground_truth,
+    peak_memory_bytes_refit_views: x.peak_memory_bytes_refit_views, peak_memory_bytes_rig: x.peak_memory_bytes_rig,
+    ground_truth: x.ground_truth,
   });
   return { input: label, shapes: current.shapes, vertices: current.vertices, ratio: current.fit_ms_median / baseline.fit_ms_median, baseline: short(baseline), current: short(current) };
 }
