@@ -176,7 +176,7 @@ dual_test! {
         let d = skinned.diagonal();
         let nv = skinned.n_vertices();
         let own: f64 = (0..train.n_shapes()).map(|i| sse(&rig.pose(i), &art.shape(i))).sum();
-        let resolved = solve_frames(&skinned, &art.shapes()).unwrap();
+        let resolved = solve_frames(&skinned, &art.population.unit_shapes()).unwrap();
         let again: f64 = resolved.sse.iter().sum();
         assert!(again <= own * 1.0001 + 1e-18, "the solve on the training poses: {again} > the rig's own {own}");
         // held-out poses, in the training population's unit box

@@ -325,9 +325,9 @@ async function teach(data) {
 // Questions about the model or the population; each returns plain data or typed arrays. `shown`: a mesh
 // descriptor ({kind: 'pose' | 'linear' | ..., see Shown in src/export/shown.rs}).
 const POPULATION_QUERIES = {
-  linearInterpolate: (i, j, t) => (liveModel() ?? population).linearInterpolate(i, j, t),
-  objText: (shown, header) => (liveModel() ?? population).objText(shown, header),
-  objScene: (meshes, header) => (liveModel() ?? population).objScene(meshes, header),
+  linearInterpolate: (i, j, t) => (model ?? population).linearInterpolate(i, j, t),
+  objText: (shown, header) => (model ?? population).objText(shown, header),
+  objScene: (meshes, header) => (model ?? population).objScene(meshes, header),
   originalLengths: (values) => population.originalLengths(Float64Array.from(values)),
 };
 const QUERIES = {

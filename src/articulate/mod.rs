@@ -46,7 +46,7 @@ pub mod rig;
 pub mod skin;
 
 use crate::error::{Error, Result};
-use crate::geometry::{add, dot, mat_mul, mat_t_vec, mat_vec, scale, sub, transpose, Mat3, Vec3};
+use crate::geometry::{add, mat_mul, mat_t_vec, mat_vec, scale, transpose, Mat3, Vec3};
 use crate::mesh::{Normalization, Population};
 use crate::mfa::Model;
 use graph::{PartGraph, Tree, TreeRule};
@@ -265,27 +265,9 @@ impl Articulation {
         self.population.shape(i).to_vec()
     }
 
-    /// Every training shape (unit box), `[i][j]`: 24 bytes per vertex-pose while it lives.
-    pub fn shapes(&self) -> Vec<Vec<Vec3>> {
-        self.population.unit_shapes()
-    }
-
     /// Training shape i rebuilt rigidly from the latent shape (eq 22).
     pub fn rigid(&self, i: usize) -> Vec<Vec3> {
         self.model.reconstruct(i)
-    }
-
-    /// RMSE of the rigid reconstructions against the training shapes (unit box), one shape at a time.
-    pub fn rigid_rmse(&self) -> f64 {
-        let (mut s, mut n) = (0.0, 0usize);
-        for i in 0..self.n_shapes() {
-            for (p, q) in self.population.shape(i).iter().zip(self.rigid(i)) {
-                let d = sub(p, q);
-                s += dot(d, d);
-                n += 1;
-            }
-        }
-        (s / n.max(1) as f64).sqrt()
     }
 
     pub fn n_vertices(&self) -> usize {

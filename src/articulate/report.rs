@@ -28,19 +28,6 @@ pub fn signed_volume(positions: &[Vec3], faces: &[[u32; 3]]) -> f64 {
         / 6.0
 }
 
-/// Root mean square distance over all points of all shapes.
-pub fn rmse(a: &[Vec<Vec3>], b: &[Vec<Vec3>]) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
-    for (x, y) in a.iter().zip(b) {
-        for (p, q) in x.iter().zip(y) {
-            let d = sub(*p, *q);
-            s += dot(d, d);
-            n += 1;
-        }
-    }
-    (s / n.max(1) as f64).sqrt()
-}
-
 /// Largest distance between corresponding points.
 pub fn max_distance(a: &[Vec3], b: &[Vec3]) -> f64 {
     a.iter().zip(b).map(|(p, q)| norm(sub(*p, *q))).fold(0.0, f64::max)
@@ -186,7 +173,7 @@ pub fn report(art: &Articulation, i: usize, j: usize, t: f64) -> Result<Report> 
         shapes: art.n_shapes(),
         vertices: art.n_vertices(),
         parts: art.n_parts(),
-        rmse: art.rigid_rmse(),
+        rmse: art.model.rmse(&art.population),
         from: i + 1,
         to: j + 1,
         t,

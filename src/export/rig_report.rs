@@ -45,17 +45,23 @@ pub fn bbox_diagonal(points: &[Vec3]) -> f64 {
 /// Compares the clip's keyframes with the population's poses (original units), keyframe i with pose i;
 /// `rest` is the training pose the rig is bound in (its bounding box gives d).
 pub fn rig_error(pop: &Population, play: &GlbPlayback, rest: usize) -> Result<RigError> {
-    if play.frames.len() != pop.n_shapes() {
-        return Err(Error::Data(format!("the clip has {} keyframes for {} training poses", play.frames.len(), pop.n_shapes())));
-    }
-    if play.rest.len() != pop.n_vertices() {
-        return Err(Error::Data(format!("the rig has {} vertices, the population {}", play.rest.len(), pop.n_vertices())));
-    }
+    check_clip(pop, play.frames.len(), play.rest.len())?;
     let mut sum = ErrorSum::new(pop, rest)?;
     for (i, frame) in play.frames.iter().enumerate() {
         sum.add(i, frame)?;
     }
     Ok(sum.finish())
+}
+
+/// A clip of `keys` keyframes of a rig of `vertices` vertices is one of `pop`'s poses each.
+fn check_clip(pop: &Population, keys: usize, vertices: usize) -> Result<()> {
+    if keys != pop.n_shapes() {
+        return Err(Error::Data(format!("the clip has {keys} keyframes for {} training poses", pop.n_shapes())));
+    }
+    if vertices != pop.n_vertices() {
+        return Err(Error::Data(format!("the rig has {vertices} vertices, the population {}", pop.n_vertices())));
+    }
+    Ok(())
 }
 
 /// [`rig_error`] one frame at a time, in pose order (the same sums in the same order).
@@ -176,15 +182,7 @@ pub fn export_rig(art: &Articulation, pop: &Population, opts: &GltfOptions) -> R
     // (played a frame at a time: the whole clip in f64 would be 24 bytes per vertex-pose)
     let mut sum = ErrorSum::new(pop, opts.bind_pose)?;
     let played = super::gltf::play_glb_clip_each(&glb, "training poses", |i, frame, _| sum.add(i, &frame))?;
-    if played.keys != pop.n_shapes() || played.rest.len() != pop.n_vertices() {
-        return Err(Error::Data(format!(
-            "the rig written has {} keyframes of {} vertices for {} poses of {}",
-            played.keys,
-            played.rest.len(),
-            pop.n_shapes(),
-            pop.n_vertices()
-        )));
-    }
+    check_clip(pop, played.keys, played.rest.len())?;
     let error = sum.finish();
     let t3 = crate::clock::now_ms();
     Ok(RigExport { glb, error, bones: played.joint_parent.len(), rig_ms: t1 - t, write_ms: t2 - t1, evaluate_ms: t3 - t2 })
