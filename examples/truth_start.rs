@@ -1,6 +1,7 @@
 //! Probe (development tool): does the model prefer a population's truth partition? Fits AECM from the truth's
-//! labels, then the default pipeline (its own count, then the truth's count with `--bones`), and prints each one's
-//! parts, final log-likelihood, RMSE and adjusted Rand index against the truth.
+//! labels (and that fit's vertices then labelled by rigid motion, as the pipeline's last labels are), then the
+//! default pipeline (its own count, then the truth's count with `--bones`), and prints each one's parts, final
+//! log-likelihood, RMSE and adjusted Rand index against the truth.
 //! `cargo run --release --example truth_start -- INPUT TRUTH.json` (TRUTH: one label per vertex, e.g. a skinned
 //! character's `truth.json` from `scripts/fixtures/skinned_character.py`).
 use posemfa::metrics::adjusted_rand_index;
@@ -42,6 +43,13 @@ fn main() {
         m.iterations,
         m.rmse(&pop),
         adjusted_rand_index(&m.labels, &truth)
+    );
+    let mut ml = m.clone();
+    let moved = posemfa::parts::motion_labels::label_by_motion(&mut ml, &pop);
+    println!(
+        "  then labelled by motion ({moved} vertices moved): {} parts, adjusted Rand vs truth {:.3}",
+        ml.n_parts(),
+        adjusted_rand_index(&ml.labels, &truth)
     );
     for target in [None, Some(m.n_parts())] {
         let params = Params { target_parts: target, ..params.clone() };
