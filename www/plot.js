@@ -42,20 +42,29 @@ export class Plot {
     const surface = clearedCanvas(this.canvas);
     if (!surface) return;
     const { g, w, h, style } = surface;
-    g.fillText(this.title, 4, 12);
     const v = this.values;
+    const left = 4;
+    const right = w - 4;
+    // the title on as many lines as it needs (words are never cut); the max label beside its last line when it
+    // fits there, else on a line of its own: the two never overlap
+    const titleLines = wrap(g, this.title.split(' '), ' ', right - left);
+    titleLines.forEach((t, i) => g.fillText(t, left, 12 * (i + 1)));
     if (v.length === 0) {
-      g.fillText('log-likelihood: no iteration yet', 4, h / 2);
+      g.fillText('log-likelihood: no iteration yet', left, h / 2);
       return;
     }
     const shown = this.runs ? v.slice(this.runs[this.runs.length - 1]) : v; // labels: the current run's range
     const lo = Math.min(...shown);
     const hi = Math.max(...shown);
     const span = hi - lo || Math.abs(hi) || 1;
-    const left = 4;
-    const top = 18;
-    const bottom = h - 14;
-    const right = w - 4;
+    const maxText = `max ${fmt(hi)}`;
+    const last = titleLines[titleLines.length - 1] ?? '';
+    const beside = g.measureText(last).width + 8 + g.measureText(maxText).width <= right - left;
+    const maxLine = beside ? Math.max(titleLines.length, 1) : titleLines.length + 1;
+    // the footer's parts (min, iterations, runs) on as many lines as they need, from the bottom up
+    const footer = wrap(g, [`min ${fmt(lo)}`, `${v.length} iteration${v.length === 1 ? '' : 's'}`, ...(this.runs ? [`${this.runs.length} runs, each to its own scale`] : [])], ' · ', right - left);
+    const top = 12 * maxLine + 6;
+    const bottom = h - 2 - 12 * footer.length;
     const x = (i) => left + ((right - left) * i) / Math.max(v.length - 1, 1);
     const y = (val) => bottom - ((bottom - top) * (val - lo)) / span;
     g.strokeStyle = style.borderColor || '#999';
@@ -84,7 +93,27 @@ export class Plot {
       v.forEach((val, i) => (i ? g.lineTo(x(i), y(val)) : g.moveTo(x(i), y(val))));
     }
     g.stroke();
-    g.fillText(`max ${fmt(hi)}`, right - g.measureText(`max ${fmt(hi)}`).width, 12);
-    g.fillText(`min ${fmt(lo)} · ${v.length} iteration${v.length === 1 ? '' : 's'}${this.runs ? ` · ${this.runs.length} runs, each to its own scale` : ''}`, left, h - 2);
+    if (v.length === 1) {
+      // one iteration: a dot, not an empty plot (a line needs two points)
+      g.beginPath();
+      g.arc(x(0) + 2, y(v[0]), 2.5, 0, 2 * Math.PI);
+      g.fillStyle = g.strokeStyle;
+      g.fill();
+      g.fillStyle = style.color;
+    }
+    g.fillText(maxText, right - g.measureText(maxText).width, 12 * maxLine);
+    footer.forEach((t, i) => g.fillText(t, left, h - 2 - 12 * (footer.length - 1 - i)));
   }
+}
+
+// Greedy line breaking of `parts` joined by `sep` into lines no wider than `width` (a part wider than that has a
+// line of its own).
+function wrap(g, parts, sep, width) {
+  const lines = [];
+  for (const p of parts) {
+    const next = lines.length ? `${lines[lines.length - 1]}${sep}${p}` : p;
+    if (lines.length && g.measureText(next).width <= width) lines[lines.length - 1] = next;
+    else lines.push(p);
+  }
+  return lines.filter((l) => l !== '');
 }

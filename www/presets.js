@@ -40,5 +40,5 @@ export function installPresets(runExample) {
 /** One line of ground-truth accuracy: adjusted Rand index and rotation error (median and worst part). */
 export function accuracyText(g) {
   if (!g) return '–';
-  return `adjusted Rand ${g.ari.toFixed(3)}; rotation error ${g.rotationErrorDeg.toFixed(2)}° median, ${g.rotationErrorDegMax.toFixed(2)}° worst part (${g.trueParts} true parts)`;
+  return `adjusted Rand ${g.ari.toFixed(3)}; rotation error ${g.rotationErrorDeg.toFixed(2)}° median, ${g.rotationErrorDegMax.toFixed(2)}° worst part (${g.trueParts} true part${g.trueParts === 1 ? '' : 's'})`;
 }

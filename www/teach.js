@@ -29,8 +29,10 @@ function buttons() {
   $('teach-run').setAttribute('aria-pressed', String(running));
 }
 
-/** Step / Run / Reset: a step of the teaching fit in hand, or a new one (count: steps at once). Reset asks
- * before it drops a finished fit (a dismissed question changes nothing). */
+const BUTTON = { 'teach-step': 'Step', 'teach-run': 'Run', 'teach-reset': 'Reset' };
+
+/** Step / Run / Reset: a step of the teaching fit in hand, or a new one (count: steps at once). A new one asks
+ * before it drops a finished fit, whichever button starts it (a dismissed question changes nothing). */
 export async function teach(type, { count = 1 } = {}) {
   if (!state.pop) return;
   if (type !== 'teach-reset' && active()) {
@@ -38,8 +40,9 @@ export async function teach(type, { count = 1 } = {}) {
     client.post({ type, id: state.teach.id, count });
     return;
   }
-  if (type === 'teach-reset' && state.model && !state.fitId
-    && !window.confirm(`Reset starts a new step-by-step fit and drops the finished one (${state.model.summary.parts} parts, its exports and views). Drop it?`)) return;
+  // (a finished model shown while a new Fit runs is dropped as well: asked too)
+  if (state.model && !active()
+    && !window.confirm(`${BUTTON[type]} starts a new step-by-step fit and drops the finished one (${state.model.summary.parts} parts, its exports and views). Drop it?`)) return;
   // A new teaching fit: the current model (and any fit in progress) gives way to it.
   const params = await checkedParams();
   if (!params || !state.pop) return; // the form names the field it cannot use

@@ -65,7 +65,9 @@ export async function launch() {
 }
 
 /** A page at 1280x800 that records console errors, page errors, dialogs and requests leaving loopback. The
- * page gets `window.__viewImage()`: the pixels of the view's canvas as ImageData (for the pixel checks). */
+ * page gets `window.__viewImage()`: the pixels of the view's canvas as ImageData (for the pixel checks).
+ * Dialogs are dismissed (a confirm answers "no") unless the test sets `log.acceptDialogs = true`; either way
+ * their messages are in `log.dialogs`. */
 export async function openPage(browser, url, { width = 1280, height = 800 } = {}) {
   const context = await browser.newContext({ viewport: { width, height } });
   await context.addInitScript(() => {
@@ -80,12 +82,13 @@ export async function openPage(browser, url, { width = 1280, height = 800 } = {}
     };
   });
   const page = await context.newPage();
-  const log = { errors: [], dialogs: [], external: [] };
+  const log = { errors: [], dialogs: [], external: [], acceptDialogs: false };
   page.on('pageerror', (e) => log.errors.push(String(e)));
   page.on('console', (m) => m.type() === 'error' && log.errors.push(m.text()));
   page.on('dialog', (d) => {
     log.dialogs.push(d.message());
-    d.dismiss();
+    if (log.acceptDialogs) d.accept();
+    else d.dismiss();
   });
   page.on('request', (r) => {
     const u = new URL(r.url());

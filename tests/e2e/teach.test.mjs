@@ -6,6 +6,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
+import { readFile } from 'node:fs/promises';
 import { pageSession, waitState, canvasFingerprint, ROOT } from './helpers.mjs';
 
 const session = pageSession();
@@ -107,6 +108,8 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
   const { page, context, log } = await fitted();
   const reference = coreSteps('quadruped', 5);
   assert.equal(await page.evaluate(() => window.posemfa.teaching().active), false);
+  log.acceptDialogs = true; // the first Step drops the fit the page opened with: yes
+
   const split = []; // vertices with no part above γ = 0.9 after each step, and how many are shown blended
   for (let k = 1; k <= 5; k++) {
     await step(page);
@@ -114,6 +117,7 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
     const t = await teaching(page);
     split.push(t.soft);
     assert.equal(t.iteration, k, 'one Step, one iteration');
+    if (k === 1) assert.match(log.dialogs.join('\n'), /^Step starts a new step-by-step fit and drops the finished one/);
     assert.equal(await page.locator('[data-testid=teach-iteration]').innerText(), String(k));
     assert.equal(t.points, k);
     assert.equal(await page.evaluate(() => window.posemfa.plotPoints()), k);
@@ -126,6 +130,7 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
   assert.deepEqual(t.logLikelihood, reference.map((p) => p.logLikelihood));
   assert.deepEqual(reference.map((p) => p.totalIterations), [1, 2, 3, 4, 5]);
   for (let i = 1; i < 5; i++) assert.ok(t.logLikelihood[i] >= t.logLikelihood[i - 1], `exact AECM never lowers the log-likelihood: ${t.logLikelihood}`);
+  assert.equal(log.dialogs.length, 1, 'only the Step that dropped the finished fit asked: the next ones go on with the teaching fit');
   assert.match(await page.locator('#teach-stages li.current').innerText(), /coarse/);
   assert.match(await page.locator('#teach-eq').innerText(), /eqs 13–14[\s\S]*eq 12[\s\S]*Λ[\s\S]*eq 19[\s\S]*eq 31[\s\S]*eq 16[\s\S]*eq 12/);
 
@@ -167,8 +172,44 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
   await context.close();
 });
 
+test('Step and Run after a finished fit ask before they drop it; dismissed, the fit and its exports stay', async () => {
+  const { page, context, log } = await fitted('#ex=arm');
+  const before = await summary(page);
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  for (const [sel, name] of [['[data-testid=teach-step]', 'Step'], ['#teach-run', 'Run']]) {
+    const asked = log.dialogs.length;
+    await page.click(sel); // the test's dialog handler dismisses the question
+    for (let i = 0; i < 100 && log.dialogs.length === asked; i++) await page.waitForTimeout(20);
+    assert.equal(log.dialogs.length, asked + 1, `${name} asked`);
+    assert.match(log.dialogs[asked], new RegExp(`^${name} starts a new step-by-step fit and drops the finished one \\(${before.parts} parts, its exports and views\\)`));
+    await page.waitForTimeout(300);
+    // nothing changed: the same model, its part count, its exports, no teaching fit
+    assert.equal(await page.locator('[data-testid=parts-count]').innerText(), String(before.parts));
+    assert.deepEqual(await summary(page), before);
+    for (const id of ['export-json', 'export-gltf']) assert.equal(await page.isDisabled(`#${id}`), false, `${id} after ${name}`);
+    assert.equal((await teaching(page)).active, false);
+    assert.equal(await page.locator('[data-testid=teach-iteration]').innerText(), '0');
+    assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  }
+  assert.equal(await page.evaluate(() => window.posemfa.fitCount()), fits, 'no fit started');
+  // the export still answers: the model's JSON, of this fit
+  const [json] = await Promise.all([page.waitForEvent('download'), page.click('#export-json')]);
+  const model = JSON.parse(await readFile(await json.path(), 'utf8'));
+  assert.equal(model.labels.length, before.vertices);
+  assert.equal(new Set(model.labels).size, before.parts);
+  // accepted, Step drops it: a teaching fit at iteration 1, no model
+  log.acceptDialogs = true;
+  await step(page);
+  assert.equal(log.dialogs.length, 3);
+  assert.equal((await teaching(page)).iteration, 1);
+  assert.equal(await page.isDisabled('#export-json'), true, 'the dropped fit has no export');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
 test('the literal eq 18 preset shows the log-likelihood dropping while stepping', async () => {
-  const { page, context } = await fitted('#ex=literal-eq18');
+  const { page, context, log } = await fitted('#ex=literal-eq18');
+  log.acceptDialogs = true; // Step drops the example's finished fit
   assert.equal(await page.locator('#params [name=paperLambda]').isChecked(), true);
   assert.equal(await page.locator('#teach-eq-lambda-paper').isVisible(), true);
   assert.equal(await page.locator('#teach-eq-lambda-exact').isVisible(), false);
@@ -260,6 +301,7 @@ test('the state in the URL round-trips: a shared link restores the same view', a
 
 test('a shared teaching link opens on the same step and stage', async () => {
   const a = await fitted('#ex=arm');
+  a.log.acceptDialogs = true; // the first Step drops the finished fit
   for (let k = 0; k < 7; k++) await step(a.page);
   await a.page.waitForFunction(() => /[#&]teach=7&stage=\w+/.test(location.hash), null, { timeout: 10000 });
   const ta = await teaching(a.page);
@@ -313,6 +355,7 @@ test('"Parts in the end" (targetParts) is in the link: bones=N restores it, auto
 
 test('the teaching panel never shows "undefined", through every stage of Algorithm 1', async () => {
   const { page, context, log } = await fitted('#ex=arm');
+  log.acceptDialogs = true; // Run drops the finished fit
   // Every text the panel shows while a teaching run goes from the coarse stage to done.
   await page.evaluate(() => {
     const panel = document.getElementById('teach');

@@ -24,6 +24,20 @@ export function fillParams(p) {
   f.refine.checked = p.refine;
   checking = Promise.resolve(null); // a check still in flight is of the old values
   showFieldProblems([]);
+  showStartUse();
+}
+
+/** Whether Fit ignores Initial parts and Seed: the merge tree (the default part rule, with the refinement on)
+ * starts from its own patches, with no random draw and its own count (src/parts/hierarchy.rs). Step by step
+ * always runs Algorithm 1, which uses both. */
+const fitIgnoresStart = () => (state.baseParams?.partRule ?? 'tree') === 'tree' && form().refine.checked;
+
+// The two fields greyed (still editable: Step by step uses them) with a line under them saying so, while Fit
+// ignores them.
+function showStartUse() {
+  const ignored = fitIgnoresStart();
+  for (const name of ['parts', 'seed']) form()[name].closest('label').classList.toggle('ignored', ignored);
+  $('parts-note').hidden = !ignored;
 }
 
 /** A new population (files opened or dropped) starts from the defaults of the settings that change what is
@@ -114,6 +128,7 @@ export function installForm({ startFit, cancelFit, runExample, check }) {
   $('params').addEventListener('input', (e) => {
     if (TEXT_FIELDS.includes(e.target.name) && $('params').dataset.invalid) checkedParams({ vertices: checkedFor });
   });
+  $('params').elements.refine.addEventListener('change', showStartUse);
   $('cancel').addEventListener('click', cancelFit);
   $('reset-params').addEventListener('click', () => state.baseParams && fillParams(state.baseParams));
   $('generate').addEventListener('click', () => {
@@ -121,7 +136,11 @@ export function installForm({ startFit, cancelFit, runExample, check }) {
     if (ex) runExample(ex);
   });
   $('example').addEventListener('change', showPicked);
-  subscribe((s, changed) => changed.has('pop') && showSource(s.source));
+  subscribe((s, changed) => {
+    if (changed.has('pop')) showSource(s.source);
+    if (changed.has('baseParams')) showStartUse();
+  });
+  showStartUse();
 }
 
 // The picker says what is shown: the example's name, or "your files" / "a generated population" (an entry that

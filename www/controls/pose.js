@@ -16,7 +16,9 @@ const STEP = (10 * Math.PI) / 180; // a button press: 10 degrees
 const DRAG = 0.01; // radians per pixel
 
 // What pose mode shows: the skeleton of the poser, the current mesh and angles, the undo stack, added frames.
-const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, undo: [], frames: null, frame: 0, playing: false };
+// whole: what the last action made of the whole pose ('random', 'mean', 'modes', 'rest'), null after a part was
+// turned (the caption then names that part)
+const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, whole: null, undo: [], frames: null, frame: 0, playing: false };
 
 // the pose space's modes come largest first (the core's PCA of the training poses); the first few get a slider
 const MODE_SLIDERS = 6;
@@ -29,10 +31,23 @@ export async function poseView() {
   const name = frames ? `frame ${pose.frames.names[pose.frame]}` : 'posed';
   const caption = frames
     ? `Added frame “${pose.frames.names[pose.frame]}” (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${pose.frames.eRms[pose.frame].toFixed(3)}`
-    : pose.bone >= 0
+    : pose.whole
+      ? `Pose mode: ${wholePose()} (drag a part to turn it about its joint)`
+      : pose.bone >= 0
       ? `Pose mode: ${pose.skeleton.names[pose.bone]} turned ${pose.angles[pose.bone].toFixed(1)}° from the rest pose (drag a part to turn it about its joint)`
       : 'Pose mode: click a part and drag to turn it about its joint, or use the pose-space sliders';
   return { slots: [{ positions, colours: state.colours.final.vertexColours, name }], caption };
+}
+
+// The caption's words for a pose made of all the parts at once (pose.whole).
+function wholePose() {
+  const n = pose.skeleton.order.length;
+  return {
+    random: `a random pose of all ${n} part${n === 1 ? '' : 's'}, within the training poses' range`,
+    mean: 'the mean pose of the training poses',
+    modes: 'a pose from the pose-space sliders (0 = the mean pose)',
+    rest: 'the rest pose',
+  }[pose.whole];
 }
 
 async function ensureStarted() {
@@ -47,6 +62,7 @@ async function ensureStarted() {
     pose.positions = r.positions;
     pose.angles = r.angles;
     pose.bone = -1;
+    pose.whole = null;
     pose.undo = [];
     pose.frames = null;
     pose.showFrames = false;
@@ -65,7 +81,9 @@ async function ensureStarted() {
 
 function fillControls() {
   const sel = $('pose-part');
-  sel.replaceChildren(...pose.skeleton.order.map((k) => Object.assign(document.createElement('option'), { value: String(k), textContent: pose.skeleton.names[k] })));
+  // listed by name, numbers in order ("part 2" before "part 10"), not in the skeleton's parent-first order
+  const byName = pose.skeleton.order.slice().sort((a, b) => pose.skeleton.names[a].localeCompare(pose.skeleton.names[b], undefined, { numeric: true }));
+  sel.replaceChildren(...byName.map((k) => Object.assign(document.createElement('option'), { value: String(k), textContent: pose.skeleton.names[k] })));
   const box = $('pose-modes');
   box.replaceChildren();
   const shown = Math.min(pose.skeleton.nModes, MODE_SLIDERS);
@@ -107,8 +125,10 @@ function took(r) {
   renderView();
 }
 
+// the undo stack keeps what the caption said of each pose with its bones (pose.whole)
 async function remember() {
-  pose.undo.push(await query('poseBones'));
+  const whole = pose.whole;
+  pose.undo.push({ bones: await query('poseBones'), whole });
   if (pose.undo.length > 100) pose.undo.shift();
 }
 
@@ -138,13 +158,16 @@ function viewAxis() {
 // Turns `bone` by `angle` about the view direction (inside a queued action; the drag queues it with `turn`).
 async function turnPart(bone, angle) {
   pose.bone = bone;
+  pose.whole = null;
   $('pose-part').value = String(bone);
   took(await query('poseTurn', bone, viewAxis(), angle));
 }
 const turn = orReport(turnPart);
 
-async function applyModes() {
+// whole: what the caption calls the pose made (pose.whole): the sliders' own, or the mean or random pose they show
+async function applyModes(whole = 'modes') {
   if (!pose.skeleton) return;
+  pose.whole = whole;
   took(await query('poseModes', modeValues()));
 }
 
@@ -224,6 +247,7 @@ export function installPose() {
   installDrag();
   $('pose-part').addEventListener('change', () => {
     pose.bone = Number($('pose-part').value);
+    pose.whole = null;
     showAngle();
     renderView();
   });
@@ -237,22 +261,27 @@ export function installPose() {
   }));
   $('pose-undo').addEventListener('click', orReport(async () => {
     const last = pose.undo.pop();
-    if (last) took(await query('poseSetBones', Array.from(last)));
+    if (!last) return;
+    const r = await query('poseSetBones', Array.from(last.bones));
+    pose.whole = last.whole;
+    took(r);
   }));
   $('pose-reset').addEventListener('click', orReport(async () => {
     await remember();
     setModeSliders([]);
+    pose.whole = 'rest';
     took(await query('poseReset'));
   }));
   $('pose-mean').addEventListener('click', orReport(async () => {
     await remember();
     setModeSliders([]);
-    await applyModes();
+    await applyModes('mean');
   }));
   $('pose-random').addEventListener('click', orReport(async () => {
     await remember();
     const c = await query('poseRandom', Math.floor(Math.random() * 2 ** 31));
     setModeSliders(Array.from(c));
+    pose.whole = 'random';
     took(await query('poseModes', Array.from(c)));
   }));
   $('pose-export-obj').addEventListener('click', orReport(async () => {

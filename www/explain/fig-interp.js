@@ -172,6 +172,6 @@ export class Limit extends Figure {
       : l.apart === l.pieces
         ? ` Each of the front legs' ${l.pieces} pieces is a part on the left and another on the right, whose rotation angles agree within ${l.maxDiff.toFixed(2)}° in every pose: one motion, two parts, apart because they do not touch.`
         : ` Of the front legs' ${l.pieces} pieces, ${l.pieces - l.apart} are one part shared by both legs.`;
-    return `${partNames.length} true parts, ${s.parts} fitted (adjusted Rand index ${s.groundTruth.ari.toFixed(3)}).${legs}`;
+    return `${partNames.length} true part${partNames.length === 1 ? '' : 's'}, ${s.parts} fitted (adjusted Rand index ${s.groundTruth.ari.toFixed(3)}).${legs}`;
   }
 }

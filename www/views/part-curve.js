@@ -1,10 +1,22 @@
 // The part-count curve (issue 15): the core's part rule (model::distinct) merges the cheapest pair of adjacent
 // parts while its score is below the distinct ratio; each decision is one point {parts, score, variance, merged}.
-// Drawn as score (log scale) against the part count: filled dots were merged, the hollow one is the pair that was
-// not, which is why the fit stopped where it did. JS only draws what the core decided.
+// Drawn as score (log scale, whole decades) against the part count: filled dots were merged, the hollow one is
+// the pair that was not, which is why the fit stopped where it did; the dashed line is the distinct ratio the
+// scores were compared with. JS only draws what the core decided. The canvas's dataset says what it wrote (points,
+// axisLo, axisHi, ratio, note, clipped: the page tests read them).
 import { clearedCanvas } from '../plot.js';
 
-export function drawPartCurve(canvas, curve) {
+const SUPERSCRIPT = { '-': '⁻', 0: '⁰', 1: '¹', 2: '²', 3: '³', 4: '⁴', 5: '⁵', 6: '⁶', 7: '⁷', 8: '⁸', 9: '⁹' };
+
+/** A power of ten as one reads it: 10^k written out from 0.001 to 10000, beyond that 10 with a superscript. */
+export function decade(k) {
+  if (k >= 0 && k <= 4) return String(10 ** k);
+  if (k < 0 && k >= -3) return (10 ** k).toFixed(-k);
+  return `10${String(k).split('').map((c) => SUPERSCRIPT[c]).join('')}`;
+}
+
+/** ratio: the distinct ratio the fit compared the scores with (the line; none when unknown). */
+export function drawPartCurve(canvas, curve, { ratio = null } = {}) {
   const surface = clearedCanvas(canvas);
   if (!surface || curve.length === 0) return;
   const { g, w, h, style } = surface;
@@ -18,7 +30,7 @@ export function drawPartCurve(canvas, curve) {
   const stop = curve[curve.length - 1];
   const kept = stop.parts;
   const next = Number.isFinite(stop.score) ? `the next pair scored ${stop.score.toFixed(1)}` : 'no pair left';
-  const title = `part rule: ${curve.length - 1} merges, ${curve[0].parts} → ${kept} parts`;
+  const title = `part rule: ${curve.length - 1} merge${curve.length === 2 ? '' : 's'}, ${curve[0].parts} → ${kept} part${kept === 1 ? '' : 's'}`;
   let top = 20;
   if (g.measureText(`${title} (${next})`).width + 4 <= w) label(`${title} (${next})`, 4, 12);
   else {
@@ -28,16 +40,23 @@ export function drawPartCurve(canvas, curve) {
   }
   canvas.dataset.clipped = String(clipped);
   const pts = curve.filter((p) => Number.isFinite(p.score) && p.score > 0);
+  Object.assign(canvas.dataset, { points: String(pts.length), axisLo: '', axisHi: '', ratio: '', note: '' });
   if (pts.length === 0) return;
-  const ys = pts.map((p) => Math.log10(p.score));
-  const lo = Math.min(...ys, -1);
-  const hi = Math.max(...ys, 1);
+  const line = Number.isFinite(ratio) && ratio > 0 ? Math.log10(ratio) : null;
+  const ys = pts.map((p) => Math.log10(p.score)).concat(line ?? []);
+  // the axis spans whole decades, so that its two labels are the powers of ten at its ends
+  const lo = Math.floor(Math.min(...ys));
+  const hi = Math.max(Math.ceil(Math.max(...ys)), lo + 1);
   const xs = curve.map((p) => p.parts);
   const x0 = Math.min(...xs) - 0.5;
   const x1 = Math.max(...xs) + 0.5;
-  const left = 32, right = w - 6, bottom = h - 14;
+  const loText = decade(lo);
+  const hiText = decade(hi);
+  const left = Math.max(g.measureText(loText).width, g.measureText(hiText).width) + 6;
+  const right = w - 6;
+  const bottom = h - 14;
   const x = (n) => left + ((right - left) * (n - x0)) / (x1 - x0);
-  const y = (v) => bottom - ((bottom - top) * (v - lo)) / (hi - lo || 1);
+  const y = (v) => bottom - ((bottom - top) * (v - lo)) / (hi - lo);
   g.strokeStyle = style.color;
   g.globalAlpha = 0.3;
   g.beginPath();
@@ -45,10 +64,23 @@ export function drawPartCurve(canvas, curve) {
   g.lineTo(right, bottom);
   g.stroke();
   g.globalAlpha = 1;
-  label(`10^${hi.toFixed(0)}`, 0, top + 4);
-  label(`10^${lo.toFixed(0)}`, 0, bottom);
+  label(hiText, 2, top + 4);
+  label(loText, 2, bottom);
+  Object.assign(canvas.dataset, { axisLo: loText, axisHi: hiText, ratio: line === null ? '' : String(ratio) });
   label('parts →', w - g.measureText('parts →').width - 2, h - 2);
-  canvas.dataset.clipped = String(clipped);
+  if (line !== null) {
+    // the distinct ratio: a pair scoring below it is merged
+    g.save();
+    g.setLineDash([4, 3]);
+    g.globalAlpha = 0.6;
+    g.beginPath();
+    g.moveTo(left, y(line));
+    g.lineTo(right, y(line));
+    g.stroke();
+    g.restore();
+    const t = `merged below ${ratio}`;
+    label(t, right - g.measureText(t).width, y(line) - 3);
+  }
   for (const p of pts) {
     g.beginPath();
     g.arc(x(p.parts), y(Math.log10(p.score)), 3, 0, 2 * Math.PI);
@@ -58,4 +90,11 @@ export function drawPartCurve(canvas, curve) {
       g.stroke();
     }
   }
+  if (pts.length === 1) {
+    // one decision only: the caption under the axis says what the lone dot is
+    const p = pts[0];
+    canvas.dataset.note = `one decision${line !== null ? `, ${p.merged ? 'below' : 'above'} the line` : ''}: ${p.merged ? 'merged' : 'not merged'}`;
+    label(canvas.dataset.note, left, h - 2);
+  }
+  canvas.dataset.clipped = String(clipped);
 }

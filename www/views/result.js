@@ -45,8 +45,34 @@ function showPopulation(pop, source) {
   $('names').replaceChildren(...pop.names.map((n) => Object.assign(document.createElement('li'), { textContent: n })));
 }
 
+// An example that fails on purpose: what failed in this fit, read off its summary (the iteration cap, the drops of
+// the log-likelihood, the core's verdict), so that the result never reads as a success. Null for other fits and
+// for a fit stopped early (its summary says so itself).
+function failureText(s, example) {
+  if (!s || !example?.failsOnPurpose || s.cancelled || s.unfinished) return null;
+  const ll = s.logLikelihood ?? [];
+  const drops = ll.filter((v, i) => i > 0 && v < ll[i - 1]).length;
+  const d = s.diagnosis;
+  const notArticulated = !!d && !d.articulated && !d.undecided;
+  const failed = [];
+  if (s.complete && !s.converged) failed.push(`AECM did not converge (it stopped at the iteration cap after ${s.iterations} iteration${s.iterations === 1 ? '' : 's'})`);
+  if (drops) failed.push(`the log-likelihood fell ${drops} time${drops === 1 ? '' : 's'} in the final stage's ${ll.length} iterations, which a maximisation step never does`);
+  if (notArticulated) failed.push(`the shape is not articulated: rigid parts explain only ${(100 * d.explained).toFixed(1)} % of its motion (the verdict below)`);
+  if (!failed.length) {
+    return { failed: false, text: `This example is meant to fail, but this fit did not: it converged in ${s.iterations} iteration${s.iterations === 1 ? '' : 's'}, its log-likelihood never fell${d && d.articulated ? ', and the verdict is articulated' : ''}.` };
+  }
+  const g = s.groundTruth;
+  const parts = g && g.ari >= 0.95 && !notArticulated ? ` Its parts still match the ground truth (adjusted Rand ${g.ari.toFixed(3)}): the fit failed, not the parts.` : '';
+  const what = failed.join('; ');
+  return { failed: true, text: `Failed, as this example means to. ${what[0].toUpperCase()}${what.slice(1)}.${parts}` };
+}
+
 function showResult() {
   const s = state.model?.summary;
+  const failure = failureText(s, state.source?.example);
+  $('fail-lead').hidden = !failure;
+  $('fail-lead').classList.toggle('fails', !!failure?.failed);
+  $('fail-lead').textContent = failure?.text ?? '';
   $('parts-count').textContent = s ? s.parts : '–';
   // the merge tree (the default part rule) starts from its own cut, not from Algorithm 1's coarse and refined stages
   const stages = state.model?.tree ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
@@ -67,7 +93,8 @@ function showResult() {
   $('diagnosis').textContent = d ? `${d.undecided ? 'No verdict' : d.articulated ? 'Articulated' : 'Not articulated'}: ${d.reason}.` : s?.unfinished ? `${s.unfinished[0].toUpperCase()}${s.unfinished.slice(1)}.` : '';
   const curve = s?.partCurve ?? [];
   $('part-curve').hidden = curve.length === 0;
-  drawPartCurve($('part-curve'), curve);
+  // the line the scores were compared with: the distinct ratio of the fit's parameters (the form never changes it)
+  drawPartCurve($('part-curve'), curve, { ratio: state.baseParams?.distinctRatio ?? null });
 }
 
 /** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since; run:
