@@ -60,6 +60,7 @@ use super::{Articulation, RigidMotion};
 use crate::error::{Error, Result};
 use crate::geometry::procrustes::best_rotation;
 use crate::geometry::{add, dot, mat_vec, scale, sub, Mat3, Vec3};
+use crate::mesh::population::widen;
 use serde::{Deserialize, Serialize};
 
 /// Which weights the rig carries.
@@ -382,8 +383,9 @@ struct Solver {
     /// How many.
     ns: usize,
     /// The targets vertex by vertex: `by_vertex[v * n_s + i]` is vertex v in pose i (a vertex's poses contiguous,
-    /// for the per-vertex solves).
-    by_vertex: Vec<Vec3>,
+    /// for the per-vertex solves), as the population stores them (f32: 12 bytes per vertex-pose, not 24; every
+    /// reader widens them to the same f64 the population's shapes give).
+    by_vertex: Vec<[f32; 3]>,
     /// Σ_i |v_i|² of every vertex over the poses.
     target_norms: Vec<f64>,
     /// Candidate parts per vertex (own part first).
@@ -553,13 +555,13 @@ impl Solver {
             .sum::<f64>()
             / edges.len().max(1) as f64;
         let ns = targets.n_shapes();
-        let mut by_vertex = vec![[0.0; 3]; nv * ns];
+        let mut by_vertex = vec![[0.0f32; 3]; nv * ns];
         for (i, shape) in targets.shapes().enumerate() {
-            for (v, p) in shape.iter().enumerate() {
+            for (v, &p) in shape.as_f32().iter().enumerate() {
                 by_vertex[v * ns + i] = p;
             }
         }
-        let target_norms = (0..nv).map(|v| by_vertex[v * ns..(v + 1) * ns].iter().map(|&p| dot(p, p)).sum()).collect();
+        let target_norms = (0..nv).map(|v| by_vertex[v * ns..(v + 1) * ns].iter().map(|&p| dot(widen(p), widen(p))).sum()).collect();
         Solver { targets, ns, by_vertex, target_norms, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
     }
 
@@ -597,8 +599,8 @@ impl Solver {
 /// pose i at `v * ns + i`): pose by pose, bone by bone in `order`, the weighted Procrustes step with the weights
 /// and bind positions fixed; pose `skip` (the bind pose of a fit) is left as it is. Used by the fit and by
 /// [`super::pose::solve_frames`] (new frames onto a finished rig).
-pub(crate) fn bone_pass(
-    by_vertex: &[Vec3],
+pub(crate) fn bone_pass<T: Target>(
+    by_vertex: &[T],
     ns: usize,
     skip: Option<usize>,
     rest: &[Vec3],
@@ -627,7 +629,7 @@ pub(crate) struct BoneSums {
 }
 
 impl BoneSums {
-    pub(crate) fn new(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], weights: &SkinWeights, order: &[usize], n_parts: usize) -> BoneSums {
+    pub(crate) fn new<T: Target>(by_vertex: &[T], ns: usize, rest: &[Vec3], weights: &SkinWeights, order: &[usize], n_parts: usize) -> BoneSums {
         let nv = rest.len();
         // supports: (vertex, weight) per part, and ū, Σ w² per part
         let mut support: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n_parts];
@@ -690,7 +692,7 @@ impl BoneSums {
         let mut sums = vec![[0.0; 12]; n_parts * ns];
         for &k in order {
             if stats[k].1 > 0.0 {
-                bone_target_sums(by_vertex, ns, rest, &support[k], stats[k].0, &mut sums[k * ns..(k + 1) * ns]);
+                T::bone_target_sums(by_vertex, ns, rest, &support[k], stats[k].0, &mut sums[k * ns..(k + 1) * ns]);
             }
         }
         BoneSums { ns, stats, pairs, sums }
@@ -751,6 +753,7 @@ avx2_fn! {
                 8 => candidate_sums::<8>(targets, &op.poses, sums),
                 _ => {
                     for (t, pose) in targets.iter().zip(op.poses.chunks_exact(stride)) {
+                        let t = widen(*t);
                         let y = [t[0] - pose[0], t[1] - pose[1], t[2] - pose[2]];
                         for (g, m) in sums.chunks_exact_mut(4).zip(pose[3..].chunks_exact(12)) {
                             let mut acc = [g[0], g[1], g[2], g[3]];
@@ -868,9 +871,10 @@ fn add_candidate_sums(g: &mut [f64; 4], m: &[f64], y: &Vec3) {
 /// with y'_i = v_i - M_own o from `targets` and `poses` ([`OwnPart::poses`]): pose by pose as the general case,
 /// but the N running sums stay in registers (N known at compile time) instead of a load and a store per pose.
 #[inline(always)]
-fn candidate_sums<const N: usize>(targets: &[Vec3], poses: &[f64], out: &mut [f64]) {
+fn candidate_sums<const N: usize>(targets: &[[f32; 3]], poses: &[f64], out: &mut [f64]) {
     let mut acc = [[0.0; 4]; N];
     for (t, pose) in targets.iter().zip(poses.chunks_exact(3 + 12 * N)) {
+        let t = widen(*t);
         let y = [t[0] - pose[0], t[1] - pose[1], t[2] - pose[2]];
         for (g, m) in acc.iter_mut().zip(pose[3..].chunks_exact(12)) {
             add_candidate_sums(g, m, &y);
@@ -894,26 +898,68 @@ struct PairSums {
     m: f64,
 }
 
-avx2_fn! {
-    /// Bone k's target sums of [`Solver::bones`] in every pose: `out[i]` = [Σ_v w y_v (u_v - ū)ᵀ | Σ_v w y_v]
-    /// row-major (3 x 4) over its support (a function of its own for V8's tiering, as [`vertex_weights`]). Row a
-    /// gains y_a [w (u_v - ū), w] per vertex: one 4-lane step per row.
-    #[inline(never)]
-    fn bone_target_sums(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
-        for &(v, w) in support {
-            let v = v as usize;
-            let d = scale(sub(rest[v], ubar), w);
-            let dw = [d[0], d[1], d[2], w];
-            for (o, y) in out.iter_mut().zip(&by_vertex[v * ns..(v + 1) * ns]) {
-                let mut acc = *o;
-                for a in 0..3 {
-                    for b in 0..4 {
-                        acc[a * 4 + b] += y[a] * dw[b];
-                    }
+/// A target point of the bone step: f32 as a population stores it ([`Solver`]), or f64 (new frames in
+/// original units, [`super::pose::solve_frames`]); read as f64 either way.
+pub(crate) trait Target: Copy {
+    fn widen(self) -> Vec3;
+    /// [`bone_target_sums_of`] over targets of this type.
+    fn bone_target_sums(by_vertex: &[Self], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]);
+}
+
+impl Target for [f32; 3] {
+    #[inline(always)]
+    fn widen(self) -> Vec3 {
+        widen(self)
+    }
+    fn bone_target_sums(by_vertex: &[Self], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+        bone_target_sums_f32(by_vertex, ns, rest, support, ubar, out)
+    }
+}
+
+impl Target for Vec3 {
+    #[inline(always)]
+    fn widen(self) -> Vec3 {
+        self
+    }
+    fn bone_target_sums(by_vertex: &[Self], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+        bone_target_sums_f64(by_vertex, ns, rest, support, ubar, out)
+    }
+}
+
+/// Bone k's target sums of [`Solver::bones`] in every pose: `out[i]` = [Σ_v w y_v (u_v - ū)ᵀ | Σ_v w y_v]
+/// row-major (3 x 4) over its support. Row a gains y_a [w (u_v - ū), w] per vertex: one 4-lane step per row.
+#[inline(always)]
+fn bone_target_sums_of<T: Target>(by_vertex: &[T], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+    for &(v, w) in support {
+        let v = v as usize;
+        let d = scale(sub(rest[v], ubar), w);
+        let dw = [d[0], d[1], d[2], w];
+        for (o, y) in out.iter_mut().zip(&by_vertex[v * ns..(v + 1) * ns]) {
+            let y = y.widen();
+            let mut acc = *o;
+            for a in 0..3 {
+                for b in 0..4 {
+                    acc[a * 4 + b] += y[a] * dw[b];
                 }
-                *o = acc;
             }
+            *o = acc;
         }
+    }
+}
+
+avx2_fn! {
+    /// [`bone_target_sums_of`] on f32 targets (a function of its own for V8's tiering, as [`vertex_weights`]).
+    #[inline(never)]
+    fn bone_target_sums_f32(by_vertex: &[[f32; 3]], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+        bone_target_sums_of(by_vertex, ns, rest, support, ubar, out)
+    }
+}
+
+avx2_fn! {
+    /// [`bone_target_sums_of`] on f64 targets.
+    #[inline(never)]
+    fn bone_target_sums_f64(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+        bone_target_sums_of(by_vertex, ns, rest, support, ubar, out)
     }
 }
 
@@ -1133,13 +1179,14 @@ avx2_fn! {
             match *two {
                 [(k, _), (l, _)] => {
                     for ((m, n), t) in poses(k).iter().zip(poses(l)).zip(targets) {
-                        add_influence_sums(&mut zs[0], m, t);
-                        add_influence_sums(&mut zs[1], n, t);
+                        let t = widen(*t);
+                        add_influence_sums(&mut zs[0], m, &t);
+                        add_influence_sums(&mut zs[1], n, &t);
                     }
                 }
                 [(k, _)] => {
                     for (m, t) in poses(k).iter().zip(targets) {
-                        add_influence_sums(&mut zs[0], m, t);
+                        add_influence_sums(&mut zs[0], m, &widen(*t));
                     }
                 }
                 _ => {}
