@@ -175,11 +175,17 @@ pub struct FrameSolve {
 }
 
 /// Every bone's motion per frame, weights and bind positions fixed (module doc). Frames must have the rig's
-/// vertex count (same mesh, same vertex order).
-pub fn solve_frames(rig: &SkinnedRig, frames: &[Vec<Vec3>]) -> Result<FrameSolve> {
+/// vertex count (same mesh, same vertex order). They are read once, in order, into the solve's own
+/// vertex-by-vertex copy: a caller can make each frame as it is asked for (pose mode's training poses in
+/// original units), so that only one is held beside the copy.
+pub fn solve_frames<F: AsRef<[Vec3]>>(rig: &SkinnedRig, frames: impl IntoIterator<Item = F, IntoIter: ExactSizeIterator>) -> Result<FrameSolve> {
     rig.validate()?;
     let nv = rig.n_vertices();
-    for (f, frame) in frames.iter().enumerate() {
+    let frames = frames.into_iter();
+    let ns = frames.len();
+    let mut by_vertex = vec![[0.0; 3]; nv * ns];
+    for (f, frame) in frames.enumerate() {
+        let frame = frame.as_ref();
         if frame.len() != nv {
             return Err(Error::Request(format!(
                 "frame {} has {} vertices but the rig has {nv}: the frames must be the rig's mesh (same vertices, same order)",
@@ -190,15 +196,11 @@ pub fn solve_frames(rig: &SkinnedRig, frames: &[Vec<Vec3>]) -> Result<FrameSolve
         if let Some(v) = frame.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
             return Err(Error::Request(format!("frame {}: vertex {v} is not a finite point", f + 1)));
         }
-    }
-    let ns = frames.len();
-    let nb = rig.n_bones();
-    let mut by_vertex = vec![[0.0; 3]; nv * ns];
-    for (i, frame) in frames.iter().enumerate() {
         for (v, &p) in frame.iter().enumerate() {
-            by_vertex[v * ns + i] = p;
+            by_vertex[v * ns + f] = p;
         }
     }
+    let nb = rig.n_bones();
     let sums = BoneSums::new(&by_vertex, ns, &rig.rest, &rig.weights, &rig.order, nb);
     // supports for the starting motions
     let mut support: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nb];
@@ -211,7 +213,8 @@ pub fn solve_frames(rig: &SkinnedRig, frames: &[Vec<Vec3>]) -> Result<FrameSolve
     let mut bones = Vec::with_capacity(ns);
     let mut errors = Vec::with_capacity(ns);
     let mut steps = Vec::with_capacity(ns);
-    for (i, frame) in frames.iter().enumerate() {
+    for i in 0..ns {
+        let frame = |v: usize| by_vertex[v * ns + i];
         let mut m = vec![RigidMotion::IDENTITY; nb];
         for &k in &rig.order {
             m[k] = match weighted_procrustes(&support[k], &rig.rest, frame) {
@@ -237,7 +240,10 @@ pub fn solve_frames(rig: &SkinnedRig, frames: &[Vec<Vec3>]) -> Result<FrameSolve
                 }
             }
         }
-        errors.push(sse(&rig.skin(&m), frame));
+        errors.push(rig.skin(&m).iter().enumerate().map(|(v, &x)| {
+            let d = sub(x, frame(v));
+            dot(d, d)
+        }).sum());
         bones.push(m);
         steps.push(n);
     }
@@ -251,7 +257,7 @@ fn motion_change(a: &RigidMotion, b: &RigidMotion, radius: f64) -> f64 {
 }
 
 /// min Σ w |M u - y|² over rigid M, on the listed (vertex, weight) pairs; None when there are none.
-fn weighted_procrustes(support: &[(usize, f64)], rest: &[Vec3], target: &[Vec3]) -> Option<RigidMotion> {
+fn weighted_procrustes(support: &[(usize, f64)], rest: &[Vec3], target: impl Fn(usize) -> Vec3) -> Option<RigidMotion> {
     let wsum: f64 = support.iter().map(|x| x.1).sum();
     if support.is_empty() || !(wsum > 0.0) {
         return None;
@@ -259,13 +265,13 @@ fn weighted_procrustes(support: &[(usize, f64)], rest: &[Vec3], target: &[Vec3])
     let (mut ub, mut yb) = ([0.0; 3], [0.0; 3]);
     for &(v, w) in support {
         ub = add(ub, scale(rest[v], w));
-        yb = add(yb, scale(target[v], w));
+        yb = add(yb, scale(target(v), w));
     }
     ub = scale(ub, 1.0 / wsum);
     yb = scale(yb, 1.0 / wsum);
     let mut c = Mat3::zeros();
     for &(v, w) in support {
-        let (y, u) = (sub(target[v], yb), sub(rest[v], ub));
+        let (y, u) = (sub(target(v), yb), sub(rest[v], ub));
         for a in 0..3 {
             for b in 0..3 {
                 c[(a, b)] += w * y[a] * u[b];

@@ -383,7 +383,8 @@ impl Poser {
     pub fn new(art: &crate::articulate::Articulation, pop: &crate::mesh::Population, opts: &super::gltf::GltfOptions) -> Result<Poser> {
         let rig = crate::articulate::rig::build(art, &opts.rig_options())?;
         let glb = super::gltf::write_glb(art, &rig, opts)?;
-        let mut p = Poser::from_glb("rig.glb", &glb, &pop.shapes().map(|s| art.to_original(&s.to_vec())).collect::<Vec<_>>())?;
+        // (the training poses in original units one at a time, into the frame solve's own copy)
+        let mut p = Poser::from_glb("rig.glb", &glb, pop.shapes().map(|s| art.to_original(&s.to_vec())))?;
         p.normalization = pop.normalization;
         Ok(p)
     }
@@ -393,8 +394,10 @@ impl Poser {
         points.iter().map(|&p| self.normalization.to_unit(p)).collect()
     }
 
-    /// From a rig .glb and the training poses (original units).
-    pub fn from_glb(file: &str, glb: &[u8], poses: &[Vec<Vec3>]) -> Result<Poser> {
+    /// From a rig .glb and the training poses (original units; read once, in order: [`solve_frames`]).
+    ///
+    /// [`solve_frames`]: crate::articulate::pose::solve_frames
+    pub fn from_glb<F: AsRef<[Vec3]>>(file: &str, glb: &[u8], poses: impl IntoIterator<Item = F, IntoIter: ExactSizeIterator>) -> Result<Poser> {
         let rig = read_rig(file, glb)?;
         let solved = crate::articulate::pose::solve_frames(&rig.rig, poses)?;
         let space = PoseSpace::new(&rig.rig, &solved.bones)?;
