@@ -802,26 +802,24 @@ pub fn play_glb_clip_each(
 }
 
 /// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe ([`play_glb`]) and
-/// compares with the rigid reconstructions of `art`.
+/// compares with the rigid reconstructions of `art`, one keyframe at a time ([`play_glb_clip_each`]).
 pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
-    let play = play_glb(glb)?;
+    let ns = art.n_shapes();
+    let mut frame_error = Vec::with_capacity(ns);
+    let rig = play_glb_clip_each(glb, "training poses", |i, frame, _| {
+        if i >= ns {
+            return Ok(()); // (counted: the error below)
+        }
+        let rigid = art.rigid(i);
+        frame_error.push(frame.iter().zip(&rigid).map(|(x, r)| crate::geometry::norm(sub(art.normalization.to_unit(*x), *r))).fold(0.0, f64::max));
+        Ok(())
+    })?;
+    if rig.keys != ns {
+        return Err(Error::Data(format!("glb check: {} keyframes for {ns} poses", rig.keys)));
+    }
     let (root, _) = parse_glb(glb)?;
     let joints = root.skins.first().map_or(0, |s| s.joints.len());
-    if play.frames.len() != art.n_shapes() {
-        return Err(Error::Data(format!("glb check: {} keyframes for {} poses", play.frames.len(), art.n_shapes())));
-    }
-    let frame_error: Vec<f64> = play
-        .frames
-        .iter()
-        .enumerate()
-        .map(|(i, f)| {
-            f.iter()
-                .zip(&art.rigid(i))
-                .map(|(x, r)| crate::geometry::norm(sub(art.normalization.to_unit(*x), *r)))
-                .fold(0.0, f64::max)
-        })
-        .collect();
-    Ok(GlbCheck { joints, clips: play.clips, max_frame_error: frame_error.iter().cloned().fold(0.0, f64::max), frame_error })
+    Ok(GlbCheck { joints, clips: rig.clips, max_frame_error: frame_error.iter().cloned().fold(0.0, f64::max), frame_error })
 }
 
 /// The samplers and channels of one glTF animation clip whose keyframes all share the times `input`, linear.
