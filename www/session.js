@@ -77,18 +77,31 @@ export async function loadFiles(got) {
     update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
     return;
   }
-  update({ baseParams: state.defaults }); // hidden parameters back to the defaults
-  resetForNewPopulation(state.defaults); // and the part count and the literal Λ step (seed, tolerance... stay)
   const label = files.length === 1 ? files[0].name : `${files.length} files`;
-  // the page keeps the files' bytes (copies go to the worker): a restarted worker gets them again
-  startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes);
+  // the page keeps the files' bytes (copies go to the worker): a restarted worker gets them again. Fitted with
+  // the defaults of the hidden parameters, the part count and the literal Λ step (seed, tolerance... as typed);
+  // the form and settings show them once the core has accepted the files (onLoaded): a refused drop keeps
+  // everything as it was
+  startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes, { fresh: true });
 }
 
+// How the fit with these parameters finds its parts (the Stages view and the Parts line name it): the merge
+// tree (the default part rule, with the refinement on: src/parts/hierarchy.rs) or Algorithm 1 (part rule
+// distinct or threshold, the refinement off, and Step by step always).
+export const methodOf = (params) => ((params?.partRule ?? 'tree') === 'tree' && params?.refine !== false ? 'tree' : 'algorithm1');
+const methods = new Map(); // fit id -> methodOf its parameters, until its model arrives
+/** Whether `model`'s parts came from the merge tree (model.method, set when it arrived; a finished tree fit also
+ * has its tree). */
+export const isTreeFit = (model) => (model?.method ?? (model?.tree ? 'tree' : 'algorithm1')) === 'tree';
+
 // Loading and fitting go in one message: the worker starts the fit as soon as the population is in. With a
-// form field the core refuses (shown at the field), the population is loaded and not fitted.
-async function startLoad(source, notes, { fit: fitting = true } = {}) {
-  const params = fitting ? await checkedParams() : null;
+// form field the core refuses (shown at the field), the population is loaded and not fitted. fresh: files
+// opened or dropped, fitted with the defaults of a new population (loadFiles), which the form shows once the
+// population is in.
+async function startLoad(source, notes, { fit: fitting = true, fresh = false } = {}) {
+  const params = fitting ? await checkedParams(fresh ? { fresh: state.defaults } : {}) : null;
   const fit = params ? { id: client.id(), params, fault: takeFault() } : undefined;
+  if (fit) methods.set(fit.id, methodOf(params));
   const job = jobKey(source, fit?.params);
   let req;
   if (source.spec) {
@@ -97,7 +110,7 @@ async function startLoad(source, notes, { fit: fitting = true } = {}) {
     const files = source.bytes.map((b) => b.buffer.slice(b.byteOffset, b.byteOffset + b.byteLength));
     req = client.request({ type: 'load', names: source.names, files, fit }, { transfer: files, job });
   }
-  update({ loading: { id: req.id, source, fit, notes }, phase: 'loading' });
+  update({ loading: { id: req.id, source, fit, notes, fresh }, phase: 'loading' });
   const fitDone = fit ? client.expect(fit.id, { onEvent: onProgress }) : null;
   fitDone?.catch(() => {}); // settled below once the population is in
   req.done.then(
@@ -107,7 +120,10 @@ async function startLoad(source, notes, { fit: fitting = true } = {}) {
       if (fit) watchFit(fit.id, fitDone);
     },
     (e) => {
-      if (fit) client.forget(fit.id);
+      if (fit) {
+        client.forget(fit.id);
+        methods.delete(fit.id);
+      }
       if (state.loading?.id !== req.id || e.kind === 'crashed') return;
       update({ loading: null, loadErrorCount: state.loadErrorCount + 1 });
       showProblems(e.problems);
@@ -117,37 +133,50 @@ async function startLoad(source, notes, { fit: fitting = true } = {}) {
 }
 
 function onLoaded(pop, fitId) {
-  const { source, notes } = state.loading;
+  const { source, notes, fresh } = state.loading;
+  if (fresh) {
+    update({ baseParams: state.defaults }); // hidden parameters back to the defaults
+    resetForNewPopulation(state.defaults); // and the part count and the literal Λ step (seed, tolerance... stay)
+  }
   const colours = { grey: new Float32Array(pop.nVertices * 3).fill(GREY) };
   if (pop.truth) colours.truth = paletteColours(pop.truth.partOfVertex, pop.truth.colours).vertexColours;
   pop.source = source.label;
   showProblems(notes);
   update({
-    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, keptAfterCancel: false, treeParts: null,
+    // a step-by-step fit of the last population went with it (the worker dropped it): its panel starts again
+    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, keptAfterCancel: false, treeParts: null, teach: null,
     hoverPart: null, lastStep: null, mode: !pop.truth && state.mode === 'truth' ? 'parts' : state.mode,
     phase: fitId === null ? 'idle' : 'fitting',
   });
   liveLabels = null;
 }
 
-/** A fit of the population shown, with the form's parameters. */
+/** A fit of the population shown, with the form's parameters. A step-by-step fit in hand (paused or running) is
+ * dropped by it: asked first, as Step / Run / Reset ask before they drop a finished fit (teach.js); a dismissed
+ * question changes nothing. */
 export async function startFit() {
   if (!state.pop) return;
+  const teaching = state.teach !== null && state.fitId === state.teach.id;
+  if (teaching && !window.confirm(`Fit starts a new fit and drops the step-by-step fit at iteration ${state.teach.iteration}. Drop it?`)) return;
   const params = await checkedParams({ vertices: state.pop.nVertices });
   if (!params || !state.pop) return; // the form says which field, and what it allows
   showProblems([]);
   const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });
-  update({ fitId: id, lastStep: null, keptAfterCancel: false, phase: 'fitting' });
+  methods.set(id, methodOf(params));
+  // a step-by-step fit (paused, running or finished) gives way to the new fit: its panel starts again
+  update({ fitId: id, lastStep: null, keptAfterCancel: false, teach: null, phase: 'fitting' });
   liveLabels = null;
   watchFit(id, done);
 }
 
 export const cancelFit = () => client.post({ type: 'cancel' });
 
-/** Follows the fit `id` to its end (done: its promise from the protocol): the model, or the failure. */
-export function watchFit(id, done) {
+/** Follows the fit `id` to its end (done: its promise from the protocol): the model, or the failure. method:
+ * how it finds its parts ('tree' | 'algorithm1', methodOf; by default what its parameters said). */
+export function watchFit(id, done, method = methods.get(id) ?? 'tree') {
+  methods.delete(id);
   done.then(
-    (m) => state.fitId === id && onFitted(m),
+    (m) => state.fitId === id && onFitted(m, method),
     (e) => {
       if (state.fitId !== id || e.kind === 'crashed') return;
       update({ fitId: null, fitCount: state.fitCount + 1 });
@@ -186,7 +215,7 @@ function showProgress() {
 }
 const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
 
-function onFitted({ model, kept: keptModel }) {
+function onFitted({ model, kept: keptModel }, method) {
   // the last slice's progress, if its frame has not come yet, is shown first: every run is named before 'done'
   if (pendingProgress) showProgress();
   if (keptModel) {
@@ -202,6 +231,7 @@ function onFitted({ model, kept: keptModel }) {
     refined: paletteColours(model.refinedLabels, model.colours.refined),
   };
   kept = null;
+  model.method = method; // how its parts were found (methodOf): the Stages view and the Parts line say so
   // the new model's own parts (not a merge tree cut the slider showed for the one before)
   update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, keptAfterCancel: false, phase: 'fitted' });
 }
@@ -233,6 +263,7 @@ function restartWork(message) {
   if (!kept && state.pop) kept = { pop: state.pop, source: state.source, model: state.model, colours: state.colours };
   update({ restartCount: client.restartCount });
   const source = state.loading?.source ?? state.source;
+  const fresh = !!state.loading?.fresh; // files not yet accepted: still fitted (and shown) as a new population
   const wasFitting = state.fitId !== null || state.loading !== null;
   update({ fitId: null, loading: null, teach: null, fitCount: state.fitCount + (wasFitting ? 1 : 0) });
   if (!source) {
@@ -240,7 +271,7 @@ function restartWork(message) {
     update({ phase: restingState() });
     return;
   }
-  startLoad(source, [{ file: null, line: null, message: `the worker stopped (${message}) and was restarted; the population was loaded again and is being fitted again` }]);
+  startLoad(source, [{ file: null, line: null, message: `the worker stopped (${message}) and was restarted; the population was loaded again and is being fitted again` }], { fresh });
   showProblems([{ file: null, line: null, message: `the worker stopped (${message}); a new one is starting and gets the population again` }], 'The worker was restarted');
 }
 

@@ -10,7 +10,7 @@ import { client, watchFit, jobKey } from './session.js';
 import { checkedParams } from './controls/form.js';
 import { renderView } from './views/render.js';
 import { plot } from './views/viewer-instance.js';
-import { showStep, stageText } from './views/result.js';
+import { showStep, stageText, FINISHING } from './views/result.js';
 import { showProblems } from './problems.js';
 
 const OUTSIDE = [0.86, 0.87, 0.89]; // vertices outside the part being refined
@@ -56,7 +56,7 @@ export async function teach(type, { count = 1 } = {}) {
   for (const k of ['iteration', 'elapsed', 'loglik']) $(k).textContent = '–';
   plot.set([], '');
   showLambdaRule();
-  watchFit(id, done);
+  watchFit(id, done, 'algorithm1'); // Step by step is always Algorithm 1
 }
 
 // Which Λ update the next fit uses: the exact conditional maximiser, or the paper's literal eq 18.
@@ -104,15 +104,16 @@ function softColours(m) {
   return { colours: out, soft };
 }
 
-// Algorithm 1's stages, the current one marked.
-function showStage(stage) {
-  const kind = stage?.kind ?? 'coarse';
+// Algorithm 1's stages, the current one marked (a teaching fit before its first step: coarse). No teaching fit
+// (run: false; none yet, or a new Fit or population dropped it): none marked, no note, the panel as it opened.
+function showStage(stage, run = true) {
+  const kind = run ? stage?.kind ?? 'coarse' : null;
   for (const li of $('teach-stages').children) {
     const here = li.dataset.stage === kind;
     li.classList.toggle('current', here);
     if (here) li.setAttribute('aria-current', 'step');
     else li.removeAttribute('aria-current');
-    li.classList.toggle('past', STAGES.indexOf(li.dataset.stage) < STAGES.indexOf(kind));
+    li.classList.toggle('past', kind !== null && STAGES.indexOf(li.dataset.stage) < STAGES.indexOf(kind));
   }
   // the same stage object as the Stage field (stageText): where the fit is now, which the next Step continues
   const note = {
@@ -162,7 +163,10 @@ function onTeach(m) {
     plot.set(values, `${stageText(s.stage)}: log-likelihood per step`, runs);
   }
   setTeach(t);
-  if (m.stage?.kind === 'done') return; // the 'fitted' message follows
+  if (m.stage?.kind === 'done') {
+    $('stage').textContent = FINISHING; // the 'fitted' message follows, once the worker has built the model
+    return;
+  }
   if (!pending) requestAnimationFrame(show);
   pending = m;
 }
@@ -176,7 +180,7 @@ export function installTeaching() {
   subscribe((s, changed) => {
     if (changed.has('teach') || changed.has('fitId')) buttons();
     if (changed.has('teach')) {
-      showStage(s.teach?.stage ?? null);
+      showStage(s.teach?.stage ?? null, s.teach !== null);
       $('teach-iteration').textContent = String(s.teach?.iteration ?? 0);
     }
     if (changed.has('pop') || changed.has('model')) showLambdaRule(); // the form was filled in code
@@ -196,5 +200,5 @@ export function installTeaching() {
   window.posemfa.plotPoints = () => plot.values.length;
   buttons();
   showLambdaRule();
-  showStage(null);
+  showStage(null, false);
 }

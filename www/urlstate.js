@@ -5,7 +5,7 @@
 //   gen=PRESET,VERTICES,POSES,SEED   a generated population, or
 //   src=files                  opened or dropped files (not in the link: the default example is shown)
 //   parts, bones=N|auto, seed, tol, floor, lambda=exact|paper-eq18, refine=0|1   fit parameters (the form's;
-//                              bones: "Parts in the end", targetParts; absent = auto, Algorithm 1's own count)
+//                              bones: "Parts in the end", targetParts; absent = auto, the part rule's own count)
 //   teach=N, stage=coarse|refine|final   a teaching fit N steps in (and the Algorithm 1 stage it was in): the
 //                              link opens on the same step (the steps are deterministic)
 //   view=parts|stages|recon|latent|interp|truth   flat=0|1   pose=I (0-based)

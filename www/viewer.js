@@ -56,6 +56,7 @@ export class Viewer {
     this.renderer.dispose();
     this.renderer.forceContextLoss();
     this.renderer.domElement.remove();
+    for (const el of this.labels ?? []) el.remove();
   }
 
   // Compiles the shaders of both materials now (software GL takes a while), while the worker loads the wasm,
@@ -90,6 +91,7 @@ export class Viewer {
       if (this.disposed) return;
       const moving = this.controls.update(); // true while damping still moves the camera
       this.renderer.render(this.scene, this.camera);
+      this.placeLabels();
       if (moving) this.requestRender();
     });
   }
@@ -111,7 +113,8 @@ export class Viewer {
     s.mesh.geometry.dispose();
   }
 
-  /** Shows the given meshes side by side: [{ positions, colours }]. Frames the camera when asked. */
+  /** Shows the given meshes side by side: [{ positions, colours, label? }] (label: words over that mesh, when
+   * several are shown). Frames the camera when asked. */
   show(items, { frame = false } = {}) {
     while (this.slots.length > items.length) this.removeSlot(this.slots.pop());
     while (this.slots.length < items.length) {
@@ -141,10 +144,47 @@ export class Viewer {
       g.computeBoundingBox();
       g.computeBoundingSphere();
     });
+    this.setLabels(items.length > 1 ? items.map((item) => item.label ?? '') : []);
     if (frame) this.framed = false; // lay out for the framing direction, not for the camera being replaced
     this.layout();
     if (frame) this.frame();
     this.requestRender();
+  }
+
+  // One label per mesh shown side by side (HTML over the canvas, .pane-label), placed over its mesh at every
+  // frame (placeLabels): the panes say what they are where they are, also after the camera moved.
+  setLabels(texts) {
+    this.labels ??= [];
+    while (this.labels.length > texts.length) this.labels.pop().remove();
+    while (this.labels.length < texts.length) {
+      const el = document.createElement('div');
+      el.className = 'pane-label';
+      this.container.appendChild(el);
+      this.labels.push(el);
+    }
+    texts.forEach((t, k) => {
+      this.labels[k].textContent = t;
+      this.labels[k].hidden = !t;
+    });
+  }
+
+  // Each label centred over the top of its mesh's box on the screen, kept inside the view.
+  placeLabels() {
+    if (!this.labels?.length) return;
+    const w = this.container.clientWidth;
+    const h = this.container.clientHeight;
+    const { up } = this.axes;
+    this.labels.forEach((el, k) => {
+      const s = this.slots[k];
+      if (!s || el.hidden) return;
+      const box = new THREE.Box3().setFromObject(s.mesh);
+      const top = box.getCenter(new THREE.Vector3()).setComponent(up, box.max.getComponent(up)).project(this.camera);
+      const half = el.offsetWidth / 2;
+      const x = Math.min(Math.max(((top.x + 1) / 2) * w, half + 2), w - half - 2);
+      const y = Math.min(Math.max(((1 - top.y) / 2) * h, el.offsetHeight + 2), h - 2);
+      el.style.left = `${x}px`;
+      el.style.top = `${y}px`;
+    });
   }
 
   // Direction from the target to the camera when framing: across the view axis, a little from above.

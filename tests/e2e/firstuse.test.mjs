@@ -12,6 +12,13 @@ const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 const text = (page, sel) => page.locator(sel).innerText();
 
+// The Log-likelihood field's number: nats, its thousands apart (views/result.js natsText)
+const natsValue = (t) => {
+  const m = t.match(/^(−?)([\d\u202f]+\.\d{2}) nats$/);
+  assert.ok(m, `"${t}" is a log-likelihood in nats`);
+  return Number(`${m[1] ? '-' : ''}${m[2].replace(/\u202f/g, '')}`);
+};
+
 async function fitted(path = '', opts) {
   const p = await session.open(path, opts);
   const state = await waitState(p.page, ['fitted', 'error'], 90000);
@@ -134,6 +141,75 @@ test('a cancelled fit gets no verdict: "cancelled: the diagnosis needs a finishe
   assert.equal(await text(page, '[data-testid=diagnosis]'), 'Cancelled: the diagnosis needs a finished fit.');
   assert.equal(await page.locator('[data-testid=diagnosis].fails').count(), 0);
   assert.match(await text(page, '#stage'), /^cancelled: where the fit stopped$/); // not "best": it may not be
+  // with the refinement off the fit is Algorithm 1's: its stages by Algorithm 1's names
+  assert.match(await text(page, '#stage-parts'), /^\(coarse \d+, refined \d+, cancelled\)$/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+// The parts line (next to the part count) of a merge-tree fit, finished or cancelled: the same words.
+const TREE_PARTS = /^\(started from the merge tree's \d+ parts?(, cancelled)?\)$/;
+
+test('the Stages view names what ran: the merge tree\'s stages for the default fit, Algorithm 1\'s otherwise; every pane labelled', async () => {
+  const { page, context, log } = await fitted();
+  const s = await summary(page);
+  assert.match(await text(page, '#stage-parts'), TREE_PARTS);
+  await mode(page, 'stages');
+  await page.waitForFunction(() => window.posemfa.shown().join() === 'coarse,refined,final');
+  await frames(page);
+  const pose = await page.evaluate(() => document.getElementById('pose-select').selectedOptions[0].textContent);
+  assert.equal(await text(page, '#caption'), `Merge-tree fit on pose “${pose}”: start (${s.coarseParts} parts) | after the part rule (${s.refinedParts}) | final (${s.parts})`);
+  const labels = () => page.$$eval('#view .pane-label', (els) => els.map((e) => {
+    const r = e.getBoundingClientRect();
+    return { text: e.textContent, visible: !e.hidden && r.width > 0, x: r.left + r.width / 2 };
+  }));
+  let l = await labels();
+  assert.deepEqual(l.map((x) => x.text), [`start (${s.coarseParts} parts)`, `after the part rule (${s.refinedParts} parts)`, `final (${s.parts} parts)`]);
+  assert.ok(l.every((x) => x.visible), JSON.stringify(l));
+  assert.ok(l[0].x < l[1].x && l[1].x < l[2].x, `left to right: ${JSON.stringify(l)}`);
+  // one mesh: no label
+  await mode(page, 'parts');
+  await frames(page);
+  assert.equal((await labels()).filter((x) => x.visible).length, 0);
+  // the refinement off: Algorithm 1's coarse stage alone, named as such
+  const n = await page.evaluate(() => window.posemfa.fitCount());
+  await page.uncheck('#params input[name=refine]');
+  await page.click('#fit');
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 90000 });
+  assert.equal(await waitState(page, ['fitted', 'error']), 'fitted');
+  const a = await summary(page);
+  assert.match(await text(page, '#stage-parts'), new RegExp(`^\\(coarse ${a.coarseParts}, refined ${a.refinedParts}\\)$`));
+  await mode(page, 'stages');
+  await page.waitForFunction(() => /^Algorithm 1 on pose/.test(document.getElementById('caption').textContent));
+  await frames(page);
+  assert.equal(await text(page, '#caption'), `Algorithm 1 on pose “${pose}”: coarse (${a.coarseParts} parts) | refined (${a.refinedParts}) | final (${a.parts})`);
+  l = await labels();
+  assert.deepEqual(l.map((x) => x.text.replace(/ \(.*/, '')), ['coarse', 'refined', 'final']);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('a cancelled merge-tree fit says where its parts started as a finished one does', async () => {
+  // a generated population large enough that Cancel lands in the fit's first run, before the merge tree of its
+  // parts is built (a finished fit has that tree, and its slider; this one has none): the page's first fit, so
+  // where it stopped is kept and shown
+  const { page, context, log } = await session.open('?preset=quadruped&vertices=20000&poses=10');
+  await page.addInitScript(() => document.addEventListener('DOMContentLoaded', () => {
+    const seen = new MutationObserver(() => {
+      if (document.body.dataset.state !== 'fitting') return;
+      seen.disconnect();
+      document.getElementById('cancel').click();
+    });
+    seen.observe(document.body, { attributes: true, attributeFilter: ['data-state'] });
+  }));
+  await page.reload();
+  await page.waitForFunction(() => window.posemfa?.fitCount() > 0, null, { timeout: 120000 });
+  const s = await summary(page);
+  assert.equal(s.cancelled, true, `cancelled before it ended: ${await text(page, '#stage')}`);
+  assert.ok(s.coarseParts > 0, JSON.stringify({ ...s, logLikelihood: undefined }));
+  assert.equal(await page.evaluate(() => window.posemfa.tree()), null, 'cancelled before its merge tree was built');
+  assert.equal(await text(page, '#stage-parts'), `(started from the merge tree's ${s.coarseParts} part${s.coarseParts === 1 ? '' : 's'}, cancelled)`);
+  assert.match(await text(page, '#stage-parts'), TREE_PARTS);
   assert.deepEqual(log.errors, []);
   await context.close();
 });
@@ -203,7 +279,7 @@ test('the Log-likelihood field is the shown model\'s final value (the plot\'s la
       await frames(page);
     }
     const ll = (await summary(page)).logLikelihood;
-    assert.equal(await text(page, '#loglik'), ll[ll.length - 1].toFixed(2), id);
+    assert.equal(natsValue(await text(page, '#loglik')).toFixed(2), ll[ll.length - 1].toFixed(2), id);
   }
   assert.deepEqual(log.errors, []);
   await context.close();
@@ -457,10 +533,10 @@ test('pose mode at 1280x800: every pose-space slider\'s label is one line, its s
   assert.ok(labels.length >= 1);
   // the status counts the modes and, when there are more than sliders, says which ones have one
   const status = await text(page, '[data-testid=pose-status]');
-  const [, modes] = status.match(/^\d+ bones, (\d+) pose modes/) ?? [];
+  const [, modes] = status.match(/^\d+ bones, (\d+) pose-space directions?/) ?? [];
   assert.ok(modes, status);
   assert.equal(labels.length, Math.min(Number(modes), 6), status);
-  if (Number(modes) > 6) assert.match(status, /\(sliders for the 6 largest\)$/);
+  if (Number(modes) > 6) assert.match(status, /; sliders for the 6 largest$/);
   for (const l of labels) {
     assert.equal(l.lines, 1, `"${l.text}" takes ${l.lines} lines`);
     assert.ok(l.height <= l.oneLine * 1.3, `"${l.text}" is ${l.height} px high (one line: ${l.oneLine} px)`);

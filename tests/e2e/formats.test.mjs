@@ -171,3 +171,47 @@ test('PLY files (ASCII and big-endian binary) and a .pc2 with its base mesh give
   assert.deepEqual(await summary(page), fromCache);
   await context.close();
 });
+
+test('a refused drop keeps the fit settings as they were (form and hidden ones); an accepted population starts from the defaults', async () => {
+  // the eq 18 example: its own hidden parameters (max_iter) and the literal Λ step, which Defaults shows again
+  const { page, context, log } = await session.open('#ex=literal-eq18');
+  await waitState(page, ['fitted', 'error'], 60000);
+  assert.equal(await page.isChecked('#params [name=paperLambda]'), true);
+  await page.fill('#params [name=targetParts]', '3');
+  await page.fill('#params [name=tol]', '0.01');
+  let [fits, errs] = await counters(page);
+  await page.click('#fit');
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  assert.equal(await waitState(page, ['fitted', 'error']), 'fitted');
+  const s = await summary(page);
+  assert.equal(s.parts, 3);
+  // a broken OBJ: refused by the core, the population, model and every setting kept
+  [fits, errs] = await counters(page);
+  await page.setInputFiles('[data-testid=file-input]', [{ name: 'broken.obj', mimeType: 'text/plain', buffer: Buffer.from('v 0 0\nf 1 2 3\n') }]);
+  await page.waitForFunction((l) => window.posemfa.loadErrorCount() > l, errs);
+  assert.match(await page.locator('[data-testid=errors]').innerText(), /broken\.obj/);
+  assert.equal(await waitState(page, ['fitted']), 'fitted');
+  assert.deepEqual(await summary(page), s);
+  assert.equal(await page.inputValue('#params [name=targetParts]'), '3', '"Parts in the end" kept');
+  assert.equal(await page.inputValue('#params [name=tol]'), '0.01');
+  assert.equal(await page.isChecked('#params [name=paperLambda]'), true, 'the literal Λ step kept');
+  // the hidden parameters are still the example's: Defaults fills the form from them (its literal Λ step)
+  await page.click('#reset-params');
+  assert.equal(await page.isChecked('#params [name=paperLambda]'), true, 'Defaults: the example\'s parameters, not the core\'s');
+  assert.equal((await counters(page))[0], fits, 'no fit started');
+  // accepted files: "Parts in the end" back to auto and the exact Λ step; the tolerance as typed
+  await page.fill('#params [name=targetParts]', '3');
+  await page.fill('#params [name=tol]', '0.01');
+  const tube = tubePopulation({ segments: 4, poses: 6, seed: 5 });
+  await page.setInputFiles('[data-testid=file-input]', tube.files.map((f) => ({ name: f.name, mimeType: 'text/plain', buffer: Buffer.from(f.text) })));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  assert.equal(await waitState(page, ['fitted', 'error']), 'fitted');
+  assert.equal((await summary(page)).vertices, tube.nVertices);
+  assert.equal(await page.inputValue('#params [name=targetParts]'), '');
+  assert.equal(await page.isChecked('#params [name=paperLambda]'), false);
+  assert.equal(await page.inputValue('#params [name=tol]'), '0.01');
+  await page.click('#reset-params');
+  assert.equal(await page.isChecked('#params [name=paperLambda]'), false, 'Defaults: the core\'s defaults now');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

@@ -114,6 +114,81 @@ test('"Measure at this t" says what each error is measured against', async () =>
   await context.close();
 });
 
+test('"Measure at this t": a line says how to read the stretch; the report scrolls in its own box, the poses stay in the window (1280x800, 390 wide)', async () => {
+  for (const [width, height] of [[1280, 800], [390, 844]]) {
+    const { page, context, log } = await fitted('', { width, height });
+    await mode(page, 'interp');
+    await page.click('#measure');
+    await page.waitForFunction(() => document.querySelector('#report table'));
+    const reading = await text(page, '[data-testid=report-reading]');
+    assert.match(reading, /^Reading the stretch: 0 % is every edge at exactly its mixed length, which is what a rigid motion gives inside a part that is rigid in the training poses\. Large figures on the edges crossing a part boundary .* where rigid parts pull apart or overlap at a joint, with no skinning/);
+    const at = await page.evaluate(() => {
+      const box = (id) => document.querySelector(id).getBoundingClientRect();
+      const table = document.querySelector('#report .report-table');
+      return {
+        strip: box('#pose-strip'), view: box('#view-wrap'), report: box('#report'), page: document.documentElement.scrollWidth,
+        inner: [innerWidth, innerHeight], across: [table.scrollWidth, table.clientWidth, getComputedStyle(table).overflowX],
+      };
+    });
+    assert.ok(at.page <= width, `the page is ${at.page} px wide at ${width}`);
+    assert.ok(at.report.right <= width + 0.5, `the report ends at ${at.report.right} px`);
+    // what does not fit across scrolls in the table's own box
+    if (at.across[0] > at.across[1]) assert.equal(at.across[2], 'auto', JSON.stringify(at.across));
+    if (width === 1280) {
+      // the page is the window's height: the view and the pose strip stay in it
+      assert.ok(at.strip.bottom <= height + 0.5, `the pose strip ends at ${at.strip.bottom} px of ${height}`);
+      assert.ok(at.view.height >= 200, `the view is ${at.view.height} px high`);
+    }
+    assert.deepEqual(log.errors, []);
+    await context.close();
+  }
+});
+
+test('the example picker shows every example\'s title in full (1280 wide), and on a phone stays inside the window', async () => {
+  for (const width of [1280, 390]) {
+    const { page, context, log } = await fitted('', { width, height: 800 });
+    const m = await page.evaluate(() => {
+      const sel = document.getElementById('example');
+      const g = document.createElement('canvas').getContext('2d');
+      const cs = getComputedStyle(sel);
+      g.font = `${cs.fontWeight} ${cs.fontSize} ${cs.fontFamily}`;
+      const titles = [...sel.options].filter((o) => !o.hidden).map((o) => o.textContent);
+      const widest = Math.max(...titles.map((t) => g.measureText(t).width));
+      const r = sel.getBoundingClientRect();
+      return { titles: titles.length, widest, inner: sel.clientWidth - parseFloat(cs.paddingLeft) - parseFloat(cs.paddingRight), right: r.right, page: document.documentElement.scrollWidth, title: sel.title, shown: sel.selectedOptions[0].textContent };
+    });
+    assert.ok(m.titles >= 5, JSON.stringify(m));
+    if (width === 1280) assert.ok(m.inner >= m.widest, `the picker's text box is ${m.inner} px for a title of ${m.widest} px`);
+    assert.ok(m.right <= width + 0.5 && m.page <= width, JSON.stringify(m));
+    assert.equal(m.title, m.shown, 'the whole title on hover');
+    assert.deepEqual(log.errors, []);
+    await context.close();
+  }
+});
+
+test('figures say their units: the Log-likelihood in nats, the variance floor in unit-box units², the pose space\'s directions and spread', async () => {
+  const { page, context, log } = await fitted();
+  assert.match(await text(page, '#loglik'), /^−?\d{1,3}(\u202f\d{3})*\.\d{2} nats$/);
+  const floor = await page.$eval('#params [name=varianceFloor]', (e) => e.closest('label').firstChild.textContent.trim());
+  assert.equal(floor, 'Variance floor (unit-box units²)');
+  // a refused floor is named by its label, with the same unit the core says
+  await page.fill('#params [name=varianceFloor]', '-1');
+  await page.click('#fit');
+  await page.waitForFunction(() => document.querySelector('[data-testid=param-errors] li[data-field=varianceFloor]'));
+  assert.match(await text(page, '[data-testid=param-errors] li[data-field=varianceFloor]'), /^Variance floor \(unit-box units²\): .*unit-box units²/);
+  await page.click('#reset-params');
+  await mode(page, 'pose');
+  await page.waitForFunction(() => window.posemfa.pose.ready(), null, { timeout: 60000 });
+  await page.waitForFunction(() => document.querySelectorAll('#pose-modes label').length > 0);
+  const labels = await page.$$eval('#pose-modes label', (l) => l.map((x) => x.textContent.trim()));
+  labels.forEach((l, m) => assert.match(l, new RegExp(`^direction ${m + 1} \\(±\\d+\\.\\d°\\)$`), l));
+  assert.match(await text(page, '[data-testid=pose-status]'), /^\d+ bones, \d+ pose-space directions?: the main directions of the training poses' joint rotations \(0: their mean pose; ±: their spread, one standard deviation\)(; sliders for the 6 largest)?$/);
+  const titles = await page.$$eval('#pose-modes label', (l) => l.map((x) => x.title));
+  titles.forEach((t, m) => assert.match(t, new RegExp(`^pose-space direction ${m + 1}: the training poses spread ±\\d+\\.\\d° along it`), t));
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
 test('pose mode: after Random pose the caption describes the whole pose until a part is turned; the Part list is in number order', async () => {
   const { page, context, log } = await fitted(); // the quadruped: 18 bones, whose parent-first order is not by number
   await mode(page, 'pose');

@@ -131,3 +131,60 @@ test('pose mode: a drag turns only the subtree about its joint; sliders give the
   assert.match(await page.locator('[data-testid=pose-status]').innerText(), /4 frames solved onto the rig: E_RMS [0-9.]+/);
   assert.deepEqual(log.errors, []);
 });
+
+test('pose mode says which pose its rest pose is (the rig\'s bind pose: the file named reference), marks no thumbnail, and its hover box measures from it', async () => {
+  const { page, context, log } = await session.open();
+  await waitState(page, ['fitted', 'idle', 'error'], 60000);
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  // the third pose named "reference": the rig is bound in it (src/export/rig_report.rs default_bind_pose)
+  const files = objFiles(path.join(dir, 'pop')).map((f, i) => (i === 2 ? { ...f, name: 'reference.obj' } : f));
+  await page.setInputFiles('[data-testid=file-input]', asPayload(files));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000, polling: 50 });
+  const names = await page.$$eval('#pose-select option', (o) => o.map((x) => x.textContent));
+  const ref = names.indexOf('reference.obj');
+  assert.ok(ref >= 0, names.join());
+  const pressed = () => page.$$eval('#pose-strip button[aria-pressed=true]', (b) => b.map((x) => x.title));
+  assert.deepEqual(await pressed(), [names[0]]);
+
+  await page.click('[data-testid=mode-pose]');
+  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  await page.waitForFunction(() => /^Pose mode/.test(document.getElementById('caption').textContent));
+  assert.equal(await page.locator('#caption').innerText(), 'Pose mode: the rest pose, the rig\'s bind pose (“reference.obj” rebuilt from its parts); drag a part to turn it about its joint');
+  assert.deepEqual(await pressed(), [], 'a made pose is none of the training poses');
+  // the rest pose is that training pose (as solved onto the rig), not another one
+  const rest = await page.evaluate(() => window.posemfa.pose.positions());
+  const dist = [];
+  for (let i = 0; i < names.length; i++) {
+    const p = await page.evaluate(async (k) => {
+      const q = await window.posemfa.pose.training(k);
+      return q;
+    }, i);
+    dist.push(maxAbs(rest, p));
+  }
+  const nearest = dist.indexOf(Math.min(...dist));
+  assert.equal(nearest, ref, `the rest pose is nearest to ${names[nearest]}: ${dist.map((d) => d.toExponential(2)).join(', ')}`);
+  await page.click('#pose-reset');
+  await page.waitForFunction(() => /the rest pose/.test(document.getElementById('caption').textContent));
+
+  // the hover box in pose mode: the part's rotation from the rest pose, as the caption says
+  const box = await page.locator('#view canvas').boundingBox();
+  let info = '';
+  for (const [fx, fy] of [[0.5, 0.5], [0.45, 0.55], [0.55, 0.55], [0.5, 0.62], [0.4, 0.5], [0.6, 0.5]]) {
+    await page.mouse.move(box.x + fx * box.width, box.y + fy * box.height);
+    await page.waitForTimeout(250);
+    info = (await page.locator("#info").innerText()).trim();
+    if (info) break;
+  }
+  assert.match(info, /^part \d+: rotation from the rest pose \(pose “reference\.obj”, the rig's bind pose\) in each training pose/);
+  // the angle of the rest pose's own row is 0
+  const rows = await page.$$eval('#info table tr', (tr) => tr.map((r) => [...r.children].map((c) => c.textContent)));
+  assert.equal(rows[ref][0], 'reference.obj');
+  assert.equal(rows[ref][2], '0.0°');
+
+  // out of pose mode: the pose shown is marked again
+  await page.check('#modes input[value=parts]', { force: true });
+  await page.waitForFunction(() => window.posemfa.mode() === 'parts');
+  assert.deepEqual(await pressed(), [names[0]]);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

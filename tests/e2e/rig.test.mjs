@@ -55,6 +55,9 @@ test('the export panel writes the rig the CLI writes: same part count, same E_RM
   const pageErms = Number(shown.erms);
   assert.equal(Number(shown.bones), 9);
   assert.ok(pageErms > 0, JSON.stringify(shown));
+  // the figure with its unit: E_RMS is 1000 x RMS error / bounding-box diagonal (Kavan et al. 2010)
+  assert.match(await page.locator('[data-testid=rig-erms]').innerText(),
+    new RegExp(`^${pageErms.toFixed(3).replace('.', '\\.')} \\(RMS error in thousandths of the bounding-box diagonal; 9 bones, 4 influences; max error [0-9.]+ % of the diagonal\\)$`));
 
   const cli = JSON.parse(posemfa('rig-report', pop, '--bones', '9', '--weights', 'fitted', '--influences', '4'));
   assert.equal(cli.bones, 9);

@@ -207,6 +207,62 @@ test('Step and Run after a finished fit ask before they drop it; dismissed, the 
   await context.close();
 });
 
+// The Step by step panel as it shows: the iteration counter, the stage marked, its note.
+const panel = (page) => page.evaluate(() => ({
+  iteration: document.querySelector('[data-testid=teach-iteration]').textContent,
+  current: [...document.querySelectorAll('#teach-stages li.current')].map((li) => li.dataset.stage),
+  note: document.getElementById('teach-stage-note').textContent,
+}));
+
+test('Fit asks before it drops a paused step-by-step fit; accepted, or with a new population, the panel starts again', async () => {
+  const { page, context, log } = await fitted('#ex=arm');
+  const opened = await panel(page);
+  assert.deepEqual(opened, { iteration: '0', current: [], note: '' }, 'no step-by-step fit yet: nothing marked');
+  log.acceptDialogs = true; // the first Step drops the finished fit
+  for (let k = 0; k < 3; k++) await step(page);
+  await frames(page);
+  const paused = await panel(page);
+  assert.equal(paused.iteration, '3');
+  assert.equal(paused.current.length, 1, JSON.stringify(paused));
+  assert.notEqual(paused.note, '');
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'paused');
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  // dismissed: nothing changes, the step-by-step fit stays where it was
+  log.acceptDialogs = false;
+  const asked = log.dialogs.length;
+  await page.click('#fit');
+  for (let i = 0; i < 100 && log.dialogs.length === asked; i++) await page.waitForTimeout(20);
+  assert.equal(log.dialogs[asked], 'Fit starts a new fit and drops the step-by-step fit at iteration 3. Drop it?');
+  await page.waitForTimeout(300);
+  assert.deepEqual(await panel(page), paused);
+  const kept = await teaching(page);
+  assert.deepEqual([kept.active, kept.iteration], [true, 3]);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'paused');
+  assert.equal(await page.evaluate(() => window.posemfa.fitCount()), fits, 'no fit started');
+  await step(page); // and it goes on
+  assert.equal((await teaching(page)).iteration, 4);
+  // accepted: the new fit runs, the panel is back to how it opened
+  log.acceptDialogs = true;
+  await page.click('#fit');
+  await page.waitForFunction(() => !window.posemfa.teaching().active);
+  assert.deepEqual(await panel(page), opened);
+  assert.equal(await waitState(page, ['fitted', 'error'], 60000), 'fitted');
+  assert.deepEqual(await panel(page), opened, 'the finished fit brings no step-by-step stage back');
+  assert.equal(log.dialogs.length, asked + 2);
+  // a new population drops a paused step-by-step fit too (the worker lets it go with the population)
+  await step(page);
+  await step(page);
+  assert.equal((await teaching(page)).iteration, 2);
+  await page.selectOption('#example', 'snake');
+  await page.click('#generate');
+  await page.waitForFunction(() => !window.posemfa.teaching().active);
+  assert.deepEqual(await panel(page), opened);
+  assert.equal(await waitState(page, ['fitted', 'error'], 60000), 'fitted');
+  assert.deepEqual(await panel(page), opened);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
 test('the literal eq 18 preset shows the log-likelihood dropping while stepping', async () => {
   const { page, context, log } = await fitted('#ex=literal-eq18');
   log.acceptDialogs = true; // Step drops the example's finished fit

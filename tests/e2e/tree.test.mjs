@@ -135,3 +135,27 @@ test('the pose thumbnails take the merge tree\'s colours with the slider, and th
   assert.deepEqual(back.hashes, fit.hashes, 'back at the fit\'s count: the fitted parts\' colours');
   assert.deepEqual(log.errors, []);
 });
+
+test('the vertex box goes when the slider shows another partition; asked again, it says the part is the fit\'s', async () => {
+  const { page, context, log } = await session.open();
+  await fitted(page);
+  const fit = (await page.evaluate(() => window.posemfa.summary())).parts;
+  const tree = await page.evaluate(() => window.posemfa.tree());
+  const info = () => page.locator('#info').innerText().then((t) => t.trim());
+  await page.evaluate(() => window.posemfa.inspect(0));
+  await page.waitForFunction(() => /^Vertex 0 /.test(document.getElementById('info').textContent));
+  assert.match(await info(), /^Vertex 0 \(.*\): part \d+ \n/);
+  const n = fit > tree.fewest ? fit - 1 : fit + 1;
+  await moveTreeSlider(page, n);
+  assert.equal(await info(), '', `the box of the ${fit}-part fit is still up over the tree's ${n} parts`);
+  assert.equal(await page.locator('#info').isVisible(), false);
+  // a new click while the tree's partition shows: the part named is the fit's, and the box says so
+  await page.evaluate(() => window.posemfa.inspect(0));
+  await page.waitForFunction(() => /^Vertex 0 /.test(document.getElementById('info').textContent));
+  assert.match(await info(), new RegExp(`^Vertex 0 \\(.*\\): part \\d+ of the fit's ${fit} \\(the view shows the merge tree's ${n}\\)`));
+  // back at the fit's count: the box goes again, and a click names the part plainly
+  await moveTreeSlider(page, fit);
+  assert.equal(await info(), '');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

@@ -35,7 +35,8 @@ export function rigOptions() {
 
 function showRig(r, opts) {
   const out = $('rig-erms');
-  out.textContent = `${r.eRms.toFixed(3)} (${r.bones} bones, ${opts.influences} influences; max error ${(100 * r.maxErrorOverDiagonal).toFixed(2)} % of the diagonal)`;
+  // E_RMS (Kavan et al. 2010): 1000 x the RMS vertex error over the bounding-box diagonal
+  out.textContent = `${r.eRms.toFixed(3)} (RMS error in thousandths of the bounding-box diagonal; ${r.bones} bones, ${opts.influences} influences; max error ${(100 * r.maxErrorOverDiagonal).toFixed(2)} % of the diagonal)`;
   out.dataset.erms = String(r.eRms);
   out.dataset.bones = String(r.bones);
   out.dataset.ms = String(r.rigMs + r.writeMs + r.evaluateMs);

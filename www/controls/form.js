@@ -42,14 +42,15 @@ function showStartUse() {
 
 /** A new population (files opened or dropped) starts from the defaults of the settings that change what is
  * fitted rather than how closely: "Parts in the end" (a count the last population's Refine N set or the user
- * typed for it) and the paper's literal Λ step (an example's). Seed, tolerance and the rest stay as typed. */
+ * typed for it) and the paper's literal Λ step (an example's). Seed, tolerance and the rest stay as typed. Called
+ * once the core has accepted the files (session.js onLoaded): a refused drop leaves the form as it was. */
 export function resetForNewPopulation(defaults) {
   const f = form();
   f.targetParts.value = defaults.targetParts ?? '';
   f.paperLambda.checked = defaults.lambdaRule === 'paper-eq18';
 }
 
-// "Parts in the end": empty or auto = Algorithm 1's own count (null); a whole number as a number; anything else
+// "Parts in the end": empty or auto = the part rule's own count (null); a whole number as a number; anything else
 // goes as typed (checkedParams refuses it before a fit).
 const bones = (v) => {
   const t = v.trim();
@@ -57,10 +58,11 @@ const bones = (v) => {
   return /^\d+$/.test(t) ? Number(t) : t;
 };
 
-// The form's check boxes over the hidden parameters (state.baseParams).
-const base = () => ({
-  ...state.baseParams,
-  lambdaRule: form().paperLambda.checked ? 'paper-eq18' : 'exact',
+// The form's check boxes over the hidden parameters (state.baseParams). fresh: the defaults a new population
+// starts from (resetForNewPopulation), read without writing them into the form.
+const base = (fresh = null) => ({
+  ...(fresh ?? state.baseParams),
+  lambdaRule: (fresh ? fresh.lambdaRule === 'paper-eq18' : form().paperLambda.checked) ? 'paper-eq18' : 'exact',
   refine: form().refine.checked,
 });
 
@@ -100,15 +102,18 @@ function showFieldProblems(problems) {
 
 /** The core's check of the form (the latest one asked); shows what it refuses. Resolves to the parameters, or
  * null when a field cannot be used. `vertices`: the vertex count of the population to fit, when it is known
- * (the core then refuses more parts than it can hold). */
-export function checkedParams({ vertices = null } = {}) {
-  if (!checker) return Promise.resolve(readParams());
+ * (the core then refuses more parts than it can hold). `fresh`: the defaults (state.defaults) for the fit of a
+ * new population: the hidden parameters, "Parts in the end" and the Λ step as resetForNewPopulation sets them,
+ * the other fields as typed; the form is not changed (it is, once the population is accepted). */
+export function checkedParams({ vertices = null, fresh = null } = {}) {
+  if (!checker) return Promise.resolve(fresh ? { ...readParams(), ...base(fresh), targetParts: fresh.targetParts ?? null } : readParams());
   checkedFor = vertices;
   const fields = Object.fromEntries(TEXT_FIELDS.map((n) => [n, String(form()[n].value)]));
+  if (fresh) fields.targetParts = String(fresh.targetParts ?? '');
   // a number field holding text that is no number reads as empty (the browser keeps the text to itself): the
   // core's "is empty" would contradict what the user sees
   const unreadable = (name) => form()[name].validity?.badInput;
-  const mine = checker(base(), fields, vertices).then((r) => {
+  const mine = checker(base(fresh), fields, vertices).then((r) => {
     const problems = r.problems.map((p) => (unreadable(p.field) ? { ...p, message: p.message.replace(/^is empty:/, 'is not a number:') } : p));
     if (mine === checking) showFieldProblems(problems);
     return r.params;
@@ -154,13 +159,17 @@ function showSource(source) {
   $('example').value = source?.example?.id ?? (source ? OTHER : $('example').value);
   showPicked();
 }
-const showPicked = () => { $('generate').disabled = $('example').value === OTHER; };
+const showPicked = () => {
+  $('generate').disabled = $('example').value === OTHER;
+  // the whole title on hover, where a narrow window cuts the select's text
+  $('example').title = $('example').selectedOptions[0]?.textContent ?? '';
+};
 
 /** The example picker, filled when the core's examples are known. */
 export function showExamples(examples) {
   document.querySelector('.generate').hidden = !examples.length;
   const other = Object.assign(document.createElement('option'), { value: OTHER, disabled: true, hidden: true, textContent: 'your files' });
-  $('example').replaceChildren(other, ...examples.map((e) => Object.assign(document.createElement('option'), { value: e.id, textContent: e.title })));
+  $('example').replaceChildren(other, ...examples.map((e) => Object.assign(document.createElement('option'), { value: e.id, textContent: e.title, title: e.title })));
   $('example').value = state.source?.example?.id ?? examples[0]?.id ?? '';
   showSource(state.source);
 }

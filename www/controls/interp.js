@@ -60,7 +60,16 @@ async function measure() {
     + 'Error at t=0 / t=1: the largest vertex distance from the ends to what the method is meant to reproduce, the training poses, or with the residual off '
     + 'their rigid reconstruction (eq 22). So a rigid row with the residual off can end exactly (error near 0) on a reconstruction whose joints still '
     + 'stretch the training poses\' edges.';
-  $('report').replaceChildren(cap, table, key);
+  // what the stretch figures mean (src/articulate/report.rs): 0 % keeps every edge at its mixed length
+  const reading = document.createElement('p');
+  reading.className = 'report-reading';
+  reading.dataset.testid = 'report-reading';
+  reading.textContent = 'Reading the stretch: 0 % is every edge at exactly its mixed length, which is what a rigid motion gives inside a part that is rigid in the training poses. '
+    + 'Large figures on the edges crossing a part boundary (the p99 column) are where rigid parts pull apart or overlap at a joint, with no skinning to blend '
+    + 'them: compare the smooth-skin rows.';
+  const box = Object.assign(document.createElement('div'), { className: 'report-table' });
+  box.append(table);
+  $('report').replaceChildren(cap, box, reading, key);
 }
 
 function stopPlay() {

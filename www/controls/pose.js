@@ -23,6 +23,18 @@ const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles:
 // the pose space's modes come largest first (the core's PCA of the training poses); the first few get a slider
 const MODE_SLIDERS = 6;
 
+/** The rest pose of pose mode: the pose the rig is bound in (every bone's motion the identity), asked for by
+ * name when the poser starts. It is the rule of the rig export's default (src/export/rig_report.rs
+ * default_bind_pose: the file named "reference", else the first pose), so the .glb export is bound in the same
+ * pose; the mesh is that pose as the rig rebuilds it (its rigid reconstruction, eq 22, with the fitted weights'
+ * bind positions: src/articulate/rig.rs). */
+export function restPose() {
+  const names = state.pop?.names ?? [];
+  const i = names.findIndex((n) => n.split('/').pop().replace(/\.[^.]*$/, '').toLowerCase() === 'reference');
+  return Math.max(i, 0);
+}
+const restName = () => `“${state.pop.names[restPose()]}”`;
+
 /** The mesh pose mode shows (for views/render.js), or null before the poser is ready. */
 export async function poseView() {
   await ensureStarted();
@@ -30,12 +42,12 @@ export async function poseView() {
   const positions = frames ? pose.frames.positions[pose.frame] : pose.positions;
   const name = frames ? `frame ${pose.frames.names[pose.frame]}` : 'posed';
   const caption = frames
-    ? `Added frame “${pose.frames.names[pose.frame]}” (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${pose.frames.eRms[pose.frame].toFixed(3)}`
+    ? `Added frame “${pose.frames.names[pose.frame]}” (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${pose.frames.eRms[pose.frame].toFixed(3)} (thousandths of the bounding-box diagonal)`
     : pose.whole
       ? `Pose mode: ${wholePose()} (drag a part to turn it about its joint)`
       : pose.bone >= 0
-      ? `Pose mode: ${pose.skeleton.names[pose.bone]} turned ${pose.angles[pose.bone].toFixed(1)}° from the rest pose (drag a part to turn it about its joint)`
-      : 'Pose mode: click a part and drag to turn it about its joint, or use the pose-space sliders';
+      ? `Pose mode: ${pose.skeleton.names[pose.bone]} turned ${pose.angles[pose.bone].toFixed(1)}° from the rest pose ${restName()} at its joint (drag a part to turn it about its joint)`
+      : `Pose mode: the rest pose, the rig's bind pose (${restName()} rebuilt from its parts); drag a part to turn it about its joint`;
   return { slots: [{ positions, colours: state.colours.final.vertexColours, name }], caption };
 }
 
@@ -46,7 +58,7 @@ function wholePose() {
     random: `a random pose of all ${n} part${n === 1 ? '' : 's'}, within the training poses' range`,
     mean: 'the mean pose of the training poses',
     modes: 'a pose from the pose-space sliders (0 = the mean pose)',
-    rest: 'the rest pose',
+    rest: `the rest pose, the rig's bind pose (${restName()} rebuilt from its parts)`,
   }[pose.whole];
 }
 
@@ -56,7 +68,7 @@ async function ensureStarted() {
   pose.startGen = state.gen;
   $('pose-status').textContent = 'building the rig…';
   pose.starting = (async () => {
-    const r = await query('poseStart', {});
+    const r = await query('poseStart', { bindPose: restPose() });
     pose.gen = state.gen;
     pose.skeleton = r.skeleton;
     pose.positions = r.positions;
@@ -69,7 +81,7 @@ async function ensureStarted() {
     fillControls();
     const n = r.skeleton.nModes;
     const sliders = Math.min(n, MODE_SLIDERS);
-    $('pose-status').textContent = `${r.skeleton.order.length} bones, ${n} pose modes${n > sliders ? ` (sliders for the ${sliders} largest)` : ''}`;
+    $('pose-status').textContent = `${r.skeleton.order.length} bones, ${n} pose-space direction${n === 1 ? '' : 's'}: the main directions of the training poses' joint rotations (0: their mean pose; ±: their spread, one standard deviation)${n > sliders ? `; sliders for the ${sliders} largest` : ''}`;
     document.body.dataset.pose = 'ready';
   })();
   try {
@@ -85,6 +97,10 @@ function fillControls() {
   const byName = pose.skeleton.order.slice().sort((a, b) => pose.skeleton.names[a].localeCompare(pose.skeleton.names[b], undefined, { numeric: true }));
   sel.replaceChildren(...byName.map((k) => Object.assign(document.createElement('option'), { value: String(k), textContent: pose.skeleton.names[k] })));
   const box = $('pose-modes');
+  // The modes are the principal components of the training poses' joint rotations (src/articulate/pose.rs
+  // PoseSpace: every non-root joint's rotation from the rest pose, relative to its parent, as axis x angle);
+  // sd: the training poses' standard deviation along each, the joints' rotations together (radians). The
+  // status line says so (ensureStarted).
   box.replaceChildren();
   const shown = Math.min(pose.skeleton.nModes, MODE_SLIDERS);
   for (let m = 0; m < shown; m++) {
@@ -94,9 +110,11 @@ function fillControls() {
     const input = Object.assign(document.createElement('input'), { type: 'range', min: String(lo - pad), max: String(hi + pad), step: String((hi - lo) / 200 || 0.001), value: '0' });
     input.dataset.mode = String(m);
     input.dataset.testid = `pose-mode-${m}`;
-    input.setAttribute('aria-label', `pose mode ${m + 1}`);
+    const spread = (pose.skeleton.sd[m] * 180 / Math.PI).toFixed(1);
+    input.setAttribute('aria-label', `pose-space direction ${m + 1}`);
     input.addEventListener('input', () => applyModes());
-    label.append(`mode ${m + 1} (sd ${(pose.skeleton.sd[m] * 180 / Math.PI).toFixed(1)}°) `, input);
+    label.title = `pose-space direction ${m + 1}: the training poses spread ±${spread}° along it (one standard deviation of their joint rotations)`;
+    label.append(`direction ${m + 1} (±${spread}°) `, input);
     box.append(label);
   }
   showAngle();

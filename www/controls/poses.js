@@ -32,9 +32,12 @@ function fillPoseLists(names) {
 /** Shows pose i. */
 export const choosePose = (i) => update({ pose: i, hoverPart: null });
 
+// The pose shown is marked in the strip; in pose mode none is (the view shows a pose made from the rig, not a
+// training pose).
 function showPose(i) {
   $('pose-select').value = i;
-  [...$('pose-strip').children].forEach((b, k) => b.setAttribute('aria-pressed', String(k === i)));
+  const made = state.mode === 'pose';
+  [...$('pose-strip').children].forEach((b, k) => b.setAttribute('aria-pressed', String(!made && k === i)));
 }
 
 let thumbsToken = 0;
@@ -70,7 +73,7 @@ export function installPoses() {
   });
   subscribe((s, changed) => {
     if (changed.has('pop')) fillPoseLists(s.pop.names);
-    if (changed.has('pose')) showPose(s.pose);
+    if (changed.has('pose') || changed.has('mode')) showPose(s.pose);
     if (changed.has('model') && s.model) setTimeout(drawThumbnails, 0);
     // the merge tree's slider recolours the main view: the thumbnails follow (and go back with it)
     else if (s.model && ['treeParts', 'mode', 'colours'].some((k) => changed.has(k)) && thumbnailColours() !== drawnWith) drawThumbnails();

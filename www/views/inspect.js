@@ -4,6 +4,7 @@ import { state, update, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { viewer } from './viewer-instance.js';
 import { poseName } from './render.js';
+import { restPose } from '../controls/pose.js';
 
 const infoPick = document.createElement('div');
 const infoHover = document.createElement('div');
@@ -32,6 +33,10 @@ function row(...cells) {
   return tr;
 }
 
+// The parts inspected are the fit's; while the merge tree's slider shows another count, the box says so.
+const ofFit = () => (state.treeParts !== null && state.model && state.mode === 'parts'
+  ? ` of the fit's ${state.model.summary.parts} (the view shows the merge tree's ${state.treeParts})` : '');
+
 async function showPick() {
   const hit = state.pick;
   if (!hit || !state.model) {
@@ -53,7 +58,7 @@ async function showPick() {
   }
   if (gen !== state.gen || state.pick !== hit) return;
   const head = document.createElement('div');
-  head.append(`Vertex ${v} (${state.shown[hit.slot]?.name ?? ''}): part ${part} `, swatch(part));
+  head.append(`Vertex ${v} (${state.shown[hit.slot]?.name ?? ''}): part ${part}${ofFit()} `, swatch(part));
   const err = document.createElement('div');
   err.textContent = `error in pose “${poseName(pose)}”: ${errors[v].toExponential(2)} unit box = ${original.toExponential(2)} original`;
   const order = [...resp.keys()].sort((a, b) => resp[b] - resp[a]).slice(0, 5);
@@ -78,7 +83,11 @@ async function showHover() {
     infoHover.replaceChildren();
     return;
   }
-  const { gen, pose } = state;
+  // pose mode shows a pose made from the rig: the angles are from its rest pose (the rig's bind pose), as the
+  // caption's are; elsewhere from the pose shown
+  const posing = state.mode === 'pose';
+  const { gen } = state;
+  const pose = posing ? restPose() : state.pose;
   let angles;
   try {
     angles = await query('rotationAngles', part, pose);
@@ -88,7 +97,9 @@ async function showHover() {
   }
   if (gen !== state.gen || state.hoverPart !== part) return;
   const head = document.createElement('div');
-  head.append(swatch(part), ` part ${part}: rotation from pose “${poseName(pose)}”`);
+  head.append(swatch(part), posing
+    ? ` part ${part}: rotation from the rest pose (pose “${poseName(pose)}”, the rig's bind pose) in each training pose`
+    : ` part ${part}: rotation from pose “${poseName(pose)}”${ofFit()}`);
   const table = document.createElement('table');
   angles.forEach((a, i) => table.append(row(poseName(i), bar(a / 180), `${a.toFixed(1)}°`)));
   infoHover.replaceChildren(head, table);
@@ -128,5 +139,13 @@ export function installInspect() {
     if (changed.has('hoverPart')) showHover();
     if (changed.has('pose') && s.pick) showPick();
     if (changed.has('pop')) showPick(); // pick was cleared
+    // another partition shown (the merge tree's slider): the box of the last one goes (a new click or hover
+    // asks again, and says which parts it names)
+    if (changed.has('treeParts') && (s.pick || s.hoverPart !== null)) {
+      pickVertex(null);
+      update({ hoverPart: null });
+    }
+    // into or out of pose mode: the hover box's angles are from another pose
+    if (changed.has('mode') && s.hoverPart !== null) showHover();
   });
 }

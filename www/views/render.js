@@ -3,7 +3,7 @@
 // Rust core); colours from colors.js. Nothing here computes a position. Every slot names its mesh (`what`,
 // a Shown descriptor of src/export/shown.rs), so the OBJ export can ask the core for the same mesh.
 import { state, update, subscribe } from '../state.js';
-import { query } from '../session.js';
+import { query, isTreeFit } from '../session.js';
 import { errorColours, RAMP_CSS, PALETTE } from '../colors.js';
 import { viewer } from './viewer-instance.js';
 import { interpValues } from '../controls/interp-values.js';
@@ -44,16 +44,22 @@ const VIEWS = {
     const by = model ? `part (${partsShown(model.summary.parts)})` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
     return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, coloured by ${by}` };
   },
+  // The three stages of what ran: the merge tree's start, the part rule's parts and the final AECM (the default
+  // part rule), or Algorithm 1's coarse, refined and final parts (part rules distinct and threshold, the
+  // refinement off, Step by step). The slots keep the stages' names (the OBJ export's objects and groups).
   stages(P, p) {
     const s = state.model.summary;
     const c = state.colours;
+    const tree = isTreeFit(state.model);
+    const [first, second] = tree ? ['start', 'after the part rule'] : ['coarse', 'refined'];
+    const labels = [`${first} (${nParts(s.coarseParts)})`, `${second} (${nParts(s.refinedParts)})`, `final (${nParts(s.parts)})`];
     return {
       slots: [
-        { positions: P, colours: c.coarse.vertexColours, name: 'coarse', what: pose(p), parts: 'coarse' },
-        { positions: P, colours: c.refined.vertexColours, name: 'refined', what: pose(p), parts: 'refined' },
-        { positions: P, colours: c.final.vertexColours, name: 'final', what: pose(p), parts: 'final' },
+        { positions: P, colours: c.coarse.vertexColours, name: 'coarse', what: pose(p), parts: 'coarse', label: labels[0] },
+        { positions: P, colours: c.refined.vertexColours, name: 'refined', what: pose(p), parts: 'refined', label: labels[1] },
+        { positions: P, colours: c.final.vertexColours, name: 'final', what: pose(p), parts: 'final', label: labels[2] },
       ],
-      caption: `Algorithm 1 on pose “${poseName(p)}”: coarse (${s.coarseParts} parts) | refined (${s.refinedParts}) | final (${s.parts})`,
+      caption: `${tree ? 'Merge-tree fit' : 'Algorithm 1'} on pose “${poseName(p)}”: ${first} (${s.coarseParts} parts) | ${second} (${s.refinedParts}) | final (${s.parts})`,
     };
   },
   async recon(P, p) {
@@ -63,8 +69,8 @@ const VIEWS = {
     const [maxOriginal] = await query('originalLengths', [max]);
     return {
       slots: [
-        { positions: P, colours: partColours(), name: 'original', what: pose(p), parts: 'final' },
-        { positions: recon, colours: errorColours(errors, max), name: 'reconstruction', what: { kind: 'reconstruction', pose: p }, parts: 'final' },
+        { positions: P, colours: partColours(), name: 'original', what: pose(p), parts: 'final', label: 'original' },
+        { positions: recon, colours: errorColours(errors, max), name: 'reconstruction', what: { kind: 'reconstruction', pose: p }, parts: 'final', label: 'reconstruction (error)' },
       ],
       caption: `Pose “${poseName(p)}”: original (parts) | reconstruction from the latent shape, coloured by per-vertex error`,
       legend: `${max.toExponential(2)} unit box (${maxOriginal.toExponential(2)} original)`,
@@ -73,8 +79,8 @@ const VIEWS = {
   truth(P, p) {
     return {
       slots: [
-        { positions: P, colours: state.colours.truth, name: 'ground truth', what: pose(p) },
-        { positions: P, colours: state.colours.final.vertexColours, name: 'final', what: pose(p), parts: 'final' },
+        { positions: P, colours: state.colours.truth, name: 'ground truth', what: pose(p), label: 'ground truth' },
+        { positions: P, colours: state.colours.final.vertexColours, name: 'final', what: pose(p), parts: 'final', label: 'fitted' },
       ],
       caption: `Pose “${poseName(p)}”: ground truth of the generator (${nParts(state.pop.truth.partNames.length)}) | fitted (${nParts(state.model.summary.parts)})`,
     };
@@ -107,7 +113,10 @@ const VIEWS = {
     const head = `“${poseName(a)}” → “${poseName(b)}” at t = ${t.toFixed(2)}`;
     if (!state.model) return { slots: single(await query('linearInterpolate', a, b, t), 'linear', linear), caption: `${head}: linear vertex blending` };
     const slots = single(await query('interpolate', a, b, t, opts), 'part-wise', { kind: 'interpolation', from: a, to: b, t, options: opts });
-    if (side) slots.push({ positions: await query('linearInterpolate', a, b, t), colours: partColours(), name: 'linear', what: linear, parts: 'final' });
+    if (side) {
+      slots[0].label = 'part-wise';
+      slots.push({ positions: await query('linearInterpolate', a, b, t), colours: partColours(), name: 'linear', what: linear, parts: 'final', label: 'linear blending' });
+    }
     return { slots, caption: `${head}: part-wise (${opts.skin === 'smooth' ? 'smooth joints' : 'rigid parts'})${side ? ' | linear vertex blending' : ''}` };
   },
 };

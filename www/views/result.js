@@ -2,7 +2,7 @@
 // the file list; the fit's progress (stage, iteration, elapsed time, log-likelihood and its plot); the
 // result (parts, RMSE, iterations, fit time, ground-truth accuracy).
 import { state, subscribe } from '../state.js';
-import { onFitProgress } from '../session.js';
+import { onFitProgress, isTreeFit } from '../session.js';
 import { accuracyText } from '../presets.js';
 import { plot } from './viewer-instance.js';
 import { drawPartCurve } from './part-curve.js';
@@ -74,8 +74,9 @@ function showResult() {
   $('fail-lead').classList.toggle('fails', !!failure?.failed);
   $('fail-lead').textContent = failure?.text ?? '';
   $('parts-count').textContent = s ? s.parts : '–';
-  // the merge tree (the default part rule) starts from its own cut, not from Algorithm 1's coarse and refined stages
-  const stages = state.model?.tree ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
+  // the merge tree (the default part rule) starts from its own cut, not from Algorithm 1's coarse and refined
+  // stages: said the same for a finished fit and for one cancelled before it finished (which has no tree yet)
+  const stages = isTreeFit(state.model) ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${s.rmseOriginal.toExponential(3)} original units` : '–';
   // a finished fit that stopped at the iteration cap says so (it is not converged)
@@ -97,12 +98,23 @@ function showResult() {
   drawPartCurve($('part-curve'), curve, { ratio: state.baseParams?.distinctRatio ?? null });
 }
 
+/** A log-likelihood for the panel: in nats (natural log), its thousands apart (U+202F), two decimals. */
+export function natsText(v) {
+  const [whole, frac] = Math.abs(v).toFixed(2).split('.');
+  return `${v < 0 ? '−' : ''}${whole.replace(/\B(?=(\d{3})+(?!\d))/g, '\u202f')}.${frac} nats`;
+}
+
+/** The Stage field between the fit's last iteration and its model: the worker builds the result (labels,
+ * latent shape, summary, the verdict's own fits), which takes a while on a large population; the field says
+ * "done" once the model is in (fitEnded). */
+export const FINISHING = 'finishing: building the result (labels, latent shape, summary, verdict)';
+
 /** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since; run:
  * the pipeline's run by name, and its number among the fit's runs). */
 export function showStep(step, stage = step.stage, run = null, runNumber = null) {
   $('stage').textContent = stageText(stage, run) + (runNumber ? ` (run ${runNumber})` : '');
   $('iteration').textContent = `${step.iteration} (total ${step.totalIterations})`;
-  $('loglik').textContent = step.logLikelihood.toFixed(2);
+  $('loglik').textContent = natsText(step.logLikelihood);
 }
 
 function fitStarted() {
@@ -120,7 +132,7 @@ function fitEnded(model, { kept = false } = {}) {
   else if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
   $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
   // the model's own final value (the plot's last point), not the last progress message seen
-  $('loglik').textContent = logLikelihood?.length ? logLikelihood[logLikelihood.length - 1].toFixed(2) : '–';
+  $('loglik').textContent = logLikelihood?.length ? natsText(logLikelihood[logLikelihood.length - 1]) : '–';
   plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'stopped early' : 'final stage'}: log-likelihood`);
 }
 
@@ -137,6 +149,7 @@ export function installResult() {
       showStep(last, last.stage, last.run ?? m.run, before + 1);
       plot.set(m.trace, `${stageText(last.stage, m.run)}: log-likelihood`);
     }
+    if (m.run?.done) $('stage').textContent = FINISHING;
     $('elapsed').textContent = `${(m.elapsedMs / 1000).toFixed(2)} s`;
   });
   subscribe((s, changed) => {
