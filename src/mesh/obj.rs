@@ -9,6 +9,9 @@
 //!   `(1, k, k+1)`), degenerate ones included; `l`, `p`, `vt`, `vn` and every other statement are ignored,
 //!   but every index written in `f`, `l` and `p` is checked (a reference to a missing `vt`/`vn` means the
 //!   file is damaged or cut).
+//! - a line that starts with neither a keyword (letters) nor `#` is an error: it is damage, and skipping it
+//!   would blame a later line or another file (a vertex line overwritten leaves a face out of range, or the
+//!   file a vertex short of the others).
 //! - `v x y z`, `v x y z w` and `v x y z r g b` are accepted; only x y z are kept (`w` is not a divisor
 //!   for polygon vertices).
 //! - a trailing backslash continues a line (OBJ spec), comments included; a comment whose backslash
@@ -446,6 +449,14 @@ impl Reader {
             b"f" | b"fo" => self.element(Element::Face, tokens),
             b"l" => self.element(Element::Line, tokens),
             b"p" => self.element(Element::Point, tokens),
+            // A statement starts with a keyword (letters; `#` starts a comment): a line that starts with
+            // anything else is damage (a vertex line overwritten, a number torn from its statement), and
+            // skipping it would move the blame to a later line or another file.
+            _ if !(keyword[0].is_ascii_alphabetic() || keyword[0] == b'#') => Err(format!(
+                "`{}` is not an OBJ statement (a statement starts with a keyword such as v, vt, vn or f; # starts \
+                 a comment): the line is damaged: export the file again",
+                shown(keyword)
+            )),
             // Comments, groups, objects, materials, smoothing groups, free-form geometry, vendor
             // extensions (`vw`, `t`, ...): nothing posemfa uses.
             _ => Ok(()),
@@ -843,6 +854,15 @@ mod tests {
         for n in needles {
             assert!(m.contains(n), "message {m:?} lacks {n:?}");
         }
+    }
+
+    #[test]
+    fn a_line_that_starts_with_no_keyword_is_damage() {
+        assert_err("v 0 0 0\nv 1 0 0\n%%%% garbage $$$\nv 0 1 0\nf 1 2 3\n", 3, &["`%%%%` is not an OBJ statement", "export the file again"]);
+        assert_err("v 0 0 0\n1.000000\n", 2, &["`1.000000` is not an OBJ statement"]);
+        // keywords posemfa does not use (vendor extensions, free-form geometry) and comments are skipped
+        let m = ok("# c\n#MRGB 00ff\nvw 1 0 1.0\nt crease 2 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        assert_eq!((m.positions.len(), m.faces.len()), (3, 1));
     }
 
     #[test]

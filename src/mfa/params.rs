@@ -101,7 +101,7 @@ pub struct Params {
     /// decide the labels that start the next stage; the final stage uses `tol`). Default 1e-2.
     pub refine_tol: f64,
     /// Exact part count: after Algorithm 1, parts are split or merged until there are exactly this many, then
-    /// the final AECM runs again ([`crate::parts::part_count`]). None (default) keeps Algorithm 1's own count.
+    /// the final AECM runs again ([`crate::parts::part_count`]). None (default) keeps the part rule's own count.
     pub target_parts: Option<usize>,
 }
 
@@ -141,7 +141,17 @@ pub const ALLOWED_PARTS: &str = "a whole number from 1 to 512 (try 11)";
 pub const ALLOWED_SEED: &str = "a whole number from 0 to 2^64 - 1 (try 0)";
 pub const ALLOWED_TOL: &str = "a positive number (try 1e-3)";
 pub const ALLOWED_VARIANCE_FLOOR: &str = "a number in (0, 1) unit-box units² (try 1e-7)";
-pub const ALLOWED_TARGET_PARTS: &str = "a positive whole number, or auto (Algorithm 1's own count)";
+pub const ALLOWED_TARGET_PARTS: &str = "a positive whole number, or auto (the part rule's own count)";
+
+/// A number as a message shows it: as Rust writes it between 1e-4 and 1e6, in exponent form outside (1e30, not
+/// thirty-one digits).
+fn shown(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
 
 /// A field of the fit form that cannot be used: its name (camelCase, as in [`Params`]'s JSON and the page's
 /// form) and why, with what is allowed.
@@ -180,6 +190,10 @@ impl Params {
             }
             match t.parse::<f64>() {
                 Ok(x) if x.is_finite() => Ok(x),
+                // (Rust reads 1e400 as infinity)
+                Ok(x) if x.is_infinite() && !t.to_ascii_lowercase().contains("inf") => {
+                    Err(format!("'{t}' is too {}: it must be {allowed}", if x > 0.0 { "large" } else { "far below zero" }))
+                }
                 _ => Err(format!("'{t}' is not a number: it must be {allowed}")),
             }
         };
@@ -289,34 +303,34 @@ impl Params {
             bad("parts", format!("= {} is too large: it must be {ALLOWED_PARTS}", self.parts));
         }
         if !(self.tol > 0.0 && self.tol.is_finite()) {
-            bad("tol", format!("= {} must be {ALLOWED_TOL}", self.tol));
+            bad("tol", format!("= {} must be {ALLOWED_TOL}", shown(self.tol)));
         }
         if self.max_iter == 0 || self.max_iter > 100_000 {
             bad("maxIter", format!("= {} must be between 1 and 100000", self.max_iter));
         }
         if !(self.variance_floor > 0.0 && self.variance_floor < 1.0) {
-            bad("varianceFloor", format!("= {} must be {ALLOWED_VARIANCE_FLOOR}", self.variance_floor));
+            bad("varianceFloor", format!("= {} must be {ALLOWED_VARIANCE_FLOOR}", shown(self.variance_floor)));
         }
         if self.restarts == 0 || self.restarts > 100 {
             bad("restarts", format!("= {} must be between 1 and 100", self.restarts));
         }
         if !(self.refine_threshold >= 0.0 && self.refine_threshold.is_finite()) {
-            bad("refineThreshold", format!("= {} must be >= 0", self.refine_threshold));
+            bad("refineThreshold", format!("= {} must be >= 0", shown(self.refine_threshold)));
         }
         if !(self.distinct_ratio > 0.0 && self.distinct_ratio.is_finite()) {
-            bad("distinctRatio", format!("= {} must be a positive number (try 4)", self.distinct_ratio));
+            bad("distinctRatio", format!("= {} must be a positive number (try 4)", shown(self.distinct_ratio)));
         }
         if !(0.0..1.0).contains(&self.blend_ratio) {
-            bad("blendRatio", format!("= {} must be in [0, 1) (try 0.1; 0 keeps every part)", self.blend_ratio));
+            bad("blendRatio", format!("= {} must be in [0, 1) (try 0.1; 0 keeps every part)", shown(self.blend_ratio)));
         }
         if !(0.0..=1.0).contains(&self.merge_ratio) {
-            bad("mergeRatio", format!("= {} must be in [0, 1]", self.merge_ratio));
+            bad("mergeRatio", format!("= {} must be in [0, 1]", shown(self.merge_ratio)));
         }
         if self.max_subparts == 0 || self.max_subparts > 64 {
             bad("maxSubparts", format!("= {} must be between 1 and 64", self.max_subparts));
         }
         if !(0.0..1.0).contains(&self.refine_min_gain) {
-            bad("refineMinGain", format!("= {} must be in [0, 1)", self.refine_min_gain));
+            bad("refineMinGain", format!("= {} must be in [0, 1)", shown(self.refine_min_gain)));
         }
         if self.min_part_vertices == 0 {
             bad("minPartVertices", "= 0 must be at least 1".into());
@@ -417,6 +431,10 @@ mod tests {
         assert_eq!(big[0].message, format!("1000000000 is too large: it must be {ALLOWED_PARTS}"));
         assert_eq!(base.with_fields(&[("seed", "1e30")]).unwrap_err()[0].message, format!("'1e30' is too large: it must be {ALLOWED_SEED}"));
         assert_eq!(base.with_fields(&[("parts", "2.5")]).unwrap_err()[0].message, format!("'2.5' is not a whole number: it must be {ALLOWED_PARTS}"));
+        // beyond f64 (read as infinity): too large, not "not a number"; a huge value in range checks shown short
+        assert_eq!(base.with_fields(&[("tol", "1e400")]).unwrap_err()[0].message, format!("'1e400' is too large: it must be {ALLOWED_TOL}"));
+        assert_eq!(base.with_fields(&[("tol", "inf")]).unwrap_err()[0].message, format!("'inf' is not a number: it must be {ALLOWED_TOL}"));
+        assert_eq!(base.with_fields(&[("varianceFloor", "1e30")]).unwrap_err()[0].message, format!("1e30 must be {ALLOWED_VARIANCE_FLOOR}"));
         // a negative count is named as negative, with what is allowed
         let neg = base.with_fields(&[("targetParts", "-3")]).unwrap_err();
         assert_eq!(neg[0].message, format!("'-3' is negative: it must be {ALLOWED_TARGET_PARTS}"));

@@ -224,7 +224,7 @@ test('bad parameters: each field named and outlined with what it allows, no fit,
   await page.waitForFunction(() => document.querySelectorAll('[data-testid=param-errors] li').length === 2, null, { timeout: 10000 });
   const lines = await page.locator('[data-testid=param-errors] li').allInnerTexts();
   assert.deepEqual(lines.sort(), [
-    "Parts in the end: 'seven' is not a whole number: it must be a positive whole number, or auto (Algorithm 1's own count)",
+    "Parts in the end: 'seven' is not a whole number: it must be a positive whole number, or auto (the part rule's own count)",
     "Tolerance (nats / vertex): 'abc' is not a number: it must be a positive number (try 1e-3)",
   ]);
   assert.equal(await page.getAttribute('#params [name=tol]', 'aria-invalid'), 'true');
@@ -456,7 +456,7 @@ test('Parts in the end: a negative count must be a positive whole number; more t
   };
   await page.fill(field, '-3');
   await page.click('#fit');
-  assert.equal(await fieldLine(page, 'targetParts'), "Parts in the end: '-3' is negative: it must be a positive whole number, or auto (Algorithm 1's own count)");
+  assert.equal(await fieldLine(page, 'targetParts'), "Parts in the end: '-3' is negative: it must be a positive whole number, or auto (the part rule's own count)");
   await refused();
   // fixed: the line goes as it is typed
   await page.fill(field, '3');

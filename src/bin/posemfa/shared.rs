@@ -34,7 +34,7 @@ pub fn pose_index(name: &str, k: usize, n: usize) -> Result<usize, String> {
     Ok(k - 1)
 }
 
-/// `--bones`: "auto" (None: Algorithm 1's own count) or a number.
+/// `--bones`: "auto" (None: the part rule's own count) or a number.
 #[derive(Clone, Copy)]
 struct Bones(Option<usize>);
 
