@@ -255,22 +255,29 @@ pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std:
         return Ok(Loaded { poses: g.poses, source: g.source });
     }
     let mut poses = Vec::with_capacity(n_mesh);
+    // (each error with its file's place, for the set's first mismatch among the files that read to join them)
     let mut errors = Vec::new();
     let (mut n_obj, mut n_ply) = (0, 0);
-    for ((name, bytes), kind) in files.into_iter().zip(kinds) {
+    for (at, ((name, bytes), kind)) in files.into_iter().zip(kinds).enumerate() {
         match kind {
             FileKind::Obj => n_obj += 1,
             FileKind::Ply => n_ply += 1,
             _ => continue,
         }
         match read_mesh(&name, &bytes) {
-            Ok(m) => poses.push((name, m)),
-            Err(e) => errors.push(e),
+            Ok(m) => poses.push((at, name, m)),
+            Err(e) => errors.push((at, e)),
         }
     }
     if !errors.is_empty() {
-        return Err(errors);
+        // the files that read, in natural order (as the population would check them)
+        poses.sort_by(|a, b| super::population::natural_cmp(&a.1, &b.1));
+        let mismatch = super::population::first_mismatch(poses.iter().map(|p| (p.1.as_str(), &p.2)));
+        errors.extend(mismatch.map(|(k, e)| (poses[k].0, e)));
+        errors.sort_by_key(|e| e.0);
+        return Err(errors.into_iter().map(|e| e.1).collect());
     }
+    let poses = poses.into_iter().map(|(_, name, m)| (name, m)).collect();
     Ok(Loaded { poses, source: mesh_files_source(n_obj, n_ply) })
 }
 

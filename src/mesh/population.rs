@@ -341,17 +341,20 @@ impl Population {
         if !other.is_empty() {
             return Err(other);
         }
-        let (mut named, mut errors): (Vec<(String, Mesh)>, Vec<Error>) = (Vec::with_capacity(names.len()), Vec::new());
+        // (each file's error with its place in `order`, so that a mismatch found among the files that read
+        // joins them in order)
+        let (mut named, mut errors): (Vec<(String, Mesh)>, Vec<(usize, Error)>) = (Vec::with_capacity(names.len()), Vec::new());
         let mut unread: Vec<(usize, Error)> = Vec::new();
         let mut bytes = Vec::new();
-        // the first error the whole set's checks would meet, reported only when every file reads
-        let mut mismatch: Option<Error> = None;
+        // the first error the whole set's checks would meet among the files that read (reported with the files'
+        // own errors, [`first_mismatch`]), and its file's place in `order`
+        let mut mismatch: Option<(usize, Error)> = None;
         // read twice: only the first pose's positions are kept; the unit box and the first non-finite
         // coordinate are found as the files go by
         let mut twice = false;
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut non_finite: Option<Error> = None;
-        for &i in &order {
+        for (at, &i) in order.iter().enumerate() {
             bytes.clear();
             if let Err(e) = fetch(i, &mut bytes) {
                 unread.push((i, e));
@@ -360,7 +363,7 @@ impl Population {
             let mut mesh = match super::load::read_mesh(&names[i], &bytes) {
                 Ok(m) => m,
                 Err(e) => {
-                    errors.push(e);
+                    errors.push((at, e));
                     continue;
                 }
             };
@@ -376,7 +379,7 @@ impl Population {
             }
             match named.first() {
                 None => {
-                    mismatch = check_first_mesh(&names[i], &mesh).err();
+                    mismatch = check_first_mesh(&names[i], &mesh).err().map(|e| (at, e));
                     twice = names.len() >= 2 && mesh.positions.len() * names.len() * 24 > read_twice_above;
                     if twice {
                         (lo, hi) = crate::geometry::bounds(&mesh.positions);
@@ -386,7 +389,7 @@ impl Population {
                 }
                 Some((first_name, first)) => {
                     if mismatch.is_none() {
-                        mismatch = check_same_mesh(first_name, first, &names[i], &mesh).err();
+                        mismatch = check_same_mesh(first_name, first, &names[i], &mesh).err().map(|e| (at, e));
                     }
                     let positions = if twice { Vec::new() } else { mesh.positions };
                     named.push((names[i].clone(), Mesh { positions, faces: Vec::new() }));
@@ -398,10 +401,12 @@ impl Population {
             return Err(unread.into_iter().map(|u| u.1).collect());
         }
         if !errors.is_empty() {
-            return Err(errors);
+            errors.extend(mismatch);
+            errors.sort_by_key(|e| e.0);
+            return Err(errors.into_iter().map(|e| e.1).collect());
         }
         // (with fewer than two shapes, that is the error)
-        if let Some(e) = mismatch.filter(|_| named.len() >= 2) {
+        if let Some((_, e)) = mismatch.filter(|_| named.len() >= 2) {
             return Err(vec![e]);
         }
         let (n_obj, n_ply) = order.iter().fold((0, 0), |(o, p), &i| match FileKind::of(&names[i]) {
@@ -617,6 +622,18 @@ fn check_first_mesh(first_name: &str, first: &Mesh) -> Result<()> {
     Ok(())
 }
 
+/// The first problem [`Population::from_meshes`]'s checks of the first mesh and of the others against it meet,
+/// with the place of its mesh in `meshes` (natural order): for a set where other files failed to read, whose
+/// errors it joins (a file a vertex short was only named once the broken ones had been mended).
+pub(super) fn first_mismatch<'a>(meshes: impl IntoIterator<Item = (&'a str, &'a Mesh)>) -> Option<(usize, Error)> {
+    let mut meshes = meshes.into_iter().enumerate();
+    let (_, (first_name, first)) = meshes.next()?;
+    if let Err(e) = check_first_mesh(first_name, first) {
+        return Some((0, e));
+    }
+    meshes.find_map(|(k, (name, mesh))| check_same_mesh(first_name, first, name, mesh).err().map(|e| (k, e)))
+}
+
 /// What [`Population::from_meshes`] asks of every other mesh: the first one's vertex count and its very faces.
 fn check_same_mesh(first_name: &str, first: &Mesh, name: &str, mesh: &Mesh) -> Result<()> {
     // two files of one name (dropped from two folders): "1.obj has ... but 1.obj has" would say nothing
@@ -717,12 +734,19 @@ mod tests {
         let (all, one) = both(&bad);
         assert_eq!(messages(&one), messages(&all));
         assert!(messages(&one)[0].contains("2.obj"), "{:?}", messages(&one));
-        // and with a file that does not read: that file's error alone, from both
+        // and with a file that does not read: that file's error and the first mismatch among the files that
+        // read, in natural order, from both (not the mismatch only once the broken file is mended)
         let mut worse = bad.clone();
         worse.push(("3.obj", b"v 0 0 zero\n".to_vec()));
         let (all, one) = both(&worse);
         assert_eq!(messages(&one), messages(&all));
-        assert!(messages(&one).iter().all(|m| m.contains("3.obj")), "{:?}", messages(&one));
+        let m = messages(&one);
+        assert_eq!(m.len(), 2, "{m:?}");
+        assert!(m[0].contains("2.obj") && m[0].contains("same faces") && m[1].contains("3.obj"), "{m:?}");
+        // the files that read agree: the broken file's error alone
+        let (all, one) = both(&[("1.obj", quad_obj(0.0, f)), ("2.obj", quad_obj(0.1, f)), ("3.obj", b"v 0 0 zero\n".to_vec())]);
+        assert_eq!(messages(&one), messages(&all));
+        assert!(messages(&one).len() == 1 && messages(&one)[0].contains("3.obj"), "{:?}", messages(&one));
         // the first mesh's own faults come first; one file alone is too few
         let (all, one) = both(&[("1.obj", quad_obj(0.0, "")), ("2.obj", quad_obj(0.1, f))]);
         assert_eq!(messages(&one), messages(&all));
