@@ -457,7 +457,8 @@ impl FitModel {
         Ok(Float64Array::from(a.as_slice()))
     }
 
-    /// {shapes, vertices, parts, coarseParts, refinedParts, rmse, rmseOriginal (in the original units),
+    /// {shapes, vertices, parts, partsFrom: "merge tree" | "Algorithm 1", coarseParts (the merge tree's start, or
+    /// Algorithm 1's coarse parts), refinedParts, rmse, rmseOriginal (in the original units),
     /// iterations, converged, complete,
     /// logLikelihood: [...], stageStats: [...],
     /// diagnosis: {articulated, reason, singleBodyRmse, partsRmse, explained, parts} or null for a fit stopped
@@ -469,6 +470,7 @@ impl FitModel {
         let rmse = m.rmse(&self.pop);
         let v = serde_json::json!({
             "shapes": m.n_shapes, "vertices": m.n_vertices, "parts": m.n_parts(),
+            "partsFrom": if self.result.from_merge_tree { "merge tree" } else { "Algorithm 1" },
             "coarseParts": s.coarse_parts, "refinedParts": s.refined_parts,
             "rmse": rmse, "rmseOriginal": self.pop.normalization.length_to_original(rmse),
             "iterations": m.iterations, "converged": m.converged,

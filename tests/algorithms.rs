@@ -226,8 +226,11 @@ dual_test! {
     fn a_lesson_steps_through_algorithm_1_whatever_the_part_rule() {
         use posemfa::parts::hierarchy::Stage;
         let c = chain(4, 6, 5e-4, 21);
-        // the default part rule (the merge tree) starts at the final AECM from its own partition
-        assert_eq!(Pipeline::new(&c.pop, &Params::default()).unwrap().stage(), Stage::Final);
+        // the default part rule (the merge tree) starts at the final AECM from its own partition, and says so
+        let tree = Pipeline::new(&c.pop, &Params::default()).unwrap();
+        assert_eq!(tree.stage(), Stage::Final);
+        assert!(tree.result().from_merge_tree);
+        assert!(!Pipeline::new(&c.pop, &Params { refine: false, ..Params::default() }).unwrap().result().from_merge_tree);
         let mut lesson = Pipeline::for_teaching(&c.pop, &Params { parts: 3, ..Params::default() }).unwrap();
         assert_eq!(lesson.stage(), Stage::Coarse);
         let mut refined = false;
@@ -236,6 +239,7 @@ dual_test! {
         }
         assert!(refined, "a lesson shows the refinement");
         assert_eq!(lesson.result().model.n_parts(), 4);
+        assert!(!lesson.result().from_merge_tree);
     }
 
     fn pruned_e_step_equals_the_plain_one() {

@@ -85,14 +85,10 @@ export async function loadFiles(got) {
   startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes, { fresh: true });
 }
 
-// How the fit with these parameters finds its parts (the Stages view and the Parts line name it): the merge
-// tree (the default part rule, with the refinement on: src/parts/hierarchy.rs) or Algorithm 1 (part rule
-// distinct or threshold, the refinement off, and Step by step always).
-export const methodOf = (params) => ((params?.partRule ?? 'tree') === 'tree' && params?.refine !== false ? 'tree' : 'algorithm1');
-const methods = new Map(); // fit id -> methodOf its parameters, until its model arrives
-/** Whether `model`'s parts came from the merge tree (model.method, set when it arrived; a finished tree fit also
- * has its tree). */
-export const isTreeFit = (model) => (model?.method ?? (model?.tree ? 'tree' : 'algorithm1')) === 'tree';
+/** Whether `model`'s parts came from the merge tree, as the core says (summary.partsFrom): the default part rule
+ * with the refinement on; Algorithm 1 otherwise, and always in Step by step. The Stages view and the Parts line
+ * name the stages after it. */
+export const isTreeFit = (model) => model?.summary?.partsFrom === 'merge tree';
 
 // Loading and fitting go in one message: the worker starts the fit as soon as the population is in. With a
 // form field the core refuses (shown at the field), the population is loaded and not fitted. fresh: files
@@ -101,7 +97,6 @@ export const isTreeFit = (model) => (model?.method ?? (model?.tree ? 'tree' : 'a
 async function startLoad(source, notes, { fit: fitting = true, fresh = false } = {}) {
   const params = fitting ? await checkedParams(fresh ? { fresh: state.defaults } : {}) : null;
   const fit = params ? { id: client.id(), params, fault: takeFault() } : undefined;
-  if (fit) methods.set(fit.id, methodOf(params));
   const job = jobKey(source, fit?.params);
   let req;
   if (source.spec) {
@@ -120,10 +115,7 @@ async function startLoad(source, notes, { fit: fitting = true, fresh = false } =
       if (fit) watchFit(fit.id, fitDone);
     },
     (e) => {
-      if (fit) {
-        client.forget(fit.id);
-        methods.delete(fit.id);
-      }
+      if (fit) client.forget(fit.id);
       if (state.loading?.id !== req.id || e.kind === 'crashed') return;
       update({ loading: null, loadErrorCount: state.loadErrorCount + 1 });
       showProblems(e.problems);
@@ -162,7 +154,6 @@ export async function startFit() {
   if (!params || !state.pop) return; // the form says which field, and what it allows
   showProblems([]);
   const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });
-  methods.set(id, methodOf(params));
   // a step-by-step fit (paused, running or finished) gives way to the new fit: its panel starts again
   update({ fitId: id, lastStep: null, keptAfterCancel: false, teach: null, phase: 'fitting' });
   liveLabels = null;
@@ -171,12 +162,10 @@ export async function startFit() {
 
 export const cancelFit = () => client.post({ type: 'cancel' });
 
-/** Follows the fit `id` to its end (done: its promise from the protocol): the model, or the failure. method:
- * how it finds its parts ('tree' | 'algorithm1', methodOf; by default what its parameters said). */
-export function watchFit(id, done, method = methods.get(id) ?? 'tree') {
-  methods.delete(id);
+/** Follows the fit `id` to its end (done: its promise from the protocol): the model, or the failure. */
+export function watchFit(id, done) {
   done.then(
-    (m) => state.fitId === id && onFitted(m, method),
+    (m) => state.fitId === id && onFitted(m),
     (e) => {
       if (state.fitId !== id || e.kind === 'crashed') return;
       update({ fitId: null, fitCount: state.fitCount + 1 });
@@ -215,7 +204,7 @@ function showProgress() {
 }
 const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
 
-function onFitted({ model, kept: keptModel }, method) {
+function onFitted({ model, kept: keptModel }) {
   // the last slice's progress, if its frame has not come yet, is shown first: every run is named before 'done'
   if (pendingProgress) showProgress();
   if (keptModel) {
@@ -231,7 +220,6 @@ function onFitted({ model, kept: keptModel }, method) {
     refined: paletteColours(model.refinedLabels, model.colours.refined),
   };
   kept = null;
-  model.method = method; // how its parts were found (methodOf): the Stages view and the Parts line say so
   // the new model's own parts (not a merge tree cut the slider showed for the one before)
   update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, keptAfterCancel: false, phase: 'fitted' });
 }

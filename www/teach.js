@@ -56,7 +56,7 @@ export async function teach(type, { count = 1 } = {}) {
   for (const k of ['iteration', 'elapsed', 'loglik']) $(k).textContent = '–';
   plot.set([], '');
   showLambdaRule();
-  watchFit(id, done, 'algorithm1'); // Step by step is always Algorithm 1
+  watchFit(id, done); // (Step by step is always Algorithm 1: its model's summary says so)
 }
 
 // Which Λ update the next fit uses: the exact conditional maximiser, or the paper's literal eq 18.

@@ -90,6 +90,9 @@ pub struct FitResult {
     pub merge_tree: Option<super::merge_tree::MergeTree>,
     /// [`PartRule::Tree`]: the count the part rule read off `merge_tree`.
     pub tree_count: Option<usize>,
+    /// The parts came from the merge tree ([`PartRule::Tree`] with the refinement on), not from Algorithm 1 (the
+    /// other part rules, `refine` off, and a step-by-step lesson): what the page names the stages after.
+    pub from_merge_tree: bool,
     /// The part count is the user's own, with no rule behind it (`refine` off: Algorithm 1's coarse stage alone,
     /// m = `parts`), so too few parts cannot be told from a shape that is no articulated one
     /// ([`super::diagnosis::diagnose_fit`]).
@@ -1099,6 +1102,7 @@ impl Pipeline {
             decided_labels: self.decided_labels.as_deref().map(|d| self.everywhere(d)),
             merge_tree,
             tree_count: self.tree_count,
+            from_merge_tree: self.params.part_rule == PartRule::Tree && self.params.refine,
             count_unjudged: !self.params.refine,
         }
     }
