@@ -804,7 +804,7 @@ impl FitModel {
         }
         let g = req.options(&self.pop)?;
         let p = crate::export::pose_glb::Poser::new(&*self.articulation()?, &self.pop, &g)?;
-        Ok(WasmPoser { inner: p, names: self.pop.names.clone() })
+        Ok(WasmPoser { inner: p, names: self.pop.names.clone(), bind_pose: g.bind_pose })
     }
 
     /// Endpoint errors, volume and edge stretch at t of every interpolation method, poses i -> j (0-based).
@@ -901,6 +901,8 @@ pub fn fault_injection(kind: &str) -> Result<(), JsValue> {
 pub struct WasmPoser {
     inner: crate::export::pose_glb::Poser,
     names: Vec<String>,
+    /// The training pose the rig is bound in (its rest pose: every bone the identity).
+    bind_pose: usize,
 }
 
 fn vec3(v: &[f64]) -> Result<[f64; 3], JsValue> {
@@ -913,7 +915,8 @@ fn vec3(v: &[f64]) -> Result<[f64; 3], JsValue> {
 #[wasm_bindgen(js_class = Poser)]
 impl WasmPoser {
     /// The skeleton: {parent: [bone or -1], order, names, jointPoints (flat xyz, bind pose), boneOfVertex,
-    /// nModes, sd, range ([lo, hi] per mode), coords (per training pose), trainingNames, diagonal}.
+    /// nModes, sd, range ([lo, hi] per mode), coords (per training pose), trainingNames, bindPose (the training
+    /// pose the rig is bound in: its rest pose, as rebuilt from the parts), diagonal}.
     pub fn skeleton(&self) -> Result<JsValue, JsValue> {
         let r = &self.inner.rig.rig;
         let obj = js_sys::Object::new();
@@ -929,6 +932,7 @@ impl WasmPoser {
         set("range", to_js(&self.inner.space.range)?)?;
         set("coords", to_js(&self.inner.space.coords)?)?;
         set("trainingNames", to_js(&self.names)?)?;
+        set("bindPose", JsValue::from(self.bind_pose as u32))?;
         // unit box, as the positions
         set("diagonal", JsValue::from(self.inner.diagonal * self.inner.normalization.scale))?;
         Ok(obj.into())

@@ -23,16 +23,11 @@ const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles:
 // the pose space's modes come largest first (the core's PCA of the training poses); the first few get a slider
 const MODE_SLIDERS = 6;
 
-/** The rest pose of pose mode: the pose the rig is bound in (every bone's motion the identity), asked for by
- * name when the poser starts. It is the rule of the rig export's default (src/export/rig_report.rs
- * default_bind_pose: the file named "reference", else the first pose), so the .glb export is bound in the same
- * pose; the mesh is that pose as the rig rebuilds it (its rigid reconstruction, eq 22, with the fitted weights'
- * bind positions: src/articulate/rig.rs). */
-export function restPose() {
-  const names = state.pop?.names ?? [];
-  const i = names.findIndex((n) => n.split('/').pop().replace(/\.[^.]*$/, '').toLowerCase() === 'reference');
-  return Math.max(i, 0);
-}
+/** The rest pose of pose mode: the training pose the rig is bound in (every bone's motion the identity), as
+ * the core chose it (skeleton.bindPose: the rig export's default, the file named "reference", else the first
+ * pose, so the .glb export is bound in the same pose); the mesh is that pose as the rig rebuilds it (its rigid
+ * reconstruction, eq 22, with the fitted weights' bind positions: src/articulate/rig.rs). */
+export const restPose = () => pose.skeleton?.bindPose ?? 0;
 const restName = () => `“${state.pop.names[restPose()]}”`;
 
 /** The mesh pose mode shows (for views/render.js), or null before the poser is ready. */
@@ -68,7 +63,7 @@ async function ensureStarted() {
   pose.startGen = state.gen;
   $('pose-status').textContent = 'building the rig…';
   pose.starting = (async () => {
-    const r = await query('poseStart', { bindPose: restPose() });
+    const r = await query('poseStart', {});
     pose.gen = state.gen;
     pose.skeleton = r.skeleton;
     pose.positions = r.positions;
