@@ -250,12 +250,12 @@ impl Population {
         }
         named.sort_by(|a, b| natural_cmp(&a.0, &b.0));
         let (first_name, first) = (&named[0].0, &named[0].1);
-        check_first_mesh(first_name, first)?;
-        for (name, mesh) in &named[1..] {
-            if faces_of_first && mesh.positions.len() == first.positions.len() {
-                continue;
-            }
-            check_same_mesh(first_name, first, name, mesh)?;
+        // (with faces_of_first, a mesh of the first one's vertex count carries no faces to compare)
+        let checked = named.iter().enumerate().filter(|(k, (_, mesh))| {
+            *k == 0 || !(faces_of_first && mesh.positions.len() == first.positions.len())
+        });
+        if let Some((_, e)) = first_mismatch(checked.map(|(_, (name, mesh))| (name.as_str(), mesh))) {
+            return Err(e);
         }
         if let Some(e) = named.iter().find_map(|(name, mesh)| first_non_finite(name, &mesh.positions)) {
             return Err(e);
