@@ -23,14 +23,8 @@ export const newId = () => nextId++;
 
 export const fmtE = (x) => (x === 0 ? '0' : x < 1e-3 ? x.toExponential(1) : x.toFixed(3));
 
-/** Iterations where the log-likelihood fell (by more than rounding). */
-export function drops(values) {
-  const out = [];
-  for (let i = 1; i < values.length; i++) {
-    if (values[i - 1] - values[i] > 1e-9 * Math.max(1, Math.abs(values[i]))) out.push(i);
-  }
-  return out;
-}
+// Iterations where the log-likelihood fell: the app's result panel reads traces the same way.
+export { drops } from '../trace.js';
 
 export class Figure {
   constructor({ el, index, pool }) {

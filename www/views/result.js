@@ -3,6 +3,7 @@
 // result (parts, RMSE, iterations, fit time, ground-truth accuracy).
 import { state, subscribe } from '../state.js';
 import { onFitProgress, isTreeFit } from '../session.js';
+import { drops } from '../trace.js';
 import { accuracyText } from '../presets.js';
 import { plot } from './viewer-instance.js';
 import { drawPartCurve } from './part-curve.js';
@@ -51,12 +52,12 @@ function showPopulation(pop, source) {
 function failureText(s, example) {
   if (!s || !example?.failsOnPurpose || s.cancelled || s.unfinished) return null;
   const ll = s.logLikelihood ?? [];
-  const drops = ll.filter((v, i) => i > 0 && v < ll[i - 1]).length;
+  const fell = drops(ll).length;
   const d = s.diagnosis;
   const notArticulated = !!d && !d.articulated && !d.undecided;
   const failed = [];
   if (s.complete && !s.converged) failed.push(`AECM did not converge (it stopped at the iteration cap after ${s.iterations} iteration${s.iterations === 1 ? '' : 's'})`);
-  if (drops) failed.push(`the log-likelihood fell ${drops} time${drops === 1 ? '' : 's'} in the final stage's ${ll.length} iterations, which a maximisation step never does`);
+  if (fell) failed.push(`the log-likelihood fell ${fell} time${fell === 1 ? '' : 's'} in the final stage's ${ll.length} iterations, which a maximisation step never does`);
   if (notArticulated) failed.push(`the shape is not articulated: rigid parts explain only ${(100 * d.explained).toFixed(1)} % of its motion (the verdict below)`);
   if (!failed.length) {
     return { failed: false, text: `This example is meant to fail, but this fit did not: it converged in ${s.iterations} iteration${s.iterations === 1 ? '' : 's'}, its log-likelihood never fell${d && d.articulated ? ', and the verdict is articulated' : ''}.` };
