@@ -218,6 +218,63 @@ pub struct GroundTruthAccuracy {
     pub rotation_errors_deg: Vec<f64>,
     /// Number of true parts.
     pub true_parts: usize,
+    /// The parts the generator moved alike ([`crate::synth::Spec::tied`]), each pair as the fit saw it.
+    pub tied: Vec<TiedParts>,
+}
+
+/// Two true parts the generator moved alike in every pose (one takes the other's joint rotation), as the fit
+/// saw them: the fitted part that holds most of each one's vertices, and how far apart those parts' motions
+/// are against how far the true parts turn. Motion cannot tell such parts apart: the fit either gives them
+/// one motion or joins them.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct TiedParts {
+    /// The two true parts' names.
+    pub names: [String; 2],
+    /// The fitted part holding most of each true part's vertices (equal when the fit joined them).
+    pub fitted: [u32; 2],
+    /// RMS over the poses of the angle between the two fitted parts' motions, each relative to pose 1
+    /// (R_a^i R_a^1ᵀ against R_b^i R_b^1ᵀ), in degrees.
+    pub motion_gap_deg: f64,
+    /// RMS over the poses of the first true part's own turn relative to pose 1, in degrees: how far the tied
+    /// parts move.
+    pub turn_deg: f64,
+}
+
+/// RMS over poses of the angle between two rotation sequences, each taken relative to its pose 1, in degrees.
+fn relative_gap_deg(a: &[Mat3], b: &[Mat3]) -> f64 {
+    let (Some(a0), Some(b0)) = (a.first(), b.first()) else { return 0.0 };
+    let (a0, b0) = (transpose(a0), transpose(b0));
+    let sq: f64 = a.iter().zip(b).map(|(x, y)| angle_between(&mat_mul(x, &a0), &mat_mul(y, &b0)).powi(2)).sum();
+    (sq / a.len().max(1) as f64).sqrt().to_degrees()
+}
+
+/// [`TiedParts`] of every pair of `truth.spec.tied` that has vertices.
+fn tied_parts(model: &crate::mfa::Model, truth: &crate::synth::Generated) -> Vec<TiedParts> {
+    let majority = |part: usize| -> Option<u32> {
+        let mut count: HashMap<u32, usize> = HashMap::new();
+        for (&l, _) in model.labels.iter().zip(&truth.part_of_vertex).filter(|(_, &t)| t as usize == part) {
+            *count.entry(l).or_default() += 1;
+        }
+        // ties to the lower part number
+        count.into_iter().max_by(|x, y| x.1.cmp(&y.1).then(y.0.cmp(&x.0))).map(|(l, _)| l)
+    };
+    let sequence = |part: usize| -> Vec<Mat3> { truth.rotations.iter().map(|pose| pose[part]).collect() };
+    truth
+        .spec
+        .tied
+        .iter()
+        .filter_map(|&(a, b)| {
+            let (fa, fb) = (majority(a)?, majority(b)?);
+            let identity = vec![Mat3::identity(); truth.rotations.len()];
+            Some(TiedParts {
+                names: [truth.part_names[a].clone(), truth.part_names[b].clone()],
+                fitted: [fa, fb],
+                motion_gap_deg: relative_gap_deg(&model.parts[fa as usize].rotations, &model.parts[fb as usize].rotations),
+                turn_deg: relative_gap_deg(&sequence(a), &identity),
+            })
+        })
+        .collect()
 }
 
 /// [`GroundTruthAccuracy`] of a model fitted to a generated population.
@@ -237,6 +294,7 @@ pub fn ground_truth_accuracy(model: &crate::mfa::Model, truth: &crate::synth::Ge
         rotation_error_deg_max: errs.iter().cloned().fold(0.0, f64::max),
         rotation_errors_deg: errs,
         true_parts: truth.n_parts(),
+        tied: tied_parts(model, truth),
     })
 }
 
@@ -244,6 +302,20 @@ pub fn ground_truth_accuracy(model: &crate::mfa::Model, truth: &crate::synth::Ge
 mod tests {
     use super::*;
     use crate::geometry::rotation::axis_angle;
+
+    #[test]
+    fn the_gap_of_two_motions_is_their_rms_angle_relative_to_pose_one() {
+        let z = [0.0, 0.0, 1.0];
+        let a: Vec<Mat3> = (0..5).map(|i| axis_angle([1.0, 0.0, 0.0], 0.2 * i as f64)).collect();
+        // b: a's motion from another latent frame (no gap), then turned 3 degrees more about z in poses 2..5
+        let frame = axis_angle([0.3, 0.5, 0.1], 1.1);
+        let b: Vec<Mat3> = a.iter().map(|r| r * frame).collect();
+        assert!(relative_gap_deg(&a, &b) < 1e-9);
+        let off = axis_angle(z, 3f64.to_radians());
+        let c: Vec<Mat3> = b.iter().enumerate().map(|(i, r)| if i == 0 { *r } else { off * r }).collect();
+        let want = 3.0 * (4.0f64 / 5.0).sqrt();
+        assert!((relative_gap_deg(&a, &c) - want).abs() < 1e-9, "{}", relative_gap_deg(&a, &c));
+    }
 
     #[test]
     fn ari_known_values() {

@@ -3,12 +3,10 @@
 #[macro_use]
 mod common;
 
-use posemfa::geometry::rotation::angle_between;
-use posemfa::geometry::{mat_mul, transpose};
-use posemfa::metrics::{adjusted_rand_index, median, rotation_errors_deg};
+use posemfa::metrics::{adjusted_rand_index, ground_truth_accuracy, median, rotation_errors_deg};
 use posemfa::parts::hierarchy::{fit, FitResult};
 use posemfa::synth::presets::{example, examples};
-use posemfa::synth::{generate, part_index, Generated, Preset};
+use posemfa::synth::{generate, Generated};
 
 fn run(id: &str) -> (Generated, FitResult) {
     let ex = example(id).expect("example exists");
@@ -31,28 +29,18 @@ dual_test! {
 
     fn two_legs_that_always_move_together_get_one_motion_and_stay_apart_by_connectivity() {
         let (g, r) = run("too-few-poses");
-        let m = &r.model;
-        // the fitted part holding most of a true part's vertices
-        let majority = |p: u32| {
-            let mut counts = std::collections::HashMap::new();
-            for (l, t) in m.labels.iter().zip(&g.part_of_vertex) {
-                if *t == p {
-                    *counts.entry(*l).or_insert(0usize) += 1;
-                }
-            }
-            counts.into_iter().max_by_key(|c| c.1).map(|c| c.0).unwrap() as usize
-        };
-        for seg in ["upper", "lower", "foot"] {
-            let a = majority(part_index(Preset::Quadruped, &format!("front_left_{seg}")).unwrap() as u32);
-            let b = majority(part_index(Preset::Quadruped, &format!("front_right_{seg}")).unwrap() as u32);
+        let tied = ground_truth_accuracy(&r.model, &g).unwrap().tied;
+        let names: Vec<String> = tied.iter().map(|t| t.names.join(" / ")).collect();
+        assert_eq!(
+            names,
+            ["front_left_upper / front_right_upper", "front_left_lower / front_right_lower", "front_left_foot / front_right_foot"]
+        );
+        for t in &tied {
             // two parts (the legs do not touch: islands.rs keeps every part one connected piece) whose motions
-            // the data cannot tell apart, as the example's note says
-            assert_ne!(a, b, "front {seg} pieces: the left and the right leg are one part");
-            for i in 1..g.population.n_shapes() {
-                let rel = |k: usize| mat_mul(&m.parts[k].rotations[i], &transpose(&m.parts[k].rotations[0]));
-                let d = angle_between(&rel(a), &rel(b)).to_degrees();
-                assert!(d < 1.0, "front {seg} pieces: left and right move differently in pose {i} ({d} degrees)");
-            }
+            // the data cannot tell apart, as the example's note says, while the legs do turn
+            assert_ne!(t.fitted[0], t.fitted[1], "{:?}: the left and the right leg are one part", t.names);
+            assert!(t.motion_gap_deg < 1.0, "{:?}: left and right move {} degrees apart", t.names, t.motion_gap_deg);
+            assert!(t.turn_deg > 5.0, "{:?}: the tied legs turn only {} degrees", t.names, t.turn_deg);
         }
     }
 

@@ -1,6 +1,5 @@
 // The preset list: every built-in example of the core (posemfa::synth::presets) with its one line of what to
-// notice, the ones that fail on purpose marked so; a click generates and fits it. And the fitted model's
-// accuracy against the generator's ground truth (computed in Rust, posemfa::metrics).
+// notice, the ones that fail on purpose marked so; a click generates and fits it.
 import './teach.css';
 import { subscribe } from './state.js';
 
@@ -35,10 +34,4 @@ export function installPresets(runExample) {
     if (changed.has('examples')) render(s.examples);
     if (changed.has('pop')) mark(s.source?.example?.id ?? null);
   });
-}
-
-/** One line of ground-truth accuracy: adjusted Rand index and rotation error (median and worst part). */
-export function accuracyText(g) {
-  if (!g) return '–';
-  return `adjusted Rand ${g.ari.toFixed(3)}; rotation error ${g.rotationErrorDeg.toFixed(2)}° median, ${g.rotationErrorDegMax.toFixed(2)}° worst part (${g.trueParts} true part${g.trueParts === 1 ? '' : 's'})`;
 }

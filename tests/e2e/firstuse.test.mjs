@@ -100,6 +100,14 @@ test('the tied-legs example says what it shows: one motion, two parts kept apart
   assert.doesNotMatch(title, /fails|never move apart/i);
   const s = await summary(page);
   assert.ok(s.groundTruth.ari > 0.95, `the legs are two parts each, as the note says: ARI ${s.groundTruth.ari}`);
+  // after the fit the result says what the limit was, with the fit's own figures for each tied pair
+  const lead = await text(page, '[data-testid=limit-lead]');
+  assert.match(lead, /^The tied parts: in each of the 3 pairs \(front left upper and front right upper; front left lower and front right lower; front left foot and front right foot\)/);
+  assert.match(lead, /motion cannot tell them apart, and they stay two parts only because they do not touch\.$/);
+  const shown = Number(lead.match(/agree within ([\d.]+)°/)[1]);
+  const worst = Math.max(...s.groundTruth.tied.map((t) => t.motionGapDeg));
+  assert.ok(shown < 1 && Math.abs(shown - worst) < 0.006, `${lead} (core: ${worst})`);
+  for (const t of s.groundTruth.tied) assert.match(lead, new RegExp(`\\b${t.fitted[0]} and ${t.fitted[1]}\\b`));
   await context.close();
 
   const art = await session.open('explain.html');

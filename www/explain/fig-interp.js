@@ -4,6 +4,7 @@
 import { Figure, Ticker, ARM, SYNTH, EXACT, LITERAL } from './figure.js';
 import { Chart } from './chart.js';
 import { paletteColours } from '../colors.js';
+import { tiedText } from '../ground-truth.js';
 
 // ------------------------------------------------------------------ 8. interpolation against linear blending
 
@@ -119,9 +120,8 @@ export class Limit extends Figure {
     this.v = this.view(this.$('.fig-view'), spec, params);
   }
 
-  async onFitted() {
+  onFitted() {
     const { model, pop } = this.v;
-    this.legs = null;
     // the blob: its most bent pose, plain and in the fit's parts; the tied legs: true parts and fitted ones
     const pose = this.name === 'blob' ? pop.nShapes - 1 : 0;
     const left = this.name === 'blob'
@@ -131,33 +131,6 @@ export class Limit extends Figure {
       { positions: pop.positions[pose], colours: left },
       { positions: pop.positions[pose], colours: paletteColours(model.labels, model.colours.final).vertexColours },
     ], { frame: true });
-    if (this.name !== 'blob') await this.compareLegs();
-  }
-
-  // The tied legs: for each piece of the front legs, the fitted parts holding most of the left one's and of the
-  // right one's vertices, and how far apart their rotation angles (relative to pose 1, from the core) are.
-  async compareLegs() {
-    const { partNames, partOfVertex } = this.v.pop.truth;
-    const { model } = this.v;
-    const major = (name) => {
-      const p = partNames.indexOf(name);
-      const count = new Map();
-      partOfVertex.forEach((t, v) => t === p && count.set(model.labels[v], (count.get(model.labels[v]) ?? 0) + 1));
-      return [...count].sort((a, b) => b[1] - a[1])[0]?.[0];
-    };
-    const pieces = ['upper', 'lower', 'foot'].filter((seg) => partNames.includes(`front_left_${seg}`));
-    const legs = { pieces: pieces.length, apart: 0, maxDiff: 0 };
-    for (const seg of pieces) {
-      const [a, b] = [major(`front_left_${seg}`), major(`front_right_${seg}`)];
-      if (a === b) continue;
-      legs.apart++;
-      const [ra, rb] = await Promise.all([this.v.handle.query('rotationAngles', a, 0), this.v.handle.query('rotationAngles', b, 0)]);
-      ra.forEach((x, i) => { legs.maxDiff = Math.max(legs.maxDiff, Math.abs(x - rb[i])); });
-    }
-    if (this.v.model === model) {
-      this.legs = legs;
-      this.refreshState();
-    }
   }
 
   fittedNote() {
@@ -167,11 +140,8 @@ export class Limit extends Figure {
       return `${s.parts} part${s.parts === 1 ? '' : 's'}, RMSE ${s.rmse.toExponential(2)} (unit box): ${d.undecided ? 'too few parts for a verdict' : d.articulated ? 'articulated' : 'not articulated'}, rigid parts explain ${(100 * Math.max(d.explained, 0)).toFixed(1)} % of the motion (articulated shapes: 99 % and more).`;
     }
     const { partNames } = this.v.pop.truth;
-    const l = this.legs;
-    const legs = !l ? ''
-      : l.apart === l.pieces
-        ? ` Each of the front legs' ${l.pieces} pieces is a part on the left and another on the right, whose rotation angles agree within ${l.maxDiff.toFixed(2)}° in every pose: one motion, two parts, apart because they do not touch.`
-        : ` Of the front legs' ${l.pieces} pieces, ${l.pieces - l.apart} are one part shared by both legs.`;
-    return `${partNames.length} true part${partNames.length === 1 ? '' : 's'}, ${s.parts} fitted (adjusted Rand index ${s.groundTruth.ari.toFixed(3)}).${legs}`;
+    // the tied legs as the core measured them (posemfa::metrics::TiedParts), in the app's words
+    const tied = tiedText(s.groundTruth);
+    return `${partNames.length} true part${partNames.length === 1 ? '' : 's'}, ${s.parts} fitted (adjusted Rand index ${s.groundTruth.ari.toFixed(3)}).${tied ? ` ${tied}` : ''}`;
   }
 }

@@ -4,7 +4,7 @@
 import { state, subscribe } from '../state.js';
 import { onFitProgress, isTreeFit } from '../session.js';
 import { drops } from '../trace.js';
-import { accuracyText } from '../presets.js';
+import { accuracyText, tiedText } from '../ground-truth.js';
 import { plot } from './viewer-instance.js';
 import { drawPartCurve } from './part-curve.js';
 
@@ -74,6 +74,10 @@ function showResult() {
   $('fail-lead').hidden = !failure;
   $('fail-lead').classList.toggle('fails', !!failure?.failed);
   $('fail-lead').textContent = failure?.text ?? '';
+  // what a limit example shows, read off the fit (a fit stopped early shows no result to read)
+  const tied = s && !s.cancelled && !s.unfinished ? tiedText(s.groundTruth) : '';
+  $('limit-lead').hidden = !tied;
+  $('limit-lead').textContent = tied;
   $('parts-count').textContent = s ? s.parts : '–';
   // the merge tree (the default part rule) starts from its own cut, not from Algorithm 1's coarse and refined
   // stages: said the same for a finished fit and for one cancelled before it finished (which has no tree yet)
