@@ -463,7 +463,9 @@ impl FitModel {
     /// logLikelihood: [...], stageStats: [...],
     /// diagnosis: {articulated, reason, singleBodyRmse, partsRmse, explained, parts} or null for a fit stopped
     /// early, unfinished: null or the words to show instead of the verdict,
-    /// partCurve: [{parts, score, variance}] (the part rule's merge decisions, most parts first)}
+    /// partCurve: [{parts, score, variance}] (the part rule's last round of merge decisions, most parts first),
+    /// partRounds: [{parts, dissolved, after}] (every round of the part rule), startParts: the merge tree's start
+    /// once its flesh was dissolved (null without)}
     pub fn summary(&self) -> Result<JsValue, JsValue> {
         let m = self.model();
         let s = &self.result.stages;
@@ -479,6 +481,8 @@ impl FitModel {
             "diagnosis": crate::parts::diagnosis::diagnose_finished(&self.pop, &self.result),
             "unfinished": (!self.result.complete).then_some(crate::parts::diagnosis::UNFINISHED),
             "partCurve": self.result.part_curve,
+            "partRounds": self.result.part_rounds,
+            "startParts": self.result.start_parts,
         });
         to_js(&v)
     }

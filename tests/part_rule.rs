@@ -47,6 +47,31 @@ dual_test! {
         }
     }
 
+    /// The record of the part rule's rounds adds up: the start's parts, its flesh dissolved, then round by round
+    /// the parts judged, dissolved and merged, down to the fit's own count.
+    fn the_part_rule_records_every_round() {
+        for preset in [Preset::Quadruped, Preset::Spider] {
+            let g = generate(&Spec { preset, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
+            let r = fit(&g.population, &Params::default(), &mut |_| true).unwrap();
+            let rounds = &r.part_rounds;
+            assert!(!rounds.is_empty(), "{preset:?}: no round recorded");
+            let start = r.start_parts.unwrap_or(r.stages.coarse_parts);
+            assert!(start <= r.stages.coarse_parts, "{preset:?}: {start} parts after the start's flesh, cut {}", r.stages.coarse_parts);
+            // a round judges at most what the AECM before it kept
+            assert!(rounds[0].parts <= start, "{preset:?}: {rounds:?} from {start}");
+            for (k, w) in rounds.iter().enumerate() {
+                assert!(w.after + w.dissolved <= w.parts, "{preset:?} round {k}: {w:?}");
+                if let Some(next) = rounds.get(k + 1) {
+                    assert!(next.parts <= w.after, "{preset:?} round {k}: {w:?} then {next:?}");
+                }
+            }
+            // the last round changed nothing, and its count is the fit's
+            let last = rounds.last().unwrap();
+            assert_eq!((last.dissolved, last.after), (0, last.parts), "{preset:?}: {rounds:?}");
+            assert_eq!(last.after, r.model.n_parts(), "{preset:?}: {rounds:?}");
+        }
+    }
+
     fn the_blob_is_diagnosed_not_articulated() {
         for seed in 0..3 {
             let (parts, _, _, _, articulated) = run(Preset::Blob, 2000, 8, seed);

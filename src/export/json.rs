@@ -48,6 +48,13 @@ pub struct FitJson {
     /// The part rule's merge decisions, most parts first: why the fit stopped at its part count
     /// ([`crate::parts::distinct::CurvePoint`]; empty with the paper's threshold rule).
     pub part_curve: Vec<CurvePoint>,
+    /// Every round of the part rule, in order: [{parts, dissolved, after}] (the parts it judged, how many it
+    /// dissolved as flesh, how many its merges left; `part_curve` is the last round's merges).
+    pub part_rounds: Vec<crate::parts::hierarchy::PartRound>,
+    /// The default part rule: the start's parts once its flesh was dissolved, before the first AECM (the start's
+    /// cut is the first of `stages`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_parts: Option<usize>,
     /// The default part rule's merge tree of the fitted parts (`leaves`: the part of every vertex in the first
     /// final AECM; `merges` [{a, b, parts, rise, score, variance}] in order, merge m making node leaves + m) and
     /// the count the rule read off it (`tree_count`); absent with Algorithm 1's rules.
@@ -102,6 +109,8 @@ impl FitJson {
             stage_stats: result.stats.clone(),
             diagnosis: crate::parts::diagnosis::diagnose_finished(pop, result),
             part_curve: result.part_curve.clone(),
+            part_rounds: result.part_rounds.clone(),
+            start_parts: result.start_parts,
             merge_tree: result.merge_tree.clone(),
             tree_count: result.tree_count,
         }

@@ -69,6 +69,17 @@ pub struct StageParts {
     pub final_parts: usize,
 }
 
+/// One decision round of the part rule ([`PartRule::Distinct`] or [`PartRule::Tree`], after a final AECM): the
+/// parts it judged (the AECM's, each made one connected piece), how many of them it dissolved as flesh, and how
+/// many were left after its merges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct PartRound {
+    pub parts: usize,
+    pub dissolved: usize,
+    pub after: usize,
+}
+
 /// Everything Algorithm 1 produced.
 #[derive(Debug, Clone)]
 pub struct FitResult {
@@ -82,6 +93,11 @@ pub struct FitResult {
     pub complete: bool,
     /// [`PartRule::Distinct`]: the merge decisions, from the most parts down to the count kept (empty otherwise).
     pub part_curve: Vec<super::distinct::CurvePoint>,
+    /// Every round of the part rule, in order (`part_curve` is the last one's merges; empty without the rule).
+    pub part_rounds: Vec<PartRound>,
+    /// [`PartRule::Tree`]: the start's parts once its flesh was dissolved, before the first AECM (the cut's own
+    /// count is `stages.coarse_parts`).
+    pub start_parts: Option<usize>,
     /// With `target_parts` and [`PartRule::Distinct`]: the labels the part rule decided, before the count was made
     /// exact (what auto would have kept), for the diagnosis ([`super::diagnosis::diagnose_fit`]).
     pub decided_labels: Option<Vec<u32>>,
@@ -267,6 +283,9 @@ pub struct Pipeline {
     decide_rounds: usize,
     /// [`PartRule::Distinct`]: the merge decisions ([`super::distinct::merge_indistinct`]).
     part_curve: Vec<super::distinct::CurvePoint>,
+    /// See [`FitResult::part_rounds`] and [`FitResult::start_parts`].
+    part_rounds: Vec<PartRound>,
+    start_parts: Option<usize>,
     /// See [`FitResult::decided_labels`].
     decided_labels: Option<Vec<u32>>,
     /// See [`FitResult::merge_tree`] and [`FitResult::tree_count`].
@@ -374,6 +393,8 @@ impl Pipeline {
             count_rounds: 0,
             decide_rounds: 0,
             part_curve: Vec::new(),
+            part_rounds: Vec::new(),
+            start_parts: None,
             decided_labels: None,
             merge_tree: None,
             tree_count: None,
@@ -415,6 +436,7 @@ impl Pipeline {
             crate::mfa::aecm::check_population(&data, params.parts, 1)?;
         }
         let (cut, labels) = tree_start(&work, &data, params)?;
+        let start_parts = (cut != labels).then(|| labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0));
         if coarse.is_some() {
             // the last run is on every vertex: its memory, for at most the cut's count, before any run
             let most = cut.iter().max().map_or(1, |&l| l as usize + 1).max(params.target_parts.unwrap_or(0));
@@ -435,6 +457,8 @@ impl Pipeline {
             count_rounds: 0,
             decide_rounds: 0,
             part_curve: Vec::new(),
+            part_rounds: Vec::new(),
+            start_parts,
             decided_labels: None,
             merge_tree: None,
             tree_count: None,
@@ -694,6 +718,7 @@ impl Pipeline {
                 self.decided_labels = Some(merged.clone());
             }
             let after = merged.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+            self.part_rounds.push(PartRound { parts: before + dissolved, dissolved, after });
             if std::env::var_os("POSEMFA_DEBUG").is_some() {
                 eprintln!("part rule, round {}: {dissolved} parts dissolved as flesh, merges {before} -> {after} parts", self.decide_rounds);
             }
@@ -1099,6 +1124,8 @@ impl Pipeline {
             stats: self.stats.clone(),
             complete: self.is_done(),
             part_curve: self.part_curve.clone(),
+            part_rounds: self.part_rounds.clone(),
+            start_parts: self.start_parts,
             decided_labels: self.decided_labels.as_deref().map(|d| self.everywhere(d)),
             merge_tree,
             tree_count: self.tree_count,
