@@ -49,6 +49,13 @@ window.posemfa = {
   restartCount: () => state.restartCount,
   /** The fitted parts: the part of every vertex and the palette colour of every part (null before a fit). */
   fittedParts: () => (state.model ? { labels: Array.from(state.model.labels), colours: Array.from(state.model.colours.final) } : null),
+  /** The Stages view's parts: for stage 'coarse', 'refined' or 'final', the part of every vertex and the palette
+   * colour of every part (null before a fit). */
+  stageParts: (stage) => {
+    const m = state.model;
+    const labels = m && { coarse: m.coarseLabels, refined: m.refinedLabels, final: m.labels }[stage];
+    return labels ? { labels: Array.from(labels), colours: Array.from(m.colours[stage]) } : null;
+  },
   /** The merge tree ({most, fewest, decided}, null without one) and the count its slider shows (null: the fit). */
   tree: () => (state.model?.tree ? { ...state.model.tree, shown: state.treeParts } : null),
   /** Inspects vertex v of the first mesh shown, as a click on it does (the info box answers). */

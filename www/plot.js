@@ -1,7 +1,17 @@
 // The live log-likelihood plot: the trace of the AECM run in progress (one point per iteration), drawn on a
 // 2D canvas with its range written on the axis.
 
-const fmt = (v) => (Math.abs(v) >= 1e5 || (Math.abs(v) < 1e-2 && v !== 0) ? v.toExponential(3) : v.toFixed(2));
+const fmt = (v, more = 0) => (Math.abs(v) >= 1e5 || (Math.abs(v) < 1e-2 && v !== 0) ? v.toExponential(3 + more) : v.toFixed(2 + more));
+
+/** The axis's min and max as text, with as many more digits as it takes for two different values to read
+ * differently (a converging run rises by far less than its size: 5.582e+5 to 5.582e+5). */
+export function rangeText(lo, hi) {
+  for (let more = 0; more < 12; more++) {
+    const [a, b] = [fmt(lo, more), fmt(hi, more)];
+    if (a !== b || lo === hi) return [a, b];
+  }
+  return [fmt(lo, 12), fmt(hi, 12)];
+}
 
 /** The canvas sized to its box at the device's pixel ratio, cleared, with the page's font and colour set:
  *  { g, w, h, style } (w, h in CSS pixels), or null while it has no size. Shared by every 2D plot of the page and article. */
@@ -49,6 +59,7 @@ export class Plot {
     // fits there, else on a line of its own: the two never overlap
     const titleLines = wrap(g, this.title.split(' '), ' ', right - left);
     titleLines.forEach((t, i) => g.fillText(t, left, 12 * (i + 1)));
+    Object.assign(this.canvas.dataset, { title: this.title, min: '', max: '', runs: '0' });
     if (v.length === 0) {
       g.fillText('log-likelihood: no iteration yet', left, h / 2);
       return;
@@ -57,12 +68,15 @@ export class Plot {
     const lo = Math.min(...shown);
     const hi = Math.max(...shown);
     const span = hi - lo || Math.abs(hi) || 1;
-    const maxText = `max ${fmt(hi)}`;
+    const [loText, hiText] = rangeText(lo, hi);
+    const maxText = `max ${hiText}`;
+    // what was written, for the page tests
+    Object.assign(this.canvas.dataset, { min: loText, max: hiText, runs: String(this.runs?.length ?? 1) });
     const last = titleLines[titleLines.length - 1] ?? '';
     const beside = g.measureText(last).width + 8 + g.measureText(maxText).width <= right - left;
     const maxLine = beside ? Math.max(titleLines.length, 1) : titleLines.length + 1;
     // the footer's parts (min, iterations, runs) on as many lines as they need, from the bottom up
-    const footer = wrap(g, [`min ${fmt(lo)}`, `${v.length} iteration${v.length === 1 ? '' : 's'}`, ...(this.runs ? [`${this.runs.length} runs, each to its own scale`] : [])], ' · ', right - left);
+    const footer = wrap(g, [`min ${loText}`, `${v.length} iteration${v.length === 1 ? '' : 's'}`, ...(this.runs ? [`${this.runs.length} runs, each to its own scale`] : [])], ' · ', right - left);
     const top = 12 * maxLine + 6;
     const bottom = h - 2 - 12 * footer.length;
     const x = (i) => left + ((right - left) * i) / Math.max(v.length - 1, 1);
@@ -82,7 +96,8 @@ export class Plot {
         const a = Math.min(...seg);
         const s = Math.max(...seg) - a || 1;
         seg.forEach((val, i) => {
-          const yy = bottom - ((bottom - top) * (val - a)) / s;
+          // a run of one iteration has no range: its point halfway up, drawn as a dot below
+          const yy = seg.length === 1 ? (top + bottom) / 2 : bottom - ((bottom - top) * (val - a)) / s;
           if (i) g.lineTo(x(start + i), yy);
           else g.moveTo(x(start), yy);
         });
@@ -93,6 +108,15 @@ export class Plot {
       v.forEach((val, i) => (i ? g.lineTo(x(i), y(val)) : g.moveTo(x(i), y(val))));
     }
     g.stroke();
+    // runs of one iteration: a dot each (a line needs two points)
+    for (const [r, start] of (this.runs ?? []).entries()) {
+      if ((this.runs[r + 1] ?? v.length) - start !== 1) continue;
+      g.beginPath();
+      g.arc(Math.min(x(start), right - 2.5), (top + bottom) / 2, 2.5, 0, 2 * Math.PI);
+      g.fillStyle = g.strokeStyle;
+      g.fill();
+      g.fillStyle = style.color;
+    }
     if (v.length === 1) {
       // one iteration: a dot, not an empty plot (a line needs two points)
       g.beginPath();

@@ -35,7 +35,7 @@
 //                                                                   labels and their colours
 //     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
 //                                                                   coarseLabels, refinedLabels, colours {final,
-//                                                                   coarse, refined}, latent
+//                                                                   coarse, refined; see modelMessage}, latent
 //     { type: 'fitted', id, cancelled: true, kept: true, fitMs }    a cancelled fit of a population whose
 //                                                                   finished model stays (no model sent)
 //     { type: 'fit-error', id, message, problems }
@@ -98,13 +98,14 @@ const problemsOf = (e) => e?.problems ?? [{ kind: 'internal', file: null, line: 
 // Palette index of every part of `labels` (one per vertex): neighbouring parts differ (Rust's part graph). A
 // fit cancelled early has no coarse or refined labels yet (empty): no colours either.
 const coloursOf = (labels) => (labels.length ? population.partColours(labels, PALETTE_SIZE) : new Uint32Array(0));
+// colours like another partition's (its labels `like`, its colours) where a part is the same
+// (posemfa::articulate::graph::colour_parts_like); plain colours without one
+const coloursLike = (labels, like, likeColours) => (labels.length && like?.length
+  ? population.partColoursLike(labels, PALETTE_SIZE, like, likeColours) : coloursOf(labels));
 // colours like the last finished fit's where a part is the same; a finished fit becomes the one to follow
 function finalColours(labels, complete) {
-  if (!labels.length) return new Uint32Array(0);
-  const colours = lastFinal
-    ? population.partColoursLike(labels, PALETTE_SIZE, lastFinal.labels, lastFinal.colours)
-    : population.partColours(labels, PALETTE_SIZE);
-  if (complete) lastFinal = { labels: labels.slice(), colours: colours.slice() };
+  const colours = coloursLike(labels, lastFinal?.labels, lastFinal?.colours);
+  if (complete && labels.length) lastFinal = { labels: labels.slice(), colours: colours.slice() };
   return colours;
 }
 
@@ -182,12 +183,14 @@ function modelMessage(m) {
   const labels = m.labels();
   const coarseLabels = m.coarseLabels();
   const refinedLabels = m.refinedLabels();
+  // the Stages view's panels side by side: a part that is the same in the next stage keeps that stage's colour
+  // (final <- refined <- coarse), so what changed between two panels shows by eye
+  const final = finalColours(labels, summary.complete);
+  const refined = coloursLike(refinedLabels, labels, final);
+  const coarse = coloursLike(coarseLabels, refinedLabels, refined);
   return {
-    summary,
-    labels,
-    coarseLabels,
-    refinedLabels,
-    colours: { final: finalColours(labels, summary.complete), coarse: coloursOf(coarseLabels), refined: coloursOf(refinedLabels) },
+    summary, labels, coarseLabels, refinedLabels,
+    colours: { final, coarse, refined },
     tree: m.treeCounts(), // {most, fewest, decided} of the merge tree, or null
     latent: m.latent(),
   };
@@ -343,10 +346,7 @@ const QUERIES = {
   // the merge tree's partition with n parts, coloured like the fitted parts where a part is the same
   treePartition: (n) => {
     const labels = model.treeLabels(n);
-    const colours = lastFinal
-      ? population.partColoursLike(labels, PALETTE_SIZE, lastFinal.labels, lastFinal.colours)
-      : population.partColours(labels, PALETTE_SIZE);
-    return { labels, colours };
+    return { labels, colours: coloursLike(labels, lastFinal?.labels, lastFinal?.colours) };
   },
   ...poseQueries(() => model, () => modelGeneration), // pose mode (issue 28): www/pose-queries.js
 };

@@ -19,12 +19,25 @@ function download(name, data, type) {
 
 const safeName = (s) => s.replace(/\.obj$/i, '').replace(/[^A-Za-z0-9._-]+/g, '_');
 
+// A cancelled first fit's model stays exportable (someone who stopped a long fit may want what it reached), and
+// each button says it writes that partial model: its JSON has "complete": false and no diagnosis, its rig and
+// OBJ groups are its parts where it stopped.
+const GLTF_TITLE = $('export-gltf').title;
+const PARTIAL = 'the partial model where the cancelled fit stopped, not a finished fit';
+
 function showButtons() {
+  const partial = !!state.model?.summary?.cancelled;
+  const tag = partial ? ' (partial)' : '';
   $('export-json').disabled = !state.model;
+  $('export-json').textContent = `Model JSON${tag}`;
+  $('export-json').title = partial ? `${PARTIAL} ("complete": false, no diagnosis)` : '';
   $('export-obj').disabled = !state.pop;
   const n = state.shown.length;
-  $('export-obj').textContent = n > 1 ? `OBJ of the ${n} shown meshes` : 'OBJ of the shown mesh';
+  $('export-obj').textContent = `${n > 1 ? `OBJ of the ${n} shown meshes` : 'OBJ of the shown mesh'}${tag}`;
+  $('export-obj').title = partial ? `the shown meshes with the parts of ${PARTIAL} (and its geometry, in the views made from the model)` : '';
   $('export-gltf').disabled = !state.model;
+  $('export-gltf').textContent = `glTF (.glb)${tag}`;
+  $('export-gltf').title = partial ? `the rig of ${PARTIAL}` : GLTF_TITLE;
 }
 
 /** The rig options of the export panel ({weights, influences, joints, morphs}: src/export/rig_report.rs). */

@@ -256,7 +256,7 @@ function playFrames() {
 }
 
 export function installPose() {
-  registerView('pose', poseView);
+  registerView('pose', poseView, { pending: 'Pose mode: building the rig… (the mesh shown is still the last view\'s)' });
   installDrag();
   $('pose-part').addEventListener('change', () => {
     pose.bone = Number($('pose-part').value);

@@ -10,6 +10,19 @@ import { renderView } from '../views/render.js';
 const $ = (id) => document.getElementById(id);
 const parts = (n) => `${n} part${n === 1 ? '' : 's'}`;
 let token = 0;
+// The count Refine wrote into the form's "Parts in the end" (null: none). Refine fits through the form, so the
+// field keeps that count for every later fit: a line under it says so while the field still holds it.
+let refined = null;
+
+function showRefineNote() {
+  const field = $('params').elements.targetParts;
+  const holds = refined !== null && field.value.trim() === String(refined);
+  if (!holds) refined = null;
+  $('refine-note').hidden = !holds;
+  $('refine-note').textContent = holds
+    ? `Refine fits with “Parts in the end” set to ${refined}, and the field keeps it: later fits too make exactly ${parts(refined)} until it is auto (empty) again.`
+    : '';
+}
 
 /** Shows the tree's partition with n parts in the parts view. */
 async function show(n) {
@@ -54,9 +67,15 @@ export function installTree() {
   $('tree-refine').addEventListener('click', () => {
     const form = $('params');
     form.targetParts.value = String(slider.value);
+    refined = Number(slider.value);
+    showRefineNote();
     form.requestSubmit();
   });
+  // the field typed into, or filled in code (Defaults, an example, new files: a new model or population follows)
+  $('params').addEventListener('input', showRefineNote);
+  $('reset-params').addEventListener('click', showRefineNote); // after the form's own listener has filled it
   subscribe((s, changed) => {
+    if (changed.has('model') || changed.has('pop')) showRefineNote();
     if (!changed.has('model')) return;
     const tree = s.model?.tree;
     $('tree').hidden = !tree;

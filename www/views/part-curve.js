@@ -28,9 +28,14 @@ export function drawPartCurve(canvas, curve, { ratio = null } = {}) {
     g.fillText(t, x, y);
   };
   const stop = curve[curve.length - 1];
-  const kept = stop.parts;
-  const next = Number.isFinite(stop.score) ? `the next pair scored ${stop.score.toFixed(1)}` : 'no pair left';
-  const title = `part rule: ${curve.length - 1} merge${curve.length === 2 ? '' : 's'}, ${curve[0].parts} → ${kept} part${kept === 1 ? '' : 's'}`;
+  // the last decision is the pair not merged, unless the merges went down to one part
+  const merges = curve.filter((p) => p.merged).length;
+  const kept = stop.merged ? stop.parts - 1 : stop.parts;
+  const next = stop.merged ? 'no pair left' : Number.isFinite(stop.score) ? `the next pair scored ${stop.score.toFixed(1)}` : 'no pair left';
+  // the core keeps the decisions of the part rule's last round only (a fit can run it again after a refit): the
+  // title says so, so that its count is not read as the whole rule's (the Stages view's start to "after")
+  const title = `part rule, last round: ${merges} merge${merges === 1 ? '' : 's'}, ${curve[0].parts} → ${kept} part${kept === 1 ? '' : 's'}`;
+  canvas.dataset.title = title;
   let top = 20;
   if (g.measureText(`${title} (${next})`).width + 4 <= w) label(`${title} (${next})`, 4, 12);
   else {

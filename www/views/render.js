@@ -41,7 +41,8 @@ const VIEWS = {
       const slots = [{ positions: P, colours: state.colours.tree, name: `pose ${poseName(pose)}`, what: { kind: 'pose', pose } }];
       return { slots, caption: `Pose “${poseName(pose)}”, coloured by the merge tree's ${partsShown(state.treeParts)} (fitted: ${model.summary.parts})` };
     }
-    const by = model ? `part (${partsShown(model.summary.parts)})` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
+    const stopped = model?.summary.cancelled ? ', where the cancelled fit stopped' : '';
+    const by = model ? `part (${partsShown(model.summary.parts)}${stopped})` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
     return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, coloured by ${by}` };
   },
   // The three stages of what ran: the merge tree's start, the part rule's parts and the final AECM (the default
@@ -121,9 +122,16 @@ const VIEWS = {
   },
 };
 
-/** Adds a view mode built elsewhere (controls/pose.js adds `pose`), so that render.js imports none of them. */
-export function registerView(mode, build) {
+// What the caption says while a mode's view is being built, when that takes a while (pose mode builds the rig
+// first): the meshes of the mode before stay until the new view is ready, and the caption must not name them.
+const PENDING = {};
+const PENDING_MS = 60;
+
+/** Adds a view mode built elsewhere (controls/pose.js adds `pose`), so that render.js imports none of them;
+ * pending: the caption while a slow build runs. */
+export function registerView(mode, build, { pending = null } = {}) {
   VIEWS[mode] = build;
+  if (pending) PENDING[mode] = pending;
 }
 
 let renderToken = 0;
@@ -135,11 +143,16 @@ export async function renderView({ frame = false } = {}) {
   const { pop, model, pose, mode } = state;
   const needModel = (!model && mode !== 'parts' && mode !== 'interp') || (mode === 'truth' && !pop.truth);
   let view;
+  const pending = !needModel && PENDING[mode]
+    ? setTimeout(() => token === renderToken && ($('caption').textContent = PENDING[mode]), PENDING_MS)
+    : null;
   try {
     view = await VIEWS[needModel ? 'parts' : mode](pop.positions[pose], pose);
   } catch (e) {
     if (token === renderToken && e.kind !== 'crashed') $('caption').textContent = e.message;
     return;
+  } finally {
+    clearTimeout(pending);
   }
   if (token !== renderToken) return;
   if (needModel) view.caption += ' (this view needs a fitted model)';

@@ -30,6 +30,11 @@ export function stageText(s, run = null) {
 // Which AECM run of the fit the progress is in (1 for the first): one more after every run that finished.
 let runsFinished = 0;
 let runsFor = null;
+// The whole fit's log-likelihood, every iteration of every run as the progress brought them (fitRuns.runs: where
+// each run starts), for the plot once the fit has ended: the model's own trace is its final stage's only (one
+// point when the last run goes on from the one before). lastFit: the fit in progress, or the last one.
+let fitRuns = { id: null, values: [], runs: [] };
+let lastFit = null;
 
 function showPopulation(pop, source) {
   const tris = pop.faces.length / 3;
@@ -68,8 +73,21 @@ function failureText(s, example) {
   return { failed: true, text: `Failed, as this example means to. ${what[0].toUpperCase()}${what.slice(1)}.${parts}` };
 }
 
+// A model from a cancelled fit (the page's first fit of its population; a cancelled refit keeps the finished model
+// instead): where the fit stopped, which can still be a coarse stage's parts. The result leads with that, so that
+// its parts and RMSE are not read as a result. The count is the fit's own, from its last progress message.
+function cancelText(s) {
+  if (!s?.cancelled) return '';
+  const n = state.lastStep?.totalIterations ?? 0;
+  const when = n ? `after ${n} iteration${n === 1 ? '' : 's'}` : 'before its first iteration';
+  return `Cancelled ${when}: a partial model, not a result. Its parts, RMSE and views are where the fit stopped, and the exports write that partial model; Fit again for a finished one.`;
+}
+
 function showResult() {
   const s = state.model?.summary;
+  const cancelled = cancelText(s);
+  $('cancel-lead').hidden = !cancelled;
+  $('cancel-lead').textContent = cancelled;
   const failure = failureText(s, state.source?.example);
   $('fail-lead').hidden = !failure;
   $('fail-lead').classList.toggle('fails', !!failure?.failed);
@@ -83,7 +101,9 @@ function showResult() {
   // stages: said the same for a finished fit and for one cancelled before it finished (which has no tree yet)
   const stages = isTreeFit(state.model) ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}`;
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
-  $('rmse').textContent = s ? `${s.rmse.toExponential(3)} (unit box) = ${s.rmseOriginal.toExponential(3)} original units` : '–';
+  // a generated population is in the unit box already: one figure for both units when they print the same
+  const [unit, original] = s ? [s.rmse.toExponential(3), s.rmseOriginal.toExponential(3)] : [];
+  $('rmse').textContent = !s ? '–' : unit === original ? `${unit} (unit box = original units)` : `${unit} (unit box) = ${original} original units`;
   // a finished fit that stopped at the iteration cap says so (it is not converged)
   const how = s?.converged ? ', converged' : s?.complete ? ', not converged: stopped at the iteration cap' : '';
   $('iterations').textContent = s ? `${s.iterations} in the final stage${how}` : '–';
@@ -99,8 +119,27 @@ function showResult() {
   $('diagnosis').textContent = d ? `${d.undecided ? 'No verdict' : d.articulated ? 'Articulated' : 'Not articulated'}: ${d.reason}.` : s?.unfinished ? `${s.unfinished[0].toUpperCase()}${s.unfinished.slice(1)}.` : '';
   const curve = s?.partCurve ?? [];
   $('part-curve').hidden = curve.length === 0;
+  $('part-curve-note').hidden = curve.length === 0;
+  $('part-curve-note').textContent = curve.length ? curveNote(s) : '';
   // the line the scores were compared with: the distinct ratio of the fit's parameters (the form never changes it)
   drawPartCurve($('part-curve'), curve, { ratio: state.baseParams?.distinctRatio ?? null });
+}
+
+// How the fit came to the count the chart's last round began with (the chart is that round's merges only): the
+// merge tree's start and the flesh dissolved on it before the first AECM, then every round of the part rule, as
+// the core recorded them (summary.startParts, summary.partRounds).
+function curveNote(s) {
+  const n = (k) => `${k} part${k === 1 ? '' : 's'}`;
+  const said = [];
+  if (isTreeFit(state.model)) {
+    const flesh = s.startParts != null ? s.coarseParts - s.startParts : 0;
+    said.push(`the merge tree's start had ${n(s.coarseParts)}${flesh > 0 ? `, ${flesh} of them flesh between parts, dissolved before the first AECM` : ''}`);
+  }
+  (s.partRounds ?? []).forEach((r, i) => {
+    said.push(`round ${i + 1} judged the AECM's ${n(r.parts)}: ${r.dissolved} dissolved as flesh, merges ${r.parts - r.dissolved} → ${r.after}`);
+  });
+  const story = said.join('; ');
+  return `The chart is the part rule's last round.${story ? ` ${story[0].toUpperCase()}${story.slice(1)}.` : ''}`;
 }
 
 /** A log-likelihood for the panel: in nats (natural log), its thousands apart (U+202F), two decimals. */
@@ -128,8 +167,9 @@ function fitStarted() {
   plot.set([], '');
 }
 
-// kept: a new fit was cancelled and this finished model stays (its figures are shown again).
-function fitEnded(model, { kept = false } = {}) {
+// kept: a new fit was cancelled and this finished model stays (its figures are shown again). runs: the whole
+// fit's trace as the progress brought it (fitRuns), when the model is that fit's.
+function fitEnded(model, { kept = false, runs = null } = {}) {
   const { cancelled, fitMs, logLikelihood, iterations } = model.summary;
   // a cancelled first fit shows where it stopped: not "best", it may be below what a finished fit reaches
   $('stage').textContent = kept ? 'new fit cancelled: the finished fit before it is kept' : cancelled ? 'cancelled: where the fit stopped' : 'done';
@@ -138,12 +178,29 @@ function fitEnded(model, { kept = false } = {}) {
   $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
   // the model's own final value (the plot's last point), not the last progress message seen
   $('loglik').textContent = logLikelihood?.length ? natsText(logLikelihood[logLikelihood.length - 1]) : '–';
-  plot.set(model.summary.logLikelihood ?? [], `${cancelled ? 'stopped early' : 'final stage'}: log-likelihood`);
+  const final = logLikelihood ?? [];
+  if (!kept && wholeFit(runs, final)) {
+    // every run, each to its own scale (they can differ in vertices and parts); the last is the model's own trace
+    plot.set(runs.values, `${cancelled ? 'stopped early' : 'the whole fit'}: log-likelihood of its ${runs.runs.length} AECM runs (min, max: the last run's)`, runs.runs);
+  } else plot.set(final, `${cancelled ? 'stopped early' : 'final stage'}: log-likelihood`);
+}
+
+// The progress brought more than one run, and its last run is the model's own trace (not a run cancelled midway
+// after the model's).
+function wholeFit(runs, final) {
+  if (!runs || runs.runs.length < 2 || !final.length) return false;
+  const last = runs.values.slice(runs.runs[runs.runs.length - 1]);
+  return last.length === final.length && last.every((v, i) => v === final[i]);
 }
 
 export function installResult() {
   onFitProgress((m) => {
     if (runsFor !== m.id) [runsFor, runsFinished] = [m.id, 0];
+    if (fitRuns.id !== m.id) fitRuns = { id: m.id, values: [], runs: [] };
+    for (const s of m.steps) {
+      if (!fitRuns.values.length || s.iteration === 1) fitRuns.runs.push(fitRuns.values.length);
+      fitRuns.values.push(s.logLikelihood);
+    }
     const last = m.steps[m.steps.length - 1];
     // the Stage field names the run of the slice's last step (step.run, Fitter.run: a slice never goes past the
     // end of a run, so every run is named once at least) and its number: one more than the runs finished before
@@ -160,12 +217,15 @@ export function installResult() {
   subscribe((s, changed) => {
     if (changed.has('pop')) showPopulation(s.pop, s.source);
     if (changed.has('fitId') && s.fitId !== null && s.phase === 'fitting') fitStarted();
-    if (changed.has('model') && s.model) fitEnded(s.model);
+    // a model that came with the end of a fit is that fit's (not one shown again after a crash)
+    const ended = changed.has('fitId') && s.fitId === null && fitRuns.id === lastFit ? fitRuns : null;
+    if (changed.has('model') && s.model) fitEnded(s.model, { runs: ended });
     // a fit that failed or was superseded without a model: the Stage field does not stay at 'starting'
     if (changed.has('fitId') && s.fitId === null && !changed.has('model')) {
       if (s.keptAfterCancel && s.model) fitEnded(s.model, { kept: true });
       else $('stage').textContent = s.model ? 'done' : 'idle';
     }
     if (changed.has('pop') || changed.has('model')) showResult();
+    if (s.fitId !== null) lastFit = s.fitId;
   });
 }
