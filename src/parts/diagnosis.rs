@@ -104,8 +104,9 @@ pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
         return asked;
     }
     let reason = format!(
-        "{n} rigid parts (the part rule's first decision, before the count was made exact; with auto the rule \
-         decides again after each refit) explain {:.1} % of the motion that one rigid body leaves (RMSE \
+        "{n} rigid parts (what the part rule decided in this fit, before the count was made exact: with a count \
+         asked for, the fit starts from another cut of the merge tree and the rule decides once, so auto can \
+         decide another count) explain {:.1} % of the motion that one rigid body leaves (RMSE \
          {single:.2e} down to {rmse:.2e}); the {} parts asked for explain {:.1} % (RMSE {:.2e})",
         100.0 * explained,
         asked.parts,
@@ -196,7 +197,7 @@ mod tests {
         // ... but the population is articulated: the part rule's own parts say so, and the reason gives both
         let d = diagnose_fit(&g.population, &r);
         assert!(d.articulated, "{d:?}");
-        assert!(d.reason.contains("part rule's first decision") && d.reason.contains("the 3 parts asked for"), "{}", d.reason);
+        assert!(d.reason.contains("what the part rule decided in this fit") && d.reason.contains("the 3 parts asked for"), "{}", d.reason);
         assert_eq!((d.parts, d.explained), (3, asked.explained));
         let g = generate(&Spec { preset: Preset::Blob, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
         let r = fit(&g.population, &Params { target_parts: Some(6), ..Params::default() }, &mut |_| true).unwrap();
