@@ -5,7 +5,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { pageSession, waitState, tubePopulation, asPayload } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload, openCancelledFirstFit } from './helpers.mjs';
 
 const session = pageSession();
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
@@ -201,17 +201,7 @@ test('a cancelled merge-tree fit says where its parts started as a finished one 
   // a generated population large enough that Cancel lands in the fit's first run, before the merge tree of its
   // parts is built (a finished fit has that tree, and its slider; this one has none): the page's first fit, so
   // where it stopped is kept and shown
-  const { page, context, log } = await session.open('?preset=quadruped&vertices=20000&poses=10');
-  await page.addInitScript(() => document.addEventListener('DOMContentLoaded', () => {
-    const seen = new MutationObserver(() => {
-      if (document.body.dataset.state !== 'fitting') return;
-      seen.disconnect();
-      document.getElementById('cancel').click();
-    });
-    seen.observe(document.body, { attributes: true, attributeFilter: ['data-state'] });
-  }));
-  await page.reload();
-  await page.waitForFunction(() => window.posemfa?.fitCount() > 0, null, { timeout: 120000 });
+  const { page, context, log } = await openCancelledFirstFit(session, '?preset=quadruped&vertices=20000&poses=10');
   const s = await summary(page);
   assert.equal(s.cancelled, true, `cancelled before it ended: ${await text(page, '#stage')}`);
   assert.ok(s.coarseParts > 0, JSON.stringify({ ...s, logLikelihood: undefined }));

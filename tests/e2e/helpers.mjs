@@ -262,3 +262,22 @@ export async function moveTreeSlider(page, n) {
   await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), n);
   return page.evaluate(() => ({ ...document.getElementById('tree-slider').dataset }));
 }
+
+/** Opens `path` in `session` (a pageSession) with Cancel pressed as soon as the page's first fit runs, and waits
+ * for that fit to end: on a population large enough that Cancel lands in the fit's first run (e.g.
+ * '?preset=quadruped&vertices=20000&poses=10'), the page keeps and shows where the fit stopped. */
+export async function openCancelledFirstFit(session, path) {
+  const opened = await session.open(path);
+  const { page } = opened;
+  await page.addInitScript(() => document.addEventListener('DOMContentLoaded', () => {
+    const seen = new MutationObserver(() => {
+      if (document.body.dataset.state !== 'fitting') return;
+      seen.disconnect();
+      document.getElementById('cancel').click();
+    });
+    seen.observe(document.body, { attributes: true, attributeFilter: ['data-state'] });
+  }));
+  await page.reload();
+  await page.waitForFunction(() => window.posemfa?.fitCount() > 0, null, { timeout: 120000 });
+  return opened;
+}

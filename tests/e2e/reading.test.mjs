@@ -6,7 +6,7 @@
 // Run: npm run build && node --test tests/e2e/reading.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, openCancelledFirstFit, moveTreeSlider } from './helpers.mjs';
 
 const session = pageSession();
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
@@ -75,17 +75,7 @@ test('the Stages view: a part that is the same in two neighbouring stages keeps 
 
 test('a cancelled first fit leads with being a partial model, and its exports say they write it; a finished fit does not', async () => {
   // large enough that Cancel lands in the fit's first run (as firstuse.test.mjs's cancelled merge-tree fit)
-  const { page, context, log } = await session.open('?preset=quadruped&vertices=20000&poses=10');
-  await page.addInitScript(() => document.addEventListener('DOMContentLoaded', () => {
-    const seen = new MutationObserver(() => {
-      if (document.body.dataset.state !== 'fitting') return;
-      seen.disconnect();
-      document.getElementById('cancel').click();
-    });
-    seen.observe(document.body, { attributes: true, attributeFilter: ['data-state'] });
-  }));
-  await page.reload();
-  await page.waitForFunction(() => window.posemfa?.fitCount() > 0, null, { timeout: 120000 });
+  const { page, context, log } = await openCancelledFirstFit(session, '?preset=quadruped&vertices=20000&poses=10');
   await frames(page);
   const s = await summary(page);
   assert.equal(s.cancelled, true, await text(page, '#stage'));
@@ -116,12 +106,7 @@ test('Refine says it set "Parts in the end", while the field holds its count', a
   const s = await summary(page);
   const n = s.parts - 3;
   assert.equal(await page.isHidden('[data-testid=refine-note]'), true);
-  await page.evaluate((v) => {
-    const el = document.getElementById('tree-slider');
-    el.value = String(v);
-    el.dispatchEvent(new Event('input'));
-  }, n);
-  await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), n);
+  await moveTreeSlider(page, n);
   const c = await page.evaluate(() => window.posemfa.fitCount());
   await page.click('[data-testid=tree-refine]');
   await page.waitForFunction((x) => window.posemfa.fitCount() > x, c, { timeout: 120000 });
