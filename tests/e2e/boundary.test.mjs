@@ -216,8 +216,9 @@ test('what comes out is camelCase: summary, examples, articulation report, groun
   assert.deepEqual(notCamel(seen), []);
   assert.ok(seen.some((x) => x.kind === 'refine' && x.subParts >= 1), 'the refinement was seen with its subParts');
   assert.deepEqual(notCamel(f.result().kernelLimit(1)), []);
-  assert.deepEqual(Object.keys(g).sort(), ['ari', 'rotationErrorDeg', 'rotationErrorDegMax', 'rotationErrorsDeg', 'trueParts']);
+  assert.deepEqual(Object.keys(g).sort(), ['ari', 'rotationErrorDeg', 'rotationErrorDegMax', 'rotationErrorsDeg', 'tied', 'trueParts']);
   assert.equal(g.trueParts, 3);
+  assert.deepEqual(g.tied, []); // the arm ties no parts (the limit example's pairs: firstuse.test.mjs)
 });
 
 test('the OBJ of a shown mesh is in the original units; neighbouring parts get different colours', () => {
