@@ -157,15 +157,8 @@ pub fn rotation_errors(
             Some(&k) => (k, true),
             None => (argmax(&column), false),
         };
-        let f0t = transpose(&fitted_rotations[k][0]);
-        let t0t = transpose(&truth_rotations[0][g]);
-        let angles_deg = (1..ns)
-            .map(|i| {
-                let rf = mat_mul(&fitted_rotations[k][i], &f0t);
-                let rt = mat_mul(&truth_rotations[i][g], &t0t);
-                angle_between(&rf, &rt).to_degrees()
-            })
-            .collect();
+        let truth: Vec<Mat3> = truth_rotations.iter().map(|pose| pose[g]).collect();
+        let angles_deg = relative_angles_deg(&fitted_rotations[k], &truth);
         out.push(PartRotationError {
             truth_part: g,
             fitted_part: k,
@@ -241,12 +234,18 @@ pub struct TiedParts {
     pub turn_deg: f64,
 }
 
-/// RMS over poses of the angle between two rotation sequences, each taken relative to its pose 1, in degrees.
-fn relative_gap_deg(a: &[Mat3], b: &[Mat3]) -> f64 {
-    let (Some(a0), Some(b0)) = (a.first(), b.first()) else { return 0.0 };
+/// The angle between two rotation sequences in poses 2..n, each taken relative to its pose 1 (R_a^i R_a^1ᵀ
+/// against R_b^i R_b^1ᵀ: free of either's latent frame), in degrees.
+fn relative_angles_deg(a: &[Mat3], b: &[Mat3]) -> Vec<f64> {
+    let (Some(a0), Some(b0)) = (a.first(), b.first()) else { return Vec::new() };
     let (a0, b0) = (transpose(a0), transpose(b0));
-    let sq: f64 = a.iter().zip(b).map(|(x, y)| angle_between(&mat_mul(x, &a0), &mat_mul(y, &b0)).powi(2)).sum();
-    (sq / a.len().max(1) as f64).sqrt().to_degrees()
+    a.iter().zip(b).skip(1).map(|(x, y)| angle_between(&mat_mul(x, &a0), &mat_mul(y, &b0)).to_degrees()).collect()
+}
+
+/// RMS over all the poses of [`relative_angles_deg`] (pose 1's is 0), in degrees.
+fn relative_gap_deg(a: &[Mat3], b: &[Mat3]) -> f64 {
+    let sq: f64 = relative_angles_deg(a, b).iter().map(|d| d * d).sum();
+    (sq / a.len().max(1) as f64).sqrt()
 }
 
 /// [`TiedParts`] of every pair of `truth.spec.tied` that has vertices.
