@@ -24,7 +24,7 @@ cargo build --release --quiet --bin posemfa
 out=$(mktemp /tmp/posemfa-dembones.XXXXXX)
 trap 'rm -f "$out"' EXIT
 for r in $(seq 1 "$runs"); do
-  # "... | RMSE 0.00334 (unit box) | 160 ms (load 90 ms)"
+  # "... | RMSE 0.00334 (unit box; E_RMS 1.234) | 160 ms (load 90 ms)"
   line=$(target/release/posemfa fit "$data" --quiet | head -1)
   ms=$(sed -E 's/.*\| ([0-9.]+) ms \(load.*/\1/' <<< "$line")
   parts=$(sed -E 's/.*final ([0-9]+) \|.*/\1/' <<< "$line")

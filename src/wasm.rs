@@ -458,7 +458,8 @@ impl FitModel {
     }
 
     /// {shapes, vertices, parts, partsFrom: "merge tree" | "Algorithm 1", coarseParts (the merge tree's start, or
-    /// Algorithm 1's coarse parts), refinedParts, rmse, rmseOriginal (in the original units),
+    /// Algorithm 1's coarse parts), refinedParts, rmse, rmseOriginal (in the original units), eRms (the
+    /// rig's measure, [`crate::export::rig_report::fit_e_rms`]),
     /// iterations, converged, complete,
     /// logLikelihood: [...], stageStats: [...],
     /// diagnosis: {articulated, reason, singleBodyRmse, partsRmse, explained, parts} or null for a fit stopped
@@ -475,6 +476,7 @@ impl FitModel {
             "partsFrom": if self.result.from_merge_tree { "merge tree" } else { "Algorithm 1" },
             "coarseParts": s.coarse_parts, "refinedParts": s.refined_parts,
             "rmse": rmse, "rmseOriginal": self.pop.normalization.length_to_original(rmse),
+            "eRms": crate::export::rig_report::fit_e_rms(&self.pop, m),
             "iterations": m.iterations, "converged": m.converged,
             "complete": self.result.complete, "logLikelihood": m.log_likelihood,
             "stageStats": self.result.stats,

@@ -18,12 +18,17 @@ use posemfa::synth::generate;
 use posemfa::synth::presets::example;
 
 fn quadruped() -> (Population, Articulation) {
+    let (pop, model) = quadruped_fit();
+    let art = Articulation::new(&model, &pop).unwrap();
+    (pop, art)
+}
+
+fn quadruped_fit() -> (Population, posemfa::mfa::Model) {
     let ex = example("quadruped").unwrap();
     let spec = posemfa::synth::Spec { vertices: 1500, poses: 8, seed: 4, ..ex.spec };
     let pop = generate(&spec).unwrap().population;
     let r = fit(&pop, &ex.params, &mut |_| true).unwrap();
-    let art = Articulation::new(&r.model, &pop).unwrap();
-    (pop, art)
+    (pop, r.model)
 }
 
 fn exported(pop: &Population, art: &Articulation, opts: &GltfOptions) -> (RigError, posemfa::export::gltf::GlbPlayback) {
@@ -88,6 +93,15 @@ dual_test! {
                 assert!(err.e_rms < 0.8 * rigid.e_rms, "K = {k}: fitted {} vs rigid {}", err.e_rms, rigid.e_rms);
             }
         }
+    }
+
+    fn the_fit_and_its_rigid_rig_have_one_error() {
+        // the fit's E_RMS (the result's figure beside its RMSE) is the rigid rig's, as the file plays it
+        let (pop, model) = quadruped_fit();
+        let art = Articulation::new(&model, &pop).unwrap();
+        let (rigid, _) = exported(&pop, &art, &GltfOptions::default());
+        let own = posemfa::export::rig_report::fit_e_rms(&pop, &model);
+        assert!(own > 0.0 && (rigid.e_rms - own).abs() <= 1e-3 * own, "rigid rig {} vs fit {own}", rigid.e_rms);
     }
 
     fn fixed_joints_keep_every_bone_length() {

@@ -38,6 +38,9 @@ pub struct FitJson {
     pub converged: bool,
     pub complete: bool,
     pub rmse: f64,
+    /// The fit's error in the rig's measure ([`crate::export::rig_report::fit_e_rms`]: E_RMS, thousandths of
+    /// the bind pose's diagonal), to set beside a rig's.
+    pub e_rms: f64,
     /// Extra connected pieces of the labels (Σ over parts of pieces - 1; 0: every part is one piece).
     pub islands: usize,
     pub timings_ms: std::collections::BTreeMap<String, f64>,
@@ -104,6 +107,7 @@ impl FitJson {
             converged: m.converged,
             complete: result.complete,
             rmse: m.rmse(pop),
+            e_rms: crate::export::rig_report::fit_e_rms(pop, m),
             islands: crate::parts::islands::island_count(&m.labels, &pop.faces),
             timings_ms,
             stage_stats: result.stats.clone(),

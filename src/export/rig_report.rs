@@ -127,6 +127,16 @@ pub fn default_bind_pose(pop: &Population) -> usize {
         .unwrap_or(0)
 }
 
+/// The fit's own error in the rig's measure: E_RMS of the rigid reconstruction of every training pose (eq 22)
+/// against the pose, with d the diagonal of [`default_bind_pose`]'s bounding box, so that the fit and any rig
+/// of it are compared in one unit (the fit's RMSE is per vertex in the unit box; E_RMS per coordinate, in
+/// thousandths of the diagonal). A rig with rigid weights plays exactly these reconstructions.
+pub fn fit_e_rms(pop: &Population, model: &crate::mfa::Model) -> f64 {
+    let diagonal = bbox_diagonal(&pop.shape(default_bind_pose(pop)).to_vec());
+    // sqrt(sse / (3 n)) = rmse / sqrt(3): both in the unit box, whose scale cancels against d's
+    1000.0 * model.rmse(pop) / 3f64.sqrt() / diagonal
+}
+
 /// A rig as asked for by the page (camelCase, unknown fields refused); missing fields take
 /// [`GltfOptions`]' defaults, except the bind pose: [`default_bind_pose`].
 #[derive(Debug, Clone, Default, PartialEq, serde::Deserialize)]

@@ -56,8 +56,12 @@ test('the export panel writes the rig the CLI writes: same part count, same E_RM
   assert.equal(Number(shown.bones), 9);
   assert.ok(pageErms > 0, JSON.stringify(shown));
   // the figure with its unit: E_RMS is 1000 x RMS error / bounding-box diagonal (Kavan et al. 2010)
+  // beside the fit's own figure in the same measure (the result's E_RMS), which fitted weights beat
+  const own = (await page.evaluate(() => window.posemfa.summary())).eRms;
+  assert.ok(own > pageErms, `fit ${own}, rig ${pageErms}`);
   assert.match(await page.locator('[data-testid=rig-erms]').innerText(),
-    new RegExp(`^${pageErms.toFixed(3).replace('.', '\\.')} \\(RMS error in thousandths of the bounding-box diagonal; 9 bones, 4 influences; max error [0-9.]+ % of the diagonal\\)$`));
+    new RegExp(`^${pageErms.toFixed(3).replace('.', '\\.')} \\(RMS error in thousandths of the bounding-box diagonal; 9 bones, 4 influences; max error [0-9.]+ % of the diagonal; the fit's rigid parts alone: ${own.toFixed(3).replace('.', '\\.')}\\)$`));
+  assert.ok((await page.locator('#rmse').innerText()).endsWith(`; E_RMS ${own.toFixed(3)} (thousandths of the diagonal, as the rig's)`));
 
   const cli = JSON.parse(posemfa('rig-report', pop, '--bones', '9', '--weights', 'fitted', '--influences', '4'));
   assert.equal(cli.bones, 9);
@@ -65,6 +69,11 @@ test('the export panel writes the rig the CLI writes: same part count, same E_RM
   assert.ok(Math.abs(pageErms - cli.e_rms) <= 1e-2 * cli.e_rms, `page ${pageErms}, CLI ${cli.e_rms}`);
   const file = JSON.parse(posemfa('rig-report', pop, '--glb', glb));
   assert.ok(Math.abs(file.e_rms - pageErms) <= 1e-9 * pageErms, `file ${file.e_rms}, page ${pageErms}`);
+  // rigid weights play the fit's own reconstructions: the rig's figure is the result's (f32 storage only)
+  await page.selectOption('#rig select[name=weights]', 'rigid');
+  await Promise.all([page.waitForEvent('download', { timeout: 120000 }), page.click('#export-gltf')]);
+  const rigid = Number(await page.evaluate(() => document.querySelector('[data-testid=rig-erms]').dataset.erms));
+  assert.ok(Math.abs(rigid - own) <= 1e-3 * own, `rigid rig ${rigid}, fit ${own}`);
   // options change: the figure shown is cleared until the next export
   await page.selectOption('#rig select[name=joints]', 'fixed');
   assert.equal(await page.locator('[data-testid=rig-erms]').innerText(), '–');

@@ -103,7 +103,9 @@ function showResult() {
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   // a generated population is in the unit box already: one figure for both units when they print the same
   const [unit, original] = s ? [s.rmse.toExponential(3), s.rmseOriginal.toExponential(3)] : [];
-  $('rmse').textContent = !s ? '–' : unit === original ? `${unit} (unit box = original units)` : `${unit} (unit box) = ${original} original units`;
+  // and the rig's measure (E_RMS, thousandths of the diagonal), so that the fit and its exported rig compare
+  const eRms = Number.isFinite(s?.eRms) ? `; E_RMS ${s.eRms.toFixed(3)} (thousandths of the diagonal, as the rig's)` : '';
+  $('rmse').textContent = !s ? '–' : unit === original ? `${unit} (unit box = original units)${eRms}` : `${unit} (unit box) = ${original} original units${eRms}`;
   // a finished fit that stopped at the iteration cap says so (it is not converged)
   const how = s?.converged ? ', converged' : s?.complete ? ', not converged: stopped at the iteration cap' : '';
   $('iterations').textContent = s ? `${s.iterations} in the final stage${how}` : '–';

@@ -26,7 +26,7 @@ pub fn run(o: Args) -> Result<(), String> {
     let m = &result.model;
     let s = &result.stages;
     out!(
-        "{} shapes x {} vertices | parts: coarse {} -> refined {} -> final {} | final AECM {} iterations ({}) | RMSE {:.5} (unit box) | {:.0} ms (load {:.0} ms)",
+        "{} shapes x {} vertices | parts: coarse {} -> refined {} -> final {} | final AECM {} iterations ({}) | RMSE {:.5} (unit box; E_RMS {:.3}) | {:.0} ms (load {:.0} ms)",
         pop.n_shapes(),
         pop.n_vertices(),
         s.coarse_parts,
@@ -35,6 +35,7 @@ pub fn run(o: Args) -> Result<(), String> {
         m.iterations,
         if m.converged { "converged" } else { "NOT converged: iteration cap reached" },
         m.rmse(&pop),
+        posemfa::export::rig_report::fit_e_rms(&pop, m),
         median(&mut totals),
         load_ms
     );
