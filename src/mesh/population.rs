@@ -187,6 +187,17 @@ impl Population {
         self.points.chunks_exact(nv).map(|points| Shape { points })
     }
 
+    /// Mean over the shapes of the mean squared distance of the vertices from the shape's centroid (unit box):
+    /// the population's size, the same however the poses are turned (which its bounding box is not).
+    pub fn mean_squared_radius(&self) -> f64 {
+        let nv = self.n_vertices.max(1) as f64;
+        let per_shape = |s: Shape<'_>| {
+            let c = s.iter().fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]).map(|x| x / nv);
+            s.iter().map(|p| (0..3).map(|d| (p[d] - c[d]).powi(2)).sum::<f64>()).sum::<f64>() / nv
+        };
+        self.shapes().map(per_shape).sum::<f64>() / self.n_shapes().max(1) as f64
+    }
+
     /// A copy of every shape in f64 (`[i][j]`: vertex j of shape i), for code that wants slices; 24 bytes per
     /// vertex and shape, twice the stored size.
     pub fn unit_shapes(&self) -> Vec<Vec<[f64; 3]>> {

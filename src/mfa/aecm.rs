@@ -105,7 +105,7 @@ impl Fit {
         if labels.len() != data.n_vertices {
             return Err(Error::Request(format!("{} labels for {} vertices", labels.len(), data.n_vertices)));
         }
-        let comps = init::components_from_labels(&data, labels, params.variance_floor);
+        let comps = init::components_from_labels(&data, labels, floor_for(&data, params));
         // the labels' components are evaluated first in the first E-step (they are its best guess)
         let owners = (comps.len() == labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0)).then_some(labels);
         Ok(Fit::from_components_owned(data, EStep::with_layout(layout), comps, params, owners))
@@ -124,6 +124,7 @@ impl Fit {
 
     /// [`Fit::from_components`] with each vertex's likeliest component, if known, for the first E-step's order.
     fn from_components_owned(data: Data, estep: EStep, comps: Vec<Component>, params: &Params, owners: Option<&[u32]>) -> Fit {
+        let floor = floor_for(&data, params);
         let mut fit = Fit {
             estep,
             data,
@@ -134,7 +135,7 @@ impl Fit {
             converged: false,
             tol: params.tol,
             max_iter: params.max_iter,
-            floor: params.variance_floor,
+            floor,
             rule: params.lambda_rule,
             px: params.px_em,
             min_mass: params.min_part_vertices as f64,
@@ -474,6 +475,15 @@ fn check_data(data: &Data, parts: usize, most_components: usize) -> Result<()> {
         )));
     }
     memory::check(data.n_vertices, data.n_shapes, most_components, memory::budget_bytes()?)
+}
+
+/// The variance floor of a run on `data`: the fit's ([`Params::floor`]), or, for a run on its own (parameters
+/// not yet scaled for a population), scaled by this data's mean squared radius.
+pub(crate) fn floor_for(data: &Data, params: &Params) -> f64 {
+    match params.floor_scale {
+        Some(_) => params.floor(),
+        None => params.for_radius(data.mean_squared_radius()).floor(),
+    }
 }
 
 /// Refuses a population whose shapes are all the same point set (up to rounding, after each is centred on

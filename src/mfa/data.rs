@@ -214,6 +214,13 @@ impl Data {
         buf
     }
 
+    /// Mean squared distance of the vertices from their shape's centroid (unit box), over every vertex and
+    /// shape: [`crate::mesh::Population::mean_squared_radius`] of the vertices held.
+    pub fn mean_squared_radius(&self) -> f64 {
+        let sum: f64 = (0..self.n_vertices).map(|j| self.vertex(j).iter().map(|p| p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sum::<f64>()).sum();
+        sum / (self.n_vertices * self.n_shapes).max(1) as f64
+    }
+
     /// The first vertex and shape (0-based) with a non-finite coordinate, and that coordinate.
     pub fn first_non_finite(&self) -> Option<(usize, usize, f64)> {
         // one pass over the stored values first (every lane holds a vertex's value, the last block's spare lanes

@@ -46,7 +46,10 @@ pub struct Params {
     pub tol: f64,
     /// Iteration cap of each AECM run; reaching it is reported as not converged. Default 300.
     pub max_iter: usize,
-    /// Lower bound of every per-shape variance s_k^i, unit-box units² (METHOD_NOTES item 6). Default 1e-7.
+    /// Lower bound of every per-shape variance s_k^i (METHOD_NOTES item 6), in unit-box units² for a population
+    /// whose mean squared radius in the unit box is [`REFERENCE_SQUARED_RADIUS`] (an animal's, about); the fit
+    /// scales it by the population's own ([`Params::floor`]), so that it follows the shape, not its bounding
+    /// box: a turn of every pose changes the box, not the shape. Default 1e-7.
     pub variance_floor: f64,
     /// Λ update of cycle 2. Default [`LambdaRule::Exact`].
     pub lambda_rule: LambdaRule,
@@ -103,7 +106,16 @@ pub struct Params {
     /// Exact part count: after Algorithm 1, parts are split or merged until there are exactly this many, then
     /// the final AECM runs again ([`crate::parts::part_count`]). None (default) keeps the part rule's own count.
     pub target_parts: Option<usize>,
+    /// The population's mean squared radius over [`REFERENCE_SQUARED_RADIUS`], which scales `variance_floor`;
+    /// set once per fit by [`Params::for_radius`] (the whole population's, also for runs on a subset of it).
+    /// None: unset (an AECM run then sets it from its own data).
+    #[serde(skip)]
+    pub floor_scale: Option<f64>,
 }
+
+/// The mean squared radius (unit-box units²) at which `variance_floor` is the floor itself: about the horses'
+/// (0.091, 0.093), the generated creatures' 0.084-0.148, the lion's 0.057.
+pub const REFERENCE_SQUARED_RADIUS: f64 = 0.09;
 
 impl Default for Params {
     fn default() -> Self {
@@ -131,7 +143,23 @@ impl Default for Params {
             refine_max_iter: 60,
             refine_tol: 1e-2,
             target_parts: None,
+            floor_scale: None,
         }
+    }
+}
+
+impl Params {
+    /// The variance floor in this population's unit box: `variance_floor` scaled by [`Params::floor_scale`].
+    pub fn floor(&self) -> f64 {
+        self.variance_floor * self.floor_scale.unwrap_or(1.0)
+    }
+
+    /// These parameters with the floor scaled for a population of mean squared radius `mean_squared_radius`
+    /// (unit box), unless it is scaled already: a run inside a fit keeps the whole population's scale.
+    pub fn for_radius(&self, mean_squared_radius: f64) -> Params {
+        let scale = mean_squared_radius / REFERENCE_SQUARED_RADIUS;
+        let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
+        Params { floor_scale: self.floor_scale.or(Some(scale)), ..self.clone() }
     }
 }
 

@@ -376,7 +376,7 @@ pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f
     } else {
         members
     };
-    crate::mfa::init::component_from_population(pop, members, members.len(), params.variance_floor).mean_variance()
+    crate::mfa::init::component_from_population(pop, members, members.len(), params.floor()).mean_variance()
 }
 
 /// Rule 2: merges adjacent parts whose motions are not distinct, cheapest first. The score of a pair (a, b) is
@@ -388,11 +388,12 @@ pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f
 /// that a merge does not make the next one look cheap). s = [`rigid_variance`]. Pairs scoring below
 /// `params.distinct_ratio` are merged. Returns compact labels and the curve of decisions.
 pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &Params) -> (Vec<u32>, Vec<CurvePoint>) {
+    let params = &params.for_radius(pop.mean_squared_radius());
     let mut labels = compact(labels);
     let (_, members) = adjacency(&labels, &pop.faces, 0);
     let mut err: Vec<f64> = members.iter().map(|m| rigid_variance(pop, m, params)).collect();
     let sizes: Vec<usize> = members.iter().map(|m| m.len()).collect();
-    let s_ref = weighted_median(&err, &sizes).max(params.variance_floor);
+    let s_ref = weighted_median(&err, &sizes).max(params.floor());
     let mut cache: std::collections::HashMap<(u32, u32), (f64, f64)> = std::collections::HashMap::new();
     let mut curve = Vec::new();
     loop {

@@ -352,6 +352,8 @@ impl Pipeline {
     /// Validates the parameters and the data and runs the coarse initialisation (k-means++).
     pub fn new(pop: &Population, params: &Params) -> Result<Pipeline> {
         params.validate()?;
+        // the variance floor follows the whole population's size, in every run of the fit (subsets included)
+        let params = &params.for_radius(pop.mean_squared_radius());
         if let Some(n) = params.target_parts {
             super::part_count::check_target(n, pop.n_vertices(), params.min_part_vertices)?;
         }
@@ -784,7 +786,7 @@ impl Pipeline {
     /// count read off the tree and the curve of decisions (as [`super::distinct::merge_indistinct`]'s).
     fn decide_on_tree(&mut self, labels: &[u32]) -> (Vec<u32>, Vec<super::distinct::CurvePoint>) {
         let leaves = compact(labels);
-        let mut tree = super::merge_tree::MergeTree::from_leaves(&self.pop, leaves, self.params.variance_floor);
+        let mut tree = super::merge_tree::MergeTree::from_leaves(&self.pop, leaves, self.params.floor());
         // the first round's typical variance stays the yardstick: a refit's larger parts have larger variances,
         // and with its own yardstick every round would merge a few more (lion-poses: 43 -> 40 -> 36 -> 34)
         let yardstick = self.merge_tree.as_ref().map_or_else(|| tree.middle_typical(), |first| first.typical);
@@ -870,7 +872,7 @@ impl Pipeline {
         let last = self.last_run_parts(labels);
         self.open_run(stage);
         let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
-        let mut comps = crate::mfa::init::components_from_labels(&data, labels, self.params.variance_floor);
+        let mut comps = crate::mfa::init::components_from_labels(&data, labels, self.params.floor());
         for (c, last) in comps.iter_mut().zip(last) {
             if let Some(last) = last {
                 // (the weight stays the labels' share: the run's weights sum to one over its own parts)
@@ -1036,7 +1038,7 @@ impl Pipeline {
         // all parts refined: final stage
         let refined = match &self.subset {
             None => std::mem::take(&mut r.refined),
-            Some(s) => super::multires::extend_labels(&self.pop, s, &r.refined, self.params.variance_floor),
+            Some(s) => super::multires::extend_labels(&self.pop, s, &r.refined, self.params.floor()),
         };
         self.refined_labels = match self.params.part_rule {
             // parts are merged after the final AECM has cleaned the boundaries ([`Pipeline::finish`])
@@ -1188,7 +1190,7 @@ fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32
 /// AECM starts with fewer components and the rounds after it find next to no flesh. Compact labels.
 fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &Params) -> Vec<u32> {
     let t0 = crate::clock::now_ms();
-    let comps = crate::mfa::init::components_from_labels(data, labels, params.variance_floor);
+    let comps = crate::mfa::init::components_from_labels(data, labels, params.floor());
     let mut model = crate::mfa::aecm::model_of(data, &comps, compact(labels));
     let dissolved = super::distinct::dissolve_flesh(&mut model, pop, params.blend_ratio);
     if dissolved > 0 {

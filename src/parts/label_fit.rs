@@ -77,6 +77,7 @@ pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64
     // also gives the next cycle 1 its members
     let mut members = Members::new();
     let mut prev = label_members(data, &labels, &comps, &mut members);
+    let floor = crate::mfa::aecm::floor_for(data, params);
     for it in 0..params.max_iter {
         // With the labels fixed, cycle 1 reads only the members (γ = 1, in layout order) and the data: from the
         // second iteration on it writes the same π and b again, bit for bit (cycle 2 changes neither), and the
@@ -85,7 +86,7 @@ pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64
             cm::cycle1(data, &members, &mut comps);
             label_members(data, &labels, &comps, &mut members);
         }
-        cm::cycle2(data, &members, &mut comps, params.lambda_rule, params.variance_floor, params.px_em);
+        cm::cycle2(data, &members, &mut comps, params.lambda_rule, floor, params.px_em);
         let ll = label_members(data, &labels, &comps, &mut members);
         trace.push(ll);
         let done = ((ll - prev) / data.n_vertices as f64).abs() < params.tol;
@@ -151,7 +152,7 @@ mod tests {
         let once: Vec<_> = comps.iter().map(|c| (c.weight, c.translations.clone())).collect();
         label_members(&data, &model.labels, &comps, &mut members);
         let p = Params::default();
-        cm::cycle2(&data, &members, &mut comps, p.lambda_rule, p.variance_floor, p.px_em);
+        cm::cycle2(&data, &members, &mut comps, p.lambda_rule, p.floor(), p.px_em);
         assert_eq!(comps.iter().map(|c| (c.weight, c.translations.clone())).collect::<Vec<_>>(), once);
         label_members(&data, &model.labels, &comps, &mut members);
         cm::cycle1(&data, &members, &mut comps);

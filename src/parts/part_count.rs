@@ -95,7 +95,7 @@ struct Counter<'a> {
 impl<'a> Counter<'a> {
     /// The component fitted to `members` in closed form.
     fn motion(&self, members: &[usize]) -> Component {
-        component_from_points(self.data, members, self.data.n_vertices, self.params.variance_floor)
+        component_from_points(self.data, members, self.data.n_vertices, self.params.floor())
     }
 
     /// Σ_j log(π N(h_j; θ)) of `members` under `c`.
@@ -147,7 +147,7 @@ impl<'a> Counter<'a> {
         let mut sub = Data::from_population_subset(self.pop, members);
         let positions = sub.clone();
         // residuals under the part's own rigid motion: h_j - (R Λ E[z|h_j] + b), as the refinement's second rule
-        let whole = component_from_points(&positions, &(0..members.len()).collect::<Vec<_>>(), members.len(), self.params.variance_floor);
+        let whole = component_from_points(&positions, &(0..members.len()).collect::<Vec<_>>(), members.len(), self.params.floor());
         let mut residuals = Vec::with_capacity(sub.n_vertices * sub.n_shapes * 3);
         for l in 0..members.len() {
             let h = positions.vertex(l).to_vec();
@@ -172,7 +172,7 @@ impl<'a> Counter<'a> {
             let comps: Vec<_> = (0..2u32)
                 .map(|h| {
                     let mem: Vec<usize> = (0..members.len()).filter(|&l| halves[l] == h).collect();
-                    component_from_points(&positions, &mem, members.len(), self.params.variance_floor)
+                    component_from_points(&positions, &mem, members.len(), self.params.floor())
                 })
                 .collect();
             let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
@@ -308,6 +308,7 @@ impl<'a> Counter<'a> {
 /// connected piece of the mesh, as [`super::islands::connect_parts`] leaves them), by the splits and merges of
 /// the module doc.
 pub fn labels_with_count(pop: &Population, labels: &[u32], n: usize, params: &Params) -> Result<(Vec<u32>, CountChange)> {
+    let params = &params.for_radius(pop.mean_squared_radius());
     check_target(n, pop.n_vertices(), params.min_part_vertices)?;
     if labels.len() != pop.n_vertices() {
         return Err(Error::Request(format!("{} labels for {} vertices", labels.len(), pop.n_vertices())));

@@ -221,6 +221,23 @@ mod tests {
     }
 
     #[test]
+    fn the_variance_floor_follows_the_shape_not_its_box() {
+        // turned (a new bounding box) and scaled by 7.3: the floor in the original units scales by 7.3² exactly
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 800, poses: 4, ..Spec::default() }).unwrap();
+        let pop = &g.population;
+        let moved = Variant::Moved.apply(pop).unwrap();
+        let (a, b) = (pop.normalization.scale, moved.normalization.scale);
+        assert!(((a / b) / 7.3 - 1.0).abs() > 1e-3, "the turn changes the box: {a} {b}");
+        let floor = |p: &Population| crate::mfa::Params::default().for_radius(p.mean_squared_radius()).floor();
+        let original = |p: &Population| floor(p) / p.normalization.scale.powi(2);
+        let ratio = original(&moved) / original(pop) / (7.3f64 * 7.3);
+        assert!((ratio - 1.0).abs() < 1e-5, "{ratio}");
+        // scaled once only: parameters scaled already keep their scale
+        let once = crate::mfa::Params::default().for_radius(0.18);
+        assert!((once.for_radius(0.045).floor() - 2e-7).abs() < 1e-18, "{}", once.floor());
+    }
+
+    #[test]
     fn agreement_counts_pairs() {
         let run = |labels: Vec<u32>, parts| Run { variant: String::new(), parts, rmse: 0.0, seconds: 0.0, labels };
         let a = agreement(&[run(vec![0, 0, 1, 1], 2), run(vec![1, 1, 0, 0], 2), run(vec![0, 0, 0, 1], 2)]);

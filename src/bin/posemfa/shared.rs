@@ -150,7 +150,7 @@ pub struct FitArgs {
     /// Iteration cap per AECM run
     #[arg(long, value_name = "N", default_value_t = Params::default().max_iter)]
     max_iter: usize,
-    /// Variance floor, unit-box units^2
+    /// Variance floor, unit-box units^2 for a shape of mean squared radius 0.09 (scaled by the population's own)
     #[arg(long, value_name = "F", default_value_t = Params::default().variance_floor, value_parser = floor_value)]
     floor: f64,
     /// The paper's literal eq 18 for Lambda (breaks monotonicity; for teaching)
