@@ -15,8 +15,8 @@
 //! - collinear, coplanar or coincident vertices: a sane model (Λ and the variances have floors; rotations of
 //!   a rank-deficient cross-covariance are still proper).
 //! - a part with fewer than 3 vertices (a tiny separate piece): a sane model.
-//! - more parts than vertices: `Error::Params` "parts = P is more than the N vertices of the mesh; ask for at
-//!   most N parts"; exactly as many parts as vertices is a sane model.
+//! - more parts than vertices for Algorithm 1: `Error::Params` "parts = P is more than the N vertices of the mesh; ask for at
+//!   most N parts"; exactly as many parts as vertices is a sane model; the merge tree (the default) ignores `parts`.
 //! - NaN/inf coordinates: OBJ text `Error::Obj` naming file, line and coordinate; shapes given as numbers
 //!   (`from_meshes`, `from_unit_shapes`) `Error::Population` naming the file and the vertex; data given to a
 //!   fit directly `Error::Data` naming the vertex and the shape. An extent too small or too large to scale
@@ -218,12 +218,16 @@ dual_test! {
     fn more_parts_than_vertices_is_a_parameter_error() {
         let shapes: Vec<Vec<Vec3>> = (0..3).map(|i| blob(5, i as f64)).collect();
         let pop = Population::from_unit_shapes(names(3), fan(5), shapes).unwrap();
-        let e = fit(&pop, &quick(6), &mut |_| true).err().expect("6 parts for 5 vertices must be refused");
+        // Algorithm 1 starts from `parts` k-means clusters; the merge tree (the default) does not use the field,
+        // so it does not refuse it (the page greys it as ignored)
+        let distinct = |parts| Params { part_rule: posemfa::mfa::PartRule::Distinct, ..quick(parts) };
+        let e = fit(&pop, &distinct(6), &mut |_| true).err().expect("6 parts for 5 vertices must be refused");
         assert!(matches!(e, Error::Params(_)), "{e:?}");
         assert_err_has(&e, &["parts = 6", "5 vertices", "at most 5 parts"]);
         // as many parts as vertices is allowed and sane
-        let params = Params { min_part_vertices: 1, ..quick(5) };
+        let params = Params { min_part_vertices: 1, ..distinct(5) };
         assert_sane(&fit(&pop, &params, &mut |_| true).unwrap(), &pop);
+        assert_sane(&fit(&pop, &quick(6), &mut |_| true).unwrap(), &pop);
         // and the part count's own limit is still checked first
         let e = fit(&pop, &quick(0), &mut |_| true).err().unwrap();
         assert_err_has(&e, &["parts = 0"]);

@@ -424,7 +424,7 @@ impl Pipeline {
         // vertices no seed holds is still motion)
         let full = on_coarse.then(|| lay_out(Data::from_population(pop)));
         if let Some((data, _)) = &full {
-            crate::mfa::aecm::check_population(data, params.parts, 1)?;
+            crate::mfa::aecm::check_population(data, 1, 1)?;
         }
         let coarse = on_coarse.then(|| super::coarse_mesh::CoarseMesh::build(pop, target));
         if let Some(c) = coarse.as_ref().filter(|_| std::env::var_os("POSEMFA_DEBUG").is_some()) {
@@ -435,7 +435,7 @@ impl Pipeline {
         let data = Data::from_population(&work);
         // (the memory for the start's count is checked once the tree gives it)
         if full.is_none() {
-            crate::mfa::aecm::check_population(&data, params.parts, 1)?;
+            crate::mfa::aecm::check_population(&data, 1, 1)?;
         }
         let (cut, labels) = tree_start(&work, &data, params)?;
         let start_parts = (cut != labels).then(|| labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0));

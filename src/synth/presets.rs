@@ -53,7 +53,7 @@ pub fn examples() -> Vec<Example> {
         Example {
             id: "arm",
             title: "Two-link arm (3 parts)",
-            note: "The smallest articulated case: base, upper arm, forearm. Watch the coarse stage over-split it and the refinement keep 3 rigid pieces.",
+            note: "The smallest articulated case: base, upper arm, forearm. Watch the fit start from many pieces (Stages: the merge tree's start) and the part rule join them into 3 rigid parts; Step by step shows the paper's coarse stage over-split it.",
             fails_on_purpose: false,
             spec: Spec { preset: Preset::Arm, vertices: 1500, poses: 8, joint_band: 0.01, ..Spec::default() },
             params: Params::default(),
