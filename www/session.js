@@ -168,7 +168,8 @@ export function watchFit(id, done) {
     (m) => state.fitId === id && onFitted(m),
     (e) => {
       if (state.fitId !== id || e.kind === 'crashed') return;
-      update({ fitId: null, fitCount: state.fitCount + 1 });
+      // no model: the failed fit's live parts go too (the view is grey, as its caption says)
+      update({ fitId: null, fitCount: state.fitCount + 1, ...(state.model ? {} : { colours: { ...state.colours, live: null } }) });
       showProblems(e.problems, state.model ? 'The fit failed; the previous model is kept' : 'The fit failed');
       update({ phase: state.model ? 'fitted' : 'error' });
     },

@@ -124,7 +124,8 @@ test('RMSE: one figure when the unit box and the original units print the same',
   const { page, context, log } = await fitted();
   const s = await summary(page);
   assert.equal(s.rmse.toExponential(3), s.rmseOriginal.toExponential(3), 'a generated population is in the unit box');
-  assert.equal(await text(page, '#rmse'), `${s.rmse.toExponential(3)} (unit box = original units)`);
+  // then the rig's measure (added with the fit's E_RMS; this line had not followed)
+  assert.equal(await text(page, '#rmse'), `${s.rmse.toExponential(3)} (unit box = original units); E_RMS ${s.eRms.toFixed(3)} (the rig's measure: RMS error per coordinate, in thousandths of the bounding-box diagonal)`);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

@@ -5,6 +5,7 @@ import { query } from '../session.js';
 import { poseName } from '../views/render.js';
 import { interpValues } from './interp-values.js';
 import { showProblems } from '../problems.js';
+import { eRmsText, percentText, ERMS_UNIT } from '../erms.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -51,8 +52,8 @@ function showRig(r, opts) {
   // E_RMS (Kavan et al. 2010): 1000 x the RMS vertex error over the bounding-box diagonal
   // beside the fit's own figure in the same measure (its rigid parts alone: what rigid weights play)
   const own = state.model?.summary?.eRms;
-  const fit = Number.isFinite(own) ? `; the fit's rigid parts alone: ${own.toFixed(3)}` : '';
-  out.textContent = `${r.eRms.toFixed(3)} (RMS error in thousandths of the bounding-box diagonal; ${r.bones} bones, ${opts.influences} influences; max error ${(100 * r.maxErrorOverDiagonal).toFixed(2)} % of the diagonal${fit})`;
+  const fit = Number.isFinite(own) ? `; the fit's rigid parts alone: ${eRmsText(own)}` : '';
+  out.textContent = `${eRmsText(r.eRms)} (${ERMS_UNIT}; ${r.bones} bones, ${opts.influences} influences; max error ${percentText(r.maxErrorOverDiagonal)} % of the diagonal${fit})`;
   out.dataset.erms = String(r.eRms);
   out.dataset.bones = String(r.bones);
   out.dataset.ms = String(r.rigMs + r.writeMs + r.evaluateMs);

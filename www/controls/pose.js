@@ -10,6 +10,7 @@ import { query } from '../session.js';
 import { viewer } from '../views/viewer-instance.js';
 import { renderView, registerView } from '../views/render.js';
 import { showProblems } from '../problems.js';
+import { eRmsText, ERMS_UNIT } from '../erms.js';
 
 const $ = (id) => document.getElementById(id);
 const STEP = (10 * Math.PI) / 180; // a button press: 10 degrees
@@ -37,7 +38,7 @@ export async function poseView() {
   const positions = frames ? pose.frames.positions[pose.frame] : pose.positions;
   const name = frames ? `frame ${pose.frames.names[pose.frame]}` : 'posed';
   const caption = frames
-    ? `Added frame “${pose.frames.names[pose.frame]}” (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${pose.frames.eRms[pose.frame].toFixed(3)} (thousandths of the bounding-box diagonal)`
+    ? `Added frame “${pose.frames.names[pose.frame]}” (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${eRmsText(pose.frames.eRms[pose.frame])} (${ERMS_UNIT})`
     : pose.whole
       ? `Pose mode: ${wholePose()} (drag a part to turn it about its joint)`
       : pose.bone >= 0
@@ -312,7 +313,7 @@ export function installPose() {
     pose.frames = r;
     pose.frame = 0;
     const mean = r.eRmsAll; // over all the frames, from the core
-    $('pose-status').textContent = `${r.names.length} frames solved onto the rig: E_RMS ${mean.toFixed(3)}`;
+    $('pose-status').textContent = `${r.names.length} frames solved onto the rig: E_RMS ${eRmsText(mean)}`;
     $('pose-status').dataset.erms = String(mean);
     $('pose-play').disabled = false;
     $('pose-export-frames').disabled = false;

@@ -41,9 +41,11 @@ const VIEWS = {
       const slots = [{ positions: P, colours: state.colours.tree, name: `pose ${poseName(pose)}`, what: { kind: 'pose', pose } }];
       return { slots, caption: `Pose “${poseName(pose)}”, coloured by the merge tree's ${partsShown(state.treeParts)} (fitted: ${model.summary.parts})` };
     }
-    const stopped = model?.summary.cancelled ? ', where the cancelled fit stopped' : '';
-    const by = model ? `part (${partsShown(model.summary.parts)}${stopped})` : state.fitId ? 'the parts of the fit in progress' : 'nothing yet';
-    return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, coloured by ${by}` };
+    // a cancelled fit's parts are where it stopped (said before the count, not inside the colours' clause); no
+    // model and no fit (none yet, or the fit failed): grey, and the caption says so
+    const stopped = model?.summary.cancelled ? ' where the cancelled fit stopped' : '';
+    const by = model ? `coloured by part${stopped} (${partsShown(model.summary.parts)})` : state.fitId ? 'coloured by the parts of the fit in progress' : 'not fitted (grey)';
+    return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, ${by}` };
   },
   // The three stages of what ran: the merge tree's start, the part rule's parts and the final AECM (the default
   // part rule), or Algorithm 1's coarse, refined and final parts (part rules distinct and threshold, the
@@ -180,6 +182,8 @@ export function installViews() {
       renderView();
     } else if (changed.has('colours') && !s.model && s.phase === 'fitting') {
       renderView(); // the parts of the fit in progress
+    } else if (changed.has('fitId') && !s.model) {
+      renderView(); // a fit started, or ended without a model (failed): the caption is not left at "in progress"
     }
   });
 }

@@ -7,6 +7,7 @@ import { drops } from '../trace.js';
 import { accuracyText, tiedText } from '../ground-truth.js';
 import { plot } from './viewer-instance.js';
 import { drawPartCurve } from './part-curve.js';
+import { eRmsText, ERMS_UNIT } from '../erms.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -103,8 +104,9 @@ function showResult() {
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   // a generated population is in the unit box already: one figure for both units when they print the same
   const [unit, original] = s ? [s.rmse.toExponential(3), s.rmseOriginal.toExponential(3)] : [];
-  // and the rig's measure (E_RMS, thousandths of the diagonal), so that the fit and its exported rig compare
-  const eRms = Number.isFinite(s?.eRms) ? `; E_RMS ${s.eRms.toFixed(3)} (thousandths of the diagonal, as the rig's)` : '';
+  // and the rig's measure (E_RMS: per coordinate, so the RMSE / sqrt 3, over the diagonal), so that the fit and its
+  // exported rig compare
+  const eRms = Number.isFinite(s?.eRms) ? `; E_RMS ${eRmsText(s.eRms)} (the rig's measure: ${ERMS_UNIT})` : '';
   $('rmse').textContent = !s ? '–' : unit === original ? `${unit} (unit box = original units)${eRms}` : `${unit} (unit box) = ${original} original units${eRms}`;
   // a finished fit that stopped at the iteration cap says so (it is not converged)
   const how = s?.converged ? ', converged' : s?.complete ? ', not converged: stopped at the iteration cap' : '';
@@ -140,6 +142,12 @@ function curveNote(s) {
   (s.partRounds ?? []).forEach((r, i) => {
     said.push(`round ${i + 1} judged the AECM's ${n(r.parts)}: ${r.dissolved} dissolved as flesh, merges ${r.parts - r.dissolved} → ${r.after}`);
   });
+  // a finished fit that ended with another count than the rule's last decision: the count asked for made it so
+  const last = s.partRounds?.[s.partRounds.length - 1];
+  if (last && s.complete && !s.cancelled && last.after !== s.parts) {
+    const asked = $('params').elements.targetParts.value.trim() === String(s.parts);
+    said.push(`then ${asked ? `the count asked for in “Parts in the end” split or merged these to ${n(s.parts)}` : `the fit ended with ${n(s.parts)}`}, the parts shown`);
+  }
   const story = said.join('; ');
   return `The chart is the part rule's last round.${story ? ` ${story[0].toUpperCase()}${story.slice(1)}.` : ''}`;
 }
