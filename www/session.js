@@ -134,6 +134,7 @@ function onLoaded(pop, fitId) {
   if (pop.truth) colours.truth = paletteColours(pop.truth.partOfVertex, pop.truth.colours).vertexColours;
   pop.source = source.label;
   showProblems(notes);
+  loadNotes = fitId === null ? [] : notes;
   update({
     // a step-by-step fit of the last population went with it (the worker dropped it): its panel starts again
     loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, keptAfterCancel: false, treeParts: null, teach: null,
@@ -157,10 +158,14 @@ export async function startFit() {
   // a step-by-step fit (paused, running or finished) gives way to the new fit: its panel starts again
   update({ fitId: id, lastStep: null, keptAfterCancel: false, teach: null, phase: 'fitting' });
   liveLabels = null;
+  loadNotes = [];
   watchFit(id, done);
 }
 
 export const cancelFit = () => client.post({ type: 'cancel' });
+
+// The notes of the drop whose fit is running (files ignored), until that fit ends or another starts.
+let loadNotes = [];
 
 /** Follows the fit `id` to its end (done: its promise from the protocol): the model, or the failure. */
 export function watchFit(id, done) {
@@ -170,7 +175,9 @@ export function watchFit(id, done) {
       if (state.fitId !== id || e.kind === 'crashed') return;
       // no model: the failed fit's live parts go too (the view is grey, as its caption says)
       update({ fitId: null, fitCount: state.fitCount + 1, ...(state.model ? {} : { colours: { ...state.colours, live: null } }) });
-      showProblems(e.problems, state.model ? 'The fit failed; the previous model is kept' : 'The fit failed');
+      // the drop's own notes (files ignored) stay beside the failure of the fit it started
+      showProblems([...e.problems, ...loadNotes], state.model ? 'The fit failed; the previous model is kept' : 'The fit failed');
+      loadNotes = [];
       update({ phase: state.model ? 'fitted' : 'error' });
     },
   );
@@ -206,6 +213,7 @@ function showProgress() {
 const sameLabels = (a, b) => !!a && !!b && a.length === b.length && a.every((x, i) => x === b[i]);
 
 function onFitted({ model, kept: keptModel }) {
+  loadNotes = [];
   // the last slice's progress, if its frame has not come yet, is shown first: every run is named before 'done'
   if (pendingProgress) showProgress();
   if (keptModel) {

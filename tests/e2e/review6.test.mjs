@@ -22,6 +22,13 @@ test('a fit that fails leaves no "fit in progress" caption: the view says it is 
   assert.match(await text(page, '[data-testid=errors]'), /^The fit failed/);
   await frames(page);
   assert.equal(await text(page, '#caption'), 'Pose “a.obj”, not fitted (grey)');
+  // a file the drop ignored is still named beside the failure of the fit the drop started
+  const d = await page.evaluate(() => window.posemfa.fitCount());
+  await page.setInputFiles('[data-testid=file-input]', asPayload([{ name: 'a.obj', text: obj }, { name: 'b.obj', text: obj }, { name: 'notes.txt', text: 'hello' }]));
+  await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state !== 'fitting', d, { timeout: 60000 });
+  const box = await text(page, '[data-testid=errors]');
+  assert.match(box, /^The fit failed/);
+  assert.match(box, /ignored \(not a mesh, point cache, glTF buffer or \.zip\): notes\.txt/);
   assert.deepEqual(log.errors, []);
   await context.close();
 });
