@@ -153,12 +153,12 @@ pub fn sse(a: &[Vec3], b: &[Vec3]) -> f64 {
     }).sum()
 }
 
-/// E_RMS (Kavan et al. 2010) of a squared error over `n_vertices` x `n_poses` points: 1000 · sqrt(sse / (3 n)) / d.
 /// E_RMS over several frames of the same mesh from each frame's E_RMS (the root of the mean square).
 pub fn overall_e_rms(per_frame: &[f64]) -> f64 {
     (per_frame.iter().map(|x| x * x).sum::<f64>() / per_frame.len().max(1) as f64).sqrt()
 }
 
+/// E_RMS (Kavan et al. 2010) of a squared error over `n_points` points (vertices x poses): 1000 · sqrt(sse / (3 n)) / d.
 pub fn e_rms(sse: f64, n_points: usize, diagonal: f64) -> f64 {
     1000.0 * (sse / (3.0 * n_points.max(1) as f64)).sqrt() / diagonal
 }

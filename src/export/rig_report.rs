@@ -8,6 +8,7 @@
 //! the rig chose). The same for one pose gives the per-pose figure; the overall E_RMS² is their mean square.
 
 use super::gltf::{GlbPlayback, GltfOptions, Joints, Morphs, Weights};
+use crate::articulate::pose::e_rms;
 use crate::articulate::Articulation;
 use crate::error::{Error, Result};
 use crate::geometry::{norm, sub, Vec3};
@@ -92,7 +93,6 @@ impl<'a> ErrorSum<'a> {
         if i != self.poses.len() || i >= pop.n_shapes() {
             return Err(Error::Data(format!("keyframe {i} of a clip for {} training poses", pop.n_shapes())));
         }
-        let nv = pop.n_vertices() as f64;
         let mut sq = 0.0;
         let mut worst: f64 = 0.0;
         for (x, u) in frame.iter().zip(pop.shape(i).iter()) {
@@ -102,14 +102,13 @@ impl<'a> ErrorSum<'a> {
         }
         self.total += sq;
         self.max_error = self.max_error.max(worst);
-        self.poses.push(PoseError { name: pop.names[i].clone(), e_rms: 1000.0 * (sq / (3.0 * nv)).sqrt() / self.diagonal, max_error: worst });
+        self.poses.push(PoseError { name: pop.names[i].clone(), e_rms: e_rms(sq, pop.n_vertices(), self.diagonal), max_error: worst });
         Ok(())
     }
 
     fn finish(self) -> RigError {
-        let nv = self.pop.n_vertices() as f64;
         RigError {
-            e_rms: 1000.0 * (self.total / (3.0 * nv * self.pop.n_shapes() as f64)).sqrt() / self.diagonal,
+            e_rms: e_rms(self.total, self.pop.n_vertices() * self.pop.n_shapes(), self.diagonal),
             max_error: self.max_error,
             max_error_over_diagonal: self.max_error / self.diagonal,
             diagonal: self.diagonal,
@@ -133,8 +132,9 @@ pub fn default_bind_pose(pop: &Population) -> usize {
 /// thousandths of the diagonal). A rig with rigid weights plays exactly these reconstructions.
 pub fn fit_e_rms(pop: &Population, model: &crate::mfa::Model) -> f64 {
     let diagonal = bbox_diagonal(&pop.shape(default_bind_pose(pop)).to_vec());
-    // sqrt(sse / (3 n)) = rmse / sqrt(3): both in the unit box, whose scale cancels against d's
-    1000.0 * model.rmse(pop) / 3f64.sqrt() / diagonal
+    // the squared error and d both in the unit box, whose scale cancels
+    let points = pop.n_vertices() * pop.n_shapes();
+    e_rms(model.rmse(pop).powi(2) * points as f64, points, diagonal)
 }
 
 /// A rig as asked for by the page (camelCase, unknown fields refused); missing fields take

@@ -49,8 +49,7 @@ export function rigOptions() {
 
 function showRig(r, opts) {
   const out = $('rig-erms');
-  // E_RMS (Kavan et al. 2010): 1000 x the RMS vertex error over the bounding-box diagonal
-  // beside the fit's own figure in the same measure (its rigid parts alone: what rigid weights play)
+  // E_RMS (www/erms.js) beside the fit's own figure in the same measure (its rigid parts alone: what rigid weights play)
   const own = state.model?.summary?.eRms;
   const fit = Number.isFinite(own) ? `; the fit's rigid parts alone: ${eRmsText(own)}` : '';
   out.textContent = `${eRmsText(r.eRms)} (${ERMS_UNIT}; ${r.bones} bones, ${opts.influences} influences; max error ${percentText(r.maxErrorOverDiagonal)} % of the diagonal${fit})`;
