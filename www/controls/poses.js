@@ -42,7 +42,18 @@ function showPose(i) {
 
 let thumbsToken = 0;
 let drawnWith = null; // the colours the thumbnails were drawn with
+// Thumbnails recoloured by the merge tree's slider wait until it has been still this long: each costs a render
+// and a read-back, and drawn during a drag they held up the main view's next partition (20-50 ms a move on
+// horse-poses, where a thumbnail costs 35-165 ms in software WebGL).
+const STILL_MS = 300;
+let stillTimer = 0;
+function drawThumbnailsWhenStill() {
+  thumbsToken++; // a drawing in progress stops
+  clearTimeout(stillTimer);
+  stillTimer = setTimeout(drawThumbnails, STILL_MS);
+}
 function drawThumbnails() {
+  clearTimeout(stillTimer);
   const token = ++thumbsToken;
   const canvases = [...$('pose-strip').querySelectorAll('canvas')];
   const colours = thumbnailColours();
@@ -76,6 +87,9 @@ export function installPoses() {
     if (changed.has('pose') || changed.has('mode')) showPose(s.pose);
     if (changed.has('model') && s.model) setTimeout(drawThumbnails, 0);
     // the merge tree's slider recolours the main view: the thumbnails follow (and go back with it)
-    else if (s.model && ['treeParts', 'mode', 'colours'].some((k) => changed.has(k)) && thumbnailColours() !== drawnWith) drawThumbnails();
+    else if (s.model && ['treeParts', 'mode', 'colours'].some((k) => changed.has(k)) && thumbnailColours() !== drawnWith) {
+      if (changed.has('treeParts')) drawThumbnailsWhenStill();
+      else drawThumbnails();
+    }
   });
 }
