@@ -14,7 +14,7 @@ async function fitted(page) {
   assert.equal(await waitState(page, ['fitted', 'error'], 90000), 'fitted');
 }
 
-test('the slider shows every count of the merge tree, each partition with that many parts', async () => {
+test('the slider shows every count of the merge tree, each partition with that many parts', async (t) => {
   const { page, log } = await session.open();
   await fitted(page);
   const tree = await page.evaluate(() => window.posemfa.tree());
@@ -28,7 +28,7 @@ test('the slider shows every count of the merge tree, each partition with that m
     slowest = Math.max(slowest, Number(d.ms));
     assert.match(await page.locator('#tree-count').innerText(), new RegExp(`^${n} ${n === 1 ? 'part' : 'parts'} `)); // "1 part", not "1 parts"
   }
-  console.log(`# merge tree slider: ${tree.most - tree.fewest + 1} counts, slowest move ${slowest.toFixed(1)} ms`);
+  t.diagnostic(`merge tree slider: ${tree.most - tree.fewest + 1} counts, slowest move ${slowest.toFixed(1)} ms`);
   // no fit ran for any of it
   assert.equal(await page.evaluate(() => window.posemfa.fitCount()), 1);
   assert.deepEqual(log.errors, []);
