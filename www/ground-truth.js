@@ -27,12 +27,12 @@ export function tiedText(g) {
     const turn = Math.min(...apart.map((t) => t.turnDeg));
     const each = apart.length === 1 ? 'the pair' : `each of the ${apart.length} pairs`;
     text = `The tied parts: in ${each} (${pairs(apart, (t) => `${words(t.names[0])} and ${words(t.names[1])}`)}) the fit's two parts ` +
-      `(${pairs(apart, (t) => `${t.fitted[0]} and ${t.fitted[1]}`)}) have motions that agree within ${gap.toFixed(2)}° (RMS over the poses) ` +
+      `(${pairs(apart, (t) => `${t.fitted[0] + 1} and ${t.fitted[1] + 1}`)}) have motions that agree within ${gap.toFixed(2)}° (RMS over the poses) ` +
       `while they turn ${turn.toFixed(1)}° or more: motion cannot tell them apart, and they stay two parts only because they do not touch.`;
   }
   if (joined) {
     text += `${text ? ' ' : ''}${joined === tied.length ? 'The' : 'Of the'} tied pair${tied.length === 1 ? '' : 's'}, ${joined} ${joined === 1 ? 'is' : 'are'} one fitted part shared by both sides: ` +
-      pairs(tied.filter((t) => t.fitted[0] === t.fitted[1]), (t) => `${words(t.names[0])} and ${words(t.names[1])} in part ${t.fitted[0]}`) + '.';
+      pairs(tied.filter((t) => t.fitted[0] === t.fitted[1]), (t) => `${words(t.names[0])} and ${words(t.names[1])} in part ${t.fitted[0] + 1}`) + '.';
   }
   return text;
 }

@@ -343,13 +343,17 @@ export class Viewer {
     cam.up.copy(this.camera.up);
     cam.position.copy(center).addScaledVector(dir, radius / Math.sin(THREE.MathUtils.degToRad(17.5)));
     cam.lookAt(center);
-    const target = new THREE.WebGLRenderTarget(w, h, { samples: 4 });
+    // one multisampled target for every thumbnail of a size (a new one each time costs its allocation per call)
+    if (!this.thumbTarget || this.thumbTarget.width !== w || this.thumbTarget.height !== h) {
+      this.thumbTarget?.dispose();
+      this.thumbTarget = new THREE.WebGLRenderTarget(w, h, { samples: 4 });
+    }
+    const target = this.thumbTarget;
     this.renderer.setRenderTarget(target);
     this.renderer.render(scene, cam);
     const pixels = new Uint8Array(w * h * 4);
     this.renderer.readRenderTargetPixels(target, 0, 0, w, h, pixels);
     this.renderer.setRenderTarget(null);
-    target.dispose();
     geometry.dispose();
     const img = new ImageData(w, h);
     for (let y = 0; y < h; y++) img.data.set(pixels.subarray((h - 1 - y) * w * 4, (h - y) * w * 4), y * w * 4);

@@ -421,7 +421,7 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
         let (t, q) = rest[slot];
         nodes.push(json::Node {
             children: if children.is_empty() { None } else { Some(children) },
-            name: Some(format!("part {k}")),
+            name: Some(format!("part {}", k + 1)),
             translation: Some(t.map(|c| c as f32)),
             rotation: Some(json::scene::UnitQuaternion(q.map(|c| c as f32))),
             ..Default::default()

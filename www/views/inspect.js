@@ -58,13 +58,13 @@ async function showPick() {
   }
   if (gen !== state.gen || state.pick !== hit) return;
   const head = document.createElement('div');
-  head.append(`Vertex ${v} (${state.shown[hit.slot]?.name ?? ''}): part ${part}${ofFit()} `, swatch(part));
+  head.append(`Vertex ${v} (${state.shown[hit.slot]?.name ?? ''}): part ${part + 1}${ofFit()} `, swatch(part));
   const err = document.createElement('div');
   err.textContent = `error in pose “${poseName(pose)}”: ${errors[v].toExponential(2)} unit box = ${original.toExponential(2)} original`;
   const order = [...resp.keys()].sort((a, b) => resp[b] - resp[a]).slice(0, 5);
   const table = document.createElement('table');
   table.append(row('P(part | vertex), eq 12', '', ''));
-  for (const k of order) table.append(row(Object.assign(swatch(k), { title: `part ${k}` }), `part ${k}`, resp[k].toFixed(4)));
+  for (const k of order) table.append(row(Object.assign(swatch(k), { title: `part ${k + 1}` }), `part ${k + 1}`, resp[k].toFixed(4)));
   // The part (its colour, the exports' label) is the fit's label: the part rule labels every vertex by rigid
   // motion and keeps each part one connected piece of the mesh, so near a border it can differ from the part
   // that eq 12's densities alone favour. Said, not hidden.
@@ -72,8 +72,8 @@ async function showPick() {
   why.className = 'note';
   why.dataset.testid = 'pick-why';
   why.textContent = order[0] === part
-    ? `part ${part} is also the most likely by eq 12`
-    : `part ${part} is the fit's label (its colour, and the exports'): the part rule labels by rigid motion and keeps every part one connected piece; eq 12's densities alone favour part ${order[0]}`;
+    ? `part ${part + 1} is also the most likely by eq 12`
+    : `part ${part + 1} is the fit's label (its colour, and the exports'): the part rule labels by rigid motion and keeps every part one connected piece; eq 12's densities alone favour part ${order[0] + 1}`;
   infoPick.replaceChildren(head, err, table, why);
 }
 
@@ -98,8 +98,8 @@ async function showHover() {
   if (gen !== state.gen || state.hoverPart !== part) return;
   const head = document.createElement('div');
   head.append(swatch(part), posing
-    ? ` part ${part}: rotation from the rest pose (pose “${poseName(pose)}”, the rig's bind pose) in each training pose`
-    : ` part ${part}: rotation from pose “${poseName(pose)}”${ofFit()}`);
+    ? ` part ${part + 1}: rotation from the rest pose (pose “${poseName(pose)}”, the rig's bind pose) in each training pose`
+    : ` part ${part + 1}: rotation from pose “${poseName(pose)}”${ofFit()}`);
   const table = document.createElement('table');
   angles.forEach((a, i) => table.append(row(poseName(i), bar(a / 180), `${a.toFixed(1)}°`)));
   infoHover.replaceChildren(head, table);
