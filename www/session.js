@@ -137,7 +137,7 @@ function onLoaded(pop, fitId) {
   loadNotes = fitId === null ? [] : notes;
   update({
     // a step-by-step fit of the last population went with it (the worker dropped it): its panel starts again
-    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, keptAfterCancel: false, treeParts: null, teach: null,
+    loading: null, source, pop, model: null, fitId, gen: state.gen + 1, colours, pose: 0, pick: null, keptAfter: null, treeParts: null, teach: null,
     hoverPart: null, lastStep: null, mode: !pop.truth && state.mode === 'truth' ? 'parts' : state.mode,
     phase: fitId === null ? 'idle' : 'fitting',
   });
@@ -151,12 +151,13 @@ export async function startFit() {
   if (!state.pop) return;
   const teaching = state.teach !== null && state.fitId === state.teach.id;
   if (teaching && !window.confirm(`Fit starts a new fit and drops the step-by-step fit at iteration ${state.teach.iteration}. Drop it?`)) return;
+  // the last fit's failure goes as a new one is asked for (a field refused now is said under the form)
+  showProblems([]);
   const params = await checkedParams({ vertices: state.pop.nVertices });
   if (!params || !state.pop) return; // the form says which field, and what it allows
-  showProblems([]);
   const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });
   // a step-by-step fit (paused, running or finished) gives way to the new fit: its panel starts again
-  update({ fitId: id, lastStep: null, keptAfterCancel: false, teach: null, phase: 'fitting' });
+  update({ fitId: id, lastStep: null, keptAfter: null, teach: null, phase: 'fitting' });
   liveLabels = null;
   loadNotes = [];
   watchFit(id, done);
@@ -174,7 +175,8 @@ export function watchFit(id, done) {
     (e) => {
       if (state.fitId !== id || e.kind === 'crashed') return;
       // no model: the failed fit's live parts go too (the view is grey, as its caption says)
-      update({ fitId: null, fitCount: state.fitCount + 1, ...(state.model ? {} : { colours: { ...state.colours, live: null } }) });
+      // a model kept: the Fit panel shows its figures again, not the failed run's (result.js)
+      update({ fitId: null, fitCount: state.fitCount + 1, ...(state.model ? { keptAfter: 'failure' } : { colours: { ...state.colours, live: null } }) });
       // the drop's own notes (files ignored) stay beside the failure of the fit it started
       showProblems([...e.problems, ...loadNotes], state.model ? 'The fit failed; the previous model is kept' : 'The fit failed');
       loadNotes = [];
@@ -219,7 +221,7 @@ function onFitted({ model, kept: keptModel }) {
   if (keptModel) {
     // a new fit cancelled: the finished model stays shown (result.js says the new fit was cancelled)
     kept = null;
-    update({ fitId: null, fitCount: state.fitCount + 1, keptAfterCancel: true, phase: 'fitted' });
+    update({ fitId: null, fitCount: state.fitCount + 1, keptAfter: 'cancel', phase: 'fitted' });
     return;
   }
   const colours = {
@@ -230,7 +232,7 @@ function onFitted({ model, kept: keptModel }) {
   };
   kept = null;
   // the new model's own parts (not a merge tree cut the slider showed for the one before)
-  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, keptAfterCancel: false, phase: 'fitted' });
+  update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, keptAfter: null, phase: 'fitted' });
 }
 
 // ------------------------------------------------------------------ questions about the model

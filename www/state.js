@@ -20,7 +20,8 @@
 //   shown        what the viewer shows, left to right: [{ positions, colours, name }]
 //   pick         the clicked vertex { slot, vertex } or null; hoverPart: the part under the pointer or null
 //   teach        the teaching fit: { id, running, iteration, stage, values, runs } (see teach.js)
-//   keptAfterCancel the last fit was cancelled and the finished model before it stays (worker.js finishFit)
+//   keptAfter    'cancel' / 'failure': the last fit was cancelled (worker.js finishFit) or failed, and the
+//                finished model before it stays; null otherwise
 //   fitCount, loadErrorCount, restartCount   fits ended, loads refused, workers replaced (test contract)
 
 const data = {
@@ -48,8 +49,8 @@ const data = {
   restartCount: 0,
   // the merge tree's part count shown by its slider (controls/tree.js); null: the fitted parts
   treeParts: null,
-  // the last fit was cancelled and the finished model before it is still shown
-  keptAfterCancel: false,
+  // 'cancel' / 'failure': the last fit was cancelled or failed, and the finished model before it is still shown
+  keptAfter: null,
 };
 
 export const state = new Proxy(data, {

@@ -298,6 +298,13 @@ export class Viewer {
     this.requestRender();
   }
 
+  /** Where point `p` (xyz in slot `slot`'s mesh coordinates) is on the screen: { x, y } in client pixels. */
+  screenPoint(slot, p) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const v = new THREE.Vector3(p[0], p[1], p[2]).add(this.slots[slot].mesh.position).project(this.camera);
+    return { x: r.left + ((v.x + 1) / 2) * r.width, y: r.top + ((1 - v.y) / 2) * r.height };
+  }
+
   /** The vertex under a screen point: { slot, vertex } or null (nearest corner of the hit triangle). */
   pick(clientX, clientY) {
     const r = this.renderer.domElement.getBoundingClientRect();

@@ -770,8 +770,8 @@ impl Pipeline {
         };
         if rounds == COUNT_ROUNDS {
             return Err(crate::error::Error::Data(format!(
-                "cannot keep exactly {n} parts: the final AECM dropped parts {rounds} times (each needs a responsibility \
-                 mass of min_part_vertices = {}); ask for fewer parts or lower min_part_vertices",
+                "cannot keep exactly {n} parts: the final AECM dropped parts {rounds} times (each part needs the \
+                 weight of at least {} vertices, the smallest part a fit keeps); ask for fewer parts",
                 self.params.min_part_vertices
             )));
         }

@@ -46,8 +46,8 @@ pub fn check_target(n: usize, n_vertices: usize, min_part_vertices: usize) -> Re
     let most = n_vertices / min_part_vertices.max(1);
     if n > most {
         return Err(Error::Params(format!(
-            "target_parts = {n}: the mesh has {n_vertices} vertices and every part needs at least {} \
-             (min_part_vertices), so at most {most} parts are possible; ask for at most {most}",
+            "target_parts = {n}: the mesh has {n_vertices} vertices and every part needs at least {} (the \
+             smallest part a fit keeps), so at most {most} parts are possible; ask for at most {most}",
             min_part_vertices.max(1)
         )));
     }
@@ -235,10 +235,11 @@ impl<'a> Counter<'a> {
         let Some((k, c, _)) = best else {
             return Err(Error::Data(format!(
                 "cannot reach {} parts: none of the {} parts can be cut into two connected pieces of at least {} \
-                 vertices (min_part_vertices); ask for fewer parts or lower min_part_vertices",
+                 vertices each (the smallest part a fit keeps); ask for at most {} parts",
                 self.target,
                 live.len(),
-                self.params.min_part_vertices.max(1)
+                self.params.min_part_vertices.max(1),
+                live.len()
             )));
         };
         let cut = self.cuts.remove(&k).expect("chosen part has cuts").swap_remove(c);

@@ -72,8 +72,13 @@ test('pose mode: a drag turns only the subtree about its joint; sliders give the
   }
   assert.ok(bone >= 0, 'a press on some non-root part of the mesh');
   const angleBefore = (await page.evaluate(() => window.posemfa.pose.angles()))[bone];
+  // the drag turns the part by the angle swept around its joint on the screen: move across the line from the
+  // joint to the press point
+  const pivot = await page.evaluate((b) => window.posemfa.pose.jointOnScreen(b), bone);
+  const [rx, ry] = [start.x - pivot.x, start.y - pivot.y];
+  const across = Math.hypot(rx, ry) > 1 ? [-ry / Math.hypot(rx, ry), rx / Math.hypot(rx, ry)] : [1, 0];
   for (let s = 1; s <= 8; s++) {
-    await page.mouse.move(start.x + 6 * s, start.y);
+    await page.mouse.move(start.x + 6 * s * across[0], start.y + 6 * s * across[1]);
     await page.waitForTimeout(60);
   }
   await page.mouse.up();

@@ -6,19 +6,10 @@ import { poseName } from '../views/render.js';
 import { interpValues } from './interp-values.js';
 import { showProblems } from '../problems.js';
 import { eRmsText, percentText, ERMS_UNIT } from '../erms.js';
+import { download, safeName, populationStem } from '../download.js';
 
 const $ = (id) => document.getElementById(id);
 
-function download(name, data, type) {
-  const url = URL.createObjectURL(new Blob([data], { type }));
-  const a = Object.assign(document.createElement('a'), { href: url, download: name });
-  document.body.append(a);
-  a.click();
-  a.remove();
-  setTimeout(() => URL.revokeObjectURL(url), 10000);
-}
-
-const safeName = (s) => s.replace(/\.obj$/i, '').replace(/[^A-Za-z0-9._-]+/g, '_');
 
 // A cancelled first fit's model stays exportable (someone who stopped a long fit may want what it reached), and
 // each button says it writes that partial model: its JSON has "complete": false and no diagnosis, its rig and
@@ -68,7 +59,7 @@ const orReport = (f) => async () => {
 };
 
 export function installExports() {
-  $('export-json').addEventListener('click', orReport(async () => download('posemfa-model.json', await query('toJson'), 'application/json')));
+  $('export-json').addEventListener('click', orReport(async () => download(`posemfa-${populationStem()}-model.json`, await query('toJson'), 'application/json')));
   // The core writes what the view shows, in the population's original units, exact floats: every mesh shown
   // side by side as one OBJ object named for what it is (original | reconstruction, coarse | refined | final...),
   // a mesh coloured by parts with one group per part of that stage.
@@ -77,7 +68,7 @@ export function installExports() {
     if (!slots.length) return;
     const names = slots.map((x) => x.name);
     const t = state.mode === 'interp' ? `-t${interpValues().t.toFixed(2)}` : '';
-    const name = `posemfa-${safeName(poseName(state.pose))}-${safeName(names.join('+'))}${t}.obj`;
+    const name = `posemfa-${populationStem()}-${safeName(poseName(state.pose))}-${safeName(names.join('+'))}${t}.obj`;
     const header = `${$('caption').textContent}\nobjects: ${names.join(', ')}\nposemfa, ${state.pop.nVertices} vertices and ${state.pop.faces.length / 3} triangles per object`;
     const meshes = slots.map((x) => ({ name: x.name, what: x.what, parts: state.model ? x.parts ?? null : null }));
     download(name, await query('objScene', meshes, header), 'model/obj');
@@ -89,7 +80,7 @@ export function installExports() {
     $('rig-erms').textContent = '…';
     const r = await query('rig', opts);
     showRig(r, opts);
-    download(`posemfa-rig-${opts.weights}-${r.bones}bones.glb`, r.glb, 'model/gltf-binary');
+    download(`posemfa-${populationStem()}-rig-${opts.weights}-${r.bones}bones.glb`, r.glb, 'model/gltf-binary');
   }));
   $('rig').addEventListener('change', () => {
     $('rig-erms').textContent = '–';

@@ -133,6 +133,10 @@ export function installForm({ startFit, cancelFit, runExample, check }) {
   $('params').addEventListener('input', (e) => {
     if (TEXT_FIELDS.includes(e.target.name) && $('params').dataset.invalid) checkedParams({ vertices: checkedFor });
   });
+  // and a field is checked as soon as it is left changed, not only when Fit is pressed
+  $('params').addEventListener('change', (e) => {
+    if (TEXT_FIELDS.includes(e.target.name)) checkedParams({ vertices: state.pop?.nVertices ?? null });
+  });
   $('params').elements.refine.addEventListener('change', showStartUse);
   $('cancel').addEventListener('click', cancelFit);
   $('reset-params').addEventListener('click', () => state.baseParams && fillParams(state.baseParams));

@@ -11,15 +11,15 @@ import { viewer } from '../views/viewer-instance.js';
 import { renderView, registerView } from '../views/render.js';
 import { showProblems } from '../problems.js';
 import { eRmsText, ERMS_UNIT } from '../erms.js';
+import { download, populationStem } from '../download.js';
 
 const $ = (id) => document.getElementById(id);
 const STEP = (10 * Math.PI) / 180; // a button press: 10 degrees
-const DRAG = 0.01; // radians per pixel
 
 // What pose mode shows: the skeleton of the poser, the current mesh and angles, the undo stack, added frames.
 // whole: what the last action made of the whole pose ('random', 'mean', 'modes', 'rest'), null after a part was
 // turned (the caption then names that part)
-const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, whole: null, undo: [], frames: null, frame: 0, playing: false };
+const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, dragging: -1, whole: null, undo: [], frames: null, frame: 0, playing: false };
 
 // the pose space's modes come largest first (the core's PCA of the training poses); the first few get a slider
 const MODE_SLIDERS = 6;
@@ -185,21 +185,19 @@ async function applyModes(whole = 'modes') {
   took(await query('poseModes', modeValues()));
 }
 
-function download(name, data, type) {
-  const url = URL.createObjectURL(new Blob([data], { type }));
-  const a = Object.assign(document.createElement('a'), { href: url, download: name });
-  document.body.append(a);
-  a.click();
-  a.remove();
-  setTimeout(() => URL.revokeObjectURL(url), 10000);
-}
-
-// Drag: pointer down on a part (capture phase, before the orbit controls) selects it; moving turns it.
+// Drag: pointer down on a part (capture phase, before the orbit controls) selects it; moving turns it about the
+// view direction through its joint, by the angle the pointer sweeps around the joint on the screen: the part
+// follows the pointer whichever way it goes. Within NEAR pixels of the joint the angle is not read (it jumps
+// there). The pose before the drag goes on the undo stack at its first turn (a click that turns nothing adds
+// no undo step).
+const NEAR = 8;
+const SWEPT = 1e-6; // radians: less is rounding
 function installDrag() {
   const view = $('view');
   let drag = null;
   let busy = false;
   let pending = 0;
+  const sweep = (e) => Math.atan2(e.clientY - drag.pivot.y, e.clientX - drag.pivot.x);
   view.addEventListener('pointerdown', (e) => {
     if (state.mode !== 'pose' || !pose.skeleton || e.button !== 0) return;
     const hit = viewer.pick(e.clientX, e.clientY);
@@ -207,27 +205,54 @@ function installDrag() {
     e.stopPropagation();
     e.preventDefault();
     const bone = pose.skeleton.boneOfVertex[hit.vertex];
-    drag = { x: e.clientX, bone };
+    const mine = { bone, pivot: null, last: null, remembered: false };
+    drag = mine;
+    pose.dragging = bone;
     pose.bone = bone;
     $('pose-part').value = String(bone);
-    remember().then(showAngle);
+    showAngle();
+    query('poseJoint', bone).then((j) => {
+      if (drag !== mine) return;
+      mine.pivot = viewer.screenPoint(hit.slot, j);
+      if (Math.hypot(e.clientX - mine.pivot.x, e.clientY - mine.pivot.y) > NEAR) mine.last = sweep(e);
+    });
   }, { capture: true });
   window.addEventListener('pointermove', async (e) => {
-    if (!drag) return;
-    pending += (e.clientX - drag.x) * DRAG;
-    drag.x = e.clientX;
-    if (busy || pending === 0) return;
+    if (!drag?.pivot) return;
+    if (Math.hypot(e.clientX - drag.pivot.x, e.clientY - drag.pivot.y) <= NEAR) {
+      drag.last = null;
+      return;
+    }
+    const now = sweep(e);
+    if (drag.last !== null) {
+      let d = now - drag.last;
+      if (d > Math.PI) d -= 2 * Math.PI;
+      if (d < -Math.PI) d += 2 * Math.PI;
+      pending += d;
+    }
+    drag.last = now;
+    // (a move straight at or away from the joint sweeps nothing but rounding)
+    if (busy || Math.abs(pending) < SWEPT) return;
     busy = true;
-    const angle = pending;
-    pending = 0;
+    const mine = drag;
     try {
-      await turn(drag.bone, angle);
+      if (!mine.remembered) {
+        mine.remembered = true;
+        await remember();
+      }
+      // what the pointer swept while a turn was on its way is turned next, also after the pointer stops
+      while (Math.abs(pending) >= SWEPT) {
+        const angle = pending;
+        pending = 0;
+        await turn(mine.bone, angle);
+      }
     } finally {
       busy = false;
     }
   });
   window.addEventListener('pointerup', () => {
     drag = null;
+    pose.dragging = -1;
   });
 }
 
@@ -299,10 +324,10 @@ export function installPose() {
     took(await query('poseModes', Array.from(c)));
   }));
   $('pose-export-obj').addEventListener('click', orReport(async () => {
-    download('posemfa-pose.obj', await query('poseObj', 'a pose made in posemfa pose mode'), 'model/obj');
+    download(`posemfa-${populationStem()}-pose.obj`, await query('poseObj', 'a pose made in posemfa pose mode'), 'model/obj');
   }));
   $('pose-export-glb').addEventListener('click', orReport(async () => {
-    download('posemfa-pose.glb', await query('poseGlb'), 'model/gltf-binary');
+    download(`posemfa-${populationStem()}-pose.glb`, await query('poseGlb'), 'model/gltf-binary');
   }));
   $('pose-frames').addEventListener('change', orReport(async (e) => {
     const files = [...e.target.files];
@@ -321,7 +346,7 @@ export function installPose() {
     playFrames();
   }));
   $('pose-play').addEventListener('click', playFrames);
-  $('pose-export-frames').addEventListener('click', () => pose.frames && download('posemfa-frames.glb', pose.frames.glb, 'model/gltf-binary'));
+  $('pose-export-frames').addEventListener('click', () => pose.frames && download(`posemfa-${populationStem()}-frames.glb`, pose.frames.glb, 'model/gltf-binary'));
   subscribe((s, changed) => {
     if (changed.has('mode')) {
       $('pose-panel').hidden = s.mode !== 'pose';
@@ -343,8 +368,12 @@ export function installPose() {
       angles: () => pose.angles && Array.from(pose.angles),
       turn: (bone, axis, angle) => query('poseTurn', bone, axis, angle).then((r) => { took(r); return Array.from(r.positions); }),
       joint: (bone) => query('poseJoint', bone).then((j) => Array.from(j)),
+      // where a bone's joint is on the screen (client pixels; the drag turns about it)
+      jointOnScreen: (bone) => query('poseJoint', bone).then((j) => viewer.screenPoint(0, j)),
       touches: (bone) => query('poseTouches', bone).then((t) => Array.from(t)),
       selected: () => pose.bone,
+      // the part a press on the mesh holds (-1: none; a press beside the mesh holds none)
+      dragging: () => pose.dragging ?? -1,
       modes: (c) => query('poseModes', c).then((r) => { took(r); return Array.from(r.positions); }),
       training: (i) => query('poseTraining', i).then((r) => { took(r); return Array.from(r.positions); }),
       vector: () => query('poseVector'),

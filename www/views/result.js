@@ -177,12 +177,13 @@ function fitStarted() {
   plot.set([], '');
 }
 
-// kept: a new fit was cancelled and this finished model stays (its figures are shown again). runs: the whole
+// kept: 'cancel' / 'failure', a new fit was cancelled or failed and this finished model stays (its figures are
+// shown again). runs: the whole
 // fit's trace as the progress brought it (fitRuns), when the model is that fit's.
-function fitEnded(model, { kept = false, runs = null } = {}) {
+function fitEnded(model, { kept = null, runs = null } = {}) {
   const { cancelled, fitMs, logLikelihood, iterations } = model.summary;
   // a cancelled first fit shows where it stopped: not "best", it may be below what a finished fit reaches
-  $('stage').textContent = kept ? 'new fit cancelled: the finished fit before it is kept' : cancelled ? 'cancelled: where the fit stopped' : 'done';
+  $('stage').textContent = kept ? `new fit ${kept === 'cancel' ? 'cancelled' : 'failed'}: the finished fit before it is kept` : cancelled ? 'cancelled: where the fit stopped' : 'done';
   if (kept) $('iteration').textContent = `${iterations} in the final stage`;
   else if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
   $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
@@ -232,7 +233,7 @@ export function installResult() {
     if (changed.has('model') && s.model) fitEnded(s.model, { runs: ended });
     // a fit that failed or was superseded without a model: the Stage field does not stay at 'starting'
     if (changed.has('fitId') && s.fitId === null && !changed.has('model')) {
-      if (s.keptAfterCancel && s.model) fitEnded(s.model, { kept: true });
+      if (s.keptAfter && s.model) fitEnded(s.model, { kept: s.keptAfter });
       else $('stage').textContent = s.model ? 'done' : 'idle';
     }
     if (changed.has('pop') || changed.has('model')) showResult();
