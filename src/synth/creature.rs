@@ -418,7 +418,7 @@ fn hand() -> Design {
     let mut limbs = Vec::new();
     // (spine parameter, socket angle in degrees, direction, length, phalanx cuts, base radius)
     let fingers: [(f64, f64, Vec3, f64, [f64; 2], f64); 5] = [
-        (5.2, -130.0, unit([0.9, 0.5, -0.2]), 0.36, [0.14, 0.26], 0.034),
+        (5.2, -130.0, unit([0.6, 0.2, -0.75]), 0.36, [0.14, 0.26], 0.034),
         (5.0, 0.0, unit([0.1, 1.0, 0.0]), 0.40, [0.16, 0.28], 0.03),
         (4.0, 0.0, unit([0.02, 1.0, 0.0]), 0.44, [0.18, 0.31], 0.03),
         (3.0, 0.0, unit([-0.06, 1.0, 0.0]), 0.40, [0.16, 0.28], 0.029),
@@ -457,6 +457,18 @@ fn hand() -> Design {
 mod tests {
     use super::*;
     use crate::synth::{generate, Spec};
+
+    /// A design no resolution can build (the thumb's hole on the index finger's) is refused with the planner's
+    /// error, not refined without end (it ran out of memory).
+    #[test]
+    fn a_design_that_cannot_be_built_is_refused() {
+        let mut d = design(Preset::Hand);
+        d.limbs[0].attach_t = 6.5;
+        d.limbs[0].attach_phi = -60f64.to_radians();
+        d.limbs[0].dir = unit([0.85, 0.45, -0.3]);
+        let err = crate::synth::tube::Planner::new(&d).plan_for_target(3000).map(|p| p.n_vertices);
+        assert!(err.is_err(), "{err:?}");
+    }
 
     fn index(d: &Design, name: &str) -> usize {
         d.names.iter().position(|n| n == name).unwrap_or_else(|| panic!("no part {name}"))

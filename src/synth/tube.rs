@@ -338,6 +338,13 @@ impl<'a> Planner<'a> {
         let mut lo = hi / 2.0;
         let mut guard = 0;
         while count(lo) <= target {
+            // a design whose plan fails at every resolution (limb holes that touch however fine the rings) would
+            // refine until a plan's arrays no longer fit in memory: past a spacing that puts several times the
+            // target's rings along the spine alone, no valid plan has as few vertices, and the plan's own error
+            // is the answer
+            if self.geom.length / lo > 4.0 * target.max(1) as f64 {
+                return self.plan(lo);
+            }
             hi = lo;
             lo /= 2.0;
             guard += 1;
