@@ -305,6 +305,12 @@ export class Viewer {
     return { x: r.left + ((v.x + 1) / 2) * r.width, y: r.top + ((1 - v.y) / 2) * r.height };
   }
 
+  /** The angle (radians, clockwise on the screen) of client point (x, y) around screen point `pivot`, or null
+   * within `near` pixels of it (where the angle jumps). */
+  angleAround(pivot, x, y, near) {
+    return Math.hypot(x - pivot.x, y - pivot.y) <= near ? null : Math.atan2(y - pivot.y, x - pivot.x);
+  }
+
   /** The vertex under a screen point: { slot, vertex } or null (nearest corner of the hit triangle). */
   pick(clientX, clientY) {
     const r = this.renderer.domElement.getBoundingClientRect();

@@ -10,7 +10,6 @@ import { download, safeName, populationStem } from '../download.js';
 
 const $ = (id) => document.getElementById(id);
 
-
 // A cancelled first fit's model stays exportable (someone who stopped a long fit may want what it reached), and
 // each button says it writes that partial model: its JSON has "complete": false and no diagnosis, its rig and
 // OBJ groups are its parts where it stopped.

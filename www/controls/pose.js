@@ -197,7 +197,6 @@ function installDrag() {
   let drag = null;
   let busy = false;
   let pending = 0;
-  const sweep = (e) => Math.atan2(e.clientY - drag.pivot.y, e.clientX - drag.pivot.x);
   view.addEventListener('pointerdown', (e) => {
     if (state.mode !== 'pose' || !pose.skeleton || e.button !== 0) return;
     const hit = viewer.pick(e.clientX, e.clientY);
@@ -214,16 +213,20 @@ function installDrag() {
     query('poseJoint', bone).then((j) => {
       if (drag !== mine) return;
       mine.pivot = viewer.screenPoint(hit.slot, j);
-      if (Math.hypot(e.clientX - mine.pivot.x, e.clientY - mine.pivot.y) > NEAR) mine.last = sweep(e);
+      mine.last = viewer.angleAround(mine.pivot, e.clientX, e.clientY, NEAR);
+    }, (err) => {
+      // no joint to turn about (the model changed under the press): the drag turns nothing, and says why
+      if (drag === mine) drag = null;
+      $('pose-status').textContent = err.message ?? String(err);
     });
   }, { capture: true });
   window.addEventListener('pointermove', async (e) => {
     if (!drag?.pivot) return;
-    if (Math.hypot(e.clientX - drag.pivot.x, e.clientY - drag.pivot.y) <= NEAR) {
+    const now = viewer.angleAround(drag.pivot, e.clientX, e.clientY, NEAR);
+    if (now === null) {
       drag.last = null;
       return;
     }
-    const now = sweep(e);
     if (drag.last !== null) {
       let d = now - drag.last;
       if (d > Math.PI) d -= 2 * Math.PI;
