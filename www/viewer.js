@@ -53,6 +53,7 @@ export class Viewer {
     this.controls.dispose();
     for (const s of this.slots) this.removeSlot(s);
     this.slots = [];
+    this.thumbTarget?.dispose(); // the thumbnails' render target (thumbnail())
     this.renderer.dispose();
     this.renderer.forceContextLoss();
     this.renderer.domElement.remove();
