@@ -8,6 +8,30 @@ THREE.ColorManagement.enabled = false; // colours go to the screen as given: exa
 
 const BACKGROUND = 0xeef0f3;
 
+/** The view axes for a mesh of flat xyz `reference`: the camera looks across the thinnest side of its box (a
+ * horse from its flank; `view`), with `up` the next axis up (y, or z when y is the thinnest) and `right` the third.
+ * `side` (+1 / -1): it looks from +view unless the shape reaches out much farther the other way from its mean
+ * (more than 1.5 times as far): then from there, so that what sticks out is in front (the hand's thumb before
+ * the palm, not behind it). */
+export function viewAxes(reference) {
+  const n = reference.length / 3;
+  if (!n) return { view: 2, up: 1, right: 0, side: 1 };
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  const mean = [0, 0, 0];
+  for (let k = 0; k < reference.length; k++) {
+    const c = k % 3;
+    lo[c] = Math.min(lo[c], reference[k]);
+    hi[c] = Math.max(hi[c], reference[k]);
+    mean[c] += reference[k] / n;
+  }
+  const size = hi.map((h, c) => h - lo[c]);
+  const view = size.indexOf(Math.min(...size));
+  const up = view === 1 ? 2 : 1;
+  const side = mean[view] - lo[view] > 1.5 * (hi[view] - mean[view]) ? -1 : 1;
+  return { view, up, right: 3 - view - up, side };
+}
+
 export class Viewer {
   constructor(container) {
     this.container = container;
@@ -33,7 +57,7 @@ export class Viewer {
     this.flat = false;
     this.faces = null;
     this.slots = [];
-    this.axes = { view: 2, up: 1, right: 0 };
+    this.axes = { view: 2, up: 1, right: 0, side: 1 };
 
     this.cameraListeners = [];
     this.makeControls();
@@ -102,11 +126,7 @@ export class Viewer {
     this.faces = faces;
     for (const s of this.slots) this.removeSlot(s);
     this.slots = [];
-    const box = new THREE.Box3().setFromBufferAttribute(new THREE.BufferAttribute(reference, 3));
-    const size = box.getSize(new THREE.Vector3()).toArray();
-    const view = size.indexOf(Math.min(...size)); // look across the thinnest side (a horse from its flank)
-    const up = view === 1 ? 2 : 1;
-    this.axes = { view, up, right: 3 - view - up };
+    this.axes = viewAxes(reference);
   }
 
   removeSlot(s) {
@@ -190,8 +210,8 @@ export class Viewer {
 
   // Direction from the target to the camera when framing: across the view axis, a little from above.
   frameDirection() {
-    const { view, up } = this.axes;
-    return new THREE.Vector3().setComponent(view, 1).setComponent(up, 0.2).normalize();
+    const { view, up, side } = this.axes;
+    return new THREE.Vector3().setComponent(view, side).setComponent(up, 0.2).normalize();
   }
 
   // +1 when the world's `right` axis points to the right of the screen, else -1.
