@@ -58,6 +58,8 @@ window.posemfa = {
   },
   /** The merge tree ({most, fewest, decided}, null without one) and the count its slider shows (null: the fit). */
   tree: () => (state.model?.tree ? { ...state.model.tree, shown: state.treeParts } : null),
+  /** The merge tree's partition with n parts, as its slider shows it: { labels, colours } (a promise). */
+  treePartition: (n) => query('treePartition', n).then(({ labels, colours }) => ({ labels: Array.from(labels), colours: Array.from(colours) })),
   /** Inspects vertex v of the first mesh shown, as a click on it does (the info box answers). */
   inspect: (v) => pickVertex({ slot: 0, vertex: v }),
 };

@@ -147,15 +147,20 @@ function onLoaded(pop, fitId) {
 /** A fit of the population shown, with the form's parameters. A step-by-step fit in hand (paused or running) is
  * dropped by it: asked first, as Step / Run / Reset ask before they drop a finished fit (teach.js); a dismissed
  * question changes nothing. */
-export async function startFit() {
+/** Fits the population with the form's parameters; `startLabels` (one part per vertex): from that partition,
+ * with exactly its number of parts (the merge tree's Refine). */
+export async function startFit({ startLabels = null } = {}) {
   if (!state.pop) return;
   const teaching = state.teach !== null && state.fitId === state.teach.id;
   if (teaching && !window.confirm(`Fit starts a new fit and drops the step-by-step fit at iteration ${state.teach.iteration}. Drop it?`)) return;
   // the last fit's failure goes as a new one is asked for (a field refused now is said under the form)
   showProblems([]);
-  const params = await checkedParams({ vertices: state.pop.nVertices });
-  if (!params || !state.pop) return; // the form says which field, and what it allows
-  const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job: jobKey(state.source, params) });
+  const checked = await checkedParams({ vertices: state.pop.nVertices });
+  if (!checked || !state.pop) return; // the form says which field, and what it allows
+  const params = startLabels ? { ...checked, startLabels: Array.from(startLabels) } : checked;
+  // (the job's key names a start by its count of parts, not by its labels)
+  const job = jobKey(state.source, startLabels ? { ...checked, startParts: new Set(startLabels).size } : checked);
+  const { id, done } = client.request({ type: 'fit', params, fault: takeFault() }, { onEvent: onProgress, job });
   // a step-by-step fit (paused, running or finished) gives way to the new fit: its panel starts again
   update({ fitId: id, lastStep: null, keptAfter: null, teach: null, phase: 'fitting' });
   liveLabels = null;

@@ -106,6 +106,12 @@ pub struct Params {
     /// Exact part count: after Algorithm 1, parts are split or merged until there are exactly this many, then
     /// the final AECM runs again ([`crate::parts::part_count`]). None (default) keeps the part rule's own count.
     pub target_parts: Option<usize>,
+    /// A partition to start from (one label per vertex; `startLabels`), with the merge tree's part rule: its
+    /// parts are the start of the final AECM in place of the patches' cut, and the count is exactly its number
+    /// of parts (`target_parts`, when unset). The page's "Refine N parts" fits the merge tree's partition it
+    /// shows. None (default): the part rule's own start.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_labels: Option<Vec<u32>>,
     /// The population's mean squared radius over [`REFERENCE_SQUARED_RADIUS`], which scales `variance_floor`;
     /// set once per fit by [`Params::for_radius`] (the whole population's, also for runs on a subset of it).
     /// None: unset (an AECM run then sets it from its own data).
@@ -143,6 +149,7 @@ impl Default for Params {
             refine_max_iter: 60,
             refine_tol: 1e-2,
             target_parts: None,
+            start_labels: None,
             floor_scale: None,
         }
     }

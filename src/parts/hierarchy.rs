@@ -30,7 +30,7 @@ use crate::mfa::data::Data;
 use crate::mfa::estep::Blocked;
 use crate::mfa::params::{PartRule, Params};
 use crate::mfa::result::Model;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::mesh::Population;
 use serde::Serialize;
 
@@ -110,7 +110,7 @@ pub struct FitResult {
     /// other part rules, `refine` off, and a step-by-step lesson): what the page names the stages after.
     pub from_merge_tree: bool,
     /// The part count is the user's own, with no rule behind it (`refine` off: Algorithm 1's coarse stage alone,
-    /// m = `parts`), so too few parts cannot be told from a shape that is no articulated one
+    /// m = `parts`; or a partition given to start from, [`Params::start_labels`]), so too few parts cannot be told from a shape that is no articulated one
     /// ([`super::diagnosis::diagnose_fit`]).
     pub count_unjudged: bool,
 }
@@ -353,7 +353,11 @@ impl Pipeline {
     pub fn new(pop: &Population, params: &Params) -> Result<Pipeline> {
         params.validate()?;
         // the variance floor follows the whole population's size, in every run of the fit (subsets included)
-        let params = &params.for_radius(pop.mean_squared_radius());
+        let mut params = params.for_radius(pop.mean_squared_radius());
+        if let Some(start) = &params.start_labels {
+            params.target_parts = Some(params.target_parts.unwrap_or(check_start_labels(start, pop, &params)?));
+        }
+        let params = &params;
         if let Some(n) = params.target_parts {
             super::part_count::check_target(n, pop.n_vertices(), params.min_part_vertices)?;
         }
@@ -437,7 +441,20 @@ impl Pipeline {
         if full.is_none() {
             crate::mfa::aecm::check_population(&data, 1, 1)?;
         }
-        let (cut, labels) = tree_start(&work, &data, params)?;
+        let (cut, labels) = match &params.start_labels {
+            // on the coarse mesh each coarse vertex takes its seed's part (a part no seed holds is made again by
+            // the exact count's split)
+            Some(start) => {
+                let on_work = match &coarse {
+                    Some(c) => compact(&c.seeds.iter().map(|&v| start[v]).collect::<Vec<_>>()),
+                    None => compact(start),
+                };
+                let most = on_work.iter().max().map_or(1, |&l| l as usize + 1).max(params.target_parts.unwrap_or(0));
+                crate::memory::check(work.n_vertices(), work.n_shapes(), most, crate::memory::budget_bytes()?)?;
+                (on_work.clone(), on_work)
+            }
+            None => tree_start(&work, &data, params)?,
+        };
         let start_parts = (cut != labels).then(|| labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0));
         if coarse.is_some() {
             // the last run is on every vertex: its memory, for at most the cut's count, before any run
@@ -699,7 +716,15 @@ impl Pipeline {
         // whether the parts were fitted to the motion labels in this call (a model the part rule leaves as it
         // is stays fitted)
         let mut fitted = false;
-        if distinct && rounds == 0 && self.decide_rounds < decide_rounds {
+        if distinct && rounds == 0 && self.decide_rounds == 0 && self.params.start_labels.is_some() {
+            // a partition given to start from (the page's Refine) is the user's: the part rule does not change
+            // it, but its tree of the fitted parts is made as on any fit (the page's slider, the JSON)
+            self.decide_rounds += 1;
+            super::label_fit::fit_to_labels(&mut model, &full_data(&mut self.full, &self.pop).0, &self.params);
+            fitted = true;
+            let (_, curve) = self.decide_on_tree(&model.labels);
+            self.part_curve = curve;
+        } else if distinct && rounds == 0 && self.decide_rounds < decide_rounds {
             self.decide_rounds += 1;
             // rule 1 judges each part by the motion of its own labelled vertices (the mixture's component of a
             // short band part leans toward its neighbours' vertices; see label_fit)
@@ -1132,7 +1157,7 @@ impl Pipeline {
             merge_tree,
             tree_count: self.tree_count,
             from_merge_tree: self.params.part_rule == PartRule::Tree && self.params.refine,
-            count_unjudged: !self.params.refine,
+            count_unjudged: !self.params.refine || self.params.start_labels.is_some(),
         }
     }
 
@@ -1152,6 +1177,26 @@ impl Pipeline {
 /// [`MergeTree::merge_yardstick`] (with `target_parts`: at [`TREE_COUNT_START_RATIO`] times its typical variance),
 /// not cut when it has fewer than [`TREE_CUT_LEAVES`] patches; then, when the part rule decides the count, the
 /// start's flesh dissolved ([`dissolve_start_flesh`]). Returns the cut and the start (compact labels).
+/// The number of parts of [`Params::start_labels`], once they are found to be a start for `pop`: one label per
+/// vertex, with the merge tree's part rule.
+fn check_start_labels(start: &[u32], pop: &Population, params: &Params) -> Result<usize> {
+    if start.len() != pop.n_vertices() {
+        return Err(Error::Params(format!(
+            "startLabels has {} labels for a population of {} vertices: give one label per vertex",
+            start.len(),
+            pop.n_vertices()
+        )));
+    }
+    if params.part_rule != PartRule::Tree || !params.refine {
+        return Err(Error::Params(
+            "startLabels needs the merge tree's part rule (partRule \"tree\", refine on): Algorithm 1 starts from its own k-means++ draw".into(),
+        ));
+    }
+    let parts = compact(start).iter().max().map_or(0, |&l| l as usize + 1);
+    super::part_count::check_target(params.target_parts.unwrap_or(parts), pop.n_vertices(), params.min_part_vertices)?;
+    Ok(parts)
+}
+
 fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32>, Vec<u32>)> {
     // the patches' own yardstick, not the variance floor: on clean data the patches fit far below the floor,
     // and the floor as the yardstick merged the generated hand's fingertips before the AECM
@@ -1366,6 +1411,42 @@ mod tests {
         let (w, c) = (warm.model(), cold.model());
         assert_eq!(w.n_parts(), c.n_parts());
         assert!(adjusted_rand_index(&w.labels, &c.labels) > 0.99);
+    }
+
+    #[test]
+    fn a_refine_from_the_merge_trees_partition_keeps_that_partition() {
+        // the page's "Refine N parts": the fitted parts' tree cut at N, then the fit from those labels; on all
+        // vertices and on a coarse mesh (each coarse vertex takes its seed's part)
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 20, ..Spec::default() }).unwrap();
+        for coarse_vertices in [0, 1000] {
+            let base = Params { coarse_vertices, ..Params::default() };
+            let auto = fit(&g.population, &base, &mut |_| true).unwrap();
+            let n = auto.model.n_parts() - 4;
+            let start = auto.merge_tree.as_ref().expect("the tree rule's tree").labels_at(n);
+            let params = Params { start_labels: Some(start.clone()), ..base.clone() };
+            let refined = fit(&g.population, &params, &mut |_| true).unwrap();
+            assert_eq!(refined.model.n_parts(), n, "coarse {coarse_vertices}");
+            // every part is one of the partition shown: more than half of each in the other
+            let (a, b) = (&refined.model.labels, &start);
+            let mut overlap = std::collections::HashMap::new();
+            let (mut size_a, mut size_b) = (vec![0usize; n], vec![0usize; n]);
+            for (&x, &y) in a.iter().zip(b) {
+                *overlap.entry((x, y)).or_insert(0usize) += 1;
+                size_a[x as usize] += 1;
+                size_b[y as usize] += 1;
+            }
+            let same = overlap.iter().filter(|(&(x, y), &k)| 2 * k > size_a[x as usize] && 2 * k > size_b[y as usize]).count();
+            assert_eq!(same, n, "coarse {coarse_vertices}: {same} of the {n} parts shown came out of the refit");
+            let ari = adjusted_rand_index(a, b);
+            assert!(ari > 0.9, "coarse {coarse_vertices}: the refit moved away from the partition shown ({ari:.3})");
+        }
+        // what is not a start is refused, naming the field
+        let short = Params { start_labels: Some(vec![0; 10]), ..Params::default() };
+        let e = Pipeline::new(&g.population, &short).err().expect("refused").to_string();
+        assert!(e.contains("startLabels has 10 labels for a population of"), "{e}");
+        let distinct = Params { part_rule: PartRule::Distinct, start_labels: Some(vec![0; g.population.n_vertices()]), ..Params::default() };
+        let e = Pipeline::new(&g.population, &distinct).err().expect("refused").to_string();
+        assert!(e.contains("startLabels needs the merge tree's part rule"), "{e}");
     }
 
     #[test]

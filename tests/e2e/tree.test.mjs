@@ -41,6 +41,7 @@ test('Refine fits the chosen count, and parts that stay keep their colours', asy
   const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
   const want = parts - 2;
   await moveTreeSlider(page, want);
+  const shown = await page.evaluate((n) => window.posemfa.treePartition(n), want);
   await page.click('[data-testid=tree-refine]');
   await page.waitForFunction(() => window.posemfa.fitCount() >= 2, null, { timeout: 90000 });
   await fitted(page);
@@ -70,8 +71,29 @@ test('Refine fits the chosen count, and parts that stay keep their colours', asy
     }
   }
   assert.ok(same >= want - 4, `only ${same} of ${want} parts matched an earlier part`);
+  // Refine fits the partition the slider showed: each of its parts is one of the refit's
+  assert.equal(matchedParts(after.labels, shown.labels), want, 'the refit is not the partition the slider showed');
   assert.deepEqual(log.errors, []);
 });
+
+// How many parts of `a` are a part of `b` (more than half of each in the other).
+function matchedParts(a, b) {
+  const overlap = new Map();
+  const sizeA = new Map();
+  const sizeB = new Map();
+  a.forEach((l, v) => {
+    const key = `${l},${b[v]}`;
+    overlap.set(key, (overlap.get(key) ?? 0) + 1);
+    sizeA.set(l, (sizeA.get(l) ?? 0) + 1);
+    sizeB.set(b[v], (sizeB.get(b[v]) ?? 0) + 1);
+  });
+  let same = 0;
+  for (const [key, n] of overlap) {
+    const [l, m] = key.split(',').map(Number);
+    if (2 * n > sizeA.get(l) && 2 * n > sizeB.get(m)) same++;
+  }
+  return same;
+}
 
 test('on horse-poses every count of the tree shows at once (needs ../shared)', async (t) => {
   const horse = path.join(process.env.POSEMFA_SHARED ?? path.join(ROOT, '../shared'), 'data/horse-poses');

@@ -1,9 +1,9 @@
 // The merge tree's slider (issue 26): the default part rule records every merge of the fitted parts
 // (posemfa::model::merge_tree), so every part count has its partition at once. Moving the slider shows that
 // count's parts (asked of the core: labels and colours, the fitted parts' colours kept where a part is the same);
-// "Refine N parts" fits again with exactly N parts (the form's "Parts in the end").
+// "Refine N parts" fits from that partition with exactly N parts (the form's "Parts in the end").
 import { state, update, subscribe } from '../state.js';
-import { query } from '../session.js';
+import { query, startFit } from '../session.js';
 import { paletteColours } from '../colors.js';
 import { renderView } from '../views/render.js';
 
@@ -73,12 +73,23 @@ export function installTree() {
     delete slider.dataset.count; // set again once the count asked for is shown
     show(Number(slider.value));
   });
-  $('tree-refine').addEventListener('click', () => {
-    const form = $('params');
-    form.targetParts.value = String(slider.value);
-    refined = Number(slider.value);
+  // Refine: the fit from the partition the slider shows, with exactly its count (the form's "Parts in the end"
+  // is set to it, and says so under the field)
+  $('tree-refine').addEventListener('click', async () => {
+    const n = Number(slider.value);
+    const mine = token;
+    let labels;
+    try {
+      ({ labels } = await query('treePartition', n));
+    } catch (e) {
+      $('tree-count').textContent = `cannot refine ${parts(n)}: ${e.message}`;
+      return;
+    }
+    if (mine !== token) return; // a new model came meanwhile: its tree is another
+    $('params').targetParts.value = String(n);
+    refined = n;
     showRefineNote();
-    form.requestSubmit();
+    startFit({ startLabels: labels });
   });
   // the field typed into, or filled in code (Defaults, an example, new files: a new model or population follows)
   $('params').addEventListener('input', showRefineNote);

@@ -139,12 +139,15 @@ export function installInspect() {
     if (changed.has('hoverPart')) showHover();
     if (changed.has('pose') && s.pick) showPick();
     if (changed.has('pop')) showPick(); // pick was cleared
-    // another partition shown (the merge tree's slider): the box of the last one goes (a new click or hover
-    // asks again, and says which parts it names)
-    if (changed.has('treeParts') && (s.pick || s.hoverPart !== null)) {
+    // another partition shown (the merge tree's slider), or a new model (or none: a step-by-step run threw the
+    // fit away), whose parts and errors are others: the boxes of the last one go (a new click or hover asks
+    // again, and says which parts it names)
+    if ((changed.has('treeParts') || changed.has('model')) && (s.pick || s.hoverPart !== null)) {
       pickVertex(null);
       update({ hoverPart: null });
     }
+    // pose mode shows the rig's rest pose, not the pose the vertex was picked on
+    if (changed.has('mode') && s.mode === 'pose' && s.pick) pickVertex(null);
     // into or out of pose mode: the hover box's angles are from another pose
     if (changed.has('mode') && s.hoverPart !== null) showHover();
   });

@@ -1,0 +1,49 @@
+// An eighth newcomer's review (docs/page-fixes.md): the clicked vertex's box goes when a new model comes (its
+// part and error were the old model's) and when pose mode shows the rig's rest pose; the diagnosis of a count
+// Refine asked for is no verdict when that count is too few, not "Not articulated". (Refine fitting the partition
+// the slider shows: tree.test.mjs.)
+// Run: npm run build && node --test tests/e2e/review8.test.mjs
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { pageSession, waitState, moveTreeSlider } from './helpers.mjs';
+
+const session = pageSession();
+const info = (page) => page.locator('#info').innerText().then((t) => t.trim());
+
+async function pick(page, v) {
+  await page.evaluate((x) => window.posemfa.inspect(x), v);
+  await page.waitForFunction((x) => document.getElementById('info').textContent.startsWith(`Vertex ${x} `), v);
+}
+
+test('the vertex box goes with the model it was about, and in pose mode', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await pick(page, 5);
+  const c = await page.evaluate(() => window.posemfa.fitCount());
+  await page.fill('input[name=targetParts]', '9');
+  await page.click('#fit');
+  await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state === 'fitted', c, { timeout: 120000 });
+  assert.equal(await info(page), '', 'the box of the model before is still up');
+  // asked again: the new model's part
+  await pick(page, 5);
+  const part = (await page.evaluate(() => window.posemfa.fittedParts())).labels[5];
+  assert.match(await info(page), new RegExp(`^Vertex 5 \\(.*\\): part ${part + 1} `));
+  await page.click('[data-testid=mode-pose]');
+  await page.waitForFunction(() => document.getElementById('info').textContent.trim() === '', null, { timeout: 10000 });
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('Refine of a few parts: no verdict, not "Not articulated"', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  assert.match(await page.locator('[data-testid=diagnosis]').innerText(), /^Articulated/);
+  const c = await page.evaluate(() => window.posemfa.fitCount());
+  await moveTreeSlider(page, 2);
+  await page.click('[data-testid=tree-refine]');
+  await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state === 'fitted', c, { timeout: 120000 });
+  assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, 2);
+  assert.match(await page.locator('[data-testid=diagnosis]').innerText(), /^No verdict: 2 rigid parts \(the count asked for, not judged by the part rule\) explain/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
