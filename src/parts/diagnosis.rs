@@ -79,7 +79,7 @@ pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     let asked = diagnose(pop, &result.model);
     if result.count_unjudged && !asked.articulated && asked.single_body_rmse >= RIGID_RMSE {
         let reason = format!(
-            "{} rigid part{} (the count asked for, not judged by the part rule) explain {:.1} % of the motion that one rigid \
+            "{} rigid part{} (a count the part rule did not judge) explain {:.1} % of the motion that one rigid \
              body leaves (RMSE {:.2e} down to {:.2e}; articulated shapes measure {:.1} % and more): too few parts may \
              be all that is wrong. Fit with the part rule on (\"Refine the parts\" on and \"Parts in the end\" auto, the \
              defaults) for a verdict",
@@ -216,7 +216,7 @@ mod tests {
         assert!(!diagnose(&g.population, &r.model).articulated);
         let d = diagnose_fit(&g.population, &r);
         assert!(d.undecided && !d.articulated, "{d:?}");
-        assert!(d.reason.contains("the count asked for, not judged by the part rule") && !d.reason.contains("deformation model"), "{}", d.reason);
+        assert!(d.reason.contains("a count the part rule did not judge") && !d.reason.contains("deformation model"), "{}", d.reason);
         assert!(d.reason.contains("of the motion that one rigid body leaves") && !d.reason.contains("  "), "{}", d.reason);
         // enough parts fixed by hand: the verdict stands
         let r = fit(&g.population, &Params { parts: 40, refine: false, ..Params::default() }, &mut |_| true).unwrap();

@@ -43,7 +43,7 @@ test('Refine of a few parts: no verdict, not "Not articulated"', async () => {
   await page.click('[data-testid=tree-refine]');
   await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state === 'fitted', c, { timeout: 120000 });
   assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, 2);
-  assert.match(await page.locator('[data-testid=diagnosis]').innerText(), /^No verdict: 2 rigid parts \(the count asked for, not judged by the part rule\) explain/);
+  assert.match(await page.locator('[data-testid=diagnosis]').innerText(), /^No verdict: 2 rigid parts \(a count the part rule did not judge\) explain/);
   assert.deepEqual(log.errors, []);
   await context.close();
 });
