@@ -196,16 +196,30 @@ impl WasmPopulation {
         Ok(Uint32Array::from(crate::articulate::graph::colour_parts(&labels, &self.inner.faces, n_colours).as_slice()))
     }
 
-    /// [`Population::part_colours`] keeping the colours of an earlier partition where a part is the same (more
-    /// than half of each in the other): `previous` / `previous_colours` are that partition's labels (one per
-    /// vertex) and its colours (one per part) (`posemfa::articulate::graph::colour_parts_like`).
+    /// [`Population::part_colours`] keeping the colours of earlier partitions where a part is the same (more
+    /// than half of each in the other): `previous` is their labels one after the other (one per vertex each, the
+    /// newest first) and `previous_colours` their colours one after the other (one per part each: a
+    /// partition's count of parts is its largest label + 1) (`posemfa::articulate::graph::colour_parts_like`).
     #[wasm_bindgen(js_name = partColoursLike)]
     pub fn part_colours_like(&self, labels: Vec<u32>, n_colours: usize, previous: Vec<u32>, previous_colours: Vec<u32>) -> Result<Uint32Array, JsValue> {
-        if labels.len() != self.inner.n_vertices() {
-            return Err(js_err(format!("{} labels for {} vertices", labels.len(), self.inner.n_vertices())));
+        let n = self.inner.n_vertices();
+        if labels.len() != n {
+            return Err(js_err(format!("{} labels for {} vertices", labels.len(), n)));
         }
-        let prev = Some((previous.as_slice(), previous_colours.as_slice()));
-        Ok(Uint32Array::from(crate::articulate::graph::colour_parts_like(&labels, &self.inner.faces, n_colours, prev).as_slice()))
+        if n == 0 || previous.len() % n != 0 {
+            return Err(js_err(format!("{} earlier labels are not whole partitions of {} vertices", previous.len(), n)));
+        }
+        let mut earlier = Vec::new();
+        let mut at = 0;
+        for part in previous.chunks(n) {
+            let parts = part.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+            let Some(colours) = previous_colours.get(at..at + parts) else {
+                return Err(js_err(format!("{} earlier colours for earlier partitions of more parts", previous_colours.len())));
+            };
+            earlier.push((part, colours));
+            at += parts;
+        }
+        Ok(Uint32Array::from(crate::articulate::graph::colour_parts_like(&labels, &self.inner.faces, n_colours, &earlier).as_slice()))
     }
 }
 

@@ -25,14 +25,11 @@
 //                                                                   colours} of a generated one, else null)
 //     { type: 'load-error', id, problems }                          the previous population is kept
 //     { type: 'progress', id, steps, run, trace, labels, colours, elapsedMs }   after every slice: the AECM
-//                                                                   iterations made (one progress object each,
-//                                                                   with the run it belongs to; a slice ends
-//                                                                   where a run ends, Fitter.run),
-//                                                                   the run in progress after it by its stage name
-//                                                                   ({name, number, fromTree, done},
-//                                                                   Fitter.currentStage),
-//                                                                   the current run's log-likelihood trace,
-//                                                                   labels and their colours
+//                                                                   iterations made (one progress object each, with
+//                                                                   its run; a slice ends where a run ends), the run
+//                                                                   in progress ({name, number, fromTree, done},
+//                                                                   Fitter.currentStage), the run's log-likelihood
+//                                                                   trace, labels and their colours
 //     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
 //                                                                   coarseLabels, refinedLabels, colours {final,
 //                                                                   coarse, refined; see modelMessage}, latent
@@ -63,9 +60,11 @@ let model = null; // wasm FitModel of the last fit (final, or where a cancelled 
 let parked = null;
 let modelGeneration = 0; // bumped whenever the model is replaced (not when it is parked and restored)
 let modelComplete = false; // `model` is a finished fit's: a cancelled new fit keeps it
-// The last finished fit's parts and colours on this population: a new fit keeps the colour of every part that
-// is the same (posemfa::articulate::graph::colour_parts_like), so two fits compare by eye.
-let lastFinal = null; // { labels, colours }
+// The last finished fits' parts and colours on this population, the newest first (at most FITS_REMEMBERED): a new
+// fit keeps the colour of every part that is the same as one of theirs, the newest's first
+// (posemfa::articulate::graph::colour_parts_like), so fits compare by eye, and fits A, B, A show A alike.
+const FITS_REMEMBERED = 8;
+let finals = []; // [{ labels, colours }]
 let truth = null; // wasm Synthetic of a generated population (its ground truth), else null
 let fitToken = 0; // bumped by every new fit and population: a fit whose token is stale was superseded
 let cancelRequested = false;
@@ -102,10 +101,12 @@ const coloursOf = (labels) => (labels.length ? population.partColours(labels, PA
 // (posemfa::articulate::graph::colour_parts_like); plain colours without one
 const coloursLike = (labels, like, likeColours) => (labels.length && like?.length
   ? population.partColoursLike(labels, PALETTE_SIZE, like, likeColours) : coloursOf(labels));
-// colours like the last finished fit's where a part is the same; a finished fit becomes the one to follow
+// colours like the last finished fits' where a part is the same; a finished fit becomes the newest to follow
 function finalColours(labels, complete) {
-  const colours = coloursLike(labels, lastFinal?.labels, lastFinal?.colours);
-  if (complete && labels.length) lastFinal = { labels: labels.slice(), colours: colours.slice() };
+  const like = finals.filter((f) => f.labels.length === labels.length);
+  const concat = (key) => Uint32Array.from(like.flatMap((f) => Array.from(f[key])));
+  const colours = coloursLike(labels, concat('labels'), concat('colours'));
+  if (complete && labels.length) finals = [{ labels: labels.slice(), colours: colours.slice() }, ...finals].slice(0, FITS_REMEMBERED);
   return colours;
 }
 
@@ -131,7 +132,7 @@ function replacePopulation(pop, synth = null) {
   modelComplete = false;
   population?.free();
   population = pop;
-  lastFinal = null;
+  finals = [];
   truth?.free();
   truth = synth;
 }
@@ -346,7 +347,7 @@ const QUERIES = {
   // the merge tree's partition with n parts, coloured like the fitted parts where a part is the same
   treePartition: (n) => {
     const labels = model.treeLabels(n);
-    return { labels, colours: coloursLike(labels, lastFinal?.labels, lastFinal?.colours) };
+    return { labels, colours: coloursLike(labels, finals[0]?.labels, finals[0]?.colours) };
   },
   ...poseQueries(() => model, () => modelGeneration), // pose mode (issue 28): www/pose-queries.js
 };

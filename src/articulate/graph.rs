@@ -366,15 +366,17 @@ pub fn part_neighbours(labels: &[u32], faces: &[[u32; 3]], n_parts: usize) -> Ve
 /// Welsh-Powell order: most neighbours first, then the larger part, then the lower index. Parts are
 /// 0..=max(label); a part with more neighbours than colours takes the least used colour.
 pub fn colour_parts(labels: &[u32], faces: &[[u32; 3]], n_colours: usize) -> Vec<u32> {
-    colour_parts_like(labels, faces, n_colours, None)
+    colour_parts_like(labels, faces, n_colours, &[])
 }
 
-/// [`colour_parts`], keeping the colours of an earlier partition of the same vertices (`previous`: its labels and
-/// its colours) where a part is the same: a part that shares more than half of its vertices with an earlier part,
-/// and that earlier part more than half of its vertices with it, takes its colour; the others are coloured as
-/// [`colour_parts`] does around them. So two fits of one population can be compared by eye. Without `previous`,
-/// or when its vertex count differs, the same as [`colour_parts`].
-pub fn colour_parts_like(labels: &[u32], faces: &[[u32; 3]], n_colours: usize, previous: Option<(&[u32], &[u32])>) -> Vec<u32> {
+/// [`colour_parts`], keeping the colours of earlier partitions of the same vertices (`previous`: their labels and
+/// their colours, the newest first) where a part is the same: a part that shares more than half of its vertices
+/// with a part of the newest, and that part more than half of its vertices with it, takes its colour; a part
+/// none of the newest is, but one of an older partition is, takes that one's colour unless a neighbour has it
+/// already (so fits A, B and A again show A in A's colours); the others are coloured as [`colour_parts`] does
+/// around them. So fits of one population can be compared by eye. A partition of another vertex count is passed
+/// over; with none, the same as [`colour_parts`].
+pub fn colour_parts_like(labels: &[u32], faces: &[[u32; 3]], n_colours: usize, previous: &[(&[u32], &[u32])]) -> Vec<u32> {
     let n_parts = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
     if n_colours == 0 {
         return vec![0; n_parts];
@@ -386,13 +388,16 @@ pub fn colour_parts_like(labels: &[u32], faces: &[[u32; 3]], n_colours: usize, p
     }
     let mut colour: Vec<Option<usize>> = vec![None; n_parts];
     let mut used = vec![0usize; n_colours];
-    if let Some((before, before_colours)) = previous.filter(|(b, _)| b.len() == labels.len()) {
+    for (k, (before, before_colours)) in previous.iter().filter(|(b, _)| b.len() == labels.len()).enumerate() {
         for (l, b) in crate::parts::labels::same_parts(labels, before).into_iter().enumerate() {
             let c = b.and_then(|b| before_colours.get(b as usize)).map(|&c| c as usize).filter(|&c| c < n_colours);
-            if let Some(c) = c {
-                colour[l] = Some(c);
-                used[c] += 1;
+            let Some(c) = c.filter(|_| colour[l].is_none()) else { continue };
+            // (the newest partition's neighbours differ already; an older one's colour must not meet a neighbour's)
+            if k > 0 && adj[l].iter().any(|&q| colour[q] == Some(c)) {
+                continue;
             }
+            colour[l] = Some(c);
+            used[c] += 1;
         }
     }
     let mut order: Vec<usize> = (0..n_parts).filter(|&p| colour[p].is_none()).collect();
@@ -438,20 +443,37 @@ mod tests {
         let before: Vec<u32> = (0..n as u32).map(|v| (v / 2).min(7) / 2).collect();
         let first = colour_parts(&before, &faces, 12);
         let after: Vec<u32> = before.iter().map(|&l| if l == 3 { 2 } else { l }).collect();
-        let kept = colour_parts_like(&after, &faces, 12, Some((&before, &first)));
+        let kept = colour_parts_like(&after, &faces, 12, &[(&before, &first)]);
         assert_eq!(kept[0], first[0]);
         assert_eq!(kept[1], first[1]);
         // part 2 of `after` holds all of the old part 2 but is twice its size: not the same part
         assert!(kept.len() == 3);
         // without a previous partition, or with another vertex count: plain colour_parts
-        assert_eq!(colour_parts_like(&after, &faces, 12, None), colour_parts(&after, &faces, 12));
-        assert_eq!(colour_parts_like(&after, &faces, 12, Some((&before[1..], &first))), colour_parts(&after, &faces, 12));
+        assert_eq!(colour_parts_like(&after, &faces, 12, &[]), colour_parts(&after, &faces, 12));
+        assert_eq!(colour_parts_like(&after, &faces, 12, &[(&before[1..], &first)]), colour_parts(&after, &faces, 12));
         // a relabelled copy of the same partition keeps every colour
         let relabelled: Vec<u32> = before.iter().map(|&l| 3 - l).collect();
-        let again = colour_parts_like(&relabelled, &faces, 12, Some((&before, &first)));
+        let again = colour_parts_like(&relabelled, &faces, 12, &[(&before, &first)]);
         for k in 0..4 {
             assert_eq!(again[3 - k], first[k]);
         }
+    }
+
+    #[test]
+    fn a_fit_like_one_before_the_last_gets_its_colours_back() {
+        // fits A, B, A again: B merged A's last two parts; the second A matches A's parts, not B's
+        let (faces, n) = quad_strip(8);
+        let a: Vec<u32> = (0..n as u32).map(|v| (v / 2).min(7) / 2).collect();
+        let b: Vec<u32> = a.iter().map(|&l| l.min(2)).collect();
+        let colours_a: Vec<u32> = vec![5, 7, 9, 11];
+        let colours_b = colour_parts_like(&b, &faces, 12, &[(&a, &colours_a)]);
+        assert_eq!(&colours_b[..2], &colours_a[..2]);
+        let again = colour_parts_like(&a, &faces, 12, &[(&b, &colours_b), (&a, &colours_a)]);
+        assert_eq!(again, colours_a, "A's parts in A's colours again");
+        // an older colour is not taken where a neighbour has it already: part 3 touches part 2
+        let clash: Vec<u32> = vec![5, 7, 9, 9];
+        let again = colour_parts_like(&a, &faces, 12, &[(&b, &colours_b), (&a, &clash)]);
+        assert_ne!(again[3], again[2]);
     }
 
     /// Parts two steps apart (sharing a neighbour) differ too where the colours allow: on the generated

@@ -121,6 +121,24 @@ pub fn narrow(p: [f64; 3]) -> [f32; 3] {
 
 /// Natural order of names: digit runs compare as numbers ("2.obj" < "10.obj"), the rest byte-wise,
 /// case-insensitively first.
+/// The error for the first name that comes twice in `sorted` (names in natural order): the poses are ordered by
+/// their names, so two files of one name (from two folders, say) cannot be told apart nor put in order.
+fn repeated_name<'a>(sorted: impl Iterator<Item = &'a str>) -> Option<Error> {
+    let mut last: Option<&str> = None;
+    for name in sorted {
+        if last == Some(name) {
+            return Some(Error::Population {
+                file: name.to_string(),
+                message: "two of the files are named so: the poses are ordered by their file names, so each needs \
+                          its own; rename one, or open the files of one folder at a time"
+                    .into(),
+            });
+        }
+        last = Some(name);
+    }
+    None
+}
+
 pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
     use std::cmp::Ordering;
     let (ab, bb) = (a.as_bytes(), b.as_bytes());
@@ -260,6 +278,9 @@ impl Population {
             });
         }
         named.sort_by(|a, b| natural_cmp(&a.0, &b.0));
+        if let Some(e) = repeated_name(named.iter().map(|n| n.0.as_str())) {
+            return Err(e);
+        }
         let (first_name, first) = (&named[0].0, &named[0].1);
         // (with faces_of_first, a mesh of the first one's vertex count carries no faces to compare)
         let checked = named.iter().enumerate().filter(|(k, (_, mesh))| {
@@ -341,6 +362,9 @@ impl Population {
         }
         let mut order: Vec<usize> = (0..names.len()).collect();
         order.sort_by(|&a, &b| natural_cmp(&names[a], &names[b]));
+        if let Some(e) = repeated_name(order.iter().map(|&i| names[i].as_str())) {
+            return Err(vec![e]);
+        }
         let other: Vec<Error> = order
             .iter()
             .filter(|&&i| !matches!(FileKind::of(&names[i]), FileKind::Obj | FileKind::Ply))
@@ -726,6 +750,23 @@ mod tests {
     }
 
     #[test]
+    fn two_files_of_one_name_are_refused_by_that_name() {
+        // two folders' 2.obj picked together: which pose is which cannot be told, nor their order
+        let f = "f 1 2 3\nf 1 3 4\n";
+        let files = vec![("2.obj".to_string(), quad_obj(0.0, f)), ("1.obj".to_string(), quad_obj(0.1, f)), ("2.obj".to_string(), quad_obj(0.2, f))];
+        let want = "file 2.obj: two of the files are named so: the poses are ordered by their file names, so each needs its own; rename one, or open the files of one folder at a time";
+        assert_eq!(messages(&Population::from_files_all_errors(files.clone())), [want]);
+        let names: Vec<String> = files.iter().map(|f| f.0.clone()).collect();
+        let one = Population::read_one_at_a_time(&names, |i, b| {
+            b.extend_from_slice(&files[i].1);
+            Ok(())
+        }, usize::MAX);
+        assert_eq!(messages(&one), [want]);
+        // distinct names read as before
+        assert!(Population::from_files_all_errors(vec![files[0].clone(), files[1].clone()]).is_ok());
+    }
+
+    #[test]
     fn files_read_one_at_a_time_give_the_same_population_and_the_same_errors() {
         let f = "f 1 2 3\nf 1 3 4\n";
         // a good set, given out of order: the same population, source and all
@@ -859,7 +900,11 @@ mod tests {
         // 1.obj of a horse and 1.obj of a lion, dropped together from two folders
         let mut m = tri(0.0);
         m.positions.push([0.0, 0.0, 1.0]);
-        let e = Population::from_meshes(vec![("1.obj".into(), tri(0.0)), ("1.obj".into(), m)]).unwrap_err();
+        // (a population refuses two files of one name at once; the mismatch among the files that read, listed
+        // beside another file's error, still tells them apart)
+        let e = check_same_mesh("1.obj", &tri(0.0), "1.obj", &m).unwrap_err();
         assert!(e.to_string().contains("has 4 vertices but the first file, also named 1.obj, has 3"), "{e}");
+        let e = Population::from_meshes(vec![("1.obj".into(), tri(0.0)), ("1.obj".into(), m)]).unwrap_err();
+        assert!(e.to_string().contains("two of the files are named so"), "{e}");
     }
 }

@@ -1,7 +1,7 @@
 // An eighth newcomer's review (docs/page-fixes.md): the clicked vertex's box goes when a new model comes (its
 // part and error were the old model's) and when pose mode shows the rig's rest pose; the diagnosis of a count
-// Refine asked for is no verdict when that count is too few, not "Not articulated". (Refine fitting the partition
-// the slider shows: tree.test.mjs.)
+// Refine asked for is no verdict when that count is too few, not "Not articulated"; fits A, B and A again show A
+// in A's colours. (Refine fitting the partition the slider shows: tree.test.mjs.)
 // Run: npm run build && node --test tests/e2e/review8.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -44,6 +44,26 @@ test('Refine of a few parts: no verdict, not "Not articulated"', async () => {
   await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state === 'fitted', c, { timeout: 120000 });
   assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, 2);
   assert.match(await page.locator('[data-testid=diagnosis]').innerText(), /^No verdict: 2 rigid parts \(a count the part rule did not judge\) explain/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('fits A, B and A again: the second A has the first A\'s colours', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const fitWith = async (parts) => {
+    const c = await page.evaluate(() => window.posemfa.fitCount());
+    await page.fill('input[name=targetParts]', parts);
+    await page.click('#fit');
+    await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state === 'fitted', c, { timeout: 120000 });
+    return page.evaluate(() => window.posemfa.fittedParts());
+  };
+  const a = await page.evaluate(() => window.posemfa.fittedParts());
+  const b = await fitWith('6');
+  assert.equal(new Set(b.labels).size, 6);
+  const again = await fitWith('');
+  assert.deepEqual(again.labels, a.labels, 'the same fit');
+  assert.deepEqual(again.colours, a.colours, 'A\'s parts in other colours after B');
   assert.deepEqual(log.errors, []);
   await context.close();
 });
