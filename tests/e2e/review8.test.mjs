@@ -67,3 +67,35 @@ test('fits A, B and A again: the second A has the first A\'s colours', async () 
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('pose mode: the pose-space sliders follow the pose shown (rest pose, a turn), 0 at the mean pose', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await page.click('[data-testid=mode-pose]');
+  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  const sliders = () => page.$$eval('#pose-modes input', (xs) => xs.map((x) => Number(x.value)));
+  // each slider's value as the range and step put the pose's coordinate
+  const placed = (coords) => page.$$eval('#pose-modes input', (xs, c) => xs.map((x) => {
+    const probe = x.cloneNode();
+    probe.value = String(c[Number(x.dataset.mode)]);
+    return Number(probe.value);
+  }), coords);
+  const settled = async (what) => {
+    const want = await placed((await page.evaluate(() => window.posemfa.pose.vector())).coords);
+    await page.waitForFunction((w) => [...document.querySelectorAll('#pose-modes input')].every((x, k) => Number(x.value) === w[k]), want, { timeout: 10000 })
+      .catch(async () => assert.fail(`${what}: sliders ${await sliders()} for the pose's ${want}`));
+    return want;
+  };
+  await page.click('#pose-reset');
+  const rest = await settled('rest pose');
+  await page.click('#pose-mean');
+  const zero = await placed(new Array(rest.length).fill(0));
+  await page.waitForFunction((w) => [...document.querySelectorAll('#pose-modes input')].every((x, k) => Number(x.value) === w[k]), zero, { timeout: 10000 });
+  assert.notDeepEqual(rest, zero, 'the rest pose is not the mean pose, and its sliders say so');
+  await page.click('#pose-plus');
+  await page.click('#pose-plus');
+  const turned = await settled('after a turn');
+  assert.notDeepEqual(turned, zero, 'a turned part moves the pose off the mean');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

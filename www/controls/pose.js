@@ -130,7 +130,10 @@ function showAngle() {
   $('pose-undo').disabled = pose.undo.length === 0;
 }
 
-function took(r) {
+// A pose shown: its positions and angles; `sliders`: the pose-space sliders follow it (its coordinates along the
+// modes; not when the sliders themselves made it)
+function took(r, { sliders = true } = {}) {
+  if (sliders) query('poseVector').then((v) => setModeSliders(v.coords), (e) => { $('pose-status').textContent = e.message; });
   pose.positions = r.positions;
   pose.angles = r.angles;
   pose.showFrames = false;
@@ -182,7 +185,7 @@ const turn = orReport(turnPart);
 async function applyModes(whole = 'modes') {
   if (!pose.skeleton) return;
   pose.whole = whole;
-  took(await query('poseModes', modeValues()));
+  took(await query('poseModes', modeValues()), { sliders: false });
 }
 
 // Drag: pointer down on a part (capture phase, before the orbit controls) selects it; moving turns it about the
@@ -310,7 +313,6 @@ export function installPose() {
   }));
   $('pose-reset').addEventListener('click', orReport(async () => {
     await remember();
-    setModeSliders([]);
     pose.whole = 'rest';
     took(await query('poseReset'));
   }));
@@ -324,7 +326,7 @@ export function installPose() {
     const c = await query('poseRandom', Math.floor(Math.random() * 2 ** 31));
     setModeSliders(Array.from(c));
     pose.whole = 'random';
-    took(await query('poseModes', Array.from(c)));
+    took(await query('poseModes', Array.from(c)), { sliders: false });
   }));
   $('pose-export-obj').addEventListener('click', orReport(async () => {
     download(`posemfa-${populationStem()}-pose.obj`, await query('poseObj', 'a pose made in posemfa pose mode'), 'model/obj');
