@@ -53,31 +53,16 @@ test('Refine fits the chosen count, and parts that stay keep their colours', asy
   assert.equal((await page.evaluate(() => window.posemfa.tree())).shown, null);
   const after = await page.evaluate(() => window.posemfa.fittedParts());
   // parts that are the same (more than half of each in the other) keep their colour
-  const overlap = new Map();
-  const sizeA = new Map();
-  const sizeB = new Map();
-  after.labels.forEach((l, v) => {
-    const b = before.labels[v];
-    overlap.set(`${l},${b}`, (overlap.get(`${l},${b}`) ?? 0) + 1);
-    sizeA.set(l, (sizeA.get(l) ?? 0) + 1);
-    sizeB.set(b, (sizeB.get(b) ?? 0) + 1);
-  });
-  let same = 0;
-  for (const [key, n] of overlap) {
-    const [l, b] = key.split(',').map(Number);
-    if (2 * n > sizeA.get(l) && 2 * n > sizeB.get(b)) {
-      same++;
-      assert.equal(after.colours[l], before.colours[b], `part ${l} (was ${b}) changed colour`);
-    }
-  }
-  assert.ok(same >= want - 4, `only ${same} of ${want} parts matched an earlier part`);
+  const same = sameParts(after.labels, before.labels);
+  for (const [l, b] of same) assert.equal(after.colours[l], before.colours[b], `part ${l} (was ${b}) changed colour`);
+  assert.ok(same.length >= want - 4, `only ${same.length} of ${want} parts matched an earlier part`);
   // Refine fits the partition the slider showed: each of its parts is one of the refit's
-  assert.equal(matchedParts(after.labels, shown.labels), want, 'the refit is not the partition the slider showed');
+  assert.equal(sameParts(after.labels, shown.labels).length, want, 'the refit is not the partition the slider showed');
   assert.deepEqual(log.errors, []);
 });
 
-// How many parts of `a` are a part of `b` (more than half of each in the other).
-function matchedParts(a, b) {
+// The parts of `a` that are a part of `b` (more than half of each in the other): [[part of a, part of b]].
+function sameParts(a, b) {
   const overlap = new Map();
   const sizeA = new Map();
   const sizeB = new Map();
@@ -87,12 +72,8 @@ function matchedParts(a, b) {
     sizeA.set(l, (sizeA.get(l) ?? 0) + 1);
     sizeB.set(b[v], (sizeB.get(b[v]) ?? 0) + 1);
   });
-  let same = 0;
-  for (const [key, n] of overlap) {
-    const [l, m] = key.split(',').map(Number);
-    if (2 * n > sizeA.get(l) && 2 * n > sizeB.get(m)) same++;
-  }
-  return same;
+  return [...overlap].map(([key, n]) => [...key.split(',').map(Number), n])
+    .filter(([l, m, n]) => 2 * n > sizeA.get(l) && 2 * n > sizeB.get(m)).map(([l, m]) => [l, m]);
 }
 
 test('on horse-poses every count of the tree shows at once (needs ../shared)', async (t) => {
