@@ -249,6 +249,36 @@ fn bones_n_gives_exactly_n_parts() {
     assert_eq!(v["islands"].as_u64(), Some(0));
 }
 
+/// `--start-labels`: the fit from a given partition keeps its count (a fit JSON's labels, or an array of them);
+/// a file that is no partition is refused naming the flag and the file.
+#[test]
+fn start_labels_fit_from_a_partition_with_its_count() {
+    let dir = std::env::temp_dir().join(format!("posemfa-cli-start-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let first = dir.join("first.json");
+    let r = posemfa(&["fit", "synth:quadruped:1500:8:1", "--bones", "7", "--quiet", "--json", first.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&first).unwrap()).unwrap();
+    let labels: Vec<u32> = serde_json::from_value(v["labels"].clone()).unwrap();
+    // the seven parts given as a plain array, with part 0 and part 1 as one: six parts
+    let six: Vec<u32> = labels.iter().map(|&l| l.max(1) - 1).collect();
+    let array = dir.join("six.json");
+    std::fs::write(&array, serde_json::to_string(&six).unwrap()).unwrap();
+    let out = dir.join("out.json");
+    for (start, want) in [(&first, 7), (&array, 6)] {
+        let r = posemfa(&["fit", "synth:quadruped:1500:8:1", "--start-labels", start.to_str().unwrap(), "--quiet", "--json", out.to_str().unwrap()]);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        let w: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        assert_eq!(w["parts"].as_array().map(Vec::len), Some(want), "{}", start.display());
+    }
+    std::fs::write(&array, "{\"a\": 1}").unwrap();
+    let r = posemfa(&["fit", "synth:quadruped:1500:8:1", "--start-labels", array.to_str().unwrap()]);
+    assert!(!r.status.success());
+    let e = text(&r.stderr);
+    assert!(e.contains("--start-labels") && e.contains("six.json") && e.contains("nor a fit JSON with `labels`"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `posemfa generate --format F` writes each format a user can try, and `posemfa fit` reads each back to the
 /// same population: the same fit as from the OBJ files (labels with adjusted Rand index >= 0.99), and the
 /// `poses:` line says where the poses came from.

@@ -196,9 +196,25 @@ pub struct FitArgs {
     /// Exact part count: auto (Algorithm 1's own) or N (split / merge until N)
     #[arg(long, value_name = "N", default_value = "auto", value_parser = bones)]
     bones: Bones,
+    /// Fit from this partition, with exactly its count (the page's Refine): a JSON array of one part per vertex,
+    /// or a fit JSON (`fit --json`: its `labels`)
+    #[arg(long, value_name = "FILE")]
+    start_labels: Option<std::path::PathBuf>,
     /// (last: its options under their own heading)
     #[command(flatten)]
     pub input: InputArgs,
+}
+
+/// One part per vertex from `path`: a JSON array of labels, or a fit JSON's `labels`.
+fn read_labels(path: &std::path::Path) -> Result<Vec<u32>, String> {
+    let shown = path.display();
+    let text = std::fs::read_to_string(path).map_err(|e| format!("--start-labels {shown}: cannot read it: {e}"))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("--start-labels {shown}: not JSON ({e}); give an array of labels or a fit JSON"))?;
+    let labels = value.get("labels").unwrap_or(&value);
+    serde_json::from_value(labels.clone()).map_err(|_| {
+        format!("--start-labels {shown}: not an array of whole numbers (one part per vertex) nor a fit JSON with `labels`")
+    })
 }
 
 impl FitArgs {
@@ -219,6 +235,9 @@ impl FitArgs {
             target_parts: self.bones.0,
             ..Params::default()
         };
+        if let Some(path) = &self.start_labels {
+            p.start_labels = Some(read_labels(path)?);
+        }
         if self.literal_eq18 {
             p.lambda_rule = LambdaRule::PaperEq18;
         }
