@@ -110,8 +110,8 @@ pub struct FitResult {
     /// other part rules, `refine` off, and a step-by-step lesson): what the page names the stages after.
     pub from_merge_tree: bool,
     /// The part count is the user's own, with no rule behind it (`refine` off: Algorithm 1's coarse stage alone,
-    /// m = `parts`; or a partition given to start from, [`Params::start_labels`]), so too few parts cannot be told from a shape that is no articulated one
-    /// ([`super::diagnosis::diagnose_fit`]).
+    /// m = `parts`; or a partition given to start from, [`Params::start_labels`]), so too few parts cannot be
+    /// told from a shape that is no articulated one ([`super::diagnosis::diagnose_fit`]).
     pub count_unjudged: bool,
 }
 
@@ -1172,11 +1172,6 @@ impl Pipeline {
     }
 }
 
-/// An empty stand-in while a finished refinement fit is moved out (never stepped).
-/// [`PartRule::Tree`]'s start ([`Pipeline::from_tree`]): the patches' tree cut at [`TREE_START_RATIO`] times its
-/// [`MergeTree::merge_yardstick`] (with `target_parts`: at [`TREE_COUNT_START_RATIO`] times its typical variance),
-/// not cut when it has fewer than [`TREE_CUT_LEAVES`] patches; then, when the part rule decides the count, the
-/// start's flesh dissolved ([`dissolve_start_flesh`]). Returns the cut and the start (compact labels).
 /// The number of parts of [`Params::start_labels`], once they are found to be a start for `pop`: one label per
 /// vertex, with the merge tree's part rule.
 fn check_start_labels(start: &[u32], pop: &Population, params: &Params) -> Result<usize> {
@@ -1192,11 +1187,14 @@ fn check_start_labels(start: &[u32], pop: &Population, params: &Params) -> Resul
             "startLabels needs the merge tree's part rule (partRule \"tree\", refine on): Algorithm 1 starts from its own k-means++ draw".into(),
         ));
     }
-    let parts = compact(start).iter().max().map_or(0, |&l| l as usize + 1);
-    super::part_count::check_target(params.target_parts.unwrap_or(parts), pop.n_vertices(), params.min_part_vertices)?;
-    Ok(parts)
+    // (the count is checked against the population with any count asked for, in Pipeline::new)
+    Ok(compact(start).iter().max().map_or(0, |&l| l as usize + 1))
 }
 
+/// [`PartRule::Tree`]'s start ([`Pipeline::from_tree`]): the patches' tree cut at [`TREE_START_RATIO`] times its
+/// [`MergeTree::merge_yardstick`] (with `target_parts`: at [`TREE_COUNT_START_RATIO`] times its typical variance),
+/// not cut when it has fewer than [`TREE_CUT_LEAVES`] patches; then, when the part rule decides the count, the
+/// start's flesh dissolved ([`dissolve_start_flesh`]). Returns the cut and the start (compact labels).
 fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32>, Vec<u32>)> {
     // the patches' own yardstick, not the variance floor: on clean data the patches fit far below the floor,
     // and the floor as the yardstick merged the generated hand's fingertips before the AECM
