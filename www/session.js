@@ -144,11 +144,10 @@ function onLoaded(pop, fitId) {
   liveLabels = null;
 }
 
-/** A fit of the population shown, with the form's parameters. A step-by-step fit in hand (paused or running) is
- * dropped by it: asked first, as Step / Run / Reset ask before they drop a finished fit (teach.js); a dismissed
- * question changes nothing. */
-/** Fits the population with the form's parameters; `startLabels` (one part per vertex): from that partition,
- * with exactly its number of parts (the merge tree's Refine). */
+/** A fit of the population shown, with the form's parameters; with `startLabels` (one part per vertex), from
+ * that partition with exactly its number of parts (the merge tree's Refine). A step-by-step fit in hand (paused
+ * or running) is dropped by it: asked first, as Step / Run / Reset ask before they drop a finished fit
+ * (teach.js); a dismissed question changes nothing. */
 export async function startFit({ startLabels = null } = {}) {
   if (!state.pop) return;
   const teaching = state.teach !== null && state.fitId === state.teach.id;
