@@ -101,7 +101,7 @@ function showResult() {
   // the merge tree (the default part rule) starts from its own cut, not from Algorithm 1's coarse and refined
   // stages: said the same for a finished fit and for one cancelled before it finished (which has no tree yet)
   // (Algorithm 1 without the refinement: a part of the coarse fit in pieces becomes a part per piece)
-  const pieces = s && !isTreeFit(state.model) && s.parts > s.refinedParts ? `; ${s.parts} once each part is one connected piece` : '';
+  const pieces = s && s.complete && !s.cancelled && !isTreeFit(state.model) && s.parts > s.refinedParts ? `; ${s.parts} once each part is one connected piece` : '';
   const stages = isTreeFit(state.model) ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}${pieces}`;
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   // a generated population is in the unit box already: one figure for both units when they print the same
