@@ -80,11 +80,17 @@ test('pose mode: the pose-space sliders follow the pose shown (rest pose, a turn
     probe.value = String(c[Number(x.dataset.mode)]);
     return Number(probe.value);
   }), coords);
+  // the sliders at the pose's coordinates, once the actions asked for have all been made (the pose is read
+  // again until the two agree: a click's turn can still be on its way when the pose is first read)
   const settled = async (what) => {
-    const want = await placed((await page.evaluate(() => window.posemfa.pose.vector())).coords);
-    await page.waitForFunction((w) => [...document.querySelectorAll('#pose-modes input')].every((x, k) => Number(x.value) === w[k]), want, { timeout: 10000 })
-      .catch(async () => assert.fail(`${what}: sliders ${await sliders()} for the pose's ${want}`));
-    return want;
+    let want = null;
+    for (let tries = 0; tries < 100; tries++) {
+      want = await placed((await page.evaluate(() => window.posemfa.pose.vector())).coords);
+      const now = await sliders();
+      if (now.every((x, k) => x === want[k])) return want;
+      await page.waitForTimeout(100);
+    }
+    return assert.fail(`${what}: sliders ${await sliders()} for the pose's ${want}`);
   };
   await page.click('#pose-reset');
   const rest = await settled('rest pose');
