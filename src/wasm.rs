@@ -393,24 +393,10 @@ impl FitModel {
         Uint32Array::from(self.model().labels.as_slice())
     }
 
-    /// The merge tree of the default part rule (`posemfa::parts::merge_tree`): {most, fewest, decided} part
-    /// counts it holds and the count the rule read off it; null with Algorithm 1's rules.
-    #[wasm_bindgen(js_name = treeCounts)]
-    pub fn tree_counts(&self) -> Result<JsValue, JsValue> {
-        let Some(t) = &self.result.merge_tree else { return Ok(JsValue::NULL) };
-        let (most, fewest) = t.counts();
-        to_js(&serde_json::json!({ "most": most, "fewest": fewest, "decided": self.result.tree_count }))
-    }
-
-    /// The merge tree's partition with `count` parts (one label per vertex; clamped to the tree's counts); at
-    /// the decided count, the fitted model's own labels.
-    #[wasm_bindgen(js_name = treeLabels)]
-    pub fn tree_labels(&self, count: usize) -> Result<Uint32Array, JsValue> {
-        let Some(t) = &self.result.merge_tree else { return Err(js_err("this fit has no merge tree (part rule tree only)")) };
-        if Some(count) == self.result.tree_count && self.model().n_parts() == count {
-            return Ok(self.labels());
-        }
-        Ok(Uint32Array::from(t.labels_at(count).as_slice()))
+    /// The partitions of the default part rule's merge tree ([`TreeCuts`]); undefined with Algorithm 1's rules.
+    #[wasm_bindgen(js_name = treeCuts)]
+    pub fn tree_cuts(&self) -> Option<TreeCuts> {
+        self.result.tree_cuts().map(TreeCuts)
     }
 
     #[wasm_bindgen(js_name = coarseLabels)]
@@ -537,6 +523,27 @@ enum Parked {
     Taken { result: FitResult, labels: Uint32Array, latent: Float64Array, coarse: Uint32Array, refined: Uint32Array, decided: Option<Uint32Array>, leaves: Option<Uint32Array> },
     /// Another holder shares the result, so taking its arrays out would free nothing: it is kept as it is.
     Shared(Rc<FitResult>),
+}
+
+/// The partitions of a fit's merge tree, one for every count ([`crate::parts::merge_tree::TreeCuts`]): its own
+/// object, so that the page keeps the tree of the fit a Refine started from after that fit is gone.
+#[wasm_bindgen]
+pub struct TreeCuts(crate::parts::merge_tree::TreeCuts);
+
+#[wasm_bindgen]
+impl TreeCuts {
+    /// {most, fewest, decided}: the part counts the tree holds, and the count the part rule read off it (null
+    /// with a count asked for).
+    pub fn counts(&self) -> Result<JsValue, JsValue> {
+        let (most, fewest) = self.0.counts();
+        to_js(&serde_json::json!({ "most": most, "fewest": fewest, "decided": self.0.decided() }))
+    }
+
+    /// The partition with `count` parts, one label per vertex (clamped to the tree's counts); at the decided
+    /// count, the fit's own labels.
+    pub fn labels(&self, count: usize) -> Uint32Array {
+        Uint32Array::from(self.0.labels(count).as_slice())
+    }
 }
 
 fn take_u32(v: &mut Vec<u32>) -> Uint32Array {

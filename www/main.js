@@ -18,7 +18,7 @@ import { installForm, fillParams, readParams, showExamples } from './controls/fo
 import { installPoses } from './controls/poses.js';
 import { installInterp } from './controls/interp.js';
 import { installPose } from './controls/pose.js';
-import { installTree } from './controls/tree.js';
+import { installTree, refine } from './controls/tree.js';
 import { installToolbar } from './controls/toolbar.js';
 import { installExports } from './controls/exports.js';
 import { installDrop } from './drop.js';
@@ -79,7 +79,7 @@ subscribe((s, changed) => {
 });
 
 const urlState = installUrlState({
-  viewer, readParams, renderView, runExample, generate, note, teach: (count) => teach('teach-step', { count }),
+  viewer, readParams, renderView, runExample, generate, note, refine, teach: (count) => teach('teach-step', { count }),
 });
 installPoses(); // before the views: a new population's pose lists are filled before its first picture
 installViews();

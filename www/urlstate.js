@@ -6,6 +6,8 @@
 //   src=files                  opened or dropped files (not in the link: the default example is shown)
 //   parts, bones=N|auto, seed, tol, floor, lambda=exact|paper-eq18, refine=0|1   fit parameters (the form's;
 //                              bones: "Parts in the end", targetParts; absent = auto, the part rule's own count)
+//   cut=N                      the parts were refined from the N-part partition of that fit's merge tree
+//                              ("Refine N parts"): the link makes the fit, then the Refine
 //   teach=N, stage=coarse|refine|final   a teaching fit N steps in (and the Algorithm 1 stage it was in): the
 //                              link opens on the same step (the steps are deterministic)
 //   view=parts|stages|recon|latent|interp|truth   flat=0|1   pose=I (0-based)
@@ -21,7 +23,7 @@ export const CONTROLS = ['header', 'panel', 'toolbar', 'modes', 'caption', 'pose
 const EMBED_HIDES = ['header', 'panel', 'toolbar', 'poses', 'interp'];
 const MODES = ['parts', 'stages', 'recon', 'latent', 'interp', 'truth'];
 const STAGES = ['coarse', 'refine', 'final', 'done'];
-const ORDER = ['ex', 'gen', 'src', 'parts', 'bones', 'seed', 'tol', 'floor', 'lambda', 'refine', 'teach', 'stage', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];
+const ORDER = ['ex', 'gen', 'src', 'parts', 'bones', 'seed', 'tol', 'floor', 'lambda', 'refine', 'cut', 'teach', 'stage', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];
 
 const num = (v) => (v === null || v === undefined || v === '' || !Number.isFinite(Number(v)) ? undefined : Number(v));
 const bool = (v) => (v === '1' ? true : v === '0' ? false : undefined);
@@ -47,6 +49,8 @@ export function parseHash(hash) {
   if (['exact', 'paper-eq18'].includes(q.get('lambda'))) params.lambdaRule = q.get('lambda');
   if (bool(q.get('refine')) !== undefined) params.refine = bool(q.get('refine'));
   if (Object.keys(params).length) s.params = params;
+  const cut = num(q.get('cut'));
+  if (Number.isInteger(cut) && cut >= 1) s.cut = cut;
   const steps = num(q.get('teach'));
   if (steps !== undefined && Number.isInteger(steps) && steps >= 1) {
     s.teach = { steps, stage: STAGES.includes(q.get('stage')) ? q.get('stage') : undefined };
@@ -81,6 +85,7 @@ export function formatHash(s) {
   if (p.varianceFloor !== undefined) q.floor = p.varianceFloor;
   if (p.lambdaRule !== undefined) q.lambda = p.lambdaRule;
   if (p.refine !== undefined) q.refine = p.refine ? 1 : 0;
+  if (s.cut) q.cut = s.cut;
   if (s.teach) {
     q.teach = s.teach.steps;
     if (s.teach.stage) q.stage = s.teach.stage;
@@ -112,7 +117,8 @@ export function applyEmbedFlags(s, body = document.body) {
 applyEmbedFlags(parseHash(location.hash));
 
 /**
- * ctx (from main.js): { viewer, readParams, renderView, runExample, generate, note, teach(count) }.
+ * ctx (from main.js): { viewer, readParams, renderView, runExample, generate, note, teach(count), refine(n) (the
+ *   merge tree's Refine: a promise of false when the tree cannot give n parts) }.
  * Returns { start(): true when the hash chose what to load (and loaded it) }.
  */
 export function installUrlState(ctx) {
@@ -120,7 +126,8 @@ export function installUrlState(ctx) {
   const $ = (id) => document.getElementById(id);
   let restoring = null; // view state waiting for the fit to end
   let source = null; // { ex } | { gen } | { src: 'files' } of the population shown
-  let fitParams = null; // the form's fit parameters when the shown model was fitted
+  let fitParams = null; // the form's fit parameters when the shown model was fitted (a Refine's: its tree's fit's)
+  let cut = null; // the count of the tree's partition the shown model was refined from (Refine), or null
   let flags = parseHash(location.hash);
   let written = location.hash.replace(/^#/, '');
   let timer = 0;
@@ -132,6 +139,7 @@ export function installUrlState(ctx) {
     if (fitParams && !s.src) {
       const { parts, targetParts, seed, tol, varianceFloor, lambdaRule, refine } = fitParams;
       s.params = { parts, targetParts, seed, tol, varianceFloor, lambdaRule, refine };
+      if (cut) s.cut = cut;
     }
     const t = state.teach;
     if (t && state.fitId === t.id && t.iteration > 0 && !s.src) s.teach = { steps: t.iteration, stage: t.stage?.kind ?? 'coarse' };
@@ -214,12 +222,12 @@ export function installUrlState(ctx) {
     if (s.ex) {
       const ex = examples.find((e) => e.id === s.ex);
       if (!ex) return false;
-      restoring = { ...s.view, teach: s.teach };
+      restoring = { ...s.view, teach: s.teach, cut: s.teach ? null : s.cut };
       ctx.runExample(ex, s.params, opts);
       return true;
     }
     if (s.gen) {
-      restoring = { ...s.view, teach: s.teach };
+      restoring = { ...s.view, teach: s.teach, cut: s.teach ? null : s.cut };
       ctx.generate(s.gen, null, s.params, opts);
       return true;
     }
@@ -233,7 +241,7 @@ export function installUrlState(ctx) {
     const s = parseHash(h);
     flags = s;
     applyEmbedFlags(s);
-    const sameSource = formatHash({ ex: s.ex, gen: s.gen, params: s.params }) === formatHash({ ...source, params: current().params });
+    const sameSource = formatHash({ ex: s.ex, gen: s.gen, params: s.params, cut: s.cut }) === formatHash({ ...source, params: current().params, cut });
     if (sameSource && state.model) applyView(s.view ?? {});
     else load(s);
   });
@@ -259,6 +267,16 @@ export function installUrlState(ctx) {
     });
   }
 
+  // A link's Refine once its fit is in; its view waits for the refined fit.
+  async function refineLink(n, tree) {
+    restoring = { ...restoring, cut: null };
+    await Promise.resolve(); // after every view has taken the fit (the slider takes its tree)
+    if (await ctx.refine(n)) return;
+    const has = tree ? `its merge tree holds ${tree.fewest}-${tree.most} parts` : 'it has no merge tree';
+    ctx.note(`This link’s parts were refined from ${n} parts of the merge tree, but ${has} here: showing the fit’s own parts.`);
+    restored();
+  }
+
   subscribe((st, changed) => {
     if (changed.has('pop') && restoring?.teach) queueMicrotask(() => ctx.teach(restoring.teach.steps));
     if (changed.has('teach') && restoring?.teach && st.teach && st.teach.iteration >= restoring.teach.steps) {
@@ -279,8 +297,13 @@ export function installUrlState(ctx) {
     const newTeachingFit = changed.has('teach') && st.teach && st.teach.id !== lastTeachId;
     if (newTeachingFit) lastTeachId = st.teach.id;
     if ((changed.has('model') && st.model) || newTeachingFit) {
-      fitParams = ctx.readParams();
-      if (changed.has('model') && restoring) {
+      const refined = changed.has('model') && !!st.model?.refinedFromTree;
+      // a Refine's parts are the link's fit and its count of the tree: the parameters stay that fit's
+      if (refined) cut = st.model.summary.parts;
+      else [fitParams, cut] = [ctx.readParams(), null];
+      if (changed.has('model') && st.model && restoring?.cut && !refined) {
+        refineLink(restoring.cut, st.model.tree);
+      } else if (changed.has('model') && restoring) {
         restored();
       } else {
         schedule();

@@ -32,7 +32,8 @@
 //                                                                   trace, labels and their colours
 //     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
 //                                                                   coarseLabels, refinedLabels, colours {final,
-//                                                                   coarse, refined; see modelMessage}, latent
+//                                                                   coarse, refined; see modelMessage}, latent,
+//                                                                   tree, refinedFromTree
 //     { type: 'fitted', id, cancelled: true, kept: true, fitMs }    a cancelled fit of a population whose
 //                                                                   finished model stays (no model sent)
 //     { type: 'fit-error', id, message, problems }
@@ -47,6 +48,7 @@ import init, * as wasm from './pkg/posemfa.js';
 import wasmUrl from './pkg/posemfa_bg.wasm?url';
 import { Teacher } from './teach-worker.js';
 import { poseQueries } from './pose-queries.js';
+import { FitMemory } from './fit-memory.js';
 
 const SLICE_MS = 40; // one fitter.run(budget) call; the worker reads its messages between slices
 const PALETTE_SIZE = 12; // colors.js PALETTE.length
@@ -60,14 +62,11 @@ let model = null; // wasm FitModel of the last fit (final, or where a cancelled 
 let parked = null;
 let modelGeneration = 0; // bumped whenever the model is replaced (not when it is parked and restored)
 let modelComplete = false; // `model` is a finished fit's: a cancelled new fit keeps it
-// The last finished fits' parts and colours on this population, the newest first (at most FITS_REMEMBERED): a new
-// fit keeps the colour of every part that is the same as one of theirs, the newest's first
-// (posemfa::articulate::graph::colour_parts_like), so fits compare by eye, and fits A, B, A show A alike.
-const FITS_REMEMBERED = 8;
-let finals = []; // [{ labels, colours }]
+const memory = new FitMemory(PALETTE_SIZE); // the finished fits' colours and merge tree (fit-memory.js)
 let truth = null; // wasm Synthetic of a generated population (its ground truth), else null
 let fitToken = 0; // bumped by every new fit and population: a fit whose token is stale was superseded
 let cancelRequested = false;
+let refiningFit = false; // the fit claimed last starts from a partition of the tree kept (Refine)
 
 const post = (msg, transfer = []) => self.postMessage(msg, transfer);
 
@@ -94,21 +93,8 @@ const yieldToEvents = () => new Promise((resolve) => { pending.push(resolve); ch
 // src/wasm.rs). Anything else (a JS error of this file) is one problem of its own.
 const problemsOf = (e) => e?.problems ?? [{ kind: 'internal', file: null, line: null, message: String(e?.message ?? e) }];
 
-// Palette index of every part of `labels` (one per vertex): neighbouring parts differ (Rust's part graph). A
-// fit cancelled early has no coarse or refined labels yet (empty): no colours either.
-const coloursOf = (labels) => (labels.length ? population.partColours(labels, PALETTE_SIZE) : new Uint32Array(0));
-// colours like another partition's (its labels `like`, its colours) where a part is the same
-// (posemfa::articulate::graph::colour_parts_like); plain colours without one
-const coloursLike = (labels, like, likeColours) => (labels.length && like?.length
-  ? population.partColoursLike(labels, PALETTE_SIZE, like, likeColours) : coloursOf(labels));
-// colours like the last finished fits' where a part is the same; a finished fit becomes the newest to follow
-function finalColours(labels, complete) {
-  const like = finals.filter((f) => f.labels.length === labels.length);
-  const concat = (key) => Uint32Array.from(like.flatMap((f) => Array.from(f[key])));
-  const colours = coloursLike(labels, concat('labels'), concat('colours'));
-  if (complete && labels.length) finals = [{ labels: labels.slice(), colours: colours.slice() }, ...finals].slice(0, FITS_REMEMBERED);
-  return colours;
-}
+const coloursOf = (labels) => memory.colours(population, labels);
+const coloursLike = (labels, like, likeColours) => memory.coloursLike(population, labels, like, likeColours);
 
 function describe(pop, truth = null) {
   const positions = [];
@@ -132,7 +118,7 @@ function replacePopulation(pop, synth = null) {
   modelComplete = false;
   population?.free();
   population = pop;
-  finals = [];
+  memory.forget();
   truth?.free();
   truth = synth;
 }
@@ -186,13 +172,14 @@ function modelMessage(m) {
   const refinedLabels = m.refinedLabels();
   // the Stages view's panels side by side: a part that is the same in the next stage keeps that stage's colour
   // (final <- refined <- coarse), so what changed between two panels shows by eye
-  const final = finalColours(labels, summary.complete);
+  const final = memory.finalColours(population, labels, summary.complete);
   const refined = coloursLike(refinedLabels, labels, final);
   const coarse = coloursLike(coarseLabels, refinedLabels, refined);
   return {
     summary, labels, coarseLabels, refinedLabels,
     colours: { final, coarse, refined },
-    tree: m.treeCounts(), // {most, fewest, decided} of the merge tree, or null
+    tree: memory.treeCounts(), // {most, fewest, decided} of the merge tree the slider shows, or null
+    refinedFromTree: memory.parents, // the model was fitted from a partition of that tree (Refine)
     latent: m.latent(),
   };
 }
@@ -207,7 +194,9 @@ async function fit({ id, params, fault = null }) {
     return;
   }
   teacher.drop();
-  if (!(await claimFit())) return;
+  // a Refine (a fit from a partition of the merge tree shown) keeps that tree for the slider
+  const refining = !!params.startLabels;
+  if (!(await claimFit({ refining }))) return;
   const t0 = performance.now();
   let f;
   try {
@@ -247,7 +236,7 @@ async function fit({ id, params, fault = null }) {
 // Stops the fit in progress, if any, and waits until its loop has let go (it keeps nothing: it was
 // superseded); then parks the last model for the new fit. False when another fit or population superseded
 // this request meanwhile.
-async function claimFit() {
+async function claimFit({ refining = false } = {}) {
   const token = ++fitToken;
   if (fitter) {
     cancelRequested = true;
@@ -258,6 +247,8 @@ async function claimFit() {
     parked = model.park(); // spends `model`
     model = null;
   }
+  if (!refining) memory.releaseTree(); // a Refine keeps the tree it starts from (fit-memory.js)
+  refiningFit = refining;
   return true;
 }
 
@@ -297,12 +288,13 @@ function finishFit(f, id, t0) {
   release(f);
   const fitMs = performance.now() - t0;
   if (!m) {
-    liveModel();
+    memory.restoreTree(liveModel());
     post({ type: 'fitted', id, cancelled, kept: true, fitMs });
     return;
   }
   dropModel();
   model = m;
+  memory.keepTree(m, refiningFit);
   const msg = modelMessage(m);
   msg.summary.fitMs = fitMs;
   msg.summary.cancelled = cancelled;
@@ -345,10 +337,7 @@ const QUERIES = {
   rig: (opts) => model.rig(opts ?? {}),
   articulationReport: (i, j, t) => model.articulationReport(i, j, t),
   // the merge tree's partition with n parts, coloured like the fitted parts where a part is the same
-  treePartition: (n) => {
-    const labels = model.treeLabels(n);
-    return { labels, colours: coloursLike(labels, finals[0]?.labels, finals[0]?.colours) };
-  },
+  treePartition: (n) => memory.treePartition(population, n),
   ...poseQueries(() => model, () => modelGeneration), // pose mode (issue 28): www/pose-queries.js
 };
 

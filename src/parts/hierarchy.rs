@@ -115,6 +115,14 @@ pub struct FitResult {
     pub count_unjudged: bool,
 }
 
+impl FitResult {
+    /// The partitions of the merge tree ([`PartRule::Tree`]; none with Algorithm 1's rules).
+    pub fn tree_cuts(&self) -> Option<super::merge_tree::TreeCuts> {
+        let tree = self.merge_tree.clone()?;
+        Some(super::merge_tree::TreeCuts::new(tree, self.tree_count, &self.model.labels))
+    }
+}
+
 struct Refinement {
     members: Vec<Vec<usize>>,
     part: usize,

@@ -761,6 +761,45 @@ impl MergeTree {
     }
 }
 
+/// The partitions a fit offers by its merge tree, one for every count (the page's "Parts in the merge tree"
+/// slider): the tree's cut, except at the count the part rule read off it, where the fit's own labels are
+/// (the fit was refitted from that cut, so its parts can differ from it). Held apart from its fit, so that the
+/// partitions of the fit a Refine started from stay in reach once the refined fit has replaced it.
+#[derive(Debug, Clone)]
+pub struct TreeCuts {
+    tree: MergeTree,
+    decided: Option<usize>,
+    /// The fit's labels when it has the decided count.
+    fitted: Option<Vec<u32>>,
+}
+
+impl TreeCuts {
+    /// `fitted`: the fit's labels, used at `decided` when they have that many parts.
+    pub fn new(tree: MergeTree, decided: Option<usize>, fitted: &[u32]) -> TreeCuts {
+        let parts = fitted.iter().collect::<BTreeSet<_>>().len();
+        let fitted = (decided == Some(parts)).then(|| fitted.to_vec());
+        TreeCuts { tree, decided, fitted }
+    }
+
+    /// The most and the fewest parts (see [`MergeTree::counts`]).
+    pub fn counts(&self) -> (usize, usize) {
+        self.tree.counts()
+    }
+
+    /// The count the part rule read off the tree (none with a count asked for).
+    pub fn decided(&self) -> Option<usize> {
+        self.decided
+    }
+
+    /// One label per vertex for `count` parts (clamped to the tree's counts).
+    pub fn labels(&self, count: usize) -> Vec<u32> {
+        match &self.fitted {
+            Some(f) if self.decided == Some(count) => f.clone(),
+            _ => self.tree.labels_at(count),
+        }
+    }
+}
+
 /// Links every connected piece of the patch graph but the largest to the piece holding the vertex nearest to it
 /// (mean shape, on at most 64 of its vertices), so that merges can reach every node.
 fn link_pieces(pop: &Population, leaves: &[u32], adjacent: &mut [BTreeSet<u32>]) {
@@ -1048,6 +1087,26 @@ mod tests {
         let again = MergeTree::build(&rev, 1e-14);
         assert_eq!(again.leaves, tree.leaves);
         assert_eq!(again.labels_at(3), tree.labels_at(3));
+    }
+
+    #[test]
+    fn the_cuts_give_the_fitted_labels_at_the_decided_count_only() {
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 600, poses: 6, ..Spec::default() }).unwrap();
+        let tree = MergeTree::build(&g.population, 1e-14);
+        // labels of 3 parts that are not the tree's 3-part cut (vertex 0's part grows by one vertex)
+        let mut fitted = tree.labels_at(3);
+        let other = fitted.iter().position(|&l| l != fitted[0]).unwrap();
+        fitted[other] = fitted[0];
+        assert_ne!(fitted, tree.labels_at(3));
+        let cuts = TreeCuts::new(tree.clone(), Some(3), &fitted);
+        assert_eq!(cuts.labels(3), fitted);
+        assert_eq!(cuts.labels(2), tree.labels_at(2));
+        assert_eq!(cuts.counts(), tree.counts());
+        // labels of another count than the decided one are not used for it
+        let cuts = TreeCuts::new(tree.clone(), Some(4), &fitted);
+        assert_eq!(cuts.labels(4), tree.labels_at(4));
+        assert_eq!(cuts.labels(3), tree.labels_at(3));
+        assert_eq!(cuts.decided(), Some(4));
     }
 }
 

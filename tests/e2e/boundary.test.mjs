@@ -142,10 +142,10 @@ test('a model parked while a new fit runs comes back the same: labels, latent sh
   const a = fitted();
   const before = {
     labels: a.model.labels(), latent: a.model.latent(), coarse: a.model.coarseLabels(), refined: a.model.refinedLabels(),
-    tree: a.model.treeCounts(), json: a.model.toJson(), pose: a.model.reconstruct(1), mid: a.model.interpolate(0, 1, 0.5, {}),
+    tree: a.model.treeCuts().counts(), json: a.model.toJson(), pose: a.model.reconstruct(1), mid: a.model.interpolate(0, 1, 0.5, {}),
   };
   const fewest = before.tree.fewest;
-  const treeLabels = a.model.treeLabels(fewest);
+  const treeLabels = a.model.treeCuts().labels(fewest);
   const parked = a.model.park();
   assert.throws(() => a.model.labels(), 'the parked FitModel object is spent');
   // a new fit of the same population runs meanwhile and is dropped (as a cancelled refit)
@@ -159,8 +159,8 @@ test('a model parked while a new fit runs comes back the same: labels, latent sh
   assert.deepEqual(m.latent(), before.latent);
   assert.deepEqual(m.coarseLabels(), before.coarse);
   assert.deepEqual(m.refinedLabels(), before.refined);
-  assert.deepEqual(m.treeCounts(), before.tree);
-  assert.deepEqual(m.treeLabels(fewest), treeLabels);
+  assert.deepEqual(m.treeCuts().counts(), before.tree);
+  assert.deepEqual(m.treeCuts().labels(fewest), treeLabels);
   assert.equal(m.toJson(), before.json);
   assert.deepEqual(m.reconstruct(1), before.pose);
   assert.deepEqual(m.interpolate(0, 1, 0.5, {}), before.mid);

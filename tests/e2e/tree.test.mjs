@@ -61,6 +61,72 @@ test('Refine fits the chosen count, and parts that stay keep their colours', asy
   assert.deepEqual(log.errors, []);
 });
 
+test('after Refine the slider keeps the tree it chose from: another count refines, the link restores the refit', async () => {
+  const { page, log } = await session.open();
+  await fitted(page);
+  const tree = await page.evaluate(() => window.posemfa.tree());
+  const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
+  assert.ok(parts - 3 >= tree.fewest, JSON.stringify(tree));
+  const refineTo = async (n) => {
+    const fits = await page.evaluate(() => window.posemfa.fitCount());
+    await moveTreeSlider(page, n);
+    await page.click('[data-testid=tree-refine]');
+    await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 90000 });
+    await fitted(page);
+    assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, n);
+  };
+  await refineTo(parts - 2);
+  // the tree is the one chosen from: every count, and the part rule's own, still on the slider
+  const after = await page.evaluate(() => window.posemfa.tree());
+  assert.deepEqual({ ...after, shown: null }, { ...tree, shown: null });
+  assert.equal(await page.evaluate(() => document.getElementById('tree-slider').max), String(tree.most));
+  assert.match(await page.locator('#tree-count').innerText(), new RegExp(`^${parts - 2} parts \\(the fit, refined from this count of the tree\\)`));
+  // the part rule's count shows that fit's own parts again, and says whose count it is
+  const d = await moveTreeSlider(page, tree.decided);
+  assert.equal(Number(d.parts), tree.decided);
+  assert.match(await page.locator('#tree-count').innerText(), /the part rule’s count/);
+  // a second Refine chooses from the same tree
+  const want = parts - 3;
+  const shown = await page.evaluate((n) => window.posemfa.treePartition(n), want);
+  await refineTo(want);
+  const refit = await page.evaluate(() => window.posemfa.fittedParts());
+  assert.equal(sameParts(refit.labels, shown.labels).length, want, 'the second Refine did not fit the partition shown');
+  // the link names the tree's fit (its parameters, the count auto) and the count refined: opened, the page makes
+  // the fit, then the Refine, and shows the same parts
+  await page.waitForFunction((n) => location.hash.includes(`cut=${n}`), want, { timeout: 5000 });
+  const hash = await page.evaluate(() => location.hash);
+  assert.doesNotMatch(hash, /bones=/, hash);
+  const again = await session.open(hash);
+  await again.page.waitForFunction(() => window.posemfa?.fitCount() >= 2 && !window.posemfa.restoring(), null, { timeout: 120000 });
+  assert.equal(await waitState(again.page, ['fitted', 'error'], 90000), 'fitted');
+  const restored = await again.page.evaluate(() => window.posemfa.fittedParts());
+  assert.deepEqual(restored.labels, refit.labels);
+  assert.deepEqual(await again.page.evaluate(() => window.posemfa.tree()), { ...tree, shown: null });
+  // a count the tree does not hold: the fit's own parts, and a note that says why
+  const far = await session.open(hash.replace(`cut=${want}`, `cut=${tree.most + 5}`));
+  await far.page.waitForFunction(() => window.posemfa?.fitCount() >= 1 && !window.posemfa.restoring(), null, { timeout: 120000 });
+  await far.page.waitForFunction(() => document.getElementById('errors').textContent.includes('merge tree holds'), null, { timeout: 10000 });
+  assert.match(await far.page.textContent('[data-testid=errors]'), new RegExp(`refined from ${tree.most + 5} parts of the merge tree, but its merge tree holds ${tree.fewest}-${tree.most} parts here: showing the fit’s own parts`));
+  assert.equal((await far.page.evaluate(() => window.posemfa.summary())).parts, parts);
+  assert.equal(await far.page.evaluate(() => window.posemfa.fitCount()), 1);
+  for (const l of [log, again.log, far.log]) assert.deepEqual(l.errors, []);
+});
+
+test('moved in another view, the slider shows its partition in the Parts view and says it went there', async () => {
+  const { page, log } = await session.open();
+  await fitted(page);
+  const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
+  await page.check('#modes input[value=interp]');
+  await page.waitForFunction(() => window.posemfa.mode() === 'interp');
+  await moveTreeSlider(page, parts - 1);
+  assert.equal(await page.evaluate(() => window.posemfa.mode()), 'parts');
+  assert.match(await page.locator('#tree-count').innerText(), new RegExp(`^${parts - 1} parts of the merge tree.*, shown in the Parts view \\(from Interpolate\\)$`));
+  // moved again in the Parts view: no word about it
+  await moveTreeSlider(page, parts - 2);
+  assert.doesNotMatch(await page.locator('#tree-count').innerText(), /shown in the Parts view/);
+  assert.deepEqual(log.errors, []);
+});
+
 // The parts of `a` that are a part of `b` (more than half of each in the other): [[part of a, part of b]].
 function sameParts(a, b) {
   const overlap = new Map();
