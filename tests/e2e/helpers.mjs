@@ -251,6 +251,12 @@ export async function canvasFingerprint(page) {
   });
 }
 
+/** Opens the Pose view and waits until its rig is ready (pose mode, issue 28). */
+export async function enterPoseMode(page) {
+  await page.click('[data-testid=mode-pose]');
+  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+}
+
 // Moves the merge tree's parts slider to `n` as an input event does, waits until the page shows that count and
 // returns the slider's dataset.
 export async function moveTreeSlider(page, n) {

@@ -11,7 +11,7 @@ import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
-import { pageSession, waitState, asPayload, ROOT } from './helpers.mjs';
+import { pageSession, waitState, asPayload, ROOT, enterPoseMode } from './helpers.mjs';
 
 const session = pageSession();
 let dir;
@@ -42,8 +42,7 @@ test('pose mode: a drag turns only the subtree about its joint; sliders give the
   await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000, polling: 50 });
   assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
 
-  await page.click('[data-testid=mode-pose]');
-  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  await enterPoseMode(page);
   const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
   assert.ok(sk.order.length >= 3 && sk.nModes >= 1, JSON.stringify({ bones: sk.order.length, modes: sk.nModes }));
   const diag = sk.diagonal;
@@ -151,8 +150,7 @@ test('pose mode says which pose its rest pose is (the rig\'s bind pose: the file
   const pressed = () => page.$$eval('#pose-strip button[aria-pressed=true]', (b) => b.map((x) => x.title));
   assert.deepEqual(await pressed(), [names[0]]);
 
-  await page.click('[data-testid=mode-pose]');
-  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  await enterPoseMode(page);
   await page.waitForFunction(() => /^Pose mode/.test(document.getElementById('caption').textContent));
   assert.equal(await page.locator('#caption').innerText(), 'Pose mode: the rest pose, the rig\'s bind pose (“reference.obj” rebuilt from its parts); drag a part to turn it about its joint');
   assert.deepEqual(await pressed(), [], 'a made pose is none of the training poses');

@@ -6,7 +6,7 @@
 // Run: npm run build && node --test tests/e2e/review7.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState, asPayload, tubePopulation } from './helpers.mjs';
+import { pageSession, waitState, asPayload, tubePopulation, enterPoseMode } from './helpers.mjs';
 
 const session = pageSession();
 const text = (page, sel) => page.locator(sel).innerText();
@@ -49,8 +49,7 @@ test('a fit that fails keeps the finished fit and its figures; the next Fit clea
 test('pose mode: a drag turns the part by the angle swept around its joint; a press that turns nothing adds no Undo', async () => {
   const { page, context, log } = await session.open();
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
-  await page.click('[data-testid=mode-pose]');
-  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  await enterPoseMode(page);
   const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
   const box = await page.locator('#view canvas').boundingBox();
   let found = null;

@@ -5,7 +5,7 @@
 // Run: npm run build && node --test tests/e2e/review8.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState, moveTreeSlider } from './helpers.mjs';
+import { pageSession, waitState, moveTreeSlider, enterPoseMode } from './helpers.mjs';
 
 const session = pageSession();
 const info = (page) => page.locator('#info').innerText().then((t) => t.trim());
@@ -71,8 +71,7 @@ test('fits A, B and A again: the second A has the first A\'s colours', async () 
 test('pose mode: the pose-space sliders follow the pose shown (rest pose, a turn), 0 at the mean pose', async () => {
   const { page, context, log } = await session.open();
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
-  await page.click('[data-testid=mode-pose]');
-  await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  await enterPoseMode(page);
   const sliders = () => page.$$eval('#pose-modes input', (xs) => xs.map((x) => Number(x.value)));
   // each slider's value as the range and step put the pose's coordinate
   const placed = (coords) => page.$$eval('#pose-modes input', (xs, c) => xs.map((x) => {
