@@ -44,17 +44,32 @@ fn convert(files: Vec<(String, Vec<u8>)>, format: &str) -> Result<Vec<(String, V
     let poses: Vec<Vec<[f64; 3]>> =
         pop.shapes().map(|s| s.iter().map(|p| pop.normalization.to_original(p)).collect()).collect();
     let stem = |n: &str| n.rsplit_once('.').map_or(n, |(s, _)| s).to_string();
-    let base = || ("base.obj".to_string(), posemfa::export::obj::write_obj(&poses[0], &pop.faces, "faces for the cache (pose 1)").into_bytes());
+    let base = || {
+        (
+            "base.obj".to_string(),
+            posemfa::export::obj::write_obj(&poses[0], &pop.faces, "faces for the cache (pose 1)").into_bytes(),
+        )
+    };
     Ok(match format {
-        "obj" => pop.names.iter().zip(&poses).map(|(n, s)| (format!("{}.obj", stem(n)), posemfa::export::obj::write_obj(s, &pop.faces, n).into_bytes())).collect(),
+        "obj" => pop
+            .names
+            .iter()
+            .zip(&poses)
+            .map(|(n, s)| (format!("{}.obj", stem(n)), posemfa::export::obj::write_obj(s, &pop.faces, n).into_bytes()))
+            .collect(),
         "ply-ascii" | "ply" => {
             let fmt = if format == "ply" { PlyFormat::Binary } else { PlyFormat::Ascii };
-            pop.names.iter().zip(&poses).map(|(n, s)| (format!("{}.ply", stem(n)), write_ply(s, &pop.faces, fmt, n))).collect()
+            pop.names
+                .iter()
+                .zip(&poses)
+                .map(|(n, s)| (format!("{}.ply", stem(n)), write_ply(s, &pop.faces, fmt, n)))
+                .collect()
         }
         "pc2" => vec![base(), ("poses.pc2".into(), posemfa::mesh::cache::write_pc2(&poses))],
         "mdd" => vec![base(), ("poses.mdd".into(), posemfa::mesh::cache::write_mdd(&poses, 24.0))],
         "glb" => {
-            let glb = posemfa::export::morph_glb::write_morph_glb("poses", &pop.names, &poses, &pop.faces).map_err(|e| e.to_string())?;
+            let glb = posemfa::export::morph_glb::write_morph_glb("poses", &pop.names, &poses, &pop.faces)
+                .map_err(|e| e.to_string())?;
             vec![("poses.glb".into(), glb)]
         }
         f => return Err(format!("--write takes obj, ply-ascii, ply, pc2, mdd or glb, not '{f}'")),
@@ -72,7 +87,11 @@ fn run() -> Result<(), String> {
             population = true;
         } else if a == "--repeat" {
             let v = args.next().ok_or("--repeat needs a number")?;
-            repeat = v.parse().ok().filter(|&r| r > 0).ok_or(format!("--repeat takes a positive whole number, not '{v}'"))?;
+            repeat = v
+                .parse()
+                .ok()
+                .filter(|&r| r > 0)
+                .ok_or(format!("--repeat takes a positive whole number, not '{v}'"))?;
         } else if a == "--write" {
             let (Some(f), Some(d)) = (args.next(), args.next()) else { return Err("--write needs FORMAT DIR".into()) };
             write = Some((f, d.into()));

@@ -79,8 +79,14 @@ fn main() {
     let pop = load(input);
     let vp = (pop.n_vertices() * pop.n_shapes()) as f64;
     let loaded = LIVE.load(Relaxed);
-    println!("{input}: {} vertices x {} shapes; live after loading {:.1} MB ({:.1} B/vertex-pose); load peak {:.1} MB",
-        pop.n_vertices(), pop.n_shapes(), loaded as f64 / 1e6, loaded as f64 / vp, PEAK.load(Relaxed) as f64 / 1e6);
+    println!(
+        "{input}: {} vertices x {} shapes; live after loading {:.1} MB ({:.1} B/vertex-pose); load peak {:.1} MB",
+        pop.n_vertices(),
+        pop.n_shapes(),
+        loaded as f64 / 1e6,
+        loaded as f64 / vp,
+        PEAK.load(Relaxed) as f64 / 1e6
+    );
     PEAK.store(LIVE.load(Relaxed), Relaxed);
     let params = Params { seed, ..Params::default() };
     let mut stage_peaks: Vec<(String, usize)> = Vec::new();

@@ -19,13 +19,14 @@
 //! vertices 3000,12000,50000, poses 10,20, one thread (other builds share the machine's two cores).
 
 use posemfa::metrics::{ground_truth_accuracy, median};
-use posemfa::parts::hierarchy::fit;
 use posemfa::mfa::Params;
+use posemfa::parts::hierarchy::fit;
 use posemfa::synth::{generate, Preset, Spec};
 use std::sync::Mutex;
 use std::time::Instant;
 
-const USAGE: &str = "usage: part_table [--creatures a,b] [--seeds 0-4] [--vertices 3000,12000,50000] [--poses 10,20] [--threads N]";
+const USAGE: &str =
+    "usage: part_table [--creatures a,b] [--seeds 0-4] [--vertices 3000,12000,50000] [--poses 10,20] [--threads N]";
 
 struct Options {
     creatures: Vec<Preset>,
@@ -183,7 +184,8 @@ fn passes(preset: Preset, row: &Row) -> Option<bool> {
 }
 
 fn line(run: &Run, row: &Row) -> String {
-    let head = format!("{:<10} {:>6} {:>5} {:>4} {:>4}", run.preset.name(), row.vertices, run.poses, run.seed, row.true_parts);
+    let head =
+        format!("{:<10} {:>6} {:>5} {:>4} {:>4}", run.preset.name(), row.vertices, run.poses, run.seed, row.true_parts);
     match &row.result {
         Ok(m) => {
             let verdict = match passes(run.preset, row) {

@@ -7,13 +7,16 @@
 use posemfa::articulate::rig::{build, RigOptions, RigWeights};
 use posemfa::articulate::Articulation;
 use posemfa::mesh::Population;
-use posemfa::parts::hierarchy::Pipeline;
 use posemfa::mfa::Params;
+use posemfa::parts::hierarchy::Pipeline;
 use std::time::Instant;
 
 /// CPU milliseconds this thread has run (Linux: /proc/thread-self/schedstat, nanoseconds), else 0.
 fn cpu_ms() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat").ok().and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok()).map_or(0.0, |ns| ns / 1e6)
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(0.0, |ns| ns / 1e6)
 }
 
 fn main() -> Result<(), String> {
@@ -24,7 +27,14 @@ fn main() -> Result<(), String> {
     let mut out = None;
     while let Some(a) = args.next() {
         match a.as_str() {
-            "--bones" => bones = args.next().ok_or("--bones N,..")?.split(',').map(|s| s.parse().map_err(|e| format!("{e}"))).collect::<Result<_, _>>()?,
+            "--bones" => {
+                bones = args
+                    .next()
+                    .ok_or("--bones N,..")?
+                    .split(',')
+                    .map(|s| s.parse().map_err(|e| format!("{e}")))
+                    .collect::<Result<_, _>>()?
+            }
             "--builds" => builds = args.next().ok_or("--builds R")?.parse().map_err(|e| format!("{e}"))?,
             "--out" => out = Some(args.next().ok_or("--out F")?),
             _ => dir = Some(a),
@@ -32,10 +42,14 @@ fn main() -> Result<(), String> {
     }
     let dir = dir.ok_or("usage: rig_probe DIR [--bones 10,20,30] [--builds R] [--out F]")?;
     let mut files = Vec::new();
-    let mut entries: Vec<_> = std::fs::read_dir(&dir).map_err(|e| e.to_string())?.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    let mut entries: Vec<_> =
+        std::fs::read_dir(&dir).map_err(|e| e.to_string())?.filter_map(|e| e.ok().map(|e| e.path())).collect();
     entries.sort();
     for e in entries.iter().filter(|e| e.extension().is_some_and(|x| x == "obj")) {
-        files.push((e.file_name().unwrap_or_default().to_string_lossy().into_owned(), std::fs::read(e).map_err(|e| e.to_string())?));
+        files.push((
+            e.file_name().unwrap_or_default().to_string_lossy().into_owned(),
+            std::fs::read(e).map_err(|e| e.to_string())?,
+        ));
     }
     let t = Instant::now();
     let pop = Population::from_files(files).map_err(|e| e.to_string())?;
@@ -54,7 +68,8 @@ fn main() -> Result<(), String> {
             for _ in 0..builds {
                 let t = Instant::now();
                 let c = cpu_ms();
-                let (labels, _) = posemfa::parts::part_count::labels_with_count(&pop, decided, n, &params).map_err(|e| e.to_string())?;
+                let (labels, _) = posemfa::parts::part_count::labels_with_count(&pop, decided, n, &params)
+                    .map_err(|e| e.to_string())?;
                 count_ms.push(t.elapsed().as_secs_f64() * 1e3);
                 count_cpu_ms.push(cpu_ms() - c);
                 counted = Some(labels);

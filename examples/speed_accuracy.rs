@@ -11,8 +11,8 @@
 //! part-count difference and RMSE ratio over the seeds.
 
 use posemfa::mesh::Population;
-use posemfa::parts::hierarchy::fit;
 use posemfa::mfa::Params;
+use posemfa::parts::hierarchy::fit;
 use posemfa::synth::{self, Generated};
 
 struct Input {
@@ -30,7 +30,8 @@ fn load(arg: &str) -> Result<Input, String> {
     }
     if let Some(rest) = arg.strip_prefix("synth:") {
         let f: Vec<&str> = rest.split(':').collect();
-        let preset = serde_json::from_value(serde_json::json!(f[0])).map_err(|_| format!("unknown preset in '{arg}'"))?;
+        let preset =
+            serde_json::from_value(serde_json::json!(f[0])).map_err(|_| format!("unknown preset in '{arg}'"))?;
         let mut spec = synth::Spec { preset, ..Default::default() };
         if let Some(v) = f.get(1) {
             spec.vertices = v.parse().map_err(|_| format!("bad vertex count in '{arg}'"))?;
@@ -103,11 +104,16 @@ fn main() {
                 let mut ari = None;
                 if let Some(g) = &input.truth {
                     let a = posemfa::metrics::adjusted_rand_index(&m.labels, &g.part_of_vertex);
-                    let fitted: Vec<Vec<posemfa::geometry::Mat3>> = m.parts.iter().map(|p| p.rotations.clone()).collect();
-                    let errs = posemfa::metrics::rotation_errors_deg(&fitted, &m.labels, &g.rotations, &g.part_of_vertex)
-                        .unwrap_or_default();
+                    let fitted: Vec<Vec<posemfa::geometry::Mat3>> =
+                        m.parts.iter().map(|p| p.rotations.clone()).collect();
+                    let errs =
+                        posemfa::metrics::rotation_errors_deg(&fitted, &m.labels, &g.rotations, &g.part_of_vertex)
+                            .unwrap_or_default();
                     let max = errs.iter().cloned().fold(0.0, f64::max);
-                    line += &format!("  ARI {a:.3}  rotation error median {:.2} max {max:.2} deg", posemfa::metrics::median(&errs));
+                    line += &format!(
+                        "  ARI {a:.3}  rotation error median {:.2} max {max:.2} deg",
+                        posemfa::metrics::median(&errs)
+                    );
                     ari = Some(a);
                 }
                 println!("{line}");
@@ -121,7 +127,11 @@ fn main() {
                 }
             }
         }
-        let ari = if worst_ari.is_finite() { format!(", ARI at most {worst_ari:.3} below the full path's") } else { String::new() };
+        let ari = if worst_ari.is_finite() {
+            format!(", ARI at most {worst_ari:.3} below the full path's")
+        } else {
+            String::new()
+        };
         println!("  => fast vs full over the seeds: part counts differ by at most {worst_parts}, RMSE ratio at most {worst_rmse:.3}{ari}");
     }
 }

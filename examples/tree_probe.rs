@@ -48,15 +48,23 @@ fn main() {
             let mut height = 0.0f64;
             for m in &tree.merges {
                 height = height.max(m.rise);
-                if height >= c * s0 { cut = m.parts; break; }
+                if height >= c * s0 {
+                    cut = m.parts;
+                    break;
+                }
             }
             cuts.push(cut);
         }
-        println!("{:<16} leaves {} decided {k} ({ms:.0} ms) s0 {s0:.2e} cuts(4,8,16,32,64) {cuts:?}", v.name(), tree.n_leaves);
+        println!(
+            "{:<16} leaves {} decided {k} ({ms:.0} ms) s0 {s0:.2e} cuts(4,8,16,32,64) {cuts:?}",
+            v.name(),
+            tree.n_leaves
+        );
         labels.push(l);
     }
     for a in 0..labels.len() {
-        let row: Vec<String> = (0..labels.len()).map(|b| format!("{:.3}", adjusted_rand_index(&labels[a], &labels[b]))).collect();
+        let row: Vec<String> =
+            (0..labels.len()).map(|b| format!("{:.3}", adjusted_rand_index(&labels[a], &labels[b]))).collect();
         println!("{}", row.join(" "));
     }
 }

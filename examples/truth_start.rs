@@ -17,10 +17,8 @@ fn main() {
         eprintln!("{input}: {e}");
         std::process::exit(1);
     });
-    let truth: Vec<u32> = std::fs::read_to_string(truth)
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok())
-        .unwrap_or_else(|| {
+    let truth: Vec<u32> =
+        std::fs::read_to_string(truth).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_else(|| {
             eprintln!("{truth}: not a JSON array of labels");
             std::process::exit(1);
         });

@@ -38,6 +38,14 @@ else
   timeout 600 rustup target add wasm32-unknown-unknown || die "rustup target add wasm32-unknown-unknown failed"
 fi
 
+# the native tests check the code's formatting (tests/style.rs)
+if rustup component list --installed 2>/dev/null | grep -q '^rustfmt'; then
+  step "rustfmt: present"
+else
+  step "rustfmt: installing (rustup component add)"
+  timeout 600 rustup component add rustfmt || die "rustup component add rustfmt failed"
+fi
+
 # ---------------------------------------------------------------- wasm-bindgen-cli
 # The CLI must be the very version of the wasm-bindgen crate that Cargo.lock resolved (Cargo.toml pins it with =).
 want_wb=$(awk '$0 == "name = \"wasm-bindgen\"" { getline; gsub(/version = |"/, ""); print; exit }' Cargo.lock)

@@ -54,7 +54,9 @@ impl Error {
     /// The error as a [`Problem`].
     pub fn problem(&self) -> Problem {
         let (kind, file, line, message) = match self {
-            Error::Obj { file, line, message } => ("obj", Some(file.clone()), (*line > 0).then_some(*line), message.clone()),
+            Error::Obj { file, line, message } => {
+                ("obj", Some(file.clone()), (*line > 0).then_some(*line), message.clone())
+            }
             Error::Population { file, message } => ("population", Some(file.clone()), None, message.clone()),
             Error::Params(_) => ("params", None, None, self.to_string()),
             Error::Data(_) => ("data", None, None, self.to_string()),
@@ -75,14 +77,22 @@ mod tests {
         assert_eq!(e.to_string(), "file a.obj, line 12: face index 9 out of range");
         assert_eq!(
             e.problem(),
-            Problem { kind: "obj", file: Some("a.obj".into()), line: Some(12), message: "face index 9 out of range".into() }
+            Problem {
+                kind: "obj",
+                file: Some("a.obj".into()),
+                line: Some(12),
+                message: "face index 9 out of range".into()
+            }
         );
         let whole = Error::Obj { file: "b.obj".into(), line: 0, message: "empty file".into() };
         assert_eq!(whole.problem().line, None);
         let p = Error::Params("parts must be at least 1".into()).problem();
         assert_eq!((p.kind, p.file, p.line), ("params", None, None));
         assert_eq!(p.message, "invalid parameter: parts must be at least 1");
-        let json = serde_json::to_string(&Error::Population { file: "c.obj".into(), message: "8 vertices, not 9".into() }.problem()).unwrap();
+        let json = serde_json::to_string(
+            &Error::Population { file: "c.obj".into(), message: "8 vertices, not 9".into() }.problem(),
+        )
+        .unwrap();
         assert_eq!(json, r#"{"kind":"population","file":"c.obj","line":null,"message":"8 vertices, not 9"}"#);
     }
 }

@@ -44,7 +44,10 @@ pub fn decode_shapes(data: &[u8]) -> Option<ShapesInput> {
     faces.extend(face_bytes.chunks_exact(3).map(|c| [c[0] as u32, c[1] as u32, c[2] as u32]));
     let values: Vec<f64> = match format {
         1 => coords.chunks_exact(2).map(|c| i16::from_le_bytes([c[0], c[1]]) as f64 / 256.0).collect(),
-        2 => coords.chunks_exact(8).map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]])).collect(),
+        2 => coords
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]))
+            .collect(),
         _ => coords.iter().map(|&b| b as i8 as f64 / 16.0).collect(),
     };
     let n_vertices = values.len() / (3 * n_shapes);
@@ -89,44 +92,81 @@ pub fn tiny_fbx_with(edit: impl FnOnce(&mut Vec<Node>), compress: bool) -> Vec<u
     ];
     edit(&mut geometry);
     let nodes = vec![
-        fbx_node("GlobalSettings", vec![], vec![p70(vec![
-            ("UpAxis", vec![Prop::Int(1)]),
-            ("UnitScaleFactor", vec![Prop::Float(100.0)]),
-            ("TimeMode", vec![Prop::Int(11)]),
-        ])]),
-        fbx_node("Objects", vec![], vec![
-            fbx_node("Geometry", vec![Prop::Int(10), s("quad\0\u{1}Geometry"), s("Mesh")], geometry),
-            fbx_node("Model", vec![Prop::Int(20), s("Quad\0\u{1}Model"), s("Mesh")], vec![]),
-            fbx_node("Deformer", vec![Prop::Int(30), s("quad\0\u{1}Deformer"), s("BlendShape")], vec![]),
-            fbx_node("Deformer", vec![Prop::Int(31), s("lift\0\u{1}SubDeformer"), s("BlendShapeChannel")], vec![
-                fbx_node("DeformPercent", vec![Prop::Float(0.0)], vec![]),
-            ]),
-            fbx_node("Geometry", vec![Prop::Int(32), s("lift\0\u{1}Geometry"), s("Shape")], vec![
-                fbx_node("Indexes", vec![Prop::I32s(vec![2, 3])], vec![]),
-                fbx_node("Vertices", vec![Prop::F64s(vec![0., 0., 1., 0., 0., 2.])], vec![]),
-            ]),
-            fbx_node("AnimationStack", vec![Prop::Int(40), s("Take 1\0\u{1}AnimStack"), s("")], vec![p70(vec![
-                ("LocalStop", vec![Prop::Int(2 * ktime)]),
-            ])]),
-            fbx_node("AnimationLayer", vec![Prop::Int(41), s("Layer\0\u{1}AnimLayer"), s("")], vec![]),
-            fbx_node("AnimationCurveNode", vec![Prop::Int(42), s("DeformPercent\0\u{1}AnimCurveNode"), s("")], vec![]),
-            fbx_node("AnimationCurve", vec![Prop::Int(43), s("\0\u{1}AnimCurve"), s("")], vec![
-                fbx_node("KeyTime", vec![Prop::I64s(vec![0, 2 * ktime])], vec![]),
-                fbx_node("KeyValueFloat", vec![Prop::F32s(vec![0.0, 100.0])], vec![]),
-            ]),
-        ]),
-        fbx_node("Connections", vec![], [
-            ("OO", 20, 0, None), ("OO", 10, 20, None), ("OO", 30, 10, None), ("OO", 31, 30, None), ("OO", 32, 31, None),
-            ("OO", 41, 40, None), ("OO", 42, 41, None), ("OP", 42, 31, Some("DeformPercent")), ("OP", 43, 42, Some("d|DeformPercent")),
-        ].into_iter().map(|(k, c, p, prop): (&str, i64, i64, Option<&str>)| {
-            let mut props = vec![s(k), Prop::Int(c), Prop::Int(p)];
-            props.extend(prop.map(s));
-            fbx_node("C", props, vec![])
-        }).collect()),
+        fbx_node(
+            "GlobalSettings",
+            vec![],
+            vec![p70(vec![
+                ("UpAxis", vec![Prop::Int(1)]),
+                ("UnitScaleFactor", vec![Prop::Float(100.0)]),
+                ("TimeMode", vec![Prop::Int(11)]),
+            ])],
+        ),
+        fbx_node(
+            "Objects",
+            vec![],
+            vec![
+                fbx_node("Geometry", vec![Prop::Int(10), s("quad\0\u{1}Geometry"), s("Mesh")], geometry),
+                fbx_node("Model", vec![Prop::Int(20), s("Quad\0\u{1}Model"), s("Mesh")], vec![]),
+                fbx_node("Deformer", vec![Prop::Int(30), s("quad\0\u{1}Deformer"), s("BlendShape")], vec![]),
+                fbx_node(
+                    "Deformer",
+                    vec![Prop::Int(31), s("lift\0\u{1}SubDeformer"), s("BlendShapeChannel")],
+                    vec![fbx_node("DeformPercent", vec![Prop::Float(0.0)], vec![])],
+                ),
+                fbx_node(
+                    "Geometry",
+                    vec![Prop::Int(32), s("lift\0\u{1}Geometry"), s("Shape")],
+                    vec![
+                        fbx_node("Indexes", vec![Prop::I32s(vec![2, 3])], vec![]),
+                        fbx_node("Vertices", vec![Prop::F64s(vec![0., 0., 1., 0., 0., 2.])], vec![]),
+                    ],
+                ),
+                fbx_node(
+                    "AnimationStack",
+                    vec![Prop::Int(40), s("Take 1\0\u{1}AnimStack"), s("")],
+                    vec![p70(vec![("LocalStop", vec![Prop::Int(2 * ktime)])])],
+                ),
+                fbx_node("AnimationLayer", vec![Prop::Int(41), s("Layer\0\u{1}AnimLayer"), s("")], vec![]),
+                fbx_node(
+                    "AnimationCurveNode",
+                    vec![Prop::Int(42), s("DeformPercent\0\u{1}AnimCurveNode"), s("")],
+                    vec![],
+                ),
+                fbx_node(
+                    "AnimationCurve",
+                    vec![Prop::Int(43), s("\0\u{1}AnimCurve"), s("")],
+                    vec![
+                        fbx_node("KeyTime", vec![Prop::I64s(vec![0, 2 * ktime])], vec![]),
+                        fbx_node("KeyValueFloat", vec![Prop::F32s(vec![0.0, 100.0])], vec![]),
+                    ],
+                ),
+            ],
+        ),
+        fbx_node(
+            "Connections",
+            vec![],
+            [
+                ("OO", 20, 0, None),
+                ("OO", 10, 20, None),
+                ("OO", 30, 10, None),
+                ("OO", 31, 30, None),
+                ("OO", 32, 31, None),
+                ("OO", 41, 40, None),
+                ("OO", 42, 41, None),
+                ("OP", 42, 31, Some("DeformPercent")),
+                ("OP", 43, 42, Some("d|DeformPercent")),
+            ]
+            .into_iter()
+            .map(|(k, c, p, prop): (&str, i64, i64, Option<&str>)| {
+                let mut props = vec![s(k), Prop::Int(c), Prop::Int(p)];
+                props.extend(prop.map(s));
+                fbx_node("C", props, vec![])
+            })
+            .collect(),
+        ),
     ];
     crate::mesh::fbx_tree::write(&nodes, compress)
 }
-
 
 /// [`tiny_fbx_with`] unchanged: a seed of the fbx_read fuzz target.
 pub fn tiny_fbx(compress: bool) -> Vec<u8> {
@@ -139,7 +179,8 @@ pub fn tiny_fbx(compress: bool) -> Vec<u8> {
 pub fn read_options_from(cfg: u8) -> crate::mesh::gltf::Options {
     use crate::mesh::gltf::{Options, PoseSource};
     Options {
-        source: [PoseSource::Auto, PoseSource::Animation, PoseSource::MorphTargets, PoseSource::Auto][(cfg & 3) as usize],
+        source: [PoseSource::Auto, PoseSource::Animation, PoseSource::MorphTargets, PoseSource::Auto]
+            [(cfg & 3) as usize],
         frames: match (cfg >> 2) & 7 {
             0 => None,
             f => Some(f as usize),
@@ -161,7 +202,11 @@ pub fn check_mesh(mesh: &crate::mesh::Mesh) {
 /// every pose with the welded vertex count (at most the file's) and the first pose's faces, each mesh whole
 /// ([`check_mesh`]), the asked number of animation frames, a source naming the file; or an error naming the
 /// file. Panics otherwise (a crash for the fuzz targets). Returns whether the file loaded.
-pub fn check_pose_read(name: &str, options: &crate::mesh::gltf::Options, read: crate::Result<crate::mesh::gltf::Gltf>) -> bool {
+pub fn check_pose_read(
+    name: &str,
+    options: &crate::mesh::gltf::Options,
+    read: crate::Result<crate::mesh::gltf::Gltf>,
+) -> bool {
     use crate::mesh::gltf::PoseSource;
     match read {
         Ok(g) => {

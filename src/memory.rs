@@ -131,7 +131,11 @@ pub fn check_subdivision(n_vertices: usize, n_faces: usize, n_shapes: usize, lev
     if need <= budget as f64 {
         return Ok(());
     }
-    let shown = if need >= u64::MAX as f64 { "more than 16 EiB".to_string() } else { format!("about {}", show_bytes(need as u64)) };
+    let shown = if need >= u64::MAX as f64 {
+        "more than 16 EiB".to_string()
+    } else {
+        format!("about {}", show_bytes(need as u64))
+    };
     Err(Error::Request(format!(
         "subdividing {levels} times gives up to {vertices:.0} vertices in each of {n_shapes} poses, {shown}, more than \
          the memory budget of {}; ask for fewer levels (or raise POSEMFA_MEMORY_BUDGET if this machine has the memory)",

@@ -269,7 +269,10 @@ fn tied_parts(model: &crate::mfa::Model, truth: &crate::synth::Generated) -> Vec
             Some(TiedParts {
                 names: [truth.part_names[a].clone(), truth.part_names[b].clone()],
                 fitted: [fa, fb],
-                motion_gap_deg: relative_gap_deg(&model.parts[fa as usize].rotations, &model.parts[fb as usize].rotations),
+                motion_gap_deg: relative_gap_deg(
+                    &model.parts[fa as usize].rotations,
+                    &model.parts[fb as usize].rotations,
+                ),
                 turn_deg: relative_gap_deg(&sequence(a), &identity),
             })
         })
@@ -277,7 +280,10 @@ fn tied_parts(model: &crate::mfa::Model, truth: &crate::synth::Generated) -> Vec
 }
 
 /// [`GroundTruthAccuracy`] of a model fitted to a generated population.
-pub fn ground_truth_accuracy(model: &crate::mfa::Model, truth: &crate::synth::Generated) -> Result<GroundTruthAccuracy> {
+pub fn ground_truth_accuracy(
+    model: &crate::mfa::Model,
+    truth: &crate::synth::Generated,
+) -> Result<GroundTruthAccuracy> {
     if model.labels.len() != truth.part_of_vertex.len() {
         return Err(Error::Request(format!(
             "the model has {} vertices, the ground truth {}",

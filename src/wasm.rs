@@ -8,8 +8,8 @@
 use crate::error::{Error, Problem};
 use crate::export::shown::{obj_in_original_units, Shown};
 use crate::mesh::Population;
-use crate::parts::hierarchy::{FitResult, Pipeline};
 use crate::mfa::{Model, Params};
+use crate::parts::hierarchy::{FitResult, Pipeline};
 use js_sys::{Array, Float32Array, Float64Array, Uint32Array, Uint8Array};
 use std::rc::Rc;
 use wasm_bindgen::prelude::*;
@@ -59,7 +59,9 @@ fn from_js<T: serde::de::DeserializeOwned + Default>(v: JsValue, what: &str) -> 
 
 /// A plain JS object as `T`, through JSON text (see [`from_js`]); every field required unless `T` says not.
 fn descriptor<T: serde::de::DeserializeOwned>(v: JsValue, what: &str) -> Result<T, JsValue> {
-    let invalid = |m: String| thrown(&[Problem { kind: "params", file: None, line: None, message: format!("invalid {what}: {m}") }]);
+    let invalid = |m: String| {
+        thrown(&[Problem { kind: "params", file: None, line: None, message: format!("invalid {what}: {m}") }])
+    };
     let text: String = js_sys::JSON::stringify(&v).map_err(|_| invalid("not a plain object".into()))?.into();
     serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))
 }
@@ -201,25 +203,40 @@ impl WasmPopulation {
     /// newest first) and `previous_colours` their colours one after the other (one per part each: a
     /// partition's count of parts is its largest label + 1) (`posemfa::articulate::graph::colour_parts_like`).
     #[wasm_bindgen(js_name = partColoursLike)]
-    pub fn part_colours_like(&self, labels: Vec<u32>, n_colours: usize, previous: Vec<u32>, previous_colours: Vec<u32>) -> Result<Uint32Array, JsValue> {
+    pub fn part_colours_like(
+        &self,
+        labels: Vec<u32>,
+        n_colours: usize,
+        previous: Vec<u32>,
+        previous_colours: Vec<u32>,
+    ) -> Result<Uint32Array, JsValue> {
         let n = self.inner.n_vertices();
         if labels.len() != n {
             return Err(js_err(format!("{} labels for {} vertices", labels.len(), n)));
         }
         if n == 0 || previous.len() % n != 0 {
-            return Err(js_err(format!("{} earlier labels are not whole partitions of {} vertices", previous.len(), n)));
+            return Err(js_err(format!(
+                "{} earlier labels are not whole partitions of {} vertices",
+                previous.len(),
+                n
+            )));
         }
         let mut earlier = Vec::new();
         let mut at = 0;
         for part in previous.chunks(n) {
             let parts = part.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
             let Some(colours) = previous_colours.get(at..at + parts) else {
-                return Err(js_err(format!("{} earlier colours for earlier partitions of more parts", previous_colours.len())));
+                return Err(js_err(format!(
+                    "{} earlier colours for earlier partitions of more parts",
+                    previous_colours.len()
+                )));
             };
             earlier.push((part, colours));
             at += parts;
         }
-        Ok(Uint32Array::from(crate::articulate::graph::colour_parts_like(&labels, &self.inner.faces, n_colours, &earlier).as_slice()))
+        Ok(Uint32Array::from(
+            crate::articulate::graph::colour_parts_like(&labels, &self.inner.faces, n_colours, &earlier).as_slice(),
+        ))
     }
 }
 
@@ -232,7 +249,11 @@ pub struct Fitter {
 
 impl Fitter {
     /// The parameters read from JS and the pipeline `make` builds from them.
-    fn with(population: &WasmPopulation, params: JsValue, make: fn(&Population, &Params) -> crate::error::Result<Pipeline>) -> Result<Fitter, JsValue> {
+    fn with(
+        population: &WasmPopulation,
+        params: JsValue,
+        make: fn(&Population, &Params) -> crate::error::Result<Pipeline>,
+    ) -> Result<Fitter, JsValue> {
         let params: Params = from_js(params, "parameters")?;
         // the fit needs the memory more than a view of the last model does (rebuilt when asked again)
         forget_articulation(None);
@@ -317,8 +338,10 @@ impl Fitter {
         let obj = js_sys::Object::new();
         if let Some(f) = self.pipe.current_fit() {
             let g: Vec<f32> = f.responsibilities().iter().map(|&v| v as f32).collect();
-            js_sys::Reflect::set(&obj, &"parts".into(), &JsValue::from(f.n_parts() as u32)).map_err(|_| js_err("reflect"))?;
-            js_sys::Reflect::set(&obj, &"gamma".into(), &Float32Array::from(g.as_slice())).map_err(|_| js_err("reflect"))?;
+            js_sys::Reflect::set(&obj, &"parts".into(), &JsValue::from(f.n_parts() as u32))
+                .map_err(|_| js_err("reflect"))?;
+            js_sys::Reflect::set(&obj, &"gamma".into(), &Float32Array::from(g.as_slice()))
+                .map_err(|_| js_err("reflect"))?;
             let verts = match self.pipe.current_vertices() {
                 Some(v) => Uint32Array::from(v.iter().map(|&x| x as u32).collect::<Vec<_>>().as_slice()).into(),
                 None => JsValue::NULL,
@@ -344,7 +367,8 @@ impl Fitter {
             labels = all;
         }
         let c = crate::articulate::graph::colour_parts(&labels, &self.pop.faces, n_colours);
-        let per_component: Vec<u32> = (0..k).map(|p| c.get(p).copied().unwrap_or((p % n_colours.max(1)) as u32)).collect();
+        let per_component: Vec<u32> =
+            (0..k).map(|p| c.get(p).copied().unwrap_or((p % n_colours.max(1)) as u32)).collect();
         Uint32Array::from(per_component.as_slice())
     }
 
@@ -520,7 +544,15 @@ pub struct ParkedModel {
 
 enum Parked {
     /// The result with its per-vertex arrays taken out, and those arrays in JS.
-    Taken { result: FitResult, labels: Uint32Array, latent: Float64Array, coarse: Uint32Array, refined: Uint32Array, decided: Option<Uint32Array>, leaves: Option<Uint32Array> },
+    Taken {
+        result: FitResult,
+        labels: Uint32Array,
+        latent: Float64Array,
+        coarse: Uint32Array,
+        refined: Uint32Array,
+        decided: Option<Uint32Array>,
+        leaves: Option<Uint32Array>,
+    },
     /// Another holder shares the result, so taking its arrays out would free nothing: it is kept as it is.
     Shared(Rc<FitResult>),
 }
@@ -674,7 +706,9 @@ impl Synthetic {
     pub fn obj_files(&self) -> Array {
         crate::synth::obj_files(&self.inner)
             .into_iter()
-            .map(|(n, t)| -> JsValue { [JsValue::from_str(&n), JsValue::from_str(&t)].iter().collect::<Array>().into() })
+            .map(|(n, t)| -> JsValue {
+                [JsValue::from_str(&n), JsValue::from_str(&t)].iter().collect::<Array>().into()
+            })
             .collect()
     }
 }
@@ -717,7 +751,11 @@ fn forget_articulation(only_of: Option<&Rc<FitResult>>) {
 impl FitModel {
     fn articulation(&self) -> Result<Rc<crate::articulate::Articulation>, JsValue> {
         let cached = ARTICULATION.with(|cache| {
-            cache.borrow().as_ref().filter(|(weak, _)| weak.upgrade().is_some_and(|r| Rc::ptr_eq(&r, &self.result))).map(|(_, art)| art.clone())
+            cache
+                .borrow()
+                .as_ref()
+                .filter(|(weak, _)| weak.upgrade().is_some_and(|r| Rc::ptr_eq(&r, &self.result)))
+                .map(|(_, art)| art.clone())
         });
         if let Some(art) = cached {
             return Ok(art);
@@ -789,7 +827,8 @@ impl FitModel {
         let parents: Vec<i32> = sk.tree.parent.iter().map(|p| p.map_or(-1, |p| p as i32)).collect();
         let pos: Vec<[f64; 3]> = sk.positions.iter().map(|p| p.unwrap_or([f64::NAN; 3])).collect();
         let obj = js_sys::Object::new();
-        let set = |k: &str, v: &JsValue| js_sys::Reflect::set(&obj, &k.into(), v).map(|_| ()).map_err(|_| js_err("reflect"));
+        let set =
+            |k: &str, v: &JsValue| js_sys::Reflect::set(&obj, &k.into(), v).map(|_| ()).map_err(|_| js_err("reflect"));
         set("root", &JsValue::from(sk.tree.root as u32))?;
         set("parents", &js_sys::Int32Array::from(parents.as_slice()).into())?;
         set("positions", &flat_f32(&pos).into())?;
@@ -806,7 +845,8 @@ impl FitModel {
         let g = req.options(&self.pop)?;
         let r = crate::export::rig_report::export_rig(&*self.articulation()?, &self.pop, &g)?;
         let obj = js_sys::Object::new();
-        let set = |k: &str, v: &JsValue| js_sys::Reflect::set(&obj, &k.into(), v).map(|_| ()).map_err(|_| js_err("reflect"));
+        let set =
+            |k: &str, v: &JsValue| js_sys::Reflect::set(&obj, &k.into(), v).map(|_| ()).map_err(|_| js_err("reflect"));
         let per_pose: Vec<f64> = r.error.poses.iter().map(|p| p.e_rms).collect();
         set("glb", &Uint8Array::from(r.glb.as_slice()).into())?;
         set("bones", &JsValue::from(r.bones as u32))?;
@@ -825,7 +865,8 @@ impl FitModel {
     /// written and read back, its training poses solved onto it and their pose space.
     pub fn poser(&self, opts: JsValue) -> Result<WasmPoser, JsValue> {
         let mut req: crate::export::rig_report::RigRequest = from_js(opts.clone(), "pose options")?;
-        let given = !opts.is_undefined() && !opts.is_null() && js_sys::Reflect::has(&opts, &"weights".into()).unwrap_or(false);
+        let given =
+            !opts.is_undefined() && !opts.is_null() && js_sys::Reflect::has(&opts, &"weights".into()).unwrap_or(false);
         if !given {
             req.weights = crate::export::gltf::Weights::Fitted;
         }
@@ -947,7 +988,8 @@ impl WasmPoser {
     pub fn skeleton(&self) -> Result<JsValue, JsValue> {
         let r = &self.inner.rig.rig;
         let obj = js_sys::Object::new();
-        let set = |k: &str, v: JsValue| js_sys::Reflect::set(&obj, &k.into(), &v).map(|_| ()).map_err(|_| js_err("reflect"));
+        let set =
+            |k: &str, v: JsValue| js_sys::Reflect::set(&obj, &k.into(), &v).map(|_| ()).map_err(|_| js_err("reflect"));
         let parent: Vec<i32> = r.parent.iter().map(|p| p.map_or(-1, |p| p as i32)).collect();
         set("parent", to_js(&parent)?)?;
         set("order", to_js(&r.order)?)?;
@@ -997,7 +1039,9 @@ impl WasmPoser {
     pub fn pose_vector(&self) -> Result<JsValue, JsValue> {
         let x = self.inner.vector();
         let c = self.inner.space.project(&x);
-        to_js(&serde_json::json!({"vector": x, "coords": c, "mean": self.inner.space.mean, "training": self.inner.space.training}))
+        to_js(
+            &serde_json::json!({"vector": x, "coords": c, "mean": self.inner.space.mean, "training": self.inner.space.training}),
+        )
     }
 
     /// Coefficients of a random pose within the training range (seeded).
@@ -1054,12 +1098,14 @@ impl WasmPoser {
         }
         let mut pairs: Vec<(String, Vec<u8>)> = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
         pairs.sort_by(|a, b| crate::mesh::population::natural_cmp(&a.0, &b.0));
-        let loaded = crate::mesh::load::load(pairs).map_err(|errors| thrown(&errors.iter().map(Error::problem).collect::<Vec<_>>()))?;
+        let loaded = crate::mesh::load::load(pairs)
+            .map_err(|errors| thrown(&errors.iter().map(Error::problem).collect::<Vec<_>>()))?;
         let frame_names: Vec<String> = loaded.poses.iter().map(|(n, _)| n.clone()).collect();
         let frames: Vec<Vec<[f64; 3]>> = loaded.poses.into_iter().map(|(_, m)| m.positions).collect();
         let (solved, e, glb) = self.inner.add_frames(&frames)?;
         let obj = js_sys::Object::new();
-        let set = |k: &str, v: JsValue| js_sys::Reflect::set(&obj, &k.into(), &v).map(|_| ()).map_err(|_| js_err("reflect"));
+        let set =
+            |k: &str, v: JsValue| js_sys::Reflect::set(&obj, &k.into(), &v).map(|_| ()).map_err(|_| js_err("reflect"));
         set("names", to_js(&frame_names)?)?;
         set("eRms", Float64Array::from(e.as_slice()).into())?;
         set("eRmsAll", JsValue::from(crate::articulate::pose::overall_e_rms(&e)))?;

@@ -15,8 +15,8 @@ use posemfa::metrics::adjusted_rand_index;
 use posemfa::mfa::aecm::Fit;
 use posemfa::mfa::data::Data;
 use posemfa::mfa::estep::{e_step, e_step_pruned};
-use posemfa::parts::hierarchy::Pipeline;
 use posemfa::mfa::{LambdaRule, Params};
+use posemfa::parts::hierarchy::Pipeline;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 

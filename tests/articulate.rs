@@ -293,7 +293,8 @@ fn horse_poses_3_to_8() {
     let model = fitted(&pop);
     let art = Articulation::new(&model, &pop).unwrap();
     let rep = posemfa::articulate::report::report(&art, 2, 7, 0.5).unwrap();
-    let by = |prefix: &str| rep.methods.iter().find(|m| m.name.starts_with(prefix)).unwrap_or_else(|| panic!("{prefix}"));
+    let by =
+        |prefix: &str| rep.methods.iter().find(|m| m.name.starts_with(prefix)).unwrap_or_else(|| panic!("{prefix}"));
     let rigid = by("rigid (default");
     let rigid_off = by("rigid, residual off");
     let smooth = by("smooth dual-quaternion skin");

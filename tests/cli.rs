@@ -48,7 +48,10 @@ const COMMANDS: &[(&str, &[&str])] = &[
             "--parts",
         ],
     ),
-    ("export-gltf", &["--out", "--weights", "--influences", "--joints", "--morphs", "--bind", "--samples", "--band", "--seed"]),
+    (
+        "export-gltf",
+        &["--out", "--weights", "--influences", "--joints", "--morphs", "--bind", "--samples", "--band", "--seed"],
+    ),
     ("rig-report", &["--glb", "--out", "--weights", "--bind", "--band", "--parts"]),
     ("pose", &["--out", "--json"]),
     ("crossval", &["--json", "--weights", "--bones", "--parts"]),
@@ -71,14 +74,20 @@ fn help_lists_every_subcommand_and_each_its_options() {
     let flat = all.split_whitespace().collect::<Vec<_>>().join(" ");
     assert!(flat.contains(&formats_line()) && !all.contains("OBJ files"), "{all}");
     for (cmd, opts) in COMMANDS {
-        assert!(all.lines().any(|l| l.trim_start().starts_with(&format!("{cmd} "))), "`posemfa help` misses {cmd}:\n{all}");
+        assert!(
+            all.lines().any(|l| l.trim_start().starts_with(&format!("{cmd} "))),
+            "`posemfa help` misses {cmd}:\n{all}"
+        );
         for asked in [posemfa(&["help", cmd]), posemfa(&[cmd, "--help"]), posemfa(&[cmd, "-h"])] {
             assert!(asked.status.success(), "help {cmd}: {}", text(&asked.stderr));
             assert!(asked.stderr.is_empty(), "help {cmd}: {}", text(&asked.stderr));
             let one = text(&asked.stdout);
             assert!(one.contains(&format!("Usage: posemfa {cmd} ")), "help {cmd}:\n{one}");
             for opt in *opts {
-                assert!(one.contains(&format!("    {opt} ")) || one.contains(&format!("    {opt}\n")), "help {cmd} misses {opt}:\n{one}");
+                assert!(
+                    one.contains(&format!("    {opt} ")) || one.contains(&format!("    {opt}\n")),
+                    "help {cmd} misses {opt}:\n{one}"
+                );
             }
         }
     }
@@ -188,7 +197,9 @@ fn a_file_of_another_extension_is_refused_by_name() {
 /// `posemfa completions SHELL` writes a script that names every subcommand, and bash can read it.
 #[test]
 fn completions_for_bash_zsh_and_fish() {
-    for (shell, marker) in [("bash", "complete -F _posemfa"), ("zsh", "#compdef posemfa"), ("fish", "complete -c posemfa")] {
+    for (shell, marker) in
+        [("bash", "complete -F _posemfa"), ("zsh", "#compdef posemfa"), ("fish", "complete -c posemfa")]
+    {
         let r = posemfa(&["completions", shell]);
         assert!(r.status.success(), "{shell}: {}", text(&r.stderr));
         let script = text(&r.stdout);
@@ -266,7 +277,15 @@ fn start_labels_fit_from_a_partition_with_its_count() {
     std::fs::write(&array, serde_json::to_string(&six).unwrap()).unwrap();
     let out = dir.join("out.json");
     for (start, want) in [(&first, 7), (&array, 6)] {
-        let r = posemfa(&["fit", "synth:quadruped:1500:8:1", "--start-labels", start.to_str().unwrap(), "--quiet", "--json", out.to_str().unwrap()]);
+        let r = posemfa(&[
+            "fit",
+            "synth:quadruped:1500:8:1",
+            "--start-labels",
+            start.to_str().unwrap(),
+            "--quiet",
+            "--json",
+            out.to_str().unwrap(),
+        ]);
         assert!(r.status.success(), "{}", text(&r.stderr));
         let w: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
         assert_eq!(w["parts"].as_array().map(Vec::len), Some(want), "{}", start.display());
@@ -275,7 +294,10 @@ fn start_labels_fit_from_a_partition_with_its_count() {
     let r = posemfa(&["fit", "synth:quadruped:1500:8:1", "--start-labels", array.to_str().unwrap()]);
     assert!(!r.status.success());
     let e = text(&r.stderr);
-    assert!(e.contains("--start-labels") && e.contains("six.json") && e.contains("nor a fit JSON with `labels`"), "{e}");
+    assert!(
+        e.contains("--start-labels") && e.contains("six.json") && e.contains("nor a fit JSON with `labels`"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -288,13 +310,17 @@ fn generate_writes_every_format_and_fit_reads_it_back() {
     let labels_of = |format: &str, want: &str| -> Vec<u32> {
         let dir = root.join(format);
         let dir_arg = dir.to_str().expect("utf-8 temp path");
-        let r = posemfa(&["generate", "arm", "--vertices", "600", "--poses", "5", "--format", format, "--out", dir_arg]);
+        let r =
+            posemfa(&["generate", "arm", "--vertices", "600", "--poses", "5", "--format", format, "--out", dir_arg]);
         assert!(r.status.success(), "generate --format {format}: {}", text(&r.stderr));
         let json = root.join(format!("{format}.json"));
         let r = posemfa(&["fit", dir_arg, "--parts", "3", "--json", json.to_str().unwrap()]);
         let out = text(&r.stdout);
         assert!(r.status.success(), "fit of --format {format}: {}", text(&r.stderr));
-        let line = out.lines().find(|l| l.trim_start().starts_with("poses: ")).unwrap_or_else(|| panic!("no poses line:\n{out}"));
+        let line = out
+            .lines()
+            .find(|l| l.trim_start().starts_with("poses: "))
+            .unwrap_or_else(|| panic!("no poses line:\n{out}"));
         assert!(line.contains(want), "--format {format}: expected '{want}' in '{line}'");
         let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
         assert_eq!(v["shapes"].as_array().map(Vec::len), Some(5), "--format {format}");
@@ -325,7 +351,8 @@ fn subdivide_writes_a_registered_finer_population_that_fits_to_the_same_parts() 
     let r = posemfa(&["subdivide", coarse.to_str().unwrap(), "--out", fine.to_str().unwrap()]);
     assert!(r.status.success(), "{}", text(&r.stderr));
     let read = |dir: &std::path::Path| {
-        let mut names: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        let mut names: Vec<_> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
         names.sort();
         let first = posemfa::mesh::obj::parse_obj(&names[0], &std::fs::read(dir.join(&names[0])).unwrap()).unwrap();
         (names, first)
@@ -340,9 +367,18 @@ fn subdivide_writes_a_registered_finer_population_that_fits_to_the_same_parts() 
     }
     assert_eq!(b.positions.len(), a.positions.len() + edges.len());
     assert_eq!(b.faces.len(), 4 * a.faces.len());
-    assert!(text(&r.stdout).contains(&format!("wrote 5 poses of {} vertices", b.positions.len())), "{}", text(&r.stdout));
+    assert!(
+        text(&r.stdout).contains(&format!("wrote 5 poses of {} vertices", b.positions.len())),
+        "{}",
+        text(&r.stdout)
+    );
     // the old vertices where they were (to the f32 storage of the unit box)
-    let side = (0..3).map(|d| a.positions.iter().map(|p| p[d]).fold(f64::MIN, f64::max) - a.positions.iter().map(|p| p[d]).fold(f64::MAX, f64::min)).fold(0.0, f64::max);
+    let side = (0..3)
+        .map(|d| {
+            a.positions.iter().map(|p| p[d]).fold(f64::MIN, f64::max)
+                - a.positions.iter().map(|p| p[d]).fold(f64::MAX, f64::min)
+        })
+        .fold(0.0, f64::max);
     for (p, q) in a.positions.iter().zip(&b.positions) {
         assert!((0..3).all(|d| (p[d] - q[d]).abs() <= 1e-6 * side), "{p:?} vs {q:?}");
     }
@@ -359,7 +395,18 @@ fn subdivide_writes_a_registered_finer_population_that_fits_to_the_same_parts() 
     assert!(ari >= 0.9, "adjusted Rand {ari} between the coarse and the subdivided arm's parts");
     // a population from one file (a .glb of 5 frames): one OBJ per pose, none overwritten
     let (glb, from_glb) = (root.join("glb"), root.join("from-glb"));
-    let r = posemfa(&["generate", "arm", "--vertices", "300", "--poses", "5", "--format", "glb", "--out", glb.to_str().unwrap()]);
+    let r = posemfa(&[
+        "generate",
+        "arm",
+        "--vertices",
+        "300",
+        "--poses",
+        "5",
+        "--format",
+        "glb",
+        "--out",
+        glb.to_str().unwrap(),
+    ]);
     assert!(r.status.success(), "{}", text(&r.stderr));
     let r = posemfa(&["subdivide", glb.to_str().unwrap(), "--out", from_glb.to_str().unwrap()]);
     assert!(r.status.success(), "{}", text(&r.stderr));
@@ -396,7 +443,10 @@ fn object_picks_the_mesh_of_an_fbx_or_usd_file() {
         let r = posemfa(&["fit", fbx, flag, "Nope", "--quiet"]);
         assert!(!r.status.success());
         let err = text(&r.stderr);
-        assert!(err.contains("quadruped-shapekeys.fbx: no mesh is called or numbered `Nope`; the file has posed"), "{err}");
+        assert!(
+            err.contains("quadruped-shapekeys.fbx: no mesh is called or numbered `Nope`; the file has posed"),
+            "{err}"
+        );
     }
     let usd = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/usd/arm-pointcache.usda");
     let r = posemfa(&["fit", usd, "--object", "/World/Character/Body", "--parts", "2", "--max-iter", "5"]);
@@ -410,7 +460,8 @@ fn object_picks_the_mesh_of_an_fbx_or_usd_file() {
 #[test]
 fn robustness_drops_each_pose_in_turn() {
     let json = std::env::temp_dir().join(format!("posemfa-cli-robust-{}.json", std::process::id()));
-    let out = posemfa(&["robustness", "synth:arm:600:5", "--seeds", "1", "--drop-each", "--json", json.to_str().unwrap()]);
+    let out =
+        posemfa(&["robustness", "synth:arm:600:5", "--seeds", "1", "--drop-each", "--json", json.to_str().unwrap()]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
     for k in 1..=5 {

@@ -30,14 +30,13 @@ mod common;
 
 use posemfa::geometry::rotation::{angle_between, axis_angle};
 use posemfa::geometry::{add, det, mat_mul, mat_vec, orthonormality_error, transpose, Mat3, Vec3};
+use posemfa::memory;
 use posemfa::mesh::{Mesh, Population};
 use posemfa::mfa::aecm::Fit;
 use posemfa::mfa::data::Data;
-use posemfa::parts::hierarchy::{fit, FitResult};
-use posemfa::memory;
 use posemfa::mfa::{Model, Params};
+use posemfa::parts::hierarchy::{fit, FitResult};
 use posemfa::Error;
-
 
 /// Small and fast fit settings (the cases are about answers, not accuracy).
 fn quick(parts: usize) -> Params {
@@ -58,7 +57,11 @@ fn blob(n: usize, seed: f64) -> Vec<Vec3> {
     (0..n)
         .map(|j| {
             let t = j as f64 + seed;
-            [0.25 * (t * 0.7).sin() + 0.01 * t, 0.15 * (t * 1.3).cos(), 0.08 * (t * 0.37).sin() + 0.05 * (t * 2.1).cos()]
+            [
+                0.25 * (t * 0.7).sin() + 0.01 * t,
+                0.15 * (t * 1.3).cos(),
+                0.08 * (t * 0.37).sin() + 0.05 * (t * 2.1).cos(),
+            ]
         })
         .collect()
 }

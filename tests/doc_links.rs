@@ -310,8 +310,10 @@ fn the_scanner_finds_inline_links_images_and_references_but_not_code() {
 #[test]
 fn anchors_follow_githubs_slug_rules() {
     assert_eq!(slug("Mesh formats (`src/mesh/`)"), "mesh-formats-srcmesh");
-    assert_eq!(slug("A part count without tuning (`partRule: \"distinct\"`, the default)"),
-        "a-part-count-without-tuning-partrule-distinct-the-default");
+    assert_eq!(
+        slug("A part count without tuning (`partRule: \"distinct\"`, the default)"),
+        "a-part-count-without-tuning-partrule-distinct-the-default"
+    );
     assert_eq!(slug("The CLI (`cargo run --release -- help`)"), "the-cli-cargo-run---release----help");
     assert_eq!(slug("Is it articulated? (`src/parts/diagnosis.rs`)"), "is-it-articulated-srcpartsdiagnosisrs");
     assert_eq!(slug("Speed + Figures"), "speed--figures");
@@ -325,13 +327,22 @@ fn a_missing_file_and_a_missing_anchor_are_reported_with_file_line_and_target() 
     fs::create_dir_all(dir.join("docs")).unwrap();
     fs::write(dir.join("docs/a.md"), "# Title\n## Part two\n").unwrap();
     let readme = dir.join("README.md");
-    let text = "intro\n[ok](docs/a.md#part-two) [ok too](docs/)\n[gone](docs/missing.md)\n[bad anchor](docs/a.md#part-3)\n\
+    let text =
+        "intro\n[ok](docs/a.md#part-two) [ok too](docs/)\n[gone](docs/missing.md)\n[bad anchor](docs/a.md#part-3)\n\
                 [self](#intro) [self ok](#readme)\n# README\n";
     fs::write(&readme, text).unwrap();
     let problems = check_file(&readme, text);
     fs::remove_dir_all(&dir).unwrap();
     assert_eq!(problems.len(), 3, "{problems:#?}");
-    assert!(problems[0].contains("README.md:3: docs/missing.md") && problems[0].contains("does not exist"), "{}", problems[0]);
-    assert!(problems[1].contains("README.md:4: docs/a.md#part-3") && problems[1].contains("#part-3"), "{}", problems[1]);
+    assert!(
+        problems[0].contains("README.md:3: docs/missing.md") && problems[0].contains("does not exist"),
+        "{}",
+        problems[0]
+    );
+    assert!(
+        problems[1].contains("README.md:4: docs/a.md#part-3") && problems[1].contains("#part-3"),
+        "{}",
+        problems[1]
+    );
     assert!(problems[2].contains("README.md:5: #intro"), "{}", problems[2]);
 }

@@ -6,9 +6,9 @@
 mod common;
 
 use posemfa::error::Error;
+use posemfa::mfa::Params;
 use posemfa::parts::hierarchy::{fit, Pipeline};
 use posemfa::parts::islands::island_count;
-use posemfa::mfa::Params;
 use posemfa::synth::generate;
 use posemfa::synth::presets::example;
 

@@ -231,7 +231,8 @@ fn usd_error(name: &str, bytes: &[u8]) -> String {
 
 /// A usda stage with one quad mesh: `points` is the points attribute's text, `faces` the face attributes'.
 fn usda(points: &str, faces: &str) -> Vec<u8> {
-    format!("#usda 1.0\n(\n    upAxis = \"Y\"\n)\n\ndef Mesh \"Quad\"\n{{\n    {faces}\n    {points}\n}}\n").into_bytes()
+    format!("#usda 1.0\n(\n    upAxis = \"Y\"\n)\n\ndef Mesh \"Quad\"\n{{\n    {faces}\n    {points}\n}}\n")
+        .into_bytes()
 }
 
 const QUAD_FACES: &str = "int[] faceVertexCounts = [4]\n    int[] faceVertexIndices = [0, 1, 2, 3]";

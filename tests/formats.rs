@@ -109,29 +109,47 @@ dual_test! {
 fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
     use posemfa::metrics::adjusted_rand_index;
     use posemfa::{mfa::Params, parts::hierarchy::fit};
-    let Some(dir) = common::shared_dir("data/horse-poses", "horse_as_ply_and_pc2_fits_like_the_obj_folder") else { return };
+    let Some(dir) = common::shared_dir("data/horse-poses", "horse_as_ply_and_pc2_fits_like_the_obj_folder") else {
+        return;
+    };
     let obj = Population::from_paths(&[&dir]).unwrap();
-    let original: Vec<Vec<[f64; 3]>> = obj.unit_shapes().iter().map(|s| s.iter().map(|&p| obj.normalization.to_original(p)).collect()).collect();
-    let ply: Vec<(String, Vec<u8>)> = obj.names.iter().zip(&original).map(|(n, s)| {
-        (n.replace(".obj", ".ply"), write_ply(s, &obj.faces, PlyFormat::Binary, "horse-poses"))
-    }).collect();
+    let original: Vec<Vec<[f64; 3]>> =
+        obj.unit_shapes().iter().map(|s| s.iter().map(|&p| obj.normalization.to_original(p)).collect()).collect();
+    let ply: Vec<(String, Vec<u8>)> = obj
+        .names
+        .iter()
+        .zip(&original)
+        .map(|(n, s)| (n.replace(".obj", ".ply"), write_ply(s, &obj.faces, PlyFormat::Binary, "horse-poses")))
+        .collect();
     let ply = Population::from_files(ply).unwrap();
     // ASCII PLY of each OBJ file's own coordinates (printed in full: they read back bit for bit)
-    let ascii: Vec<(String, Vec<u8>)> = obj.names.iter().map(|n| {
-        let m = parse_obj(n, &std::fs::read(dir.join(n)).unwrap()).unwrap();
-        (n.replace(".obj", ".ply"), write_ply(&m.positions, &m.faces, PlyFormat::Ascii, "horse-poses"))
-    }).collect();
+    let ascii: Vec<(String, Vec<u8>)> = obj
+        .names
+        .iter()
+        .map(|n| {
+            let m = parse_obj(n, &std::fs::read(dir.join(n)).unwrap()).unwrap();
+            (n.replace(".obj", ".ply"), write_ply(&m.positions, &m.faces, PlyFormat::Ascii, "horse-poses"))
+        })
+        .collect();
     let ascii = Population::from_files(ascii).unwrap();
     assert_eq!(ascii.source, "11 PLY files");
-    assert_eq!((&ascii.unit_shapes(), &ascii.faces), (&obj.unit_shapes(), &obj.faces), "ASCII PLY gives the OBJ population exactly");
+    assert_eq!(
+        (&ascii.unit_shapes(), &ascii.faces),
+        (&obj.unit_shapes(), &obj.faces),
+        "ASCII PLY gives the OBJ population exactly"
+    );
     let pc2 = Population::from_files(vec![
         ("horse.pc2".into(), write_pc2(&original)),
         ("reference.obj".into(), std::fs::read(dir.join("reference.obj")).unwrap()),
-    ]).unwrap();
+    ])
+    .unwrap();
     assert_eq!(ply.n_shapes(), 11);
     assert_eq!(pc2.n_shapes(), 11);
     let seeds: Vec<u64> = match std::env::var("POSEMFA_SEEDS") {
-        Ok(v) => v.split(',').map(|s| s.trim().parse().unwrap_or_else(|_| panic!("POSEMFA_SEEDS: '{s}' is not a seed (0,1,2)"))).collect(),
+        Ok(v) => v
+            .split(',')
+            .map(|s| s.trim().parse().unwrap_or_else(|_| panic!("POSEMFA_SEEDS: '{s}' is not a seed (0,1,2)")))
+            .collect(),
         Err(_) => vec![0],
     };
     let mut failed = Vec::new();

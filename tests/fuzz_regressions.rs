@@ -9,9 +9,9 @@
 #[macro_use]
 mod common;
 
+use posemfa::fuzzing::{decode_shapes, params_from, ShapesInput};
 use posemfa::mesh::Population;
 use posemfa::parts::hierarchy::fit;
-use posemfa::fuzzing::{decode_shapes, params_from, ShapesInput};
 use posemfa::Error;
 
 /// The fit of the targets must give a model with every number finite and every rotation proper.
@@ -178,7 +178,26 @@ fn usd_read_survives_mutated_usdc() {
     // where the TOC points: the structural sections follow the values
     let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
     let structure = 2896.min(toc);
-    let edges = [0u64, 1, 2, 3, 4, 7, 8, 255, 256, 4096, 65535, 1 << 31, 1 << 32, 1 << 40, 1 << 62, u64::MAX, u64::MAX - 7, i64::MAX as u64];
+    let edges = [
+        0u64,
+        1,
+        2,
+        3,
+        4,
+        7,
+        8,
+        255,
+        256,
+        4096,
+        65535,
+        1 << 31,
+        1 << 32,
+        1 << 40,
+        1 << 62,
+        u64::MAX,
+        u64::MAX - 7,
+        i64::MAX as u64,
+    ];
     let (mut loaded, mut refused) = (0, 0);
     for _ in 0..n {
         let mut b = seed.to_vec();
@@ -191,7 +210,11 @@ fn usd_read_survives_mutated_usdc() {
                 }
                 1 if b.len() >= 8 => {
                     let at = rng.gen_range(from.min(b.len() - 8)..=b.len() - 8);
-                    let v = if rng.gen_bool(0.5) { edges[rng.gen_range(0..edges.len())] } else { rng.gen::<u64>() >> rng.gen_range(0..64) };
+                    let v = if rng.gen_bool(0.5) {
+                        edges[rng.gen_range(0..edges.len())]
+                    } else {
+                        rng.gen::<u64>() >> rng.gen_range(0..64)
+                    };
                     b[at..at + 8].copy_from_slice(&v.to_le_bytes());
                 }
                 2 => {
@@ -211,5 +234,7 @@ fn usd_read_survives_mutated_usdc() {
             refused += 1;
         }
     }
-    eprintln!("usd_read_survives_mutated_usdc: {n} mutations, {loaded} loaded, {refused} refused, none aborted or panicked");
+    eprintln!(
+        "usd_read_survives_mutated_usdc: {n} mutations, {loaded} loaded, {refused} refused, none aborted or panicked"
+    );
 }

@@ -4,8 +4,8 @@
 
 use posemfa::export::json::fit_to_json;
 use posemfa::mesh::Population;
-use posemfa::parts::hierarchy::fit;
 use posemfa::mfa::Params;
+use posemfa::parts::hierarchy::fit;
 use std::path::PathBuf;
 
 mod common;
@@ -58,8 +58,10 @@ fn horse_at_defaults_meets_the_figures_and_the_json_is_consistent() {
         for (j, p) in mesh.positions.iter().enumerate() {
             let u: Vec<f64> = (0..3).map(|d| (p[d] - offset[d]) * scale).collect();
             let k = labels[j].as_u64().unwrap() as usize;
-            let r: Vec<f64> = parts[k]["rotations"][i].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-            let b: Vec<f64> = parts[k]["translations"][i].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let r: Vec<f64> =
+                parts[k]["rotations"][i].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let b: Vec<f64> =
+                parts[k]["translations"][i].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
             let v: Vec<f64> = latent[j].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
             for d in 0..3 {
                 let q = r[3 * d] * v[0] + r[3 * d + 1] * v[1] + r[3 * d + 2] * v[2] + b[d];

@@ -7,9 +7,9 @@ mod common;
 
 use posemfa::export::json::fit_to_json;
 use posemfa::mesh::Population;
+use posemfa::mfa::Params;
 use posemfa::parts::hierarchy::fit;
 use posemfa::parts::islands::island_count;
-use posemfa::mfa::Params;
 use posemfa::synth::generate;
 use posemfa::synth::presets::examples;
 
@@ -41,7 +41,9 @@ dual_test! {
 #[test]
 fn horse_populations_have_connected_parts() {
     for name in ["horse-poses", "horse-gallop"] {
-        let Some(dir) = common::shared_dir(&format!("data/{name}"), "horse_populations_have_connected_parts") else { return };
+        let Some(dir) = common::shared_dir(&format!("data/{name}"), "horse_populations_have_connected_parts") else {
+            return;
+        };
         let pop = Population::from_paths(&[dir]).unwrap();
         for seed in 0..2u64 {
             let (islands, parts) = islands_of(&pop, &Params { seed, ..Params::default() });

@@ -125,7 +125,8 @@ fn read(p: &Path) -> String {
 
 #[test]
 fn the_parser_ignores_comments_strings_and_unit_tests() {
-    let text = "use super::data::Data; // crate::parts::hierarchy\n/* crate::parts::x */ let s = \"crate::parts::y\";\n\
+    let text =
+        "use super::data::Data; // crate::parts::hierarchy\n/* crate::parts::x */ let s = \"crate::parts::y\";\n\
                 #[cfg(test)]\nmod tests { use crate::parts::hierarchy::fit; fn f() { if true { } } }\n\
                 fn g() { crate::mfa::aecm::run(); }\nuse super::{cm, estep::EStep};";
     let named = paths_named(&code_only(text));
@@ -135,14 +136,20 @@ fn the_parser_ignores_comments_strings_and_unit_tests() {
         .collect();
     assert_eq!(named, want);
     // and code that does name the other room is seen
-    assert!(paths_named(&code_only("fn f() { crate::parts::hierarchy::fit(); }")).contains(&("parts".into(), "hierarchy".into())));
+    assert!(paths_named(&code_only("fn f() { crate::parts::hierarchy::fit(); }"))
+        .contains(&("parts".into(), "hierarchy".into())));
 }
 
 #[test]
 fn mfa_never_names_parts() {
     for f in rust_files(&src().join("mfa")) {
         for (room, name) in paths_named(&code_only(&read(&f))) {
-            assert_ne!(room, "parts", "{} names crate::parts::{name}: the MFA must not depend on the part decisions", f.display());
+            assert_ne!(
+                room,
+                "parts",
+                "{} names crate::parts::{name}: the MFA must not depend on the part decisions",
+                f.display()
+            );
         }
     }
 }
@@ -183,7 +190,10 @@ fn parts_modules_import_only_earlier_ones() {
                     "parts/{me}.rs uses parts::{name}, listed after it in parts/mod.rs: an import circle or a wrong order"
                 );
             } else {
-                assert!(room == "parts" || name == "super", "parts/{me}.rs names super::{name}, not a module of parts/");
+                assert!(
+                    room == "parts" || name == "super",
+                    "parts/{me}.rs names super::{name}, not a module of parts/"
+                );
             }
         }
     }

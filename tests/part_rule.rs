@@ -7,9 +7,9 @@
 mod common;
 
 use posemfa::metrics::ground_truth_accuracy;
+use posemfa::mfa::Params;
 use posemfa::parts::diagnosis::diagnose;
 use posemfa::parts::hierarchy::fit;
-use posemfa::mfa::Params;
 use posemfa::synth::{generate, Preset, Spec};
 
 /// (parts, ARI, worst rotation error, median rotation error, articulated) at default parameters.
@@ -95,15 +95,26 @@ fn the_parts_do_not_depend_on_how_the_poses_are_turned() {
     // Every fifth frame of horse-gallop (10 of its poses), and the same turned, scaled by 7.3 and shifted: the
     // same parts, vertex for vertex. The turn changes the poses' bounding box, which sets the unit box; while the
     // variance floor was a fixed number of unit-box units² the two gave 22 and 24 parts.
-    let Some(dir) = common::shared_dir("data/horse-gallop", "the_parts_do_not_depend_on_how_the_poses_are_turned") else { return };
-    let mut files: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "obj")).collect();
+    let Some(dir) = common::shared_dir("data/horse-gallop", "the_parts_do_not_depend_on_how_the_poses_are_turned")
+    else {
+        return;
+    };
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "obj"))
+        .collect();
     files.sort();
-    let every_fifth: Vec<_> = files.iter().filter(|p| p.file_stem().is_some_and(|s| s != "reference")).step_by(5).collect();
+    let every_fifth: Vec<_> =
+        files.iter().filter(|p| p.file_stem().is_some_and(|s| s != "reference")).step_by(5).collect();
     let pop = posemfa::mesh::Population::from_paths(&every_fifth).unwrap();
     let moved = posemfa::parts::robustness::Variant::Moved.apply(&pop).unwrap();
     let a = fit(&pop, &Params::default(), &mut |_| true).unwrap().model;
     let b = fit(&moved, &Params::default(), &mut |_| true).unwrap().model;
     assert_eq!((a.n_parts(), &a.labels), (b.n_parts(), &b.labels));
-    let (ra, rb) = (pop.normalization.length_to_original(a.rmse(&pop)), moved.normalization.length_to_original(b.rmse(&moved)) / 7.3);
+    let (ra, rb) = (
+        pop.normalization.length_to_original(a.rmse(&pop)),
+        moved.normalization.length_to_original(b.rmse(&moved)) / 7.3,
+    );
     assert!((ra / rb - 1.0).abs() < 1e-3, "RMSE {ra} against {rb} (original units, the second over 7.3)");
 }

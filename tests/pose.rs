@@ -57,7 +57,13 @@ fn true_rig(g: &Generated) -> SkinnedRig {
             })
         })
         .collect();
-    SkinnedRig { rest: g.rest.clone(), weights: SkinWeights { influences }, parent: g.parent.clone(), order, joint_points }
+    SkinnedRig {
+        rest: g.rest.clone(),
+        weights: SkinWeights { influences },
+        parent: g.parent.clone(),
+        order,
+        joint_points,
+    }
 }
 
 fn true_motions(g: &Generated, i: usize) -> Vec<RigidMotion> {

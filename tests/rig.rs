@@ -31,7 +31,11 @@ fn quadruped_fit() -> (Population, posemfa::mfa::Model) {
     (pop, r.model)
 }
 
-fn exported(pop: &Population, art: &Articulation, opts: &GltfOptions) -> (RigError, posemfa::export::gltf::GlbPlayback) {
+fn exported(
+    pop: &Population,
+    art: &Articulation,
+    opts: &GltfOptions,
+) -> (RigError, posemfa::export::gltf::GlbPlayback) {
     let glb = to_glb(art, opts).unwrap();
     let play = play_glb(&glb).unwrap();
     (rig_error(pop, &play, opts.rig_options().bind_pose).unwrap(), play)
@@ -156,7 +160,8 @@ fn horse_gallop_fitted_rig() {
     let art = Articulation::new(&r.model, &pop).unwrap();
     let bind = pop.names.iter().position(|n| n.starts_with("reference")).unwrap_or(0);
     let (rigid, _) = exported(&pop, &art, &GltfOptions { bind_pose: bind, ..Default::default() });
-    let (fitted, _) = exported(&pop, &art, &GltfOptions { bind_pose: bind, weights: Weights::Fitted, ..Default::default() });
+    let (fitted, _) =
+        exported(&pop, &art, &GltfOptions { bind_pose: bind, weights: Weights::Fitted, ..Default::default() });
     eprintln!("horse-gallop, {} parts: E_RMS rigid {:.3}, fitted {:.3}", r.model.n_parts(), rigid.e_rms, fitted.e_rms);
     assert!(fitted.e_rms < 0.8 * rigid.e_rms && fitted.e_rms < 1.5, "fitted {} rigid {}", fitted.e_rms, rigid.e_rms);
 }

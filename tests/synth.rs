@@ -166,7 +166,11 @@ fn same_seed_same_output_other_seed_other_poses() {
         assert_eq!(a.population.faces, c.population.faces);
         assert_eq!(a.part_of_vertex, c.part_of_vertex);
         for i in 0..4 {
-            assert_ne!(a.population.unit_shapes()[i], c.population.unit_shapes()[i], "{preset:?}: seeds 7 and 8 give pose {i} alike");
+            assert_ne!(
+                a.population.unit_shapes()[i],
+                c.population.unit_shapes()[i],
+                "{preset:?}: seeds 7 and 8 give pose {i} alike"
+            );
             assert_ne!(a.rotations[i], c.rotations[i]);
         }
     }
@@ -408,7 +412,8 @@ fn segment_hits_triangle(p: Vec3, q: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
 /// Pairs of triangles with no common vertex that cross each other (a uniform grid of about two edge lengths
 /// finds the candidates).
 fn self_intersections(x: &[Vec3], faces: &[[u32; 3]]) -> usize {
-    let edge: f64 = faces.iter().map(|f| norm(sub(x[f[0] as usize], x[f[1] as usize]))).sum::<f64>() / faces.len() as f64;
+    let edge: f64 =
+        faces.iter().map(|f| norm(sub(x[f[0] as usize], x[f[1] as usize]))).sum::<f64>() / faces.len() as f64;
     let cell = 2.0 * edge;
     let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
     for (k, f) in faces.iter().enumerate() {
@@ -433,7 +438,8 @@ fn self_intersections(x: &[Vec3], faces: &[[u32; 3]]) -> usize {
                 }
                 let (ta, tb) = (fa.map(|v| x[v as usize]), fb.map(|v| x[v as usize]));
                 let hit = (0..3).any(|e| {
-                    segment_hits_triangle(ta[e], ta[(e + 1) % 3], tb) || segment_hits_triangle(tb[e], tb[(e + 1) % 3], ta)
+                    segment_hits_triangle(ta[e], ta[(e + 1) % 3], tb)
+                        || segment_hits_triangle(tb[e], tb[(e + 1) % 3], ta)
                 });
                 if hit {
                     crossing.insert((a.min(b), a.max(b)));
@@ -450,7 +456,8 @@ fn self_intersection_check_finds_a_crossing() {
     let x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.2, 0.2, -0.5], [0.2, 0.2, 0.5], [0.9, 0.9, 0.0]];
     let faces = [[0, 1, 2], [3, 4, 5]];
     assert_eq!(self_intersections(&x, &faces), 1);
-    let apart: Vec<Vec3> = x.iter().enumerate().map(|(k, &p)| if k >= 3 { add(p, [5.0, 0.0, 0.0]) } else { p }).collect();
+    let apart: Vec<Vec3> =
+        x.iter().enumerate().map(|(k, &p)| if k >= 3 { add(p, [5.0, 0.0, 0.0]) } else { p }).collect();
     assert_eq!(self_intersections(&apart, &faces), 0);
 }
 

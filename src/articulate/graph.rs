@@ -376,7 +376,12 @@ pub fn colour_parts(labels: &[u32], faces: &[[u32; 3]], n_colours: usize) -> Vec
 /// already (so fits A, B and A again show A in A's colours); the others are coloured as [`colour_parts`] does
 /// around them. So fits of one population can be compared by eye. A partition of another vertex count is passed
 /// over; with none, the same as [`colour_parts`].
-pub fn colour_parts_like(labels: &[u32], faces: &[[u32; 3]], n_colours: usize, previous: &[(&[u32], &[u32])]) -> Vec<u32> {
+pub fn colour_parts_like(
+    labels: &[u32],
+    faces: &[[u32; 3]],
+    n_colours: usize,
+    previous: &[(&[u32], &[u32])],
+) -> Vec<u32> {
     let n_parts = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
     if n_colours == 0 {
         return vec![0; n_parts];
@@ -413,7 +418,8 @@ pub fn colour_parts_like(labels: &[u32], faces: &[[u32; 3]], n_colours: usize, p
         for c in two_away.into_iter().filter_map(|r| colour[r]) {
             beyond[c] += 1;
         }
-        let least = |ok: &dyn Fn(usize) -> bool| (0..n_colours).filter(|&c| ok(c)).min_by_key(|&c| (beyond[c], used[c], c));
+        let least =
+            |ok: &dyn Fn(usize) -> bool| (0..n_colours).filter(|&c| ok(c)).min_by_key(|&c| (beyond[c], used[c], c));
         let c = least(&|c| !taken.contains(&c)).or_else(|| least(&|_| true)).unwrap_or(0);
         colour[p] = Some(c);
         used[c] += 1;
@@ -542,7 +548,11 @@ mod tests {
 
     /// A strip of quads along x: vertices (i, y) for i = 0..=n, y = 0..rows (vertex i * rows + y); labels
     /// by column; two triangles per quad.
-    fn strip_rows(n: usize, rows: usize, label_of_column: impl Fn(usize) -> u32) -> (Vec<u32>, Vec<[u32; 3]>, Vec<Vec3>) {
+    fn strip_rows(
+        n: usize,
+        rows: usize,
+        label_of_column: impl Fn(usize) -> u32,
+    ) -> (Vec<u32>, Vec<[u32; 3]>, Vec<Vec3>) {
         let mut pos = Vec::new();
         let mut labels = Vec::new();
         for i in 0..=n {
@@ -599,7 +609,15 @@ mod tests {
         // 0: columns 0..=5, 1: columns 6..=11, 2: columns 12..=14, 5 rows, plus an island of part 2 at
         // column 2 of part 0 (one vertex). BFS from 0 hangs 2 on 0 through the island; the strongest tree
         // hangs it on 1.
-        let (mut labels, faces, pos) = strip_rows(14, 5, |i| if i <= 5 { 0 } else if i <= 11 { 1 } else { 2 });
+        let (mut labels, faces, pos) = strip_rows(14, 5, |i| {
+            if i <= 5 {
+                0
+            } else if i <= 11 {
+                1
+            } else {
+                2
+            }
+        });
         labels[10] = 2; // vertex (2, 0)
         let g = PartGraph::new(&labels, &faces, 3, &pos);
         assert_eq!(g.neighbors[0], vec![1, 2]);

@@ -132,11 +132,13 @@ impl Articulation {
             (0..self.n_parts()).map(|k| motions[k].then_after(&self.training_motion(k, i).inverse())).collect();
         let from_j: Vec<RigidMotion> =
             (0..self.n_parts()).map(|k| motions[k].then_after(&self.training_motion(k, j).inverse())).collect();
-        let a: Vec<Vec3> = (0..self.n_vertices()).map(|v| blend_motion(&from_i, weights, v, opts.blend).apply(yi[v])).collect();
+        let a: Vec<Vec3> =
+            (0..self.n_vertices()).map(|v| blend_motion(&from_i, weights, v, opts.blend).apply(yi[v])).collect();
         if i == j {
             return a;
         }
-        let b: Vec<Vec3> = (0..self.n_vertices()).map(|v| blend_motion(&from_j, weights, v, opts.blend).apply(yj[v])).collect();
+        let b: Vec<Vec3> =
+            (0..self.n_vertices()).map(|v| blend_motion(&from_j, weights, v, opts.blend).apply(yj[v])).collect();
         if opts.edge_blend {
             // every edge's length moves linearly between its lengths in the two end shapes
             let lengths: Vec<f64> = self

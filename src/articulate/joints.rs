@@ -72,7 +72,12 @@ pub fn area_centroid(tris: &[usize], faces: &[[u32; 3]], positions: &[Vec3]) -> 
 
 /// Every contact's joint, keyed (smaller, larger) like [`PartGraph::contacts`]. `shapes`: the training shapes in
 /// order (unit box), read one at a time.
-pub fn joints<S: AsRef<[Vec3]>>(graph: &PartGraph, model: &Model, faces: &[[u32; 3]], shapes: impl IntoIterator<Item = S>) -> BTreeMap<(usize, usize), Joint> {
+pub fn joints<S: AsRef<[Vec3]>>(
+    graph: &PartGraph,
+    model: &Model,
+    faces: &[[u32; 3]],
+    shapes: impl IntoIterator<Item = S>,
+) -> BTreeMap<(usize, usize), Joint> {
     let mut points: Vec<Vec<Vec3>> = vec![Vec::new(); graph.contacts.len()];
     for s in shapes {
         let s = s.as_ref();
@@ -101,7 +106,14 @@ mod tests {
 
     #[test]
     fn centroid_weights_by_area() {
-        let pos = vec![[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [10.0, 0.0, 0.0], [10.5, 0.0, 0.0], [10.0, 0.5, 0.0]];
+        let pos = vec![
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [10.0, 0.0, 0.0],
+            [10.5, 0.0, 0.0],
+            [10.0, 0.5, 0.0],
+        ];
         let faces = vec![[0, 1, 2], [3, 4, 5]];
         // areas 2 and 0.125; centres (2/3, 2/3) and (10 + 1/6, 1/6)
         let c = area_centroid(&[0, 1], &faces, &pos);

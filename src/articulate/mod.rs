@@ -146,7 +146,10 @@ impl RigidMotion {
     }
 
     pub fn inverse(&self) -> RigidMotion {
-        RigidMotion { rotation: transpose(&self.rotation), translation: scale(mat_t_vec(&self.rotation, self.translation), -1.0) }
+        RigidMotion {
+            rotation: transpose(&self.rotation),
+            translation: scale(mat_t_vec(&self.rotation, self.translation), -1.0),
+        }
     }
 
     /// self ∘ other (other first).
@@ -205,7 +208,9 @@ impl Articulation {
             )));
         }
         if model.parts.is_empty() || model.labels.len() != model.n_vertices || model.latent.len() != model.n_vertices {
-            return Err(Error::Request("the model has no parts or its labels/latent shape do not match its vertices".into()));
+            return Err(Error::Request(
+                "the model has no parts or its labels/latent shape do not match its vertices".into(),
+            ));
         }
         if let Some(&l) = model.labels.iter().find(|&&l| l as usize >= model.parts.len()) {
             return Err(Error::Request(format!("label {l} but the model has {} parts", model.parts.len())));
@@ -304,7 +309,9 @@ impl Articulation {
                 let used = self.graph.used_parts();
                 *used
                     .iter()
-                    .min_by(|&&a, &&b| self.rotation_angle(a, i, j).total_cmp(&self.rotation_angle(b, i, j)).then(a.cmp(&b)))
+                    .min_by(|&&a, &&b| {
+                        self.rotation_angle(a, i, j).total_cmp(&self.rotation_angle(b, i, j)).then(a.cmp(&b))
+                    })
                     .expect("at least one used part")
             }
         }

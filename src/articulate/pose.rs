@@ -98,7 +98,9 @@ impl SkinnedRig {
             let mut sum = 0.0;
             for (k, w) in self.weights.influences(v) {
                 if k >= nb || !seen[k] {
-                    return Err(Error::Data(format!("rig: vertex {v} is weighted to bone {k}, which is not in the skeleton")));
+                    return Err(Error::Data(format!(
+                        "rig: vertex {v} is weighted to bone {k}, which is not in the skeleton"
+                    )));
                 }
                 if !(w >= 0.0 && w.is_finite()) {
                     return Err(Error::Data(format!("rig: vertex {v} has weight {w} on bone {k}")));
@@ -147,10 +149,13 @@ impl SkinnedRig {
 
 /// Sum of squared distances between two point lists.
 pub fn sse(a: &[Vec3], b: &[Vec3]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| {
-        let d = sub(*x, *y);
-        dot(d, d)
-    }).sum()
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| {
+            let d = sub(*x, *y);
+            dot(d, d)
+        })
+        .sum()
 }
 
 /// E_RMS over several frames of the same mesh from each frame's E_RMS (the root of the mean square).
@@ -178,7 +183,10 @@ pub struct FrameSolve {
 /// vertex count (same mesh, same vertex order). They are read once, in order, into the solve's own
 /// vertex-by-vertex copy: a caller can make each frame as it is asked for (pose mode's training poses in
 /// original units), so that only one is held beside the copy.
-pub fn solve_frames<F: AsRef<[Vec3]>>(rig: &SkinnedRig, frames: impl IntoIterator<Item = F, IntoIter: ExactSizeIterator>) -> Result<FrameSolve> {
+pub fn solve_frames<F: AsRef<[Vec3]>>(
+    rig: &SkinnedRig,
+    frames: impl IntoIterator<Item = F, IntoIter: ExactSizeIterator>,
+) -> Result<FrameSolve> {
     rig.validate()?;
     let nv = rig.n_vertices();
     let frames = frames.into_iter();
@@ -240,10 +248,16 @@ pub fn solve_frames<F: AsRef<[Vec3]>>(rig: &SkinnedRig, frames: impl IntoIterato
                 }
             }
         }
-        errors.push(rig.skin(&m).iter().enumerate().map(|(v, &x)| {
-            let d = sub(x, frame(v));
-            dot(d, d)
-        }).sum());
+        errors.push(
+            rig.skin(&m)
+                .iter()
+                .enumerate()
+                .map(|(v, &x)| {
+                    let d = sub(x, frame(v));
+                    dot(d, d)
+                })
+                .sum(),
+        );
         bones.push(m);
         steps.push(n);
     }
@@ -326,7 +340,9 @@ pub fn turn(rig: &SkinnedRig, bones: &[RigidMotion], k: usize, axis: Vec3, angle
     let c = bones[holder].apply(rig.joint_points[k]);
     let r = axis_angle(axis, angle);
     let g = RigidMotion { rotation: r, translation: sub(c, mat_vec(&r, c)) };
-    Ok((0..rig.n_bones()).map(|b| if rig.order.contains(&b) && rig.in_subtree(k, b) { g.then_after(&bones[b]) } else { bones[b] }).collect())
+    Ok((0..rig.n_bones())
+        .map(|b| if rig.order.contains(&b) && rig.in_subtree(k, b) { g.then_after(&bones[b]) } else { bones[b] })
+        .collect())
 }
 
 /// Log map of a rotation: axis · angle (radians), angle in [0, π].
@@ -373,7 +389,12 @@ impl PoseSpace {
             return Err(Error::Request("the pose space needs at least one pose".into()));
         }
         if let Some(i) = poses.iter().position(|p| p.len() != rig.n_bones()) {
-            return Err(Error::Request(format!("pose {} has {} bone motions for {} bones", i + 1, poses[i].len(), rig.n_bones())));
+            return Err(Error::Request(format!(
+                "pose {} has {} bone motions for {} bones",
+                i + 1,
+                poses[i].len(),
+                rig.n_bones()
+            )));
         }
         let bones: Vec<usize> = rig.order.iter().copied().filter(|&k| rig.parent[k].is_some()).collect();
         let dim = 3 * bones.len();
@@ -418,7 +439,9 @@ impl PoseSpace {
         let mut space = PoseSpace { bones, mean, modes, sd, training, coords: Vec::new(), range: Vec::new() };
         space.coords = space.training.iter().map(|x| space.project(x)).collect();
         space.range = (0..space.modes.len())
-            .map(|m| space.coords.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |r, c| [r[0].min(c[m]), r[1].max(c[m])]))
+            .map(|m| {
+                space.coords.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |r, c| [r[0].min(c[m]), r[1].max(c[m])])
+            })
             .collect();
         Ok(space)
     }
@@ -492,7 +515,9 @@ pub fn crossval(
 ) -> Result<Vec<Fold>> {
     let ns = pop.n_shapes();
     if ns < 3 {
-        return Err(Error::Request(format!("cross-validation leaves one pose out of at least 3; the population has {ns}")));
+        return Err(Error::Request(format!(
+            "cross-validation leaves one pose out of at least 3; the population has {ns}"
+        )));
     }
     let mut folds = Vec::with_capacity(ns);
     for out in 0..ns {
@@ -500,7 +525,8 @@ pub fn crossval(
         let t0 = crate::clock::now_ms();
         let keep: Vec<usize> = (0..ns).filter(|&i| i != out).collect();
         let names: Vec<String> = keep.iter().map(|&i| pop.names[i].clone()).collect();
-        let shapes: Vec<Vec<Vec3>> = keep.iter().map(|&i| pop.shape(i).iter().map(|p| pop.normalization.to_original(p)).collect()).collect();
+        let shapes: Vec<Vec<Vec3>> =
+            keep.iter().map(|&i| pop.shape(i).iter().map(|p| pop.normalization.to_original(p)).collect()).collect();
         let train = crate::mesh::Population::from_unit_shapes(names, pop.faces.to_vec(), shapes)?;
         let fit = crate::parts::hierarchy::fit(&train, params, &mut |_| true)?;
         let art = super::Articulation::new(&fit.model, &train)?;
@@ -515,7 +541,8 @@ pub fn crossval(
         };
         let in_sse: f64 = (0..train.n_shapes()).map(|i| sse(&rig.pose(i), &train.shape(i).to_vec())).sum();
         let skinned = SkinnedRig::from_rig(&rig);
-        let frame: Vec<Vec3> = pop.shape(out).iter().map(|p| train.normalization.to_unit(pop.normalization.to_original(p))).collect();
+        let frame: Vec<Vec3> =
+            pop.shape(out).iter().map(|p| train.normalization.to_unit(pop.normalization.to_original(p))).collect();
         let solved = solve_frames(&skinned, std::slice::from_ref(&frame))?;
         let t2 = crate::clock::now_ms();
         folds.push(Fold {

@@ -126,7 +126,15 @@ pub struct Report {
     pub methods: Vec<MethodFigures>,
 }
 
-fn figures(art: &Articulation, name: &str, opts: Option<Options>, i: usize, j: usize, t: f64, v_ref: f64) -> Result<MethodFigures> {
+fn figures(
+    art: &Articulation,
+    name: &str,
+    opts: Option<Options>,
+    i: usize,
+    j: usize,
+    t: f64,
+    v_ref: f64,
+) -> Result<MethodFigures> {
     let at = |t: f64| -> Result<Vec<Vec3>> {
         match &opts {
             Some(o) => art.interpolate(i, j, t, o),
@@ -159,11 +167,35 @@ pub fn report(art: &Articulation, i: usize, j: usize, t: f64) -> Result<Report> 
         figures(art, "rigid (default: anchor root, exact ends, residual)", Some(d), i, j, t, v_ref)?,
         figures(art, "rigid, residual off", Some(Options { residual: false, ..d }), i, j, t, v_ref)?,
         figures(art, "smooth dual-quaternion skin", Some(smooth), i, j, t, v_ref)?,
-        figures(art, "smooth dual-quaternion skin, residual off", Some(Options { residual: false, ..smooth }), i, j, t, v_ref)?,
-        figures(art, "smooth dual-quaternion skin, ends averaged by position (no edge blend)", Some(Options { edge_blend: false, ..smooth }), i, j, t, v_ref)?,
+        figures(
+            art,
+            "smooth dual-quaternion skin, residual off",
+            Some(Options { residual: false, ..smooth }),
+            i,
+            j,
+            t,
+            v_ref,
+        )?,
+        figures(
+            art,
+            "smooth dual-quaternion skin, ends averaged by position (no edge blend)",
+            Some(Options { edge_blend: false, ..smooth }),
+            i,
+            j,
+            t,
+            v_ref,
+        )?,
         figures(art, "smooth linear-blend skin", Some(Options { blend: Blend::Linear, ..smooth }), i, j, t, v_ref)?,
         figures(art, "rigid, paper root, exact ends", Some(Options { root: RootRule::Paper, ..d }), i, j, t, v_ref)?,
-        figures(art, "Algorithm 2 as printed (paper root, BFS, no offset blending), residual off", Some(Options { residual: false, ..Options::paper() }), i, j, t, v_ref)?,
+        figures(
+            art,
+            "Algorithm 2 as printed (paper root, BFS, no offset blending), residual off",
+            Some(Options { residual: false, ..Options::paper() }),
+            i,
+            j,
+            t,
+            v_ref,
+        )?,
         figures(art, "linear vertex interpolation", None, i, j, t, v_ref)?,
     ];
     let total_area: f64 = art.part_area.iter().sum();

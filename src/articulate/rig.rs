@@ -133,10 +133,16 @@ impl Default for RigOptions {
 impl RigOptions {
     pub fn validate(&self, n_shapes: usize) -> Result<()> {
         if !(1..=8).contains(&self.influences) {
-            return Err(Error::Params(format!("influences = {} must be between 1 and 8 (glTF: 4 per JOINTS_n set)", self.influences)));
+            return Err(Error::Params(format!(
+                "influences = {} must be between 1 and 8 (glTF: 4 per JOINTS_n set)",
+                self.influences
+            )));
         }
         if self.bind_pose >= n_shapes {
-            return Err(Error::Request(format!("bind pose {} (0-based): the population has {n_shapes} poses", self.bind_pose)));
+            return Err(Error::Request(format!(
+                "bind pose {} (0-based): the population has {n_shapes} poses",
+                self.bind_pose
+            )));
         }
         if !(1..=3).contains(&self.rings) {
             return Err(Error::Params(format!("rings = {} must be between 1 and 3", self.rings)));
@@ -145,7 +151,10 @@ impl RigOptions {
             return Err(Error::Params(format!("smoothness = {} must be a number >= 0 (try 1e-4)", self.smoothness)));
         }
         if !(self.tol >= 0.0 && self.tol.is_finite()) {
-            return Err(Error::Params(format!("tol = {} must be a number >= 0 (try 1e-2; 0 runs every iteration)", self.tol)));
+            return Err(Error::Params(format!(
+                "tol = {} must be a number >= 0 (try 1e-2; 0 runs every iteration)",
+                self.tol
+            )));
         }
         if self.iterations > 10_000 {
             return Err(Error::Params(format!("iterations = {} must be at most 10000", self.iterations)));
@@ -342,13 +351,14 @@ pub fn build(art: &Articulation, opts: &RigOptions) -> Result<Rig> {
     let n_parts = art.n_parts();
     let mfa_bones: Vec<Vec<RigidMotion>> = (0..ns)
         .map(|i| {
-            (0..n_parts)
-                .map(|k| art.training_motion(k, i).then_after_inverse(&art.training_motion(k, bind)))
-                .collect()
+            (0..n_parts).map(|k| art.training_motion(k, i).then_after_inverse(&art.training_motion(k, bind))).collect()
         })
         .collect();
-    let joint_points: Vec<Vec3> =
-        (0..n_parts).map(|k| if tree.contains(k) { art.training_motion(k, bind).apply(art.node_offset(&tree, k)) } else { [0.0; 3] }).collect();
+    let joint_points: Vec<Vec3> = (0..n_parts)
+        .map(
+            |k| if tree.contains(k) { art.training_motion(k, bind).apply(art.node_offset(&tree, k)) } else { [0.0; 3] },
+        )
+        .collect();
     let (rest, weights) = match opts.weights {
         RigWeights::Rigid => (art.rigid(bind), art.rigid_weights.capped(opts.influences)),
         RigWeights::Smooth => (art.shape(bind), art.smooth_weights.capped(opts.influences)),
@@ -506,7 +516,6 @@ impl OwnPart {
     }
 }
 
-
 impl Solver {
     fn new(art: &Articulation, rig: &Rig, opts: &RigOptions) -> Solver {
         let nv = art.n_vertices();
@@ -561,8 +570,23 @@ impl Solver {
                 by_vertex[v * ns + i] = p;
             }
         }
-        let target_norms = (0..nv).map(|v| by_vertex[v * ns..(v + 1) * ns].iter().map(|&p| dot(widen(p), widen(p))).sum()).collect();
-        Solver { targets, ns, by_vertex, target_norms, labels: art.model.labels.clone(), near, origin, bind: opts.bind_pose, candidates, neighbours, influences: opts.influences, smoothness: opts.smoothness, edge2 }
+        let target_norms =
+            (0..nv).map(|v| by_vertex[v * ns..(v + 1) * ns].iter().map(|&p| dot(widen(p), widen(p))).sum()).collect();
+        Solver {
+            targets,
+            ns,
+            by_vertex,
+            target_norms,
+            labels: art.model.labels.clone(),
+            near,
+            origin,
+            bind: opts.bind_pose,
+            candidates,
+            neighbours,
+            influences: opts.influences,
+            smoothness: opts.smoothness,
+            edge2,
+        }
     }
 
     fn sse(&self, rig: &Rig) -> f64 {
@@ -629,7 +653,14 @@ pub(crate) struct BoneSums {
 }
 
 impl BoneSums {
-    pub(crate) fn new<T: Target>(by_vertex: &[T], ns: usize, rest: &[Vec3], weights: &SkinWeights, order: &[usize], n_parts: usize) -> BoneSums {
+    pub(crate) fn new<T: Target>(
+        by_vertex: &[T],
+        ns: usize,
+        rest: &[Vec3],
+        weights: &SkinWeights,
+        order: &[usize],
+        n_parts: usize,
+    ) -> BoneSums {
         let nv = rest.len();
         // supports: (vertex, weight) per part, and ū, Σ w² per part
         let mut support: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n_parts];
@@ -903,7 +934,14 @@ struct PairSums {
 pub(crate) trait Target: Copy {
     fn widen(self) -> Vec3;
     /// [`bone_target_sums_of`] over targets of this type.
-    fn bone_target_sums(by_vertex: &[Self], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]);
+    fn bone_target_sums(
+        by_vertex: &[Self],
+        ns: usize,
+        rest: &[Vec3],
+        support: &[(u32, f64)],
+        ubar: Vec3,
+        out: &mut [[f64; 12]],
+    );
 }
 
 impl Target for [f32; 3] {
@@ -911,7 +949,14 @@ impl Target for [f32; 3] {
     fn widen(self) -> Vec3 {
         widen(self)
     }
-    fn bone_target_sums(by_vertex: &[Self], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+    fn bone_target_sums(
+        by_vertex: &[Self],
+        ns: usize,
+        rest: &[Vec3],
+        support: &[(u32, f64)],
+        ubar: Vec3,
+        out: &mut [[f64; 12]],
+    ) {
         bone_target_sums_f32(by_vertex, ns, rest, support, ubar, out)
     }
 }
@@ -921,7 +966,14 @@ impl Target for Vec3 {
     fn widen(self) -> Vec3 {
         self
     }
-    fn bone_target_sums(by_vertex: &[Self], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+    fn bone_target_sums(
+        by_vertex: &[Self],
+        ns: usize,
+        rest: &[Vec3],
+        support: &[(u32, f64)],
+        ubar: Vec3,
+        out: &mut [[f64; 12]],
+    ) {
         bone_target_sums_f64(by_vertex, ns, rest, support, ubar, out)
     }
 }
@@ -929,7 +981,14 @@ impl Target for Vec3 {
 /// Bone k's target sums of [`Solver::bones`] in every pose: `out[i]` = [Σ_v w y_v (u_v - ū)ᵀ | Σ_v w y_v]
 /// row-major (3 x 4) over its support. Row a gains y_a [w (u_v - ū), w] per vertex: one 4-lane step per row.
 #[inline(always)]
-fn bone_target_sums_of<T: Target>(by_vertex: &[T], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
+fn bone_target_sums_of<T: Target>(
+    by_vertex: &[T],
+    ns: usize,
+    rest: &[Vec3],
+    support: &[(u32, f64)],
+    ubar: Vec3,
+    out: &mut [[f64; 12]],
+) {
     for &(v, w) in support {
         let v = v as usize;
         let d = scale(sub(rest[v], ubar), w);
@@ -975,7 +1034,8 @@ fn bone_step(sums: &[f64; 12], pairs: &[(usize, PairSums)], bones: &[RigidMotion
         let t = m.translation;
         for a in 0..3 {
             for b in 0..3 {
-                c[a * 3 + b] -= r[(a, 0)] * ps.s[b] + r[(a, 1)] * ps.s[3 + b] + r[(a, 2)] * ps.s[6 + b] + t[a] * ps.d[b];
+                c[a * 3 + b] -=
+                    r[(a, 0)] * ps.s[b] + r[(a, 1)] * ps.s[3 + b] + r[(a, 2)] * ps.s[6 + b] + t[a] * ps.d[b];
             }
             wr[a] -= r[(a, 0)] * ps.g[0] + r[(a, 1)] * ps.g[1] + r[(a, 2)] * ps.g[2] + t[a] * ps.m;
         }
@@ -1005,7 +1065,9 @@ impl Solver {
             }
         }
         let touched: Vec<Vec<u32>> = (0..n_parts)
-            .map(|k| (0..nv as u32).filter(|&v| rig.weights.influences(v as usize).any(|(l, _)| in_sub[k][l])).collect())
+            .map(|k| {
+                (0..nv as u32).filter(|&v| rig.weights.influences(v as usize).any(|(l, _)| in_sub[k][l])).collect()
+            })
             .collect();
         let order = rig.tree.order.clone();
         let mut share = vec![[0.0; 3]; nv];
@@ -1370,7 +1432,8 @@ mod tests {
             let mut f = vec![0.0; 3];
             for i in 0..3 {
                 for j in 0..3 {
-                    h[i * 3 + j] = (0..rows).map(|r| a[r * 3 + i] * a[r * 3 + j]).sum::<f64>() + if i == j { 1e-9 } else { 0.0 };
+                    h[i * 3 + j] =
+                        (0..rows).map(|r| a[r * 3 + i] * a[r * 3 + j]).sum::<f64>() + if i == j { 1e-9 } else { 0.0 };
                 }
                 f[i] = (0..rows).map(|r| a[r * 3 + i] * y[r]).sum();
             }

@@ -146,9 +146,8 @@ pub fn smooth_weights<S: AsRef<[Vec3]>>(
     let radii = part_radii(labels, latent, n_parts);
     // Every part's reach depends on that part alone, so the raw weights are continuous across boundaries:
     // its own radius, or its smallest neighbour's if smaller (a small part next to it bounds the band).
-    let reach: Vec<f64> = (0..n_parts)
-        .map(|k| graph.neighbors[k].iter().map(|&n| radii[n]).fold(radii[k], f64::min))
-        .collect();
+    let reach: Vec<f64> =
+        (0..n_parts).map(|k| graph.neighbors[k].iter().map(|&n| radii[n]).fold(radii[k], f64::min)).collect();
     // CSR adjacency with mean edge lengths.
     let edges = mesh_edges(faces);
     let edge_len = mean_edge_lengths(&edges, shapes);
@@ -255,7 +254,14 @@ pub const EDGE_BLEND_PASSES: usize = 3;
 /// ε = `anchor`. Solved by Jacobi-preconditioned conjugate gradients from m, [`EDGE_BLEND_PASSES`] times,
 /// each pass anchored to the previous result instead of m (so the pull toward the shrunken average fades).
 /// When a and b agree (t = 0 or 1 in particular) m is the exact solution and is returned as it is.
-pub fn edge_blend(a: &[Vec3], b: &[Vec3], t: f64, edges: &[[u32; 2]], lengths: Option<&[f64]>, anchor: f64) -> Vec<Vec3> {
+pub fn edge_blend(
+    a: &[Vec3],
+    b: &[Vec3],
+    t: f64,
+    edges: &[[u32; 2]],
+    lengths: Option<&[f64]>,
+    anchor: f64,
+) -> Vec<Vec3> {
     let n = a.len();
     let m: Vec<Vec3> = a.iter().zip(b).map(|(p, q)| crate::geometry::add(scale(*p, 1.0 - t), scale(*q, t))).collect();
     let g: Vec<Vec3> = edges
@@ -470,7 +476,10 @@ mod tests {
         let graph = PartGraph::new(&labels, &faces, 2, &pos);
         let radii = part_radii(&labels, &pos, 2);
         // RMS radius of 11 (10) unit-spaced columns about their middle: sqrt(10) (sqrt(99 / 12))
-        assert!((radii[0] - 10f64.sqrt()).abs() < 1e-3 && (radii[1] - (99.0f64 / 12.0).sqrt()).abs() < 1e-3, "{radii:?}");
+        assert!(
+            (radii[0] - 10f64.sqrt()).abs() < 1e-3 && (radii[1] - (99.0f64 / 12.0).sqrt()).abs() < 1e-3,
+            "{radii:?}"
+        );
         let w = smooth_weights(&graph, &labels, &pos, &faces, &[pos.clone()], 1.0);
         let h = radii[0].min(radii[1]);
         for v in 0..pos.len() {

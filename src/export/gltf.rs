@@ -31,9 +31,9 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use serde::Serialize;
 
+pub use crate::articulate::rig::Joints;
 /// Which skinning weights the file carries (rigid, smooth, or fitted: [`crate::articulate::rig`]).
 pub use crate::articulate::rig::RigWeights as Weights;
-pub use crate::articulate::rig::Joints;
 
 /// Morph targets of the file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
@@ -85,7 +85,13 @@ impl Default for GltfOptions {
 impl GltfOptions {
     /// The rig these options ask for.
     pub fn rig_options(&self) -> RigOptions {
-        RigOptions { weights: self.weights, influences: self.influences, joints: self.joints, bind_pose: self.bind_pose, ..RigOptions::default() }
+        RigOptions {
+            weights: self.weights,
+            influences: self.influences,
+            joints: self.joints,
+            bind_pose: self.bind_pose,
+            ..RigOptions::default()
+        }
     }
 }
 
@@ -96,7 +102,22 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 /// Column-major 4x4 of an affine map x -> A x + c (A row-major 3x3).
 fn mat4(a: &Mat3, c: Vec3) -> [f64; 16] {
     [
-        a[(0, 0)], a[(1, 0)], a[(2, 0)], 0.0, a[(0, 1)], a[(1, 1)], a[(2, 1)], 0.0, a[(0, 2)], a[(1, 2)], a[(2, 2)], 0.0, c[0], c[1], c[2], 1.0,
+        a[(0, 0)],
+        a[(1, 0)],
+        a[(2, 0)],
+        0.0,
+        a[(0, 1)],
+        a[(1, 1)],
+        a[(2, 1)],
+        0.0,
+        a[(0, 2)],
+        a[(1, 2)],
+        a[(2, 2)],
+        0.0,
+        c[0],
+        c[1],
+        c[2],
+        1.0,
     ]
 }
 
@@ -159,7 +180,15 @@ impl Bin {
         json::Index::new(self.accessors.len() as u32 - 1)
     }
 
-    pub(crate) fn floats(&mut self, values: &[f32], type_: json::accessor::Type, per: usize, bounds: bool, target: Option<json::buffer::Target>, name: &str) -> json::Index<json::Accessor> {
+    pub(crate) fn floats(
+        &mut self,
+        values: &[f32],
+        type_: json::accessor::Type,
+        per: usize,
+        bounds: bool,
+        target: Option<json::buffer::Target>,
+        name: &str,
+    ) -> json::Index<json::Accessor> {
         let b = bounds.then(|| {
             let mut lo = vec![f32::INFINITY; per];
             let mut hi = vec![f32::NEG_INFINITY; per];
@@ -225,7 +254,14 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
 
     // Mesh.
     let positions: Vec<f32> = art.to_original(&rig.rest).iter().flat_map(|p| p.map(|c| c as f32)).collect();
-    let pos_acc = bin.floats(&positions, json::accessor::Type::Vec3, 3, true, Some(json::buffer::Target::ArrayBuffer), "POSITION");
+    let pos_acc = bin.floats(
+        &positions,
+        json::accessor::Type::Vec3,
+        3,
+        true,
+        Some(json::buffer::Target::ArrayBuffer),
+        "POSITION",
+    );
     let indices: Vec<u8> = art.faces.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
     let idx_acc = bin.accessor(
         &indices,
@@ -245,7 +281,8 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
         if weights.influences(v).any(|(k, _)| joint_of_part[k] == u32::MAX) {
             return Err(Error::Data(format!("vertex {v} is weighted to a part outside the skeleton")));
         }
-        let mut slots: Vec<(u16, f32)> = weights.influences(v).map(|(k, w)| (joint_of_part[k] as u16, w as f32)).collect();
+        let mut slots: Vec<(u16, f32)> =
+            weights.influences(v).map(|(k, w)| (joint_of_part[k] as u16, w as f32)).collect();
         // normalise in f32: the heaviest takes the rounding
         let rest: f32 = slots[1..].iter().map(|s| s.1).sum();
         slots[0].1 = 1.0 - rest;
@@ -258,8 +295,12 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
     let mut skin_attrs = Vec::new();
     for set in 0..sets {
         let pick = |v: usize, s: usize| v * slots_per_vertex + 4 * set + s;
-        let idx: Vec<u16> = (0..art.n_vertices()).flat_map(|v| (0..4).map(move |s| (v, s))).map(|(v, s)| joint_idx[pick(v, s)]).collect();
-        let wts: Vec<f32> = (0..art.n_vertices()).flat_map(|v| (0..4).map(move |s| (v, s))).map(|(v, s)| joint_w[pick(v, s)]).collect();
+        let idx: Vec<u16> = (0..art.n_vertices())
+            .flat_map(|v| (0..4).map(move |s| (v, s)))
+            .map(|(v, s)| joint_idx[pick(v, s)])
+            .collect();
+        let wts: Vec<f32> =
+            (0..art.n_vertices()).flat_map(|v| (0..4).map(move |s| (v, s))).map(|(v, s)| joint_w[pick(v, s)]).collect();
         let (joints_bytes, joints_type) = if n_joints <= 256 {
             (idx.iter().map(|&j| j as u8).collect::<Vec<u8>>(), json::accessor::ComponentType::U8)
         } else {
@@ -274,8 +315,14 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             None,
             &format!("JOINTS_{set}"),
         );
-        let weights_acc =
-            bin.floats(&wts, json::accessor::Type::Vec4, 4, false, Some(json::buffer::Target::ArrayBuffer), &format!("WEIGHTS_{set}"));
+        let weights_acc = bin.floats(
+            &wts,
+            json::accessor::Type::Vec4,
+            4,
+            false,
+            Some(json::buffer::Target::ArrayBuffer),
+            &format!("WEIGHTS_{set}"),
+        );
         skin_attrs.push((set as u32, joints_acc, weights_acc));
     }
 
@@ -298,12 +345,21 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
                 }
                 let want = sub(shape[v], c);
                 let x = solve3(&l, want).ok_or_else(|| {
-                    Error::Data(format!("pose {i}, vertex {v}: the blended bone motion is singular, no morph target can fix it"))
+                    Error::Data(format!(
+                        "pose {i}, vertex {v}: the blended bone motion is singular, no morph target can fix it"
+                    ))
                 })?;
                 let disp = sub(x, rig.rest[v]);
                 d.extend(disp.map(|c| (c / norm.scale) as f32));
             }
-            let acc = bin.floats(&d, json::accessor::Type::Vec3, 3, true, Some(json::buffer::Target::ArrayBuffer), &format!("morph target: pose {i}"));
+            let acc = bin.floats(
+                &d,
+                json::accessor::Type::Vec3,
+                3,
+                true,
+                Some(json::buffer::Target::ArrayBuffer),
+                &format!("morph target: pose {i}"),
+            );
             targets.push(json::mesh::MorphTarget { positions: Some(acc), normals: None, tangents: None });
         }
     }
@@ -370,10 +426,18 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             }
             // with fixed joints only the root's translation moves: the others keep their rest translation
             if opts.joints == Joints::Free || tree.parent[k].is_none() {
-                let out = bin.floats(&tr, json::accessor::Type::Vec3, 3, false, None, &format!("{name}: part {k} translation"));
+                let out = bin.floats(
+                    &tr,
+                    json::accessor::Type::Vec3,
+                    3,
+                    false,
+                    None,
+                    &format!("{name}: part {k} translation"),
+                );
                 clip.add(out, 2 + slot as u32, json::animation::Property::Translation);
             }
-            let out = bin.floats(&rot, json::accessor::Type::Vec4, 4, false, None, &format!("{name}: part {k} rotation"));
+            let out =
+                bin.floats(&rot, json::accessor::Type::Vec4, 4, false, None, &format!("{name}: part {k} rotation"));
             clip.add(out, 2 + slot as u32, json::animation::Property::Rotation);
         }
         if name == "training poses" && !targets.is_empty() {
@@ -559,7 +623,9 @@ pub fn parse_glb(glb: &[u8]) -> Result<(json::Root, Vec<u8>)> {
 
 pub(crate) fn read_floats(root: &json::Root, bin: &[u8], acc: json::Index<json::Accessor>) -> Result<Vec<f64>> {
     let a = root.get(acc).ok_or_else(|| Error::Data("accessor out of range".into()))?;
-    let view = root.get(a.buffer_view.ok_or_else(|| Error::Data("accessor without view".into()))?).ok_or_else(|| Error::Data("view".into()))?;
+    let view = root
+        .get(a.buffer_view.ok_or_else(|| Error::Data("accessor without view".into()))?)
+        .ok_or_else(|| Error::Data("view".into()))?;
     let start = view.byte_offset.map_or(0, |o| o.0 as usize) + a.byte_offset.map_or(0, |o| o.0 as usize);
     let per = match a.type_ {
         Valid(t) => t.multiplicity(),
@@ -692,12 +758,10 @@ pub fn play_glb_clip_each(
             parent[c.value()] = Some(i);
         }
     }
-    let slot_of_node: std::collections::HashMap<usize, usize> = skin.joints.iter().enumerate().map(|(s, j)| (j.value(), s)).collect();
-    let joint_parent: Vec<Option<usize>> = skin
-        .joints
-        .iter()
-        .map(|j| parent[j.value()].and_then(|p| slot_of_node.get(&p).copied()))
-        .collect();
+    let slot_of_node: std::collections::HashMap<usize, usize> =
+        skin.joints.iter().enumerate().map(|(s, j)| (j.value(), s)).collect();
+    let joint_parent: Vec<Option<usize>> =
+        skin.joints.iter().map(|j| parent[j.value()].and_then(|p| slot_of_node.get(&p).copied())).collect();
     let anim = root
         .animations
         .iter()
@@ -731,11 +795,15 @@ pub fn play_glb_clip_each(
         for (node, path, out) in &channels {
             let k = key;
             match path {
-                Valid(json::animation::Property::Translation) => local[*node].0 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]],
+                Valid(json::animation::Property::Translation) => {
+                    local[*node].0 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]]
+                }
                 Valid(json::animation::Property::Rotation) => {
                     local[*node].1 = [out[4 * k], out[4 * k + 1], out[4 * k + 2], out[4 * k + 3]]
                 }
-                Valid(json::animation::Property::Scale) => local[*node].2 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]],
+                Valid(json::animation::Property::Scale) => {
+                    local[*node].2 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]]
+                }
                 Valid(json::animation::Property::MorphTargetWeights) => {
                     let n = morphs.len();
                     morph_w.copy_from_slice(&out[n * k..n * k + n]);
@@ -744,7 +812,12 @@ pub fn play_glb_clip_each(
             }
         }
         let mut world: Vec<Option<Affine>> = vec![None; n_nodes];
-        fn world_of(n: usize, parent: &[Option<usize>], local: &[(Vec3, [f64; 4], Vec3)], world: &mut Vec<Option<Affine>>) -> Affine {
+        fn world_of(
+            n: usize,
+            parent: &[Option<usize>],
+            local: &[(Vec3, [f64; 4], Vec3)],
+            world: &mut Vec<Option<Affine>>,
+        ) -> Affine {
             if let Some(w) = world[n] {
                 return w;
             }
@@ -766,7 +839,8 @@ pub fn play_glb_clip_each(
                 jpos.push(w.1);
                 let m = &ibm[16 * s..16 * s + 16];
                 // glTF matrices are column-major, like nalgebra's storage
-                let b: Affine = (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]]);
+                let b: Affine =
+                    (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]]);
                 affine_mul(&w, &b)
             })
             .collect();
@@ -798,7 +872,12 @@ pub fn play_glb_clip_each(
         }
         each(key, out, jpos)?;
     }
-    Ok(GlbRig { rest, joint_parent, clips: root.animations.iter().filter_map(|a| a.name.clone()).collect(), keys: n_keys })
+    Ok(GlbRig {
+        rest,
+        joint_parent,
+        clips: root.animations.iter().filter_map(|a| a.name.clone()).collect(),
+        keys: n_keys,
+    })
 }
 
 /// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe ([`play_glb`]) and
@@ -811,7 +890,13 @@ pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
             return Ok(()); // (counted: the error below)
         }
         let rigid = art.rigid(i);
-        frame_error.push(frame.iter().zip(&rigid).map(|(x, r)| crate::geometry::norm(sub(art.normalization.to_unit(*x), *r))).fold(0.0, f64::max));
+        frame_error.push(
+            frame
+                .iter()
+                .zip(&rigid)
+                .map(|(x, r)| crate::geometry::norm(sub(art.normalization.to_unit(*x), *r)))
+                .fold(0.0, f64::max),
+        );
         Ok(())
     })?;
     if rig.keys != ns {
@@ -819,7 +904,12 @@ pub fn check_glb(art: &Articulation, glb: &[u8]) -> Result<GlbCheck> {
     }
     let (root, _) = parse_glb(glb)?;
     let joints = root.skins.first().map_or(0, |s| s.joints.len());
-    Ok(GlbCheck { joints, clips: rig.clips, max_frame_error: frame_error.iter().cloned().fold(0.0, f64::max), frame_error })
+    Ok(GlbCheck {
+        joints,
+        clips: rig.clips,
+        max_frame_error: frame_error.iter().cloned().fold(0.0, f64::max),
+        frame_error,
+    })
 }
 
 /// The samplers and channels of one glTF animation clip whose keyframes all share the times `input`, linear.

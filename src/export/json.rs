@@ -90,7 +90,19 @@ impl FitJson {
                     rotations: c
                         .rotations
                         .iter()
-                        .map(|r| [r[(0, 0)], r[(0, 1)], r[(0, 2)], r[(1, 0)], r[(1, 1)], r[(1, 2)], r[(2, 0)], r[(2, 1)], r[(2, 2)]])
+                        .map(|r| {
+                            [
+                                r[(0, 0)],
+                                r[(0, 1)],
+                                r[(0, 2)],
+                                r[(1, 0)],
+                                r[(1, 1)],
+                                r[(1, 2)],
+                                r[(2, 0)],
+                                r[(2, 1)],
+                                r[(2, 2)],
+                            ]
+                        })
                         .collect(),
                     translations: c.translations.clone(),
                     lambda: c.lambda,

@@ -36,7 +36,12 @@ fn bounds(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
 /// Writes `poses` (each one position per vertex, all the same length) with triangles `faces` as a .glb.
 /// `names` name the poses (target names); `mesh_name` names the mesh. Errors: no poses, poses of different
 /// lengths, a face out of range, a coordinate that is not finite in float32.
-pub fn write_morph_glb(mesh_name: &str, names: &[String], poses: &[Vec<[f64; 3]>], faces: &[[u32; 3]]) -> Result<Vec<u8>> {
+pub fn write_morph_glb(
+    mesh_name: &str,
+    names: &[String],
+    poses: &[Vec<[f64; 3]>],
+    faces: &[[u32; 3]],
+) -> Result<Vec<u8>> {
     let base = poses.first().ok_or_else(|| Error::Data("no poses to write".into()))?;
     let n = base.len();
     if n == 0 || faces.is_empty() {
@@ -75,7 +80,8 @@ pub fn write_morph_glb(mesh_name: &str, names: &[String], poses: &[Vec<[f64; 3]>
     f32s(&mut bin, base32.iter().flatten().copied());
     let view = push_view(&mut bin, start, Some(34962));
     let (lo, hi) = bounds(&base32);
-    accessors.push(json!({"bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": lo, "max": hi}));
+    accessors
+        .push(json!({"bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": lo, "max": hi}));
     // 1: indices
     let start = bin.len();
     for v in faces.iter().flatten() {
@@ -91,7 +97,8 @@ pub fn write_morph_glb(mesh_name: &str, names: &[String], poses: &[Vec<[f64; 3]>
         let view = push_view(&mut bin, start, Some(34962));
         let (lo, hi) = bounds(t);
         target_refs.push(json!({"POSITION": accessors.len()}));
-        accessors.push(json!({"bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": lo, "max": hi}));
+        accessors
+            .push(json!({"bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": lo, "max": hi}));
     }
     let mut animations = Vec::new();
     if n_targets > 0 {
@@ -143,7 +150,8 @@ pub fn write_morph_glb(mesh_name: &str, names: &[String], poses: &[Vec<[f64; 3]>
         bin.push(0);
     }
     let total = 12 + 8 + json_bytes.len() + 8 + bin.len();
-    let total32 = u32::try_from(total).map_err(|_| Error::Data(format!("the .glb would take {total} bytes, more than 4 GiB")))?;
+    let total32 =
+        u32::try_from(total).map_err(|_| Error::Data(format!("the .glb would take {total} bytes, more than 4 GiB")))?;
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -165,7 +173,12 @@ mod tests {
     fn tetra_poses() -> (Vec<Vec<[f64; 3]>>, Vec<[u32; 3]>) {
         let base = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let poses = (0..4)
-            .map(|k| base.iter().enumerate().map(|(j, p): (usize, &[f64; 3])| if j == 3 { [0.25 * k as f64, 0.0, 1.0] } else { *p }).collect())
+            .map(|k| {
+                base.iter()
+                    .enumerate()
+                    .map(|(j, p): (usize, &[f64; 3])| if j == 3 { [0.25 * k as f64, 0.0, 1.0] } else { *p })
+                    .collect()
+            })
             .collect();
         (poses, vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     }
@@ -186,7 +199,13 @@ mod tests {
                 }
             }
             if source == PoseSource::Auto {
-                assert!(g.source.starts_with("4 frames of animation 'Poses' (sampled at its keyframes, 24 fps) of mesh 'tetra'"), "{}", g.source);
+                assert!(
+                    g.source.starts_with(
+                        "4 frames of animation 'Poses' (sampled at its keyframes, 24 fps) of mesh 'tetra'"
+                    ),
+                    "{}",
+                    g.source
+                );
             } else {
                 assert!(g.source.starts_with("3 morph targets of mesh 'tetra'"), "{}", g.source);
                 assert!(g.poses[2].0.ends_with("pose3"), "{}", g.poses[2].0);

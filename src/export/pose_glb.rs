@@ -78,14 +78,21 @@ fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
         };
         bad(format!("{m} (posemfa pose reads the binary .glb rigs posemfa writes)"))
     })?;
-    let skin = root.skins.first().ok_or_else(|| bad("no skin: this is not a rig (write one with `posemfa export-gltf`)".into()))?;
+    let skin = root
+        .skins
+        .first()
+        .ok_or_else(|| bad("no skin: this is not a rig (write one with `posemfa export-gltf`)".into()))?;
     let mesh = root.meshes.first().ok_or_else(|| bad("no mesh".into()))?;
     if mesh.primitives.len() != 1 {
         return Err(bad(format!("mesh 0 has {} primitives; a posemfa rig has one", mesh.primitives.len())));
     }
     let prim = &mesh.primitives[0];
     let attr = |s: json::mesh::Semantic| prim.attributes.get(&Valid(s)).copied();
-    let pos = read_floats(&root, &bin, attr(json::mesh::Semantic::Positions).ok_or_else(|| bad("the mesh has no POSITION".into()))?)?;
+    let pos = read_floats(
+        &root,
+        &bin,
+        attr(json::mesh::Semantic::Positions).ok_or_else(|| bad("the mesh has no POSITION".into()))?,
+    )?;
     let nv = pos.len() / 3;
     let rest: Vec<Vec3> = (0..nv).map(|v| [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]]).collect();
     let idx = read_floats(&root, &bin, prim.indices.ok_or_else(|| bad("the mesh has no indices".into()))?)?;
@@ -97,7 +104,10 @@ fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
     let mut influences: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nv];
     let mut sets = 0;
     for set in 0.. {
-        let (Some(j), Some(w)) = (attr(json::mesh::Semantic::Joints(set)), attr(json::mesh::Semantic::Weights(set))) else { break };
+        let (Some(j), Some(w)) = (attr(json::mesh::Semantic::Joints(set)), attr(json::mesh::Semantic::Weights(set)))
+        else {
+            break;
+        };
         let (j, w) = (read_floats(&root, &bin, j)?, read_floats(&root, &bin, w)?);
         if j.len() != 4 * nv || w.len() != 4 * nv {
             return Err(bad(format!("JOINTS_{set} / WEIGHTS_{set} do not have one VEC4 per vertex ({nv})")));
@@ -109,7 +119,9 @@ fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
                     continue;
                 }
                 if !(x > 0.0 && x.is_finite()) || !(k >= 0.0 && (k as usize) < n_joints) {
-                    return Err(bad(format!("vertex {v}: joint {k} weight {x} in JOINTS_{set} / WEIGHTS_{set} ({n_joints} joints)")));
+                    return Err(bad(format!(
+                        "vertex {v}: joint {k} weight {x} in JOINTS_{set} / WEIGHTS_{set} ({n_joints} joints)"
+                    )));
                 }
                 influences[v].push((k as u32, x));
             }
@@ -127,7 +139,11 @@ fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
         inf.iter_mut().for_each(|x| x.1 /= sum);
         inf.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     }
-    let ibm_values = read_floats(&root, &bin, skin.inverse_bind_matrices.ok_or_else(|| bad("the skin has no inverse bind matrices".into()))?)?;
+    let ibm_values = read_floats(
+        &root,
+        &bin,
+        skin.inverse_bind_matrices.ok_or_else(|| bad("the skin has no inverse bind matrices".into()))?,
+    )?;
     if ibm_values.len() != 16 * n_joints {
         return Err(bad(format!("{} inverse bind matrices for {n_joints} joints", ibm_values.len() / 16)));
     }
@@ -192,7 +208,8 @@ fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
     if let Some(&n) = joint_nodes.iter().find(|&&n| root.nodes[n].matrix.is_some()) {
         return Err(bad(format!("joint node {n} has a matrix: animated nodes need translation / rotation / scale")));
     }
-    let slot_of_node: std::collections::HashMap<usize, usize> = joint_nodes.iter().enumerate().map(|(s, &n)| (n, s)).collect();
+    let slot_of_node: std::collections::HashMap<usize, usize> =
+        joint_nodes.iter().enumerate().map(|(s, &n)| (n, s)).collect();
     let parent: Vec<Option<usize>> = joint_nodes
         .iter()
         .map(|&n| {
@@ -227,7 +244,8 @@ fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
             invert(&s).map_or(w.1, |si| add(mat_vec(&si.0, w.1), si.1))
         })
         .collect();
-    let names = joint_nodes.iter().map(|&n| root.nodes[n].name.clone().unwrap_or_else(|| format!("node {n}"))).collect();
+    let names =
+        joint_nodes.iter().map(|&n| root.nodes[n].name.clone().unwrap_or_else(|| format!("node {n}"))).collect();
     let clips = root.animations.iter().map(|a| a.name.clone().unwrap_or_default()).collect();
     let rig = SkinnedRig { rest, weights: SkinWeights { influences }, parent, order, joint_points };
     rig.validate()?;
@@ -258,12 +276,19 @@ impl GlbRig {
             .ibm
             .iter()
             .enumerate()
-            .map(|(k, m)| invert(m).ok_or_else(|| Error::Data(format!("joint {k}: its inverse bind matrix is singular"))))
+            .map(|(k, m)| {
+                invert(m).ok_or_else(|| Error::Data(format!("joint {k}: its inverse bind matrix is singular")))
+            })
             .collect::<Result<_>>()?;
-        let slot_of_node: std::collections::HashMap<usize, usize> = self.joint_nodes.iter().enumerate().map(|(s, &n)| (n, s)).collect();
+        let slot_of_node: std::collections::HashMap<usize, usize> =
+            self.joint_nodes.iter().enumerate().map(|(s, &n)| (n, s)).collect();
         let mut root = self.root.clone();
         root.animations.retain(|a| a.name.as_deref() != Some(name));
-        let mut bin = Bin { data: self.bin.clone(), views: std::mem::take(&mut root.buffer_views), accessors: std::mem::take(&mut root.accessors) };
+        let mut bin = Bin {
+            data: self.bin.clone(),
+            views: std::mem::take(&mut root.buffer_views),
+            accessors: std::mem::take(&mut root.accessors),
+        };
         let n = frames.len();
         let times: Vec<f32> = (0..n).map(|f| f as f32).collect();
         let input = bin.floats(&times, json::accessor::Type::Scalar, 1, true, None, &format!("{name}: time"));
@@ -285,7 +310,11 @@ impl GlbRig {
                 };
                 let local = match parent_world {
                     None => world[k],
-                    Some(pw) => compose(&invert(&pw).ok_or_else(|| Error::Data(format!("the parent of joint {k} has a singular transform")))?, &world[k]),
+                    Some(pw) => compose(
+                        &invert(&pw)
+                            .ok_or_else(|| Error::Data(format!("the parent of joint {k} has a singular transform")))?,
+                        &world[k],
+                    ),
                 };
                 let det = local.0.determinant();
                 let s = det.cbrt();
@@ -313,17 +342,42 @@ impl GlbRig {
         }
         let mut clip = Channels::new(input);
         for k in 0..nb {
-            let t = bin.floats(&tr[k], json::accessor::Type::Vec3, 3, false, None, &format!("{name}: {} translation", self.names[k]));
+            let t = bin.floats(
+                &tr[k],
+                json::accessor::Type::Vec3,
+                3,
+                false,
+                None,
+                &format!("{name}: {} translation", self.names[k]),
+            );
             clip.add(t, self.joint_nodes[k] as u32, json::animation::Property::Translation);
-            let r = bin.floats(&rot[k], json::accessor::Type::Vec4, 4, false, None, &format!("{name}: {} rotation", self.names[k]));
+            let r = bin.floats(
+                &rot[k],
+                json::accessor::Type::Vec4,
+                4,
+                false,
+                None,
+                &format!("{name}: {} rotation", self.names[k]),
+            );
             clip.add(r, self.joint_nodes[k] as u32, json::animation::Property::Rotation);
         }
         // morph targets: weights 0 (a new pose has no residual); on every node that shows the mesh
-        let n_targets = root.meshes.first().and_then(|m| m.primitives.first()).and_then(|p| p.targets.as_ref()).map_or(0, |t| t.len());
+        let n_targets = root
+            .meshes
+            .first()
+            .and_then(|m| m.primitives.first())
+            .and_then(|p| p.targets.as_ref())
+            .map_or(0, |t| t.len());
         if n_targets > 0 {
             let zeros = vec![0f32; n_targets * n];
             let w = bin.floats(&zeros, json::accessor::Type::Scalar, 1, false, None, &format!("{name}: morph weights"));
-            let mesh_nodes: Vec<usize> = root.nodes.iter().enumerate().filter(|(_, nd)| nd.mesh.map(|m| m.value()) == Some(0)).map(|(i, _)| i).collect();
+            let mesh_nodes: Vec<usize> = root
+                .nodes
+                .iter()
+                .enumerate()
+                .filter(|(_, nd)| nd.mesh.map(|m| m.value()) == Some(0))
+                .map(|(i, _)| i)
+                .collect();
             for node in mesh_nodes {
                 clip.add(w, node as u32, json::animation::Property::MorphTargetWeights);
             }
@@ -380,7 +434,11 @@ pub struct Poser {
 
 impl Poser {
     /// From a fitted model's articulation: the rig of `opts` ([`super::gltf::write_glb`]) and the population.
-    pub fn new(art: &crate::articulate::Articulation, pop: &crate::mesh::Population, opts: &super::gltf::GltfOptions) -> Result<Poser> {
+    pub fn new(
+        art: &crate::articulate::Articulation,
+        pop: &crate::mesh::Population,
+        opts: &super::gltf::GltfOptions,
+    ) -> Result<Poser> {
         let rig = crate::articulate::rig::build(art, &opts.rig_options())?;
         let glb = super::gltf::write_glb(art, &rig, opts)?;
         // (the training poses in original units one at a time, into the frame solve's own copy)
@@ -397,14 +455,26 @@ impl Poser {
     /// From a rig .glb and the training poses (original units; read once, in order: [`solve_frames`]).
     ///
     /// [`solve_frames`]: crate::articulate::pose::solve_frames
-    pub fn from_glb<F: AsRef<[Vec3]>>(file: &str, glb: &[u8], poses: impl IntoIterator<Item = F, IntoIter: ExactSizeIterator>) -> Result<Poser> {
+    pub fn from_glb<F: AsRef<[Vec3]>>(
+        file: &str,
+        glb: &[u8],
+        poses: impl IntoIterator<Item = F, IntoIter: ExactSizeIterator>,
+    ) -> Result<Poser> {
         let rig = read_rig(file, glb)?;
         let solved = crate::articulate::pose::solve_frames(&rig.rig, poses)?;
         let space = PoseSpace::new(&rig.rig, &solved.bones)?;
         let current = rig.rest_bones();
         let bone_of_vertex = rig.rig.weights.influences.iter().map(|inf| inf[0].0).collect();
         let diagonal = rig.rig.diagonal();
-        Ok(Poser { rig, training: solved.bones, space, current, bone_of_vertex, diagonal, normalization: crate::mesh::Normalization::IDENTITY })
+        Ok(Poser {
+            rig,
+            training: solved.bones,
+            space,
+            current,
+            bone_of_vertex,
+            diagonal,
+            normalization: crate::mesh::Normalization::IDENTITY,
+        })
     }
 
     /// The mesh of the current pose.
@@ -438,7 +508,11 @@ impl Poser {
     /// The pose of mode coefficients ([`PoseSpace::pose`]), the root where it is now.
     pub fn set_modes(&mut self, coeffs: &[f64]) -> Result<()> {
         if coeffs.len() > self.space.n_modes() || !coeffs.iter().all(|c| c.is_finite()) {
-            return Err(Error::Request(format!("{} mode coefficients for {} modes (numbers)", coeffs.len(), self.space.n_modes())));
+            return Err(Error::Request(format!(
+                "{} mode coefficients for {} modes (numbers)",
+                coeffs.len(),
+                self.space.n_modes()
+            )));
         }
         let root = self.rig.rig.order[0];
         let locals = self.space.locals(self.rig.rig.n_bones(), &self.space.vector(coeffs));
@@ -479,7 +553,20 @@ impl Poser {
             .iter()
             .flat_map(|m| {
                 let r = &m.rotation;
-                [r[(0, 0)], r[(0, 1)], r[(0, 2)], r[(1, 0)], r[(1, 1)], r[(1, 2)], r[(2, 0)], r[(2, 1)], r[(2, 2)], m.translation[0], m.translation[1], m.translation[2]]
+                [
+                    r[(0, 0)],
+                    r[(0, 1)],
+                    r[(0, 2)],
+                    r[(1, 0)],
+                    r[(1, 1)],
+                    r[(1, 2)],
+                    r[(2, 0)],
+                    r[(2, 1)],
+                    r[(2, 2)],
+                    m.translation[0],
+                    m.translation[1],
+                    m.translation[2],
+                ]
             })
             .collect()
     }
@@ -492,7 +579,10 @@ impl Poser {
         }
         self.current = flat
             .chunks_exact(12)
-            .map(|c| RigidMotion { rotation: best_rotation(&Mat3::from_row_slice(&c[..9])), translation: [c[9], c[10], c[11]] })
+            .map(|c| RigidMotion {
+                rotation: best_rotation(&Mat3::from_row_slice(&c[..9])),
+                translation: [c[9], c[10], c[11]],
+            })
             .collect();
         Ok(())
     }

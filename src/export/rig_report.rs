@@ -77,7 +77,10 @@ struct ErrorSum<'a> {
 impl<'a> ErrorSum<'a> {
     fn new(pop: &'a Population, rest: usize) -> Result<ErrorSum<'a>> {
         if rest >= pop.n_shapes() {
-            return Err(Error::Request(format!("rest pose {rest} (0-based): the population has {} poses", pop.n_shapes())));
+            return Err(Error::Request(format!(
+                "rest pose {rest} (0-based): the population has {} poses",
+                pop.n_shapes()
+            )));
         }
         let rest_pose: Vec<Vec3> = pop.shape(rest).iter().map(|u| pop.normalization.to_original(u)).collect();
         let diagonal = bbox_diagonal(&rest_pose);
@@ -102,7 +105,11 @@ impl<'a> ErrorSum<'a> {
         }
         self.total += sq;
         self.max_error = self.max_error.max(worst);
-        self.poses.push(PoseError { name: pop.names[i].clone(), e_rms: e_rms(sq, pop.n_vertices(), self.diagonal), max_error: worst });
+        self.poses.push(PoseError {
+            name: pop.names[i].clone(),
+            e_rms: e_rms(sq, pop.n_vertices(), self.diagonal),
+            max_error: worst,
+        });
         Ok(())
     }
 
@@ -195,5 +202,12 @@ pub fn export_rig(art: &Articulation, pop: &Population, opts: &GltfOptions) -> R
     check_clip(pop, played.keys, played.rest.len())?;
     let error = sum.finish();
     let t3 = crate::clock::now_ms();
-    Ok(RigExport { glb, error, bones: played.joint_parent.len(), rig_ms: t1 - t, write_ms: t2 - t1, evaluate_ms: t3 - t2 })
+    Ok(RigExport {
+        glb,
+        error,
+        bones: played.joint_parent.len(),
+        rig_ms: t1 - t,
+        write_ms: t2 - t1,
+        evaluate_ms: t3 - t2,
+    })
 }

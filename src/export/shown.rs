@@ -16,14 +16,30 @@ use serde::Deserialize;
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum Shown {
-    Pose { pose: usize },
-    Reconstruction { pose: usize },
+    Pose {
+        pose: usize,
+    },
+    Reconstruction {
+        pose: usize,
+    },
     Latent,
     /// The latent shape with every part moved by its translation b of pose `pose` but not turned
     /// ([`Model::latent_placed`]).
-    LatentMoved { pose: usize },
-    Interpolation { from: usize, to: usize, t: f64, #[serde(default)] options: Options },
-    Linear { from: usize, to: usize, t: f64 },
+    LatentMoved {
+        pose: usize,
+    },
+    Interpolation {
+        from: usize,
+        to: usize,
+        t: f64,
+        #[serde(default)]
+        options: Options,
+    },
+    Linear {
+        from: usize,
+        to: usize,
+        t: f64,
+    },
 }
 
 impl Shown {
@@ -33,14 +49,23 @@ impl Shown {
     }
 
     /// Its positions, unit box. `model` and `articulation` are needed when [`Shown::needs_model`].
-    pub fn positions(&self, pop: &Population, model: Option<&Model>, articulation: Option<&Articulation>) -> Result<Vec<Vec3>> {
+    pub fn positions(
+        &self,
+        pop: &Population,
+        model: Option<&Model>,
+        articulation: Option<&Articulation>,
+    ) -> Result<Vec<Vec3>> {
         let shape = |i: usize| {
-            pop.get_shape(i).map(|s| s.to_vec()).ok_or_else(|| Error::Request(format!("no pose {i}: the population has {} poses", pop.n_shapes())))
+            pop.get_shape(i)
+                .map(|s| s.to_vec())
+                .ok_or_else(|| Error::Request(format!("no pose {i}: the population has {} poses", pop.n_shapes())))
         };
         let need_model = || model.ok_or_else(|| Error::Request("this mesh needs a fitted model".into()));
         match *self {
             Shown::Pose { pose } => shape(pose),
-            Shown::Linear { from, to, t } => crate::articulate::interpolate::linear_blend(&shape(from)?, &shape(to)?, t),
+            Shown::Linear { from, to, t } => {
+                crate::articulate::interpolate::linear_blend(&shape(from)?, &shape(to)?, t)
+            }
             Shown::Reconstruction { pose } => {
                 shape(pose)?;
                 Ok(need_model()?.reconstruct(pose))
@@ -51,7 +76,8 @@ impl Shown {
                 Ok(need_model()?.latent_placed(pose))
             }
             Shown::Interpolation { from, to, t, options } => {
-                let art = articulation.ok_or_else(|| Error::Request("the interpolation needs a fitted model".into()))?;
+                let art =
+                    articulation.ok_or_else(|| Error::Request("the interpolation needs a fitted model".into()))?;
                 art.interpolate(from, to, t, &options)
             }
         }
@@ -82,7 +108,12 @@ pub fn obj_of_meshes(pop: &Population, meshes: &[NamedMesh], header: &str) -> Re
     let mut offset = 0u64;
     for m in meshes {
         if m.positions.len() != pop.n_vertices() || m.labels.is_some_and(|l| l.len() != m.positions.len()) {
-            return Err(Error::Request(format!("mesh {}: {} positions for {} vertices", m.name, m.positions.len(), pop.n_vertices())));
+            return Err(Error::Request(format!(
+                "mesh {}: {} positions for {} vertices",
+                m.name,
+                m.positions.len(),
+                pop.n_vertices()
+            )));
         }
         let name: String = m.name.chars().map(|c| if c.is_whitespace() { '_' } else { c }).collect();
         out.push_str(&format!("o {name}\n"));
@@ -91,7 +122,11 @@ pub fn obj_of_meshes(pop: &Population, meshes: &[NamedMesh], header: &str) -> Re
         let part = |f: &[u32; 3]| {
             m.labels.map(|l| {
                 let [a, b, c] = f.map(|v| l[v as usize]);
-                if b == c { b } else { a }
+                if b == c {
+                    b
+                } else {
+                    a
+                }
             })
         };
         let mut order: Vec<usize> = (0..pop.faces.len()).collect();
@@ -105,7 +140,12 @@ pub fn obj_of_meshes(pop: &Population, meshes: &[NamedMesh], header: &str) -> Re
                     current = Some(k);
                 }
             }
-            out.push_str(&format!("f {} {} {}\n", offset + u64::from(f[0]) + 1, offset + u64::from(f[1]) + 1, offset + u64::from(f[2]) + 1));
+            out.push_str(&format!(
+                "f {} {} {}\n",
+                offset + u64::from(f[0]) + 1,
+                offset + u64::from(f[1]) + 1,
+                offset + u64::from(f[2]) + 1
+            ));
         }
         offset += m.positions.len() as u64;
     }
@@ -118,8 +158,12 @@ mod tests {
     use crate::mesh::population::Normalization;
 
     fn population() -> Population {
-        let shapes = vec![vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.5]]];
-        let mut pop = Population::from_unit_shapes(vec!["a.obj".into(), "b.obj".into()], vec![[0, 1, 2]], shapes).unwrap();
+        let shapes = vec![
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.5]],
+        ];
+        let mut pop =
+            Population::from_unit_shapes(vec!["a.obj".into(), "b.obj".into()], vec![[0, 1, 2]], shapes).unwrap();
         pop.normalization = Normalization { offset: [100.0, -7.0, 0.25], scale: 0.1 };
         pop
     }
@@ -129,7 +173,11 @@ mod tests {
         let pop = population();
         let p = Shown::Pose { pose: 1 }.positions(&pop, None, None).unwrap();
         let text = obj_in_original_units(&pop, &p, "pose b");
-        let v: Vec<Vec<f64>> = text.lines().filter(|l| l.starts_with("v ")).map(|l| l[2..].split(' ').map(|x| x.parse().unwrap()).collect()).collect();
+        let v: Vec<Vec<f64>> = text
+            .lines()
+            .filter(|l| l.starts_with("v "))
+            .map(|l| l[2..].split(' ').map(|x| x.parse().unwrap()).collect())
+            .collect();
         for (k, q) in pop.shape(1).iter().enumerate() {
             let o = pop.normalization.to_original(q);
             assert_eq!(v[k], o.to_vec(), "exact floats");
@@ -157,13 +205,32 @@ mod tests {
         // every face has two corners in part 1 (group part_2); faces keep their order within a part
         assert_eq!(
             lines,
-            ["# two meshes", "o original", "f 1 2 3", "f 3 2 1", "f 2 3 1", "o coarse_parts", "g coarse_parts_part_2", "f 4 5 6", "f 6 5 4", "f 5 6 4"]
+            [
+                "# two meshes",
+                "o original",
+                "f 1 2 3",
+                "f 3 2 1",
+                "f 2 3 1",
+                "o coarse_parts",
+                "g coarse_parts_part_2",
+                "f 4 5 6",
+                "f 6 5 4",
+                "f 5 6 4"
+            ]
         );
         // three corners in three parts: the first corner's part
         let labels = [0u32, 1, 2];
         let one = [NamedMesh { name: "final".into(), positions: p0.clone(), labels: Some(&labels) }];
-        let lines: Vec<String> = obj_of_meshes(&pop, &one, "").unwrap().lines().filter(|l| !l.starts_with("v ")).map(str::to_owned).collect();
-        assert_eq!(lines, ["o final", "g final_part_1", "f 1 2 3", "g final_part_2", "f 2 3 1", "g final_part_3", "f 3 2 1"]);
+        let lines: Vec<String> = obj_of_meshes(&pop, &one, "")
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with("v "))
+            .map(str::to_owned)
+            .collect();
+        assert_eq!(
+            lines,
+            ["o final", "g final_part_1", "f 1 2 3", "g final_part_2", "f 2 3 1", "g final_part_3", "f 3 2 1"]
+        );
         let short = [NamedMesh { name: "x".into(), positions: p0[..2].to_vec(), labels: None }];
         assert!(obj_of_meshes(&pop, &short, "").is_err());
     }
@@ -175,7 +242,11 @@ mod tests {
         assert_eq!(p[2], [0.0, 1.0, 0.25]);
         assert!(Shown::Pose { pose: 2 }.positions(&pop, None, None).unwrap_err().to_string().contains("no pose 2"));
         assert!(Shown::Latent.positions(&pop, None, None).unwrap_err().to_string().contains("fitted model"));
-        assert!(Shown::LatentMoved { pose: 0 }.positions(&pop, None, None).unwrap_err().to_string().contains("fitted model"));
+        assert!(Shown::LatentMoved { pose: 0 }
+            .positions(&pop, None, None)
+            .unwrap_err()
+            .to_string()
+            .contains("fitted model"));
         let s: Shown = serde_json::from_str(r#"{"kind":"latent-moved","pose":1}"#).unwrap();
         assert_eq!(s, Shown::LatentMoved { pose: 1 });
         assert!(Shown::Latent.needs_model() && !Shown::Pose { pose: 0 }.needs_model());
@@ -187,7 +258,9 @@ mod tests {
         assert_eq!(s, Shown::Interpolation { from: 0, to: 1, t: 0.25, options: Options::default() });
         let e = serde_json::from_str::<Shown>(r#"{"kind":"pose","pose":1,"poze":2}"#).unwrap_err().to_string();
         assert!(e.contains("poze"), "{e}");
-        let e = serde_json::from_str::<Shown>(r#"{"kind":"linear","from":0,"to":1,"t":0.5,"options":{}}"#).unwrap_err().to_string();
+        let e = serde_json::from_str::<Shown>(r#"{"kind":"linear","from":0,"to":1,"t":0.5,"options":{}}"#)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("options"), "{e}");
     }
 }

@@ -45,16 +45,15 @@ fn err(file: &str, message: String) -> Error {
     Error::Obj { file: file.to_string(), line: 0, message }
 }
 
-fn frames_from(
-    file: &str,
-    data: &[u8],
-    frames: usize,
-    points: usize,
-    big: bool,
-) -> Result<Vec<Vec<[f64; 3]>>> {
+fn frames_from(file: &str, data: &[u8], frames: usize, points: usize, big: bool) -> Result<Vec<Vec<[f64; 3]>>> {
     let mut out = Vec::with_capacity(frames);
     let mut chunks = data.chunks_exact(4).map(|c| {
-        let b = [c.first().copied().unwrap_or(0), c.get(1).copied().unwrap_or(0), c.get(2).copied().unwrap_or(0), c.get(3).copied().unwrap_or(0)];
+        let b = [
+            c.first().copied().unwrap_or(0),
+            c.get(1).copied().unwrap_or(0),
+            c.get(2).copied().unwrap_or(0),
+            c.get(3).copied().unwrap_or(0),
+        ];
         f64::from(if big { f32::from_be_bytes(b) } else { f32::from_le_bytes(b) })
     });
     for f in 0..frames {
@@ -98,7 +97,9 @@ fn check_size(file: &str, what: &str, len: usize, header: u64, frames: u64, poin
         )),
         None => Err(err(
             file,
-            format!("its header says {frames} frames of {points} vertices, far more than the file holds; it is damaged"),
+            format!(
+                "its header says {frames} frames of {points} vertices, far more than the file holds; it is damaged"
+            ),
         )),
     }
 }

@@ -37,9 +37,27 @@ type DMat4 = Matrix4<f64>;
 
 /// Nodes whose arrays the reader does not use: not inflated (normals, UVs, colours, edges, materials, ...).
 const UNUSED_ARRAYS: &[&str] = &[
-    "Normals", "NormalsW", "NormalsIndex", "Binormals", "BinormalsW", "BinormalsIndex", "Tangents", "TangentsW",
-    "TangentsIndex", "UV", "UVIndex", "Colors", "ColorIndex", "Edges", "Smoothing", "Materials", "FullWeights",
-    "Visibility", "Hole", "EdgeCrease", "VertexCrease",
+    "Normals",
+    "NormalsW",
+    "NormalsIndex",
+    "Binormals",
+    "BinormalsW",
+    "BinormalsIndex",
+    "Tangents",
+    "TangentsW",
+    "TangentsIndex",
+    "UV",
+    "UVIndex",
+    "Colors",
+    "ColorIndex",
+    "Edges",
+    "Smoothing",
+    "Materials",
+    "FullWeights",
+    "Visibility",
+    "Hole",
+    "EdgeCrease",
+    "VertexCrease",
 ];
 
 /// FBX time units per second.
@@ -85,7 +103,10 @@ impl<'a> Doc<'a> {
             for n in &objs.children {
                 let Some(id) = n.props.first().and_then(Prop::as_i64) else { continue };
                 let sub = n.props.get(2).and_then(Prop::as_str).unwrap_or("").to_string();
-                if objects.insert(id, Object { id, class: &n.name, sub, name: object_name(n.props.get(1)), node: n }).is_none() {
+                if objects
+                    .insert(id, Object { id, class: &n.name, sub, name: object_name(n.props.get(1)), node: n })
+                    .is_none()
+                {
                     order.push(id);
                 }
             }
@@ -94,7 +115,9 @@ impl<'a> Doc<'a> {
         let mut parents: HashMap<i64, Vec<(i64, Option<String>)>> = HashMap::new();
         if let Some(conns) = tree.node("Connections") {
             for c in conns.children_named("C") {
-                let (Some(child), Some(parent)) = (c.props.get(1).and_then(Prop::as_i64), c.props.get(2).and_then(Prop::as_i64)) else {
+                let (Some(child), Some(parent)) =
+                    (c.props.get(1).and_then(Prop::as_i64), c.props.get(2).and_then(Prop::as_i64))
+                else {
                     continue;
                 };
                 let prop = c.props.get(3).and_then(Prop::as_str).map(str::to_string);
@@ -140,7 +163,13 @@ impl<'a> Doc<'a> {
             None => Ok(None),
             Some(Prop::F64s(v)) => Ok(Some(std::borrow::Cow::Borrowed(v.as_slice()))),
             Some(p) => p.to_f64s().map(|v| Some(std::borrow::Cow::Owned(v))).ok_or_else(|| {
-                err(self.file, format!("{} '{}' (id {}): {child} is not a numeric array; the file is damaged: export it again", o.class, o.name, o.id))
+                err(
+                    self.file,
+                    format!(
+                        "{} '{}' (id {}): {child} is not a numeric array; the file is damaged: export it again",
+                        o.class, o.name, o.id
+                    ),
+                )
             }),
         }
     }
@@ -149,7 +178,13 @@ impl<'a> Doc<'a> {
         match self.array(o, child) {
             None => Ok(None),
             Some(p) => p.to_i64s().map(Some).ok_or_else(|| {
-                err(self.file, format!("{} '{}' (id {}): {child} is not an integer array; the file is damaged: export it again", o.class, o.name, o.id))
+                err(
+                    self.file,
+                    format!(
+                        "{} '{}' (id {}): {child} is not an integer array; the file is damaged: export it again",
+                        o.class, o.name, o.id
+                    ),
+                )
             }),
         }
     }
@@ -173,7 +208,9 @@ fn p70_i64(node: &Node, name: &str) -> Option<i64> {
 
 fn p70_vec3(node: &Node, name: &str, default: f64) -> DVec3 {
     match p70(node, name) {
-        Some([a, b, c, ..]) => DVec3::new(a.as_f64().unwrap_or(default), b.as_f64().unwrap_or(default), c.as_f64().unwrap_or(default)),
+        Some([a, b, c, ..]) => {
+            DVec3::new(a.as_f64().unwrap_or(default), b.as_f64().unwrap_or(default), c.as_f64().unwrap_or(default))
+        }
         _ => DVec3::repeat(default),
     }
 }
@@ -301,7 +338,13 @@ fn read_anim(doc: &Doc, stack: &Object) -> Result<Anim> {
                     ));
                 }
                 if times.windows(2).any(|w| w[1] < w[0]) {
-                    return Err(err(doc.file, format!("the key times of AnimationCurve {} are not in order; the file is damaged: export it again", o.id)));
+                    return Err(err(
+                        doc.file,
+                        format!(
+                            "the key times of AnimationCurve {} are not in order; the file is damaged: export it again",
+                            o.id
+                        ),
+                    ));
                 }
                 // Interpolation per key: KeyAttrFlags (bit 1: constant) shared by KeyAttrRefCount keys each.
                 let flags = doc.i64s(o, "KeyAttrFlags")?.unwrap_or_default();
@@ -316,13 +359,23 @@ fn read_anim(doc: &Doc, stack: &Object) -> Result<Anim> {
             let mut defaults = HashMap::new();
             if let Some(p) = cn.node.child("Properties70") {
                 for q in p.children_named("P") {
-                    if let (Some(n), Some(v)) = (q.props.first().and_then(Prop::as_str), q.props.get(4).and_then(Prop::as_f64)) {
+                    if let (Some(n), Some(v)) =
+                        (q.props.first().and_then(Prop::as_str), q.props.get(4).and_then(Prop::as_f64))
+                    {
                         defaults.insert(n.to_string(), v);
                     }
                 }
             }
             for (target, prop) in targets {
-                let curves_copy = curves.iter().map(|(n, c)| (n.clone(), Curve { times: c.times.clone(), values: c.values.clone(), constant: c.constant.clone() })).collect();
+                let curves_copy = curves
+                    .iter()
+                    .map(|(n, c)| {
+                        (
+                            n.clone(),
+                            Curve { times: c.times.clone(), values: c.values.clone(), constant: c.constant.clone() },
+                        )
+                    })
+                    .collect();
                 channels.insert((target, prop), (curves_copy, defaults.clone()));
             }
         }
@@ -338,7 +391,11 @@ fn local_matrix(doc: &Doc, anim: Option<&Anim>, model: i64, t: i64) -> DMat4 {
     let rest_r = p70_vec3(n, "Lcl Rotation", 0.0);
     let rest_s = p70_vec3(n, "Lcl Scaling", 1.0);
     let (tr, rot, sc) = match anim {
-        Some(a) => (a.vec3(model, "Lcl Translation", t, rest_t), a.vec3(model, "Lcl Rotation", t, rest_r), a.vec3(model, "Lcl Scaling", t, rest_s)),
+        Some(a) => (
+            a.vec3(model, "Lcl Translation", t, rest_t),
+            a.vec3(model, "Lcl Rotation", t, rest_r),
+            a.vec3(model, "Lcl Scaling", t, rest_s),
+        ),
         None => (rest_t, rest_r, rest_s),
     };
     let order = p70_i64(n, "RotationOrder").unwrap_or(0);
@@ -408,7 +465,13 @@ fn matrix16(doc: &Doc, o: &Object, child: &str) -> Result<Option<DMat4>> {
         Some(v) if v.len() == 16 => Ok(Some(DMat4::from_column_slice(&v))),
         Some(v) => Err(err(
             doc.file,
-            format!("{} '{}' (id {}): {child} has {} numbers, not 16; the file is damaged: export it again", o.class, o.name, o.id, v.len()),
+            format!(
+                "{} '{}' (id {}): {child} has {} numbers, not 16; the file is damaged: export it again",
+                o.class,
+                o.name,
+                o.id,
+                v.len()
+            ),
         )),
     }
 }
@@ -423,18 +486,26 @@ struct MeshModel {
 
 fn read_geometry(doc: &Doc, model: &Object, geom: &Object) -> Result<MeshModel> {
     let what = format!("Geometry '{}' (id {}) of model '{}'", geom.name, geom.id, model.name);
-    let v = doc.f64s(geom, "Vertices")?.ok_or_else(|| err(doc.file, format!("{what} has no Vertices; export the mesh with its geometry")))?;
+    let v = doc
+        .f64s(geom, "Vertices")?
+        .ok_or_else(|| err(doc.file, format!("{what} has no Vertices; export the mesh with its geometry")))?;
     if v.len() % 3 != 0 {
-        return Err(err(doc.file, format!("{what}: Vertices holds {} numbers, not a multiple of 3; the file is damaged: export it again", v.len())));
+        return Err(err(
+            doc.file,
+            format!(
+                "{what}: Vertices holds {} numbers, not a multiple of 3; the file is damaged: export it again",
+                v.len()
+            ),
+        ));
     }
     let n = v.len() / 3;
     if n > u32::MAX as usize {
         return Err(err(doc.file, format!("{what} has more than 4294967295 control points")));
     }
     let positions: Vec<DVec3> = v.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect();
-    let pvi = doc
-        .i64s(geom, "PolygonVertexIndex")?
-        .ok_or_else(|| err(doc.file, format!("{what} has no PolygonVertexIndex (no polygons); posemfa needs a polygon mesh")))?;
+    let pvi = doc.i64s(geom, "PolygonVertexIndex")?.ok_or_else(|| {
+        err(doc.file, format!("{what} has no PolygonVertexIndex (no polygons); posemfa needs a polygon mesh"))
+    })?;
     let mut faces = Vec::with_capacity(pvi.len());
     let mut corners: Vec<u32> = Vec::new();
     for (k, &raw) in pvi.iter().enumerate() {
@@ -456,7 +527,10 @@ fn read_geometry(doc: &Doc, model: &Object, geom: &Object) -> Result<MeshModel> 
         }
     }
     if faces.is_empty() {
-        return Err(err(doc.file, format!("{what} has no polygons with 3 or more corners; posemfa needs a polygon mesh")));
+        return Err(err(
+            doc.file,
+            format!("{what} has no polygons with 3 or more corners; posemfa needs a polygon mesh"),
+        ));
     }
     Ok(MeshModel { model: model.id, geometry: geom.id, positions, faces })
 }
@@ -510,8 +584,12 @@ fn read_channels<'a>(doc: &Doc<'a>, mm: &MeshModel) -> Result<Vec<Channel<'a>>> 
                 }
                 points.push(i as u32);
             }
-            let rest_percent =
-                ch.node.child_prop("DeformPercent").and_then(Prop::as_f64).or_else(|| p70_f64(ch.node, "DeformPercent")).unwrap_or(0.0);
+            let rest_percent = ch
+                .node
+                .child_prop("DeformPercent")
+                .and_then(Prop::as_f64)
+                .or_else(|| p70_f64(ch.node, "DeformPercent"))
+                .unwrap_or(0.0);
             out.push(Channel { id: ch.id, name: ch.name.clone(), rest_percent, points, offsets: v });
         }
     }
@@ -535,18 +613,36 @@ fn read_clusters(doc: &Doc, mm: &MeshModel, geo: &DMat4) -> Result<Vec<Cluster>>
             let idx = doc.i64s(cl, "Indexes")?.unwrap_or_default();
             let w = doc.f64s(cl, "Weights")?.unwrap_or_default();
             if idx.len() != w.len() {
-                return Err(err(doc.file, format!("{what} has {} indexes but {} weights; the file is damaged: export it again", idx.len(), w.len())));
+                return Err(err(
+                    doc.file,
+                    format!(
+                        "{what} has {} indexes but {} weights; the file is damaged: export it again",
+                        idx.len(),
+                        w.len()
+                    ),
+                ));
             }
             let Some(bone) = doc.kids(cl.id, "Model", None).first().map(|b| b.id) else {
                 if idx.is_empty() {
                     continue;
                 }
-                return Err(err(doc.file, format!("{what} weights {} control points but is linked to no bone; export the skin with its skeleton", idx.len())));
+                return Err(err(
+                    doc.file,
+                    format!(
+                        "{what} weights {} control points but is linked to no bone; export the skin with its skeleton",
+                        idx.len()
+                    ),
+                ));
             };
             // `Transform` in the file is the mesh-to-bone matrix at bind time (TransformLink^-1 times the mesh's
             // bind matrix, as the FBX SDK writes it); `TransformLink` (the bone's bind matrix) is not needed.
             let transform = matrix16(doc, cl, "Transform")?.ok_or_else(|| {
-                err(doc.file, format!("{what} has no Transform (its bind matrix), so its rest pose is unknown; export the skin again"))
+                err(
+                    doc.file,
+                    format!(
+                        "{what} has no Transform (its bind matrix), so its rest pose is unknown; export the skin again"
+                    ),
+                )
             })?;
             let mut weights = Vec::with_capacity(idx.len());
             for (k, (&i, &wt)) in idx.iter().zip(w.iter()).enumerate() {
@@ -580,8 +676,13 @@ fn axis_system(tree: &fbx_tree::Tree) -> (DMat4, String) {
         v
     };
     let (c, u, f) = (axis(coord, coord_s), axis(up, up_s), axis(front, front_s));
-    let distinct = [coord, up, front].iter().all(|a| (0..3).contains(a)) && coord != up && up != front && coord != front;
-    let rows = if distinct { nalgebra::Matrix3::from_rows(&[c.transpose(), u.transpose(), f.transpose()]) } else { nalgebra::Matrix3::identity() };
+    let distinct =
+        [coord, up, front].iter().all(|a| (0..3).contains(a)) && coord != up && up != front && coord != front;
+    let rows = if distinct {
+        nalgebra::Matrix3::from_rows(&[c.transpose(), u.transpose(), f.transpose()])
+    } else {
+        nalgebra::Matrix3::identity()
+    };
     let scale = unit / 100.0;
     let m = (rows * scale).to_homogeneous();
     let names = ["X", "Y", "Z"];
@@ -649,7 +750,12 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
 }
 
 /// The poses of the chosen mesh (its kept points), its weld, and the description of what was read.
-fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> Result<(Weld, Vec<(String, Vec<[f64; 3]>)>, String)> {
+fn poses(
+    file: &str,
+    tree: &fbx_tree::Tree,
+    options: &Options,
+    budget: u64,
+) -> Result<(Weld, Vec<(String, Vec<[f64; 3]>)>, String)> {
     let doc = Doc::new(file, tree);
 
     // Mesh models, with their geometry.
@@ -663,15 +769,20 @@ fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> R
         }
     }
     if candidates.is_empty() {
-        return Err(err(file, "the file holds no mesh (no Model of type Mesh with a Geometry); export the character with its mesh".into()));
+        return Err(err(
+            file,
+            "the file holds no mesh (no Model of type Mesh with a Geometry); export the character with its mesh".into(),
+        ));
     }
     let count = |g: &Object| match doc.array(g, "Vertices") {
         Some(Prop::F64s(v)) => v.len() / 3,
         Some(Prop::F32s(v)) => v.len() / 3,
         _ => 0,
     };
-    let stacks: Vec<&Object> = doc.order.iter().filter_map(|id| doc.get(*id)).filter(|o| o.class == "AnimationStack").collect();
-    let anims: Vec<(&Object, Anim)> = stacks.iter().map(|s| read_anim(&doc, s).map(|a| (*s, a))).collect::<Result<_>>()?;
+    let stacks: Vec<&Object> =
+        doc.order.iter().filter_map(|id| doc.get(*id)).filter(|o| o.class == "AnimationStack").collect();
+    let anims: Vec<(&Object, Anim)> =
+        stacks.iter().map(|s| read_anim(&doc, s).map(|a| (*s, a))).collect::<Result<_>>()?;
 
     // What moves a mesh model: its own transform or an ancestor's, its blend shape channels, its skin's bones
     // (or their ancestors).
@@ -718,7 +829,8 @@ fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> R
             })?,
         None => {
             let animated: Vec<&(&Object, &Object)> = candidates.iter().filter(|(m, g)| is_animated(m, g)).collect();
-            let pool: Vec<&(&Object, &Object)> = if animated.is_empty() { candidates.iter().collect() } else { animated };
+            let pool: Vec<&(&Object, &Object)> =
+                if animated.is_empty() { candidates.iter().collect() } else { animated };
             let mut best = pool[0];
             for c in &pool {
                 if count(c.1) > count(best.1) {
@@ -784,14 +896,18 @@ fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> R
                 finite &= v[0].is_finite() & v[1].is_finite() & v[2].is_finite();
             }
         } else {
-            let mats: Vec<Affine> = clusters.iter().map(|cl| Affine::new(&(axes * global_matrix(&doc, anim, cl.bone, t, &mut cache) * cl.bind))).collect();
+            let mats: Vec<Affine> = clusters
+                .iter()
+                .map(|cl| Affine::new(&(axes * global_matrix(&doc, anim, cl.bone, t, &mut cache) * cl.bind)))
+                .collect();
             for (v, infl) in p.iter_mut().zip(&influences) {
                 let total: f64 = infl.iter().map(|(_, w)| w).sum();
                 *v = if infl.is_empty() || total <= 0.0 {
                     rigid.apply(v)
                 } else {
                     let at = DVec3::from(*v);
-                    let s: DVec3 = infl.iter().map(|&(c, w)| DVec3::from(mats[c].apply(&at.into())) * (w / total)).sum();
+                    let s: DVec3 =
+                        infl.iter().map(|&(c, w)| DVec3::from(mats[c].apply(&at.into())) * (w / total)).sum();
                     s.into()
                 };
                 finite &= v[0].is_finite() & v[1].is_finite() & v[2].is_finite();
@@ -827,7 +943,13 @@ fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> R
                 .map(|(_, a)| a)
                 .ok_or_else(|| {
                     let names: Vec<String> = stacks.iter().map(|s| format!("'{}'", s.name)).collect();
-                    err(file, format!("no animation (take) is called or numbered `{w}`; the file has {}", if names.is_empty() { "none".into() } else { names.join(", ") }))
+                    err(
+                        file,
+                        format!(
+                            "no animation (take) is called or numbered `{w}`; the file has {}",
+                            if names.is_empty() { "none".into() } else { names.join(", ") }
+                        ),
+                    )
                 })?,
             None => {
                 let span = |a: &(&Object, Anim)| a.1.key_range().map_or(0, |(lo, hi)| hi - lo);
@@ -867,16 +989,32 @@ fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> R
                 n.max(1.0) as usize
             }
         };
-        crate::memory::check(n_file, n_times, 1, budget)
-            .map_err(|e| err(file, format!("animation '{}' at {n_times} frames: {e}; sample it at fewer times (--frames N)", stack.name)))?;
+        crate::memory::check(n_file, n_times, 1, budget).map_err(|e| {
+            err(
+                file,
+                format!("animation '{}' at {n_times} frames: {e}; sample it at fewer times (--frames N)", stack.name),
+            )
+        })?;
         let times: Vec<i64> = match options.frames {
-            Some(f) => (0..f).map(|i| if f == 1 { start } else { start + ((stop - start) as f64 * i as f64 / (f - 1) as f64).round() as i64 }).collect(),
+            Some(f) => (0..f)
+                .map(|i| {
+                    if f == 1 {
+                        start
+                    } else {
+                        start + ((stop - start) as f64 * i as f64 / (f - 1) as f64).round() as i64
+                    }
+                })
+                .collect(),
             None => (0..n_times).map(|i| start + (i as f64 / fps * KTIME_PER_SECOND).round() as i64).collect(),
         };
         let fps_text = format!("{fps:.3}").trim_end_matches('0').trim_end_matches('.').to_string();
         let how = match options.frames {
             Some(f) => format!("sampled at {f} evenly spaced times"),
-            None => format!("{fps_text} fps, {:.3} s to {:.3} s", start as f64 / KTIME_PER_SECOND, stop as f64 / KTIME_PER_SECOND),
+            None => format!(
+                "{fps_text} fps, {:.3} s to {:.3} s",
+                start as f64 / KTIME_PER_SECOND,
+                stop as f64 / KTIME_PER_SECOND
+            ),
         };
         let what = match (channels.is_empty(), clusters.is_empty()) {
             (false, false) => format!("{} blend shapes, skinned by {} bones", channels.len(), clusters.len()),
@@ -884,10 +1022,14 @@ fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> R
             (true, false) => format!("skinned by {} bones", clusters.len()),
             (true, true) => "its transform".to_string(),
         };
-        description = format!("{} frames of {mname} in {file} (animation '{}', {how}; {what})", times.len(), stack.name);
+        description =
+            format!("{} frames of {mname} in {file} (animation '{}', {how}; {what})", times.len(), stack.name);
         let w = times.len().to_string().len();
         for (fi, &t) in times.iter().enumerate() {
-            let percents: Vec<f64> = channels.iter().map(|c| anim.value(c.id, "DeformPercent", "DeformPercent", t).unwrap_or(c.rest_percent)).collect();
+            let percents: Vec<f64> = channels
+                .iter()
+                .map(|c| anim.value(c.id, "DeformPercent", "DeformPercent", t).unwrap_or(c.rest_percent))
+                .collect();
             push(format!("frame {:0w$}", fi + 1), pose_at(Some(anim), t, &percents))?;
         }
     } else {
@@ -902,7 +1044,11 @@ fn poses(file: &str, tree: &fbx_tree::Tree, options: &Options, budget: u64) -> R
         }
         crate::memory::check(n_file, channels.len() + 1, 1, budget)
             .map_err(|e| err(file, format!("{} blend shapes of {mname}, each one pose: {e}", channels.len())))?;
-        description = format!("{} frames of {mname} in {file} (its {} blend shapes at 100 %, after the base)", channels.len() + 1, channels.len());
+        description = format!(
+            "{} frames of {mname} in {file} (its {} blend shapes at 100 %, after the base)",
+            channels.len() + 1,
+            channels.len()
+        );
         let w = (channels.len() + 1).to_string().len();
         push(format!("shape {:0w$} base", 0), pose_at(None, 0, &vec![0.0; channels.len()]))?;
         for k in 0..channels.len() {
@@ -930,13 +1076,22 @@ impl Weld {
             format!("{n_file} vertices welded to {n_welded} (duplicates split by the exporter)")
         };
         let source = format!("{description}; {weld_note}");
-        let poses = poses.into_iter().map(|(name, positions)| (format!("{file} {name}"), Mesh { positions, faces: self.faces.clone() })).collect();
+        let poses = poses
+            .into_iter()
+            .map(|(name, positions)| (format!("{file} {name}"), Mesh { positions, faces: self.faces.clone() }))
+            .collect();
         Gltf { file: file.to_string(), poses, source, vertices_in_file: n_file, vertices_welded: n_welded }
     }
 }
 
 /// Welds control points that are exact duplicates in the file, names the poses and says how many vertices.
-pub(super) fn weld(file: &str, base: &[DVec3], faces: &[[u32; 3]], poses_raw: Vec<(String, Vec<DVec3>)>, description: String) -> Gltf {
+pub(super) fn weld(
+    file: &str,
+    base: &[DVec3],
+    faces: &[[u32; 3]],
+    poses_raw: Vec<(String, Vec<DVec3>)>,
+    description: String,
+) -> Gltf {
     let weld = Weld::new(base, faces);
     let poses = poses_raw.into_iter().map(|(name, pos)| (name, weld.keep(&pos))).collect();
     weld.finish(file, poses, description)
@@ -1010,7 +1165,9 @@ mod tests {
 
     #[test]
     fn a_non_finite_point_is_refused_even_where_welded_away() {
-        let e = read("nan.fbx", &split_quad(vec![0., 0., 1., 0., 0., f64::NAN]), &Default::default()).unwrap_err().to_string();
+        let e = read("nan.fbx", &split_quad(vec![0., 0., 1., 0., 0., f64::NAN]), &Default::default())
+            .unwrap_err()
+            .to_string();
         assert_eq!(
             e,
             "file nan.fbx: Quad at frame 2 has coordinates that are not finite numbers (a transform, bind matrix or curve holds NaN or \

@@ -178,7 +178,12 @@ impl<'a> Reader<'a> {
         let mut nodes = Vec::new();
         while at < end {
             let (node_end, n_props, props_len, name_len) = if self.wide {
-                (self.u64_at(at, "a node record")?, self.u64_at(at + 8, "a node record")?, self.u64_at(at + 16, "a node record")?, self.slice(at + 24, 1, "a node record")?[0])
+                (
+                    self.u64_at(at, "a node record")?,
+                    self.u64_at(at + 8, "a node record")?,
+                    self.u64_at(at + 16, "a node record")?,
+                    self.slice(at + 24, 1, "a node record")?[0],
+                )
             } else {
                 (
                     u64::from(self.u32_at(at, "a node record")?),
@@ -271,7 +276,8 @@ impl<'a> Reader<'a> {
                 let s = fixed(self, 8)?;
                 let mut b = [0u8; 8];
                 b.copy_from_slice(s);
-                let p = if code == b'D' { Prop::Float(f64::from_le_bytes(b)) } else { Prop::Int(i64::from_le_bytes(b)) };
+                let p =
+                    if code == b'D' { Prop::Float(f64::from_le_bytes(b)) } else { Prop::Int(i64::from_le_bytes(b)) };
                 (p, v + 8)
             }
             b'S' | b'R' => {
@@ -280,7 +286,8 @@ impl<'a> Reader<'a> {
                     return Err(self.cut(&format!("{what} ({len} bytes)"), at));
                 }
                 let s = self.slice(v + 4, len, &what)?;
-                let p = if code == b'S' { Prop::Str(String::from_utf8_lossy(s).into_owned()) } else { Prop::Raw(s.len()) };
+                let p =
+                    if code == b'S' { Prop::Str(String::from_utf8_lossy(s).into_owned()) } else { Prop::Raw(s.len()) };
                 (p, v + 4 + len)
             }
             b'f' | b'd' | b'l' | b'i' | b'b' if self.skip.contains(&node) => {
@@ -295,9 +302,9 @@ impl<'a> Reader<'a> {
                 return Err(err(
                     self.file,
                     format!(
-                        "{what} at byte {at} has the unknown type code 0x{other:02x}; the file is damaged or not a binary \
+                    "{what} at byte {at} has the unknown type code 0x{other:02x}; the file is damaged or not a binary \
                          FBX 7.x file: export it again"
-                    ),
+                ),
                 ))
             }
         };
@@ -371,7 +378,14 @@ impl<'a> Reader<'a> {
 
     /// Fills `out` (the declared number of elements) from an array's stored bytes: copied when `encoding` is 0,
     /// inflated when it is 1 (zlib, its Adler-32 checked; the stream must fill `out` exactly).
-    fn fill<T: LittleEndian>(&mut self, mut out: Vec<T>, data: &[u8], encoding: u32, at: u64, what: &str) -> Result<Vec<T>> {
+    fn fill<T: LittleEndian>(
+        &mut self,
+        mut out: Vec<T>,
+        data: &[u8],
+        encoding: u32,
+        at: u64,
+        what: &str,
+    ) -> Result<Vec<T>> {
         let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out[..]);
         let declared = bytes.len();
         if encoding == 0 {
@@ -422,7 +436,6 @@ macro_rules! little_endian {
 }
 little_endian!(f64, i64, f32, i32, u8);
 
-
 /// Parses a binary FBX file into its node tree. `budget` bounds the bytes of all decoded arrays.
 pub fn parse(file: &str, bytes: &[u8], budget: u64) -> Result<Tree> {
     parse_skipping(file, bytes, budget, &[])
@@ -448,7 +461,10 @@ pub fn parse_skipping(file: &str, bytes: &[u8], budget: u64, skip: &[&str]) -> R
         ));
     }
     if bytes.len() < 27 {
-        return Err(err(file, format!("the FBX header is cut ({} of 27 bytes); the file is cut: export it again", bytes.len())));
+        return Err(err(
+            file,
+            format!("the FBX header is cut ({} of 27 bytes); the file is cut: export it again", bytes.len()),
+        ));
     }
     let version = u32::from_le_bytes([bytes[23], bytes[24], bytes[25], bytes[26]]);
     if !(7000..8000).contains(&version) {
@@ -585,7 +601,10 @@ mod tests {
         // The Adler-32 of the inflated bytes (the stream's last 4 bytes) does not match.
         let mut bad = bytes.clone();
         bad[data + len - 1] ^= 1;
-        assert_eq!(error(&bad), format!("file t.fbx: property 0 of node 'V' at byte {at} is not valid zlib data (data error); {tail}"));
+        assert_eq!(
+            error(&bad),
+            format!("file t.fbx: property 0 of node 'V' at byte {at} is not valid zlib data (data error); {tail}")
+        );
         // The stream stops before its end (its checksum cut off; the stored length says so).
         let mut cut = bytes.clone();
         cut[data - 4..data].copy_from_slice(&(len as u32 - 4).to_le_bytes());
@@ -596,7 +615,10 @@ mod tests {
         // Not zlib at all (a wrong header).
         let mut junk = bytes.clone();
         junk[data] = 0;
-        assert_eq!(error(&junk), format!("file t.fbx: property 0 of node 'V' at byte {at} is not valid zlib data (data error); {tail}"));
+        assert_eq!(
+            error(&junk),
+            format!("file t.fbx: property 0 of node 'V' at byte {at} is not valid zlib data (data error); {tail}")
+        );
         // It declares more elements than the stream holds, or fewer (zero among them).
         for (count, message) in [
             (4u32, format!("inflates to 24 bytes but declares 4 elements (32 bytes)")),

@@ -190,7 +190,9 @@ fn check_sizes(file: &str, doc: &gltf::Document) -> Result<()> {
     for (a, anim) in json.animations.iter().enumerate() {
         for (c, channel) in anim.channels.iter().enumerate() {
             let mut problems = Vec::new();
-            channel.target.validate(json, gltf::json::Path::new, &mut |path, e| problems.push(format!("{} ({e})", path())));
+            channel
+                .target
+                .validate(json, gltf::json::Path::new, &mut |path, e| problems.push(format!("{} ({e})", path())));
             if !problems.is_empty() {
                 return Err(err(
                     file,
@@ -207,20 +209,31 @@ fn check_sizes(file: &str, doc: &gltf::Document) -> Result<()> {
 }
 
 /// The bytes of every buffer: GLB's BIN chunk, data URIs, or files given alongside.
-fn buffers(file: &str, doc: &gltf::Document, blob: Option<Vec<u8>>, resources: &[(&str, &[u8])]) -> Result<Vec<Vec<u8>>> {
+fn buffers(
+    file: &str,
+    doc: &gltf::Document,
+    blob: Option<Vec<u8>>,
+    resources: &[(&str, &[u8])],
+) -> Result<Vec<Vec<u8>>> {
     use base64::Engine as _;
     let mut blob = blob;
     let mut out = Vec::new();
     for b in doc.buffers() {
         let data = match b.source() {
             gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
-                err(file, format!("buffer {} is the GLB's binary chunk, but the file has none; export it again", b.index()))
+                err(
+                    file,
+                    format!("buffer {} is the GLB's binary chunk, but the file has none; export it again", b.index()),
+                )
             })?,
             gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                 let Some((_, payload)) = uri.split_once(";base64,") else {
                     return Err(err(
                         file,
-                        format!("buffer {}: only base64 data URIs are supported; export with embedded buffers", b.index()),
+                        format!(
+                            "buffer {}: only base64 data URIs are supported; export with embedded buffers",
+                            b.index()
+                        ),
                     ));
                 };
                 base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| {
@@ -229,20 +242,22 @@ fn buffers(file: &str, doc: &gltf::Document, blob: Option<Vec<u8>>, resources: &
             }
             gltf::buffer::Source::Uri(uri) => {
                 let wanted = percent_decode(uri.rsplit('/').next().unwrap_or(uri));
-                let found = resources
-                    .iter()
-                    .find(|(n, _)| n.rsplit('/').next() == Some(wanted.as_str()))
-                    .or_else(|| resources.iter().find(|(n, _)| n.rsplit('/').next().is_some_and(|n| n.eq_ignore_ascii_case(&wanted))));
+                let found =
+                    resources.iter().find(|(n, _)| n.rsplit('/').next() == Some(wanted.as_str())).or_else(|| {
+                        resources
+                            .iter()
+                            .find(|(n, _)| n.rsplit('/').next().is_some_and(|n| n.eq_ignore_ascii_case(&wanted)))
+                    });
                 match found {
                     Some((_, bytes)) => bytes.to_vec(),
                     None => {
                         return Err(err(
                             file,
                             format!(
-                                "buffer {} is stored in the separate file `{uri}`, which was not given; drop or pass it \
+                            "buffer {} is stored in the separate file `{uri}`, which was not given; drop or pass it \
                                  together with the .gltf file (or export a single .glb)",
-                                b.index()
-                            ),
+                            b.index()
+                        ),
                         ))
                     }
                 }
@@ -270,7 +285,11 @@ fn percent_decode(s: &str) -> String {
     let mut i = 0;
     while let Some(&c) = b.get(i) {
         if c == b'%' {
-            if let Some(v) = b.get(i + 1..i + 3).and_then(|h| std::str::from_utf8(h).ok()).and_then(|h| u8::from_str_radix(h, 16).ok()) {
+            if let Some(v) = b
+                .get(i + 1..i + 3)
+                .and_then(|h| std::str::from_utf8(h).ok())
+                .and_then(|h| u8::from_str_radix(h, 16).ok())
+            {
                 out.push(v);
                 i += 3;
                 continue;
@@ -308,19 +327,35 @@ impl Data<'_> {
                     (DataType::U32, &[a, b, c, d]) => f64::from(u32::from_le_bytes([a, b, c, d])),
                     (DataType::U16, &[a, b]) => {
                         let v = f64::from(u16::from_le_bytes([a, b]));
-                        if norm { v / 65535.0 } else { v }
+                        if norm {
+                            v / 65535.0
+                        } else {
+                            v
+                        }
                     }
                     (DataType::I16, &[a, b]) => {
                         let v = f64::from(i16::from_le_bytes([a, b]));
-                        if norm { (v / 32767.0).max(-1.0) } else { v }
+                        if norm {
+                            (v / 32767.0).max(-1.0)
+                        } else {
+                            v
+                        }
                     }
                     (DataType::U8, &[a]) => {
                         let v = f64::from(a);
-                        if norm { v / 255.0 } else { v }
+                        if norm {
+                            v / 255.0
+                        } else {
+                            v
+                        }
                     }
                     (DataType::I8, &[a]) => {
                         let v = f64::from(a as i8);
-                        if norm { (v / 127.0).max(-1.0) } else { v }
+                        if norm {
+                            (v / 127.0).max(-1.0)
+                        } else {
+                            v
+                        }
                     }
                     _ => 0.0, // not reached: the bounds were checked above
                 };
@@ -443,7 +478,12 @@ fn name_of(name: Option<&str>, kind: &str, index: usize) -> String {
     }
 }
 
-fn pick<'a, T>(items: Vec<T>, wanted: &str, name: impl Fn(&T) -> Option<&'a str>, index: impl Fn(&T) -> usize) -> Option<T> {
+fn pick<'a, T>(
+    items: Vec<T>,
+    wanted: &str,
+    name: impl Fn(&T) -> Option<&'a str>,
+    index: impl Fn(&T) -> usize,
+) -> Option<T> {
     let by_index = wanted.parse::<usize>().ok();
     items.into_iter().find(|t| name(t) == Some(wanted) || Some(index(t)) == by_index)
 }
@@ -588,7 +628,10 @@ fn read_mesh(data: &Data, mesh: &gltf::Mesh) -> Result<MeshData> {
             let jv = data.read(&j, &format!("JOINTS_{set} of primitive {pi} of {mname}"))?;
             let wv = data.read(&w, &format!("WEIGHTS_{set} of primitive {pi} of {mname}"))?;
             if jv.len() != 4 * n || wv.len() != 4 * n {
-                return Err(err(file, format!("JOINTS_{set}/WEIGHTS_{set} of primitive {pi} of {mname} do not have one entry per vertex")));
+                return Err(err(
+                    file,
+                    format!("JOINTS_{set}/WEIGHTS_{set} of primitive {pi} of {mname} do not have one entry per vertex"),
+                ));
             }
             for (i, slot) in infl.iter_mut().enumerate() {
                 for c in 0..4 {
@@ -723,7 +766,10 @@ impl Channel {
                 }
             }
             CubicSpline => {
-                let (va, vb) = (self.values.get(k).cloned().unwrap_or_default(), self.values.get(k + 1).cloned().unwrap_or_default());
+                let (va, vb) = (
+                    self.values.get(k).cloned().unwrap_or_default(),
+                    self.values.get(k + 1).cloned().unwrap_or_default(),
+                );
                 let w = va.len() / 3;
                 let (u2, u3) = (u * u, u * u * u);
                 let out: Vec<f64> = (0..w)
@@ -732,7 +778,10 @@ impl Channel {
                         let m0 = va.get(2 * w + c).copied().unwrap_or(0.0) * dt;
                         let p1 = vb.get(w + c).copied().unwrap_or(0.0);
                         let m1 = vb.get(c).copied().unwrap_or(0.0) * dt;
-                        (2.0 * u3 - 3.0 * u2 + 1.0) * p0 + (u3 - 2.0 * u2 + u) * m0 + (-2.0 * u3 + 3.0 * u2) * p1 + (u3 - u2) * m1
+                        (2.0 * u3 - 3.0 * u2 + 1.0) * p0
+                            + (u3 - 2.0 * u2 + u) * m0
+                            + (-2.0 * u3 + 3.0 * u2) * p1
+                            + (u3 - u2) * m1
                     })
                     .collect();
                 if self.property == gltf::animation::Property::Rotation && out.len() == 4 {
@@ -776,10 +825,19 @@ fn read_channels(data: &Data, anim: &gltf::Animation, aname: &str) -> Result<Vec
             ));
         }
         let values = flat.chunks_exact(per_key).map(<[f64]>::to_vec).collect();
-        out.push(Channel { node: ch.target().node().index(), property: ch.target().property(), interpolation: s.interpolation(), times, values });
+        out.push(Channel {
+            node: ch.target().node().index(),
+            property: ch.target().property(),
+            interpolation: s.interpolation(),
+            times,
+            values,
+        });
     }
     if out.is_empty() {
-        return Err(err(data.file, format!("{aname} has no channels: no keyframes to sample; export the animation again")));
+        return Err(err(
+            data.file,
+            format!("{aname} has no channels: no keyframes to sample; export the animation again"),
+        ));
     }
     Ok(out)
 }
@@ -787,7 +845,8 @@ fn read_channels(data: &Data, anim: &gltf::Animation, aname: &str) -> Result<Vec
 /// Reads the poses of one glTF file.
 pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Options) -> Result<Gltf> {
     let (json, blob) = if bytes.starts_with(b"glTF") { split_glb(file, bytes)? } else { (bytes.to_vec(), None) };
-    let invalid = |e: gltf::Error| err(file, format!("not a valid glTF 2.0 document: {e}; export the file again as glTF 2.0"));
+    let invalid =
+        |e: gltf::Error| err(file, format!("not a valid glTF 2.0 document: {e}; export the file again as glTF 2.0"));
     let root = gltf::Gltf::from_slice_without_validation(&json).map_err(invalid)?.document.into_json();
     // The crate's validation indexes `accessors` with a primitive's POSITION index unchecked (gltf-json 1.4,
     // mesh.rs): an index out of range would panic inside it, so those are checked first.
@@ -823,7 +882,11 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             let names: Vec<String> = meshes.iter().map(|m| name_of(m.name(), "mesh", m.index())).collect();
             err(file, format!("no mesh is called or numbered `{w}`; the file has {}", names.join(", ")))
         })?,
-        None => meshes.iter().max_by_key(|m| (mesh_vertex_count(m), std::cmp::Reverse(m.index()))).cloned().ok_or_else(|| err(file, "no mesh".into()))?,
+        None => meshes
+            .iter()
+            .max_by_key(|m| (mesh_vertex_count(m), std::cmp::Reverse(m.index())))
+            .cloned()
+            .ok_or_else(|| err(file, "no mesh".into()))?,
     };
     let mname = name_of(mesh.name(), "mesh", mesh.index());
     let others = meshes.len() - 1;
@@ -866,11 +929,27 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             let m = data.read(&ibm, &format!("inverse bind matrices of skin {}", s.index()))?;
             let joints: Vec<usize> = s.joints().map(|j| j.index()).collect();
             if m.len() != 16 * joints.len() {
-                return Err(err(file, format!("skin {} has {} joints but {} inverse bind matrices (accessor {})", s.index(), joints.len(), m.len() / 16, ibm.index())));
+                return Err(err(
+                    file,
+                    format!(
+                        "skin {} has {} joints but {} inverse bind matrices (accessor {})",
+                        s.index(),
+                        joints.len(),
+                        m.len() / 16,
+                        ibm.index()
+                    ),
+                ));
             }
             let ibms: Vec<DMat4> = m.chunks_exact(16).map(|c| DMat4::from_column_slice(c)).collect();
             if let Some((j, _)) = md.influences.iter().flatten().find(|(j, _)| *j >= joints.len()) {
-                return Err(err(file, format!("a vertex of {mname} is bound to joint {j}, but skin {} has {} joints; the file is damaged", s.index(), joints.len())));
+                return Err(err(
+                    file,
+                    format!(
+                        "a vertex of {mname} is bound to joint {j}, but skin {} has {} joints; the file is damaged",
+                        s.index(),
+                        joints.len()
+                    ),
+                ));
             }
             Some((joints, ibms))
         }
@@ -883,7 +962,8 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
         a.channels().any(|c| {
             let t = c.target();
             let n = t.node().index();
-            (t.property() == gltf::animation::Property::MorphTargetWeights && node.as_ref().is_some_and(|x| x.index() == n))
+            (t.property() == gltf::animation::Property::MorphTargetWeights
+                && node.as_ref().is_some_and(|x| x.index() == n))
                 || moves_joint.get(n).copied().unwrap_or(false)
         })
     };
@@ -901,7 +981,13 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
         let anim = match &options.animation {
             Some(w) => pick(all.clone(), w, |a| a.name(), |a| a.index()).ok_or_else(|| {
                 let names: Vec<String> = all.iter().map(|a| name_of(a.name(), "animation", a.index())).collect();
-                err(file, format!("no animation is called or numbered `{w}`; the file has {}", if names.is_empty() { "none".into() } else { names.join(", ") }))
+                err(
+                    file,
+                    format!(
+                        "no animation is called or numbered `{w}`; the file has {}",
+                        if names.is_empty() { "none".into() } else { names.join(", ") }
+                    ),
+                )
             })?,
             None => {
                 let mut best = None;
@@ -930,8 +1016,9 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             None => keys.len(),
         };
         // The poses must fit in the memory budget: refuse before computing them.
-        crate::memory::check(n_file, n_times, 1, crate::memory::budget_bytes()?)
-            .map_err(|e| err(file, format!("{aname} sampled at {n_times} times: {e}; sample it at fewer times (--frames N)")))?;
+        crate::memory::check(n_file, n_times, 1, crate::memory::budget_bytes()?).map_err(|e| {
+            err(file, format!("{aname} sampled at {n_times} times: {e}; sample it at fewer times (--frames N)"))
+        })?;
         let times: Vec<f64> = match options.frames {
             Some(f) => (0..f).map(|i| if f == 1 { lo } else { lo + (hi - lo) * i as f64 / (f - 1) as f64 }).collect(),
             None => keys.clone(),
@@ -942,7 +1029,9 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
                 let steps: Vec<f64> = keys.windows(2).map(|w| w[1] - w[0]).collect();
                 let even = steps.first().is_some_and(|&d| d > 0.0 && steps.iter().all(|s| (s - d).abs() <= 1e-3 * d));
                 match steps.first() {
-                    Some(&d) if even => format!("sampled at its keyframes, {:.3} fps", 1.0 / d).replace(".000 fps", " fps"),
+                    Some(&d) if even => {
+                        format!("sampled at its keyframes, {:.3} fps", 1.0 / d).replace(".000 fps", " fps")
+                    }
                     _ => "sampled at its keyframes".into(),
                 }
             }
@@ -982,7 +1071,11 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             let morphed = morph(&md, &weights);
             let posed = match &skinning {
                 Some((joints, ibms)) => {
-                    let mats: Vec<DMat4> = joints.iter().zip(ibms).map(|(&j, ibm)| g.get(j).copied().unwrap_or_else(DMat4::identity) * *ibm).collect();
+                    let mats: Vec<DMat4> = joints
+                        .iter()
+                        .zip(ibms)
+                        .map(|(&j, ibm)| g.get(j).copied().unwrap_or_else(DMat4::identity) * *ibm)
+                        .collect();
                     skin_positions(&morphed, &md.influences, &mats)
                 }
                 None => {
@@ -1009,9 +1102,8 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             .and_then(|v| v.get("targetNames").and_then(|t| t.as_array().cloned()))
             .map(|a| a.iter().map(|v| v.as_str().unwrap_or("").to_string()).collect())
             .unwrap_or_default();
-        crate::memory::check(n_file, md.targets.len() + 1, 1, crate::memory::budget_bytes()?).map_err(
-            |e| err(file, format!("{} morph targets of {mname}, each one pose: {e}", md.targets.len())),
-        )?;
+        crate::memory::check(n_file, md.targets.len() + 1, 1, crate::memory::budget_bytes()?)
+            .map_err(|e| err(file, format!("{} morph targets of {mname}, each one pose: {e}", md.targets.len())))?;
         description = format!("{} morph targets of {mname}, plus the base (the first pose)", md.targets.len());
         let w = md.targets.len().to_string().len();
         poses_raw.push((format!("target {:0w$} base", 0), md.positions.clone()));
@@ -1106,7 +1198,6 @@ impl Weld {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1143,9 +1234,11 @@ mod tests {
         for _ in 0..2 {
             f32s(&mut bin, &[1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.]);
         }
-        let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+        let uri =
+            format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
         let view = |o: usize, l: usize| json!({"buffer": 0, "byteOffset": o, "byteLength": l});
-        let acc = |v: usize, ct: u32, n: usize, t: &str| json!({"bufferView": v, "componentType": ct, "count": n, "type": t});
+        let acc =
+            |v: usize, ct: u32, n: usize, t: &str| json!({"bufferView": v, "componentType": ct, "count": n, "type": t});
         let mut pos = acc(0, 5126, 5, "VEC3");
         pos["min"] = json!([0, 0, 0]);
         pos["max"] = json!([1, 1, 0]);
@@ -1171,8 +1264,10 @@ mod tests {
     /// The quad with a skin instead of morph targets: vertices 2, 3 follow joint 1, which turns 90 degrees
     /// about z at t = 1.
     fn skinned(v: &mut serde_json::Value) {
-        v["meshes"][0]["primitives"][0] = json!({"attributes": {"POSITION": 0, "JOINTS_0": 4, "WEIGHTS_0": 5}, "indices": 3});
-        v["nodes"] = json!([{"name": "body", "mesh": 0, "skin": 0}, {"name": "root", "children": [2]}, {"name": "arm"}]);
+        v["meshes"][0]["primitives"][0] =
+            json!({"attributes": {"POSITION": 0, "JOINTS_0": 4, "WEIGHTS_0": 5}, "indices": 3});
+        v["nodes"] =
+            json!([{"name": "body", "mesh": 0, "skin": 0}, {"name": "root", "children": [2]}, {"name": "arm"}]);
         v["scenes"] = json!([{"nodes": [0, 1]}]);
         v["skins"] = json!([{"joints": [1, 2], "inverseBindMatrices": 9}]);
         v["animations"] = json!([{"name": "Bend", "samplers": [{"input": 6, "output": 8}],
@@ -1201,7 +1296,12 @@ mod tests {
         assert!(g.source.contains("5 vertices welded to 4"), "{}", g.source);
         // Auto prefers the animation: frame k shows target k.
         let a = load(&quad(|_| {}), &Options::default()).unwrap();
-        assert!(a.source.starts_with("3 frames of animation 'Walk' (sampled at its keyframes, 1 fps) of mesh 'quad' in t.gltf"), "{}", a.source);
+        assert!(
+            a.source
+                .starts_with("3 frames of animation 'Walk' (sampled at its keyframes, 1 fps) of mesh 'quad' in t.gltf"),
+            "{}",
+            a.source
+        );
         for k in 0..3 {
             assert_eq!(a.poses[k].1.positions, g.poses[k].1.positions);
         }
@@ -1225,14 +1325,20 @@ mod tests {
 
     #[test]
     fn errors_name_the_accessor_and_say_what_to_do() {
-        let e = error(&quad(|v| v["accessors"][3]["sparse"] = json!({"count": 1, "indices": {"bufferView": 3, "componentType": 5123}, "values": {"bufferView": 3}})));
+        let e = error(&quad(|v| {
+            v["accessors"][3]["sparse"] =
+                json!({"count": 1, "indices": {"bufferView": 3, "componentType": 5123}, "values": {"bufferView": 3}})
+        }));
         assert!(e.contains("accessor 3") && e.contains("sparse"), "{e}");
         let e = error(&quad(|v| v["accessors"][0]["count"] = json!(4_000_000_000u64)));
         assert!(e.contains("accessor 0") && e.contains("past the end of its buffer view 0"), "{e}");
         let e = error(&quad(|v| v["bufferViews"][0]["byteLength"] = json!(100_000)));
         assert!(e.contains("buffer view 0") && e.contains("past the end of buffer 0"), "{e}");
         let e = error(&quad(|v| v["accessors"][0]["count"] = json!(4)));
-        assert!(e.contains("index 3 of primitive 0 of mesh 'quad' (accessor 3) is 4") && e.contains("4 vertices"), "{e}");
+        assert!(
+            e.contains("index 3 of primitive 0 of mesh 'quad' (accessor 3) is 4") && e.contains("4 vertices"),
+            "{e}"
+        );
         let e = error(&quad(|v| v["meshes"][0]["primitives"][0]["indices"] = json!(6)));
         assert!(e.contains("accessor 6") && e.contains("unsigned integers"), "{e}");
         let e = error(&quad(|v| {
@@ -1305,7 +1411,10 @@ mod tests {
         let doc = gltf::Gltf::from_slice(&bytes).unwrap().document;
         let data = Data { file: "t.gltf", buffers: buffers("t.gltf", &doc, None, &[]).unwrap() };
         let e = check_read_size(&data, &doc.meshes().next().unwrap(), "mesh 'quad'", 1).unwrap_err().to_string();
-        assert!(e.contains("accessor 1 (morph target 0 of primitive 0 of mesh 'quad'") && e.contains("past the end"), "{e}");
+        assert!(
+            e.contains("accessor 1 (morph target 0 of primitive 0 of mesh 'quad'") && e.contains("past the end"),
+            "{e}"
+        );
     }
 
     /// Offsets and lengths near 2^64 are refused, not wrapped (the sums saturate).

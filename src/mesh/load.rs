@@ -57,7 +57,12 @@ pub const FORMATS: &[Format] = &[
     Format { extensions: &[("glb", FileKind::Glb), ("gltf", FileKind::Gltf)], note: "" },
     Format { extensions: &[("fbx", FileKind::Fbx)], note: "" },
     Format {
-        extensions: &[("usd", FileKind::Usd), ("usda", FileKind::Usd), ("usdc", FileKind::Usd), ("usdz", FileKind::Usd)],
+        extensions: &[
+            ("usd", FileKind::Usd),
+            ("usda", FileKind::Usd),
+            ("usdc", FileKind::Usd),
+            ("usdz", FileKind::Usd),
+        ],
         note: "",
     },
     Format { extensions: &[("pc2", FileKind::Pc2), ("mdd", FileKind::Mdd)], note: " with a base mesh" },
@@ -173,8 +178,12 @@ pub fn load(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Loaded, Vec<Er
 /// [`load`] with choices for glTF files (which mesh, which animation, how many frames, which poses).
 pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std::result::Result<Loaded, Vec<Error>> {
     let kinds: Vec<FileKind> = files.iter().map(|(n, _)| FileKind::of(n)).collect();
-    let unknown: Vec<Error> =
-        files.iter().zip(&kinds).filter(|(_, k)| **k == FileKind::Unknown).map(|((n, _), _)| unknown_format(n)).collect();
+    let unknown: Vec<Error> = files
+        .iter()
+        .zip(&kinds)
+        .filter(|(_, k)| **k == FileKind::Unknown)
+        .map(|((n, _), _)| unknown_format(n))
+        .collect();
     if !unknown.is_empty() {
         return Err(unknown);
     }
@@ -288,7 +297,8 @@ fn load_scene(
     n_other_meshes: usize,
     options: &gltf::Options,
 ) -> std::result::Result<Option<Loaded>, Vec<Error>> {
-    let scenes: Vec<&(String, Vec<u8>)> = files.iter().zip(kinds).filter(|(_, k)| matches!(k, FileKind::Fbx | FileKind::Usd)).map(|(f, _)| f).collect();
+    let scenes: Vec<&(String, Vec<u8>)> =
+        files.iter().zip(kinds).filter(|(_, k)| matches!(k, FileKind::Fbx | FileKind::Usd)).map(|(f, _)| f).collect();
     let Some((name, bytes)) = scenes.first().copied() else { return Ok(None) };
     if scenes.len() > 1 || n_other_meshes > 0 {
         return Err(set_error(
@@ -299,7 +309,11 @@ fn load_scene(
             ),
         ));
     }
-    let g = if FileKind::of(name) == FileKind::Usd { usd::read(name, bytes, options) } else { fbx::read(name, bytes, options) };
+    let g = if FileKind::of(name) == FileKind::Usd {
+        usd::read(name, bytes, options)
+    } else {
+        fbx::read(name, bytes, options)
+    };
     let g = g.map_err(|e| vec![e])?;
     Ok(Some(Loaded { poses: g.poses, source: g.source }))
 }

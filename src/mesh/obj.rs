@@ -54,7 +54,11 @@ pub fn parse_obj(name: &str, bytes: &[u8]) -> Result<Mesh> {
 /// full reader). For a file [`parse_obj`] has already accepted: a face this skips is not checked (the second
 /// reading of a large population, [`crate::mesh::Population::from_mesh_files_one_at_a_time`]).
 pub fn parse_obj_positions(name: &str, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
-    parse(bytes, true).map(|m| m.positions).map_err(|f| Error::Obj { file: name.to_string(), line: f.line, message: f.message })
+    parse(bytes, true).map(|m| m.positions).map_err(|f| Error::Obj {
+        file: name.to_string(),
+        line: f.line,
+        message: f.message,
+    })
 }
 
 /// An error before the file name is attached. `line` is 1-based, 0 for the whole file.
@@ -686,7 +690,8 @@ impl Reader {
             let resolved = if negative { count_i - m } else { m - 1 };
             if m != 0 && resolved >= 0 && resolved < count_i {
                 return Some(
-                    usize::try_from(resolved).map_err(|_| self.index_error(kind, target, negative, &shown(text), count)),
+                    usize::try_from(resolved)
+                        .map_err(|_| self.index_error(kind, target, negative, &shown(text), count)),
                 );
             }
             if m == 0 {
@@ -858,7 +863,11 @@ mod tests {
 
     #[test]
     fn a_line_that_starts_with_no_keyword_is_damage() {
-        assert_err("v 0 0 0\nv 1 0 0\n%%%% garbage $$$\nv 0 1 0\nf 1 2 3\n", 3, &["`%%%%` is not an OBJ statement", "export the file again"]);
+        assert_err(
+            "v 0 0 0\nv 1 0 0\n%%%% garbage $$$\nv 0 1 0\nf 1 2 3\n",
+            3,
+            &["`%%%%` is not an OBJ statement", "export the file again"],
+        );
         assert_err("v 0 0 0\n1.000000\n", 2, &["`1.000000` is not an OBJ statement"]);
         // keywords posemfa does not use (vendor extensions, free-form geometry) and comments are skipped
         let m = ok("# c\n#MRGB 00ff\nvw 1 0 1.0\nt crease 2 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");

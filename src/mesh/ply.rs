@@ -193,64 +193,67 @@ fn header(bytes: &[u8]) -> Res<Header> {
                 let (Some(name), Some(count)) = (words.first(), words.get(1)) else {
                     return fail(line, "an `element` line needs a name and a count, as in `element vertex 8431`");
                 };
-                let count = std::str::from_utf8(count).ok().and_then(|c| c.parse::<u64>().ok()).ok_or_else(|| Fail {
-                    line,
-                    message: format!(
-                        "the count `{}` of element `{}` is not a whole number; the header is damaged: export the \
+                let count =
+                    std::str::from_utf8(count).ok().and_then(|c| c.parse::<u64>().ok()).ok_or_else(|| Fail {
+                        line,
+                        message: format!(
+                            "the count `{}` of element `{}` is not a whole number; the header is damaged: export the \
                          file again",
-                        text(count),
-                        text(name)
-                    ),
-                })?;
+                            text(count),
+                            text(name)
+                        ),
+                    })?;
                 elements.push(Element { name: name.to_vec(), count, line, properties: Vec::new() });
             }
             b"property" => {
                 let Some(element) = elements.last_mut() else {
                     return fail(line, "a `property` line comes before any `element` line; the header is damaged");
                 };
-                let property = match words.as_slice() {
-                    [b"list", count, item, name] => {
-                        let (Some(c), Some(i)) = (Scalar::parse(count), Scalar::parse(item)) else {
-                            return fail(
-                                line,
-                                format!(
+                let property =
+                    match words.as_slice() {
+                        [b"list", count, item, name] => {
+                            let (Some(c), Some(i)) = (Scalar::parse(count), Scalar::parse(item)) else {
+                                return fail(
+                                    line,
+                                    format!(
                                     "unknown type in `property list {} {} {}`; PLY types are char uchar short ushort \
                                      int uint float double (or int8 ... float64)",
                                     text(count),
                                     text(item),
                                     text(name)
                                 ),
-                            );
-                        };
-                        if c.is_float() {
-                            return fail(
-                                line,
-                                format!("the count type of list `{}` is a float; it must be an integer type", text(name)),
-                            );
+                                );
+                            };
+                            if c.is_float() {
+                                return fail(
+                                    line,
+                                    format!(
+                                        "the count type of list `{}` is a float; it must be an integer type",
+                                        text(name)
+                                    ),
+                                );
+                            }
+                            Property::List { count: c, item: i, name: name.to_vec() }
                         }
-                        Property::List { count: c, item: i, name: name.to_vec() }
-                    }
-                    [ty, name] => {
-                        let Some(t) = Scalar::parse(ty) else {
-                            return fail(
-                                line,
-                                format!(
+                        [ty, name] => {
+                            let Some(t) = Scalar::parse(ty) else {
+                                return fail(
+                                    line,
+                                    format!(
                                     "unknown type `{}` of property `{}`; PLY types are char uchar short ushort int \
                                      uint float double (or int8 ... float64)",
                                     text(ty),
                                     text(name)
                                 ),
-                            );
-                        };
-                        Property::Scalar { ty: t, name: name.to_vec() }
-                    }
-                    _ => {
-                        return fail(
+                                );
+                            };
+                            Property::Scalar { ty: t, name: name.to_vec() }
+                        }
+                        _ => return fail(
                             line,
                             "a `property` line is `property TYPE NAME` or `property list COUNT_TYPE ITEM_TYPE NAME`",
-                        )
-                    }
-                };
+                        ),
+                    };
                 element.properties.push(property);
             }
             b"end_header" => {
@@ -839,7 +842,10 @@ mod tests {
     #[test]
     fn errors_name_the_line_and_say_what_to_do() {
         let m = err(ASCII.replace("0.5 0.5 1e0 7", "0.5 zz 1 7").as_bytes());
-        assert!(m.contains("line 17") && m.contains("`zz` is not a valid `float` value") && m.contains("vertex 4"), "{m}");
+        assert!(
+            m.contains("line 17") && m.contains("`zz` is not a valid `float` value") && m.contains("vertex 4"),
+            "{m}"
+        );
         let m = err(ASCII.replace("3 0 1 4 1", "3 0 1 9 1").as_bytes());
         assert!(m.contains("face 1 refers to vertex 9") && m.contains("5 vertices"), "{m}");
         let m = err(ASCII.replace("3 0 1 4 1", "2 0 1 1").as_bytes());

@@ -15,7 +15,11 @@ impl Normalization {
     pub const IDENTITY: Normalization = Normalization { offset: [0.0; 3], scale: 1.0 };
 
     pub fn to_unit(&self, p: [f64; 3]) -> [f64; 3] {
-        [(p[0] - self.offset[0]) * self.scale, (p[1] - self.offset[1]) * self.scale, (p[2] - self.offset[2]) * self.scale]
+        [
+            (p[0] - self.offset[0]) * self.scale,
+            (p[1] - self.offset[1]) * self.scale,
+            (p[2] - self.offset[2]) * self.scale,
+        ]
     }
 
     pub fn to_original(&self, p: [f64; 3]) -> [f64; 3] {
@@ -283,9 +287,10 @@ impl Population {
         }
         let (first_name, first) = (&named[0].0, &named[0].1);
         // (with faces_of_first, a mesh of the first one's vertex count carries no faces to compare)
-        let checked = named.iter().enumerate().filter(|(k, (_, mesh))| {
-            *k == 0 || !(faces_of_first && mesh.positions.len() == first.positions.len())
-        });
+        let checked = named
+            .iter()
+            .enumerate()
+            .filter(|(k, (_, mesh))| *k == 0 || !(faces_of_first && mesh.positions.len() == first.positions.len()));
         if let Some((_, e)) = first_mismatch(checked.map(|(_, (name, mesh))| (name.as_str(), mesh))) {
             return Err(e);
         }
@@ -307,7 +312,15 @@ impl Population {
             names.push(name);
         }
         let source = format!("{} shapes", names.len());
-        Ok(Population { names, faces: std::sync::Arc::new(faces), points: std::sync::Arc::new(points), n_vertices, normalization, source, pose_order: PoseOrder::default() })
+        Ok(Population {
+            names,
+            faces: std::sync::Arc::new(faces),
+            points: std::sync::Arc::new(points),
+            n_vertices,
+            normalization,
+            source,
+            pose_order: PoseOrder::default(),
+        })
     }
 
     /// Reads every file (name, bytes) with the reader its extension calls for ([`super::load`]: OBJ, PLY,
@@ -326,7 +339,13 @@ impl Population {
     /// Like [`Population::from_files`] but reports every file's error, in natural order of the names.
     pub fn from_files_all_errors(mut files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
         files.sort_by(|a, b| natural_cmp(&a.0, &b.0));
-        Population::from_loaded(files).map_err(|e| if e.is_empty() { vec![Error::Io("no files were given".into())] } else { e })
+        Population::from_loaded(files).map_err(|e| {
+            if e.is_empty() {
+                vec![Error::Io("no files were given".into())]
+            } else {
+                e
+            }
+        })
     }
 
     /// [`Population::from_files_all_errors`] for poses of one OBJ or PLY file each, read one file at a time:
@@ -378,7 +397,8 @@ impl Population {
         }
         // (each file's error with its place in `order`, so that a mismatch found among the files that read
         // joins them in order)
-        let (mut named, mut errors): (Vec<(String, Mesh)>, Vec<(usize, Error)>) = (Vec::with_capacity(names.len()), Vec::new());
+        let (mut named, mut errors): (Vec<(String, Mesh)>, Vec<(usize, Error)>) =
+            (Vec::with_capacity(names.len()), Vec::new());
         let mut unread: Vec<(usize, Error)> = Vec::new();
         let mut bytes = Vec::new();
         // the first error the whole set's checks would meet among the files that read (reported with the files'
@@ -467,7 +487,9 @@ impl Population {
         named[0].1.positions = Vec::new();
         for &i in &order[1..] {
             bytes.clear();
-            let again = fetch(i, &mut bytes).and_then(|_| super::load::read_positions(&names[i], &bytes)).map_err(|e| vec![e])?;
+            let again = fetch(i, &mut bytes)
+                .and_then(|_| super::load::read_positions(&names[i], &bytes))
+                .map_err(|e| vec![e])?;
             if again.len() != n_vertices || first_non_finite(&names[i], &again).is_some() {
                 return Err(vec![Error::Population {
                     file: names[i].clone(),
@@ -505,7 +527,11 @@ impl Population {
     }
 
     /// Builds a population directly from unit-box shapes (generated data, tests).
-    pub fn from_unit_shapes(names: Vec<String>, faces: Vec<[u32; 3]>, shapes: Vec<Vec<[f64; 3]>>) -> Result<Population> {
+    pub fn from_unit_shapes(
+        names: Vec<String>,
+        faces: Vec<[u32; 3]>,
+        shapes: Vec<Vec<[f64; 3]>>,
+    ) -> Result<Population> {
         if names.len() != shapes.len() {
             return Err(Error::Population {
                 file: names.first().cloned().unwrap_or_else(|| "(none)".into()),
@@ -535,12 +561,16 @@ impl Population {
     }
 
     /// [`Population::from_paths`] with choices for glTF files.
-    pub fn from_paths_with<P: AsRef<std::path::Path>>(paths: &[P], options: &super::gltf::Options) -> Result<Population> {
+    pub fn from_paths_with<P: AsRef<std::path::Path>>(
+        paths: &[P],
+        options: &super::gltf::Options,
+    ) -> Result<Population> {
         let mut files = Vec::new();
         for p in paths {
             let p = p.as_ref();
             if p.is_dir() {
-                let rd = std::fs::read_dir(p).map_err(|e| Error::Io(format!("cannot read directory {}: {e}", p.display())))?;
+                let rd = std::fs::read_dir(p)
+                    .map_err(|e| Error::Io(format!("cannot read directory {}: {e}", p.display())))?;
                 for entry in rd {
                     let entry = entry.map_err(|e| Error::Io(format!("cannot read directory {}: {e}", p.display())))?;
                     let path = entry.path();
@@ -590,7 +620,8 @@ impl Population {
     /// what [`Population::from_meshes`] says.
     fn from_mesh_paths(files: Vec<std::path::PathBuf>) -> Result<Population> {
         use std::io::Read;
-        let names: Vec<String> = files.iter().map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect();
+        let names: Vec<String> =
+            files.iter().map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect();
         Population::from_mesh_files_one_at_a_time(&names, |i, buffer| {
             std::fs::File::open(&files[i])
                 .and_then(|mut file| file.read_to_end(buffer))
@@ -628,7 +659,10 @@ fn unit_box(first_name: &str, lo: [f64; 3], hi: [f64; 3]) -> Result<Normalizatio
 /// The error for the first of `positions` (file `name`'s) with a non-finite coordinate, if any.
 fn first_non_finite(name: &str, positions: &[[f64; 3]]) -> Option<Error> {
     let j = positions.iter().position(|p| p.iter().any(|c| !c.is_finite()))?;
-    Some(Error::Population { file: name.to_string(), message: format!("vertex {} has a non-finite coordinate; fix or remove it", j + 1) })
+    Some(Error::Population {
+        file: name.to_string(),
+        message: format!("vertex {} has a non-finite coordinate; fix or remove it", j + 1),
+    })
 }
 
 /// What [`Population::from_meshes`] asks of the first mesh in natural order: vertices, triangles, and every
@@ -672,12 +706,21 @@ pub(super) fn first_mismatch<'a>(meshes: impl IntoIterator<Item = (&'a str, &'a 
 /// What [`Population::from_meshes`] asks of every other mesh: the first one's vertex count and its very faces.
 fn check_same_mesh(first_name: &str, first: &Mesh, name: &str, mesh: &Mesh) -> Result<()> {
     // two files of one name (dropped from two folders): "1.obj has ... but 1.obj has" would say nothing
-    let first_name = &if name == first_name { format!("the first file, also named {first_name},") } else { first_name.to_string() };
+    let first_name =
+        &if name == first_name { format!("the first file, also named {first_name},") } else { first_name.to_string() };
     let differ = |what: &str, here: usize, there: usize, rule: &str| {
-        Err(Error::Population { file: name.to_string(), message: format!("has {here} {what} but {first_name} has {there}; {rule}") })
+        Err(Error::Population {
+            file: name.to_string(),
+            message: format!("has {here} {what} but {first_name} has {there}; {rule}"),
+        })
     };
     if mesh.positions.len() != first.positions.len() {
-        return differ("vertices", mesh.positions.len(), first.positions.len(), "every shape must be the same mesh in another pose");
+        return differ(
+            "vertices",
+            mesh.positions.len(),
+            first.positions.len(),
+            "every shape must be the same mesh in another pose",
+        );
     }
     if mesh.faces.len() != first.faces.len() {
         return differ("triangles", mesh.faces.len(), first.faces.len(), "every shape must share the same faces");
@@ -713,18 +756,24 @@ mod tests {
     /// Both readers on one set of files, the one-at-a-time reader reading once and reading twice: it must ask
     /// for each file once in natural order, or (twice) for every file in natural order and then again for all
     /// but the first when all of them read. Both ways must give the same population or the same errors.
-    fn both(files: &[(&str, Vec<u8>)]) -> (std::result::Result<Population, Vec<Error>>, std::result::Result<Population, Vec<Error>>) {
+    fn both(
+        files: &[(&str, Vec<u8>)],
+    ) -> (std::result::Result<Population, Vec<Error>>, std::result::Result<Population, Vec<Error>>) {
         let all = Population::from_files_all_errors(files.iter().map(|(n, b)| (n.to_string(), b.clone())).collect());
         let names: Vec<String> = files.iter().map(|(n, _)| n.to_string()).collect();
         let mut want = names.clone();
         want.sort_by(|a, b| natural_cmp(a, b));
         let read = |read_twice_above: usize| {
             let mut asked = Vec::new();
-            let one = Population::read_one_at_a_time(&names, |i, buffer| {
-                asked.push(names[i].clone());
-                buffer.extend_from_slice(&files[i].1);
-                Ok(())
-            }, read_twice_above);
+            let one = Population::read_one_at_a_time(
+                &names,
+                |i, buffer| {
+                    asked.push(names[i].clone());
+                    buffer.extend_from_slice(&files[i].1);
+                    Ok(())
+                },
+                read_twice_above,
+            );
             (one, asked)
         };
         let (once, asked) = read(usize::MAX);
@@ -738,7 +787,10 @@ mod tests {
         match (&once, &twice) {
             (Ok(a), Ok(b)) => {
                 assert_eq!(a, b);
-                assert_eq!((&a.source, a.normalization.scale, a.normalization.offset), (&b.source, b.normalization.scale, b.normalization.offset));
+                assert_eq!(
+                    (&a.source, a.normalization.scale, a.normalization.offset),
+                    (&b.source, b.normalization.scale, b.normalization.offset)
+                );
             }
             _ => assert_eq!(messages(&once), messages(&twice)),
         }
@@ -753,14 +805,22 @@ mod tests {
     fn two_files_of_one_name_are_refused_by_that_name() {
         // two folders' 2.obj picked together: which pose is which cannot be told, nor their order
         let f = "f 1 2 3\nf 1 3 4\n";
-        let files = vec![("2.obj".to_string(), quad_obj(0.0, f)), ("1.obj".to_string(), quad_obj(0.1, f)), ("2.obj".to_string(), quad_obj(0.2, f))];
+        let files = vec![
+            ("2.obj".to_string(), quad_obj(0.0, f)),
+            ("1.obj".to_string(), quad_obj(0.1, f)),
+            ("2.obj".to_string(), quad_obj(0.2, f)),
+        ];
         let want = "file 2.obj: two of the files are named so: the poses are ordered by their file names, so each needs its own; rename one, or open the files of one folder at a time";
         assert_eq!(messages(&Population::from_files_all_errors(files.clone())), [want]);
         let names: Vec<String> = files.iter().map(|f| f.0.clone()).collect();
-        let one = Population::read_one_at_a_time(&names, |i, b| {
-            b.extend_from_slice(&files[i].1);
-            Ok(())
-        }, usize::MAX);
+        let one = Population::read_one_at_a_time(
+            &names,
+            |i, b| {
+                b.extend_from_slice(&files[i].1);
+                Ok(())
+            },
+            usize::MAX,
+        );
         assert_eq!(messages(&one), [want]);
         // distinct names read as before
         assert!(Population::from_files_all_errors(vec![files[0].clone(), files[1].clone()]).is_ok());
@@ -770,7 +830,8 @@ mod tests {
     fn files_read_one_at_a_time_give_the_same_population_and_the_same_errors() {
         let f = "f 1 2 3\nf 1 3 4\n";
         // a good set, given out of order: the same population, source and all
-        let (all, one) = both(&[("10.obj", quad_obj(0.3, f)), ("2.obj", quad_obj(0.1, f)), ("1.obj", quad_obj(0.0, f))]);
+        let (all, one) =
+            both(&[("10.obj", quad_obj(0.3, f)), ("2.obj", quad_obj(0.1, f)), ("1.obj", quad_obj(0.0, f))]);
         let (all, one) = (all.unwrap(), one.unwrap());
         assert_eq!(one.names, all.names);
         assert_eq!(one.faces, all.faces);
@@ -796,7 +857,8 @@ mod tests {
         assert_eq!(m.len(), 2, "{m:?}");
         assert!(m[0].contains("2.obj") && m[0].contains("same faces") && m[1].contains("3.obj"), "{m:?}");
         // the files that read agree: the broken file's error alone
-        let (all, one) = both(&[("1.obj", quad_obj(0.0, f)), ("2.obj", quad_obj(0.1, f)), ("3.obj", b"v 0 0 zero\n".to_vec())]);
+        let (all, one) =
+            both(&[("1.obj", quad_obj(0.0, f)), ("2.obj", quad_obj(0.1, f)), ("3.obj", b"v 0 0 zero\n".to_vec())]);
         assert_eq!(messages(&one), messages(&all));
         assert!(messages(&one).len() == 1 && messages(&one)[0].contains("3.obj"), "{:?}", messages(&one));
         // the first mesh's own faults come first; one file alone is too few
@@ -821,16 +883,20 @@ mod tests {
         // a file that has another vertex count when it is read the second time
         let names = vec!["1.obj".to_string(), "2.obj".to_string()];
         let mut reads = 0;
-        let changed = Population::read_one_at_a_time(&names, |i, buffer| {
-            reads += 1;
-            let dx = if reads == 3 { "0 0 0\nv 0.5" } else { "0.1" };
-            buffer.extend_from_slice(&quad_obj(0.0, f));
-            if i == 1 {
-                buffer.clear();
-                buffer.extend_from_slice(format!("v {dx} 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n{f}").as_bytes());
-            }
-            Ok(())
-        }, 0);
+        let changed = Population::read_one_at_a_time(
+            &names,
+            |i, buffer| {
+                reads += 1;
+                let dx = if reads == 3 { "0 0 0\nv 0.5" } else { "0.1" };
+                buffer.extend_from_slice(&quad_obj(0.0, f));
+                if i == 1 {
+                    buffer.clear();
+                    buffer.extend_from_slice(format!("v {dx} 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n{f}").as_bytes());
+                }
+                Ok(())
+            },
+            0,
+        );
         let m = messages(&changed);
         assert!(m.len() == 1 && m[0].contains("2.obj") && m[0].contains("changed while it was read"), "{m:?}");
     }

@@ -30,7 +30,11 @@ impl Midpoints {
     pub fn of(faces: &[[u32; 3]], n_vertices: usize) -> Result<Midpoints> {
         let bad = |message: String| Error::Population { file: "(subdivision)".into(), message };
         if let Some((f, t)) = faces.iter().enumerate().find(|(_, t)| t.iter().any(|&v| v as usize >= n_vertices)) {
-            return Err(bad(format!("triangle {} names vertex {} of a mesh of {n_vertices}", f + 1, t.iter().max().unwrap_or(&0) + 1)));
+            return Err(bad(format!(
+                "triangle {} names vertex {} of a mesh of {n_vertices}",
+                f + 1,
+                t.iter().max().unwrap_or(&0) + 1
+            )));
         }
         let mut index: HashMap<[u32; 2], u32> = HashMap::with_capacity(faces.len() * 3 / 2 + 1);
         let mut edges: Vec<[u32; 2]> = Vec::with_capacity(faces.len() * 3 / 2 + 1);
@@ -41,8 +45,12 @@ impl Midpoints {
                 if let Some(&m) = index.get(&key) {
                     return Ok(m);
                 }
-                let m = u32::try_from(n_vertices + edges.len())
-                    .map_err(|_| bad(format!("{} vertices after subdivision: more than 32-bit indices hold", n_vertices + edges.len())))?;
+                let m = u32::try_from(n_vertices + edges.len()).map_err(|_| {
+                    bad(format!(
+                        "{} vertices after subdivision: more than 32-bit indices hold",
+                        n_vertices + edges.len()
+                    ))
+                })?;
                 index.insert(key, m);
                 edges.push(key);
                 Ok(m)
@@ -80,7 +88,8 @@ pub fn subdivide(pop: &Population, levels: usize, budget: u64) -> Result<(Vec<[u
     crate::memory::check_subdivision(pop.n_vertices(), pop.faces.len(), pop.n_shapes(), levels, budget)?;
     let norm = pop.normalization;
     let mut faces = pop.faces.to_vec();
-    let mut shapes: Vec<Vec<[f64; 3]>> = pop.shapes().map(|s| s.iter().map(|p| norm.to_original(p)).collect()).collect();
+    let mut shapes: Vec<Vec<[f64; 3]>> =
+        pop.shapes().map(|s| s.iter().map(|p| norm.to_original(p)).collect()).collect();
     for _ in 0..levels {
         let step = Midpoints::of(&faces, shapes.first().map_or(0, Vec::len))?;
         shapes = shapes.iter().map(|s| step.apply(s.iter().copied())).collect();
@@ -186,7 +195,13 @@ mod tests {
         let (v, f) = tetra();
         let moved: Vec<[f64; 3]> = v.iter().map(|p| [10.0 * p[0] + 5.0, 10.0 * p[2], -10.0 * p[1]]).collect();
         let pop = Population::from_meshes(vec![
-            ("a.obj".into(), crate::mesh::Mesh { positions: v.iter().map(|p| [10.0 * p[0], 10.0 * p[1], 10.0 * p[2]]).collect(), faces: f.clone() }),
+            (
+                "a.obj".into(),
+                crate::mesh::Mesh {
+                    positions: v.iter().map(|p| [10.0 * p[0], 10.0 * p[1], 10.0 * p[2]]).collect(),
+                    faces: f.clone(),
+                },
+            ),
             ("b.obj".into(), crate::mesh::Mesh { positions: moved, faces: f.clone() }),
         ])
         .unwrap();
@@ -197,7 +212,11 @@ mod tests {
         assert_eq!(shapes[0].len(), 34);
         assert!((shapes[0][1][0] - 10.0).abs() < 1e-5, "{:?}", shapes[0][1]);
         let finer = Population::from_meshes(
-            shapes.into_iter().zip(["a.obj", "b.obj"]).map(|(s, n)| (n.to_string(), crate::mesh::Mesh { positions: s, faces: faces.clone() })).collect(),
+            shapes
+                .into_iter()
+                .zip(["a.obj", "b.obj"])
+                .map(|(s, n)| (n.to_string(), crate::mesh::Mesh { positions: s, faces: faces.clone() }))
+                .collect(),
         )
         .unwrap();
         assert_eq!(finer.n_vertices(), 34);

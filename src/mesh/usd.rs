@@ -50,8 +50,15 @@ fn layer(file: &str, bytes: &[u8]) -> Result<Box<dyn AbstractData>> {
         // unseen) so that a crate layer is checked like a .usdc file. The root layer is the first .usda /
         // .usdc / .usd entry (the USDZ spec), told apart by its extension, a .usd by its first bytes.
         let mut zip = zip::ZipArchive::new(Cursor::new(bytes)).map_err(|e| damaged(file, "USDZ package (zip)", e))?;
-        let Some(name) = zip.file_names().find(|n| n.ends_with(".usdc") || n.ends_with(".usda") || n.ends_with(".usd")).map(String::from) else {
-            return Err(err(file, "the USDZ package holds no .usda, .usdc or .usd layer; package the stage again (usdzip)".into()));
+        let Some(name) = zip
+            .file_names()
+            .find(|n| n.ends_with(".usdc") || n.ends_with(".usda") || n.ends_with(".usd"))
+            .map(String::from)
+        else {
+            return Err(err(
+                file,
+                "the USDZ package holds no .usda, .usdc or .usd layer; package the stage again (usdzip)".into(),
+            ));
         };
         let what = "first layer of the USDZ package";
         let mut layer_bytes = Vec::new();
@@ -64,13 +71,18 @@ fn layer(file: &str, bytes: &[u8]) -> Result<Box<dyn AbstractData>> {
         if is_crate {
             return crate_layer(file, &layer_bytes, what);
         }
-        let text = String::from_utf8(layer_bytes).map_err(|e| damaged(file, what, format!("{name} is not UTF-8 text: {e}")))?;
+        let text = String::from_utf8(layer_bytes)
+            .map_err(|e| damaged(file, what, format!("{name} is not UTF-8 text: {e}")))?;
         let data = openusd::usda::parse(&text).map_err(|e| damaged(file, what, e))?;
         return Ok(Box::new(data));
     }
     if bytes.starts_with(b"#usda") {
-        let text = std::str::from_utf8(bytes)
-            .map_err(|e| err(file, format!("the USDA text is not UTF-8 (byte {}); the file is damaged: export it again", e.valid_up_to())))?;
+        let text = std::str::from_utf8(bytes).map_err(|e| {
+            err(
+                file,
+                format!("the USDA text is not UTF-8 (byte {}); the file is damaged: export it again", e.valid_up_to()),
+            )
+        })?;
         let data = openusd::usda::parse(text).map_err(|e| damaged(file, "USDA text", e))?;
         return Ok(Box::new(data));
     }
@@ -113,7 +125,9 @@ fn points(v: &Value) -> Option<Vec<DVec3>> {
     Some(match v {
         Value::Vec3fVec(p) => p.iter().map(|v| DVec3::new(v.x.into(), v.y.into(), v.z.into())).collect(),
         Value::Vec3dVec(p) => p.iter().map(|v| DVec3::new(v.x, v.y, v.z)).collect(),
-        Value::Vec3hVec(p) => p.iter().map(|v| DVec3::new(v.x.to_f32().into(), v.y.to_f32().into(), v.z.to_f32().into())).collect(),
+        Value::Vec3hVec(p) => {
+            p.iter().map(|v| DVec3::new(v.x.to_f32().into(), v.y.to_f32().into(), v.z.to_f32().into())).collect()
+        }
         _ => return None,
     })
 }
@@ -140,7 +154,9 @@ fn attr(data: &dyn AbstractData, prim: &sdf::Path, name: &str) -> Option<Attr> {
     }
     let default = field(data, &p, "default").filter(|v| !matches!(v, Value::ValueBlock | Value::None));
     let mut samples = match field(data, &p, "timeSamples") {
-        Some(Value::TimeSamples(s)) => s.into_iter().filter(|(t, v)| t.is_finite() && !matches!(v, Value::ValueBlock)).collect(),
+        Some(Value::TimeSamples(s)) => {
+            s.into_iter().filter(|(t, v)| t.is_finite() && !matches!(v, Value::ValueBlock)).collect()
+        }
         _ => Vec::new(),
     };
     samples.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -205,11 +221,30 @@ fn local_transform(file: &str, data: &dyn AbstractData, prim: &sdf::Path, t: f64
         };
         let kind = name.strip_prefix("xformOp:").unwrap_or(name).split(':').next().unwrap_or("");
         let values = attr(data, prim, name).and_then(|a| a.numbers_at(t)).ok_or_else(|| {
-            err(file, format!("prim {prim}: xformOpOrder names {name}, which has no value; the file is damaged: export it again"))
+            err(
+                file,
+                format!(
+                    "prim {prim}: xformOpOrder names {name}, which has no value; the file is damaged: export it again"
+                ),
+            )
         })?;
-        let bad = || err(file, format!("prim {prim}: {name} holds {} numbers, not what a {kind} op takes; the file is damaged: export it again", values.len()));
-        let v3 = || -> Result<DVec3> { if values.len() == 3 { Ok(DVec3::new(values[0], values[1], values[2])) } else { Err(bad()) } };
-        let one = || -> Result<f64> { if values.len() == 1 { Ok(values[0]) } else { Err(bad()) } };
+        let bad = || {
+            err(file, format!("prim {prim}: {name} holds {} numbers, not what a {kind} op takes; the file is damaged: export it again", values.len()))
+        };
+        let v3 = || -> Result<DVec3> {
+            if values.len() == 3 {
+                Ok(DVec3::new(values[0], values[1], values[2]))
+            } else {
+                Err(bad())
+            }
+        };
+        let one = || -> Result<f64> {
+            if values.len() == 1 {
+                Ok(values[0])
+            } else {
+                Err(bad())
+            }
+        };
         let op_m = match kind {
             "translate" => Matrix4::new_translation(&v3()?),
             "scale" => {
@@ -294,19 +329,30 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
         .filter(|p| field(data, p, "typeName").as_ref().and_then(Value::as_str) == Some("Mesh"))
         .collect();
     if meshes.is_empty() {
-        return Err(err(file, "the stage holds no Mesh prim (UsdGeomMesh); export the character's mesh (with its points time-sampled)".into()));
+        return Err(err(
+            file,
+            "the stage holds no Mesh prim (UsdGeomMesh); export the character's mesh (with its points time-sampled)"
+                .into(),
+        ));
     }
     let name_of = |p: &sdf::Path| p.name().unwrap_or("").to_string();
     let samples_of = |p: &sdf::Path| attr(data, p, "points").map_or(0, |a| a.samples.len());
     let mesh = match &options.mesh {
-        Some(w) => meshes.iter().enumerate().find(|(i, p)| name_of(p) == *w || p.to_string() == *w || i.to_string() == *w).map(|(_, p)| p.clone()).ok_or_else(|| {
-            let names: Vec<String> = meshes.iter().map(|p| p.to_string()).collect();
-            err(file, format!("no mesh is called or numbered `{w}`; the stage has {}", names.join(", ")))
-        })?,
+        Some(w) => meshes
+            .iter()
+            .enumerate()
+            .find(|(i, p)| name_of(p) == *w || p.to_string() == *w || i.to_string() == *w)
+            .map(|(_, p)| p.clone())
+            .ok_or_else(|| {
+                let names: Vec<String> = meshes.iter().map(|p| p.to_string()).collect();
+                err(file, format!("no mesh is called or numbered `{w}`; the stage has {}", names.join(", ")))
+            })?,
         None => {
             let count = |p: &sdf::Path| {
                 let a = attr(data, p, "points");
-                a.and_then(|a| a.samples.first().map(|s| s.1.clone()).or(a.default)).and_then(|v| points(&v)).map_or(0, |v| v.len())
+                a.and_then(|a| a.samples.first().map(|s| s.1.clone()).or(a.default))
+                    .and_then(|v| points(&v))
+                    .map_or(0, |v| v.len())
             };
             let animated: Vec<&sdf::Path> = meshes.iter().filter(|p| samples_of(p) >= 2).collect();
             let pool: Vec<&sdf::Path> = if animated.is_empty() { meshes.iter().collect() } else { animated };
@@ -320,7 +366,8 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
         }
     };
     let mname = name_of(&mesh);
-    let pts = attr(data, &mesh, "points").ok_or_else(|| err(file, format!("mesh {mesh} has no points; export the mesh with its points")))?;
+    let pts = attr(data, &mesh, "points")
+        .ok_or_else(|| err(file, format!("mesh {mesh} has no points; export the mesh with its points")))?;
     if pts.samples.len() < 2 {
         let skinned = data.has_spec(&prop(&mesh, "skel:skeleton").unwrap_or_else(|| root.clone()))
             || data.has_spec(&prop(&mesh, "primvars:skel:jointIndices").unwrap_or_else(|| root.clone()));
@@ -334,12 +381,22 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
             ),
         ));
     }
-    let counts = attr(data, &mesh, "faceVertexCounts").and_then(|a| a.default.or(a.samples.into_iter().next().map(|s| s.1)));
-    let indices = attr(data, &mesh, "faceVertexIndices").and_then(|a| a.default.or(a.samples.into_iter().next().map(|s| s.1)));
+    let counts =
+        attr(data, &mesh, "faceVertexCounts").and_then(|a| a.default.or(a.samples.into_iter().next().map(|s| s.1)));
+    let indices =
+        attr(data, &mesh, "faceVertexIndices").and_then(|a| a.default.or(a.samples.into_iter().next().map(|s| s.1)));
     let (Some(counts), Some(indices)) = (counts.as_ref().and_then(ints), indices.as_ref().and_then(ints)) else {
         return Err(err(file, format!("mesh {mesh} has no faceVertexCounts / faceVertexIndices (as int arrays); export the mesh with its faces")));
     };
-    let first = points(&pts.samples[0].1).ok_or_else(|| err(file, format!("mesh {mesh}: points at time {} are not an array of 3-vectors; the file is damaged: export it again", pts.samples[0].0)))?;
+    let first = points(&pts.samples[0].1).ok_or_else(|| {
+        err(
+            file,
+            format!(
+                "mesh {mesh}: points at time {} are not an array of 3-vectors; the file is damaged: export it again",
+                pts.samples[0].0
+            ),
+        )
+    })?;
     let n = first.len();
     // (in i128: an int64 or uint array of counts may add up beyond i64)
     let total: i128 = counts.iter().map(|&c| i128::from(c.max(0))).sum();
@@ -367,14 +424,31 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
         }
     }
     if faces.is_empty() {
-        return Err(err(file, format!("mesh {mesh} has no faces with 3 or more corners; posemfa needs a polygon mesh")));
+        return Err(err(
+            file,
+            format!("mesh {mesh} has no faces with 3 or more corners; posemfa needs a polygon mesh"),
+        ));
     }
 
     // Stage metadata: up axis, metres per unit, time codes per second.
-    let up = field(data, &root, "upAxis").as_ref().and_then(Value::as_str).map(str::to_string).unwrap_or_else(|| "Y".into());
-    let mpu = field(data, &root, "metersPerUnit").as_ref().and_then(numbers).and_then(|v| v.first().copied()).filter(|m| m.is_finite() && *m > 0.0);
-    let tcps = field(data, &root, "timeCodesPerSecond").as_ref().and_then(numbers).and_then(|v| v.first().copied()).filter(|f| f.is_finite() && *f > 0.0).unwrap_or(24.0);
-    let up_m = if up == "Z" { Rotation3::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2).to_homogeneous() } else { DMat4::identity() };
+    let up =
+        field(data, &root, "upAxis").as_ref().and_then(Value::as_str).map(str::to_string).unwrap_or_else(|| "Y".into());
+    let mpu = field(data, &root, "metersPerUnit")
+        .as_ref()
+        .and_then(numbers)
+        .and_then(|v| v.first().copied())
+        .filter(|m| m.is_finite() && *m > 0.0);
+    let tcps = field(data, &root, "timeCodesPerSecond")
+        .as_ref()
+        .and_then(numbers)
+        .and_then(|v| v.first().copied())
+        .filter(|f| f.is_finite() && *f > 0.0)
+        .unwrap_or(24.0);
+    let up_m = if up == "Z" {
+        Rotation3::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2).to_homogeneous()
+    } else {
+        DMat4::identity()
+    };
     let stage_m = Matrix4::new_scaling(mpu.unwrap_or(1.0)) * up_m;
     let units = match mpu {
         Some(m) if m == 1.0 => "metersPerUnit 1".to_string(),
@@ -414,7 +488,14 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
         None => format!("one per time sample, times {t0} to {t1} at {tcps} per second"),
     };
     let others: Vec<String> = meshes.iter().filter(|p| **p != mesh).map(|p| p.to_string()).collect();
-    let more = if others.is_empty() { String::new() } else { format!(" (other meshes: {}; --object NAME picks one)", others.join(", ")) };
-    let description = format!("{} frames of {mname} in {file} (time-sampled points of {mesh}, {how}){more}; {axes}, {units}", times.len());
+    let more = if others.is_empty() {
+        String::new()
+    } else {
+        format!(" (other meshes: {}; --object NAME picks one)", others.join(", "))
+    };
+    let description = format!(
+        "{} frames of {mname} in {file} (time-sampled points of {mesh}, {how}){more}; {axes}, {units}",
+        times.len()
+    );
     Ok(weld(file, &first, &faces, poses_raw, description))
 }

@@ -63,7 +63,12 @@ impl<'a> Cur<'a> {
     }
     fn take(&mut self, n: u64, item: &str) -> Check<&'a [u8]> {
         if self.pos > self.end || n > self.left() {
-            return damaged(format!("{} ends inside {item} (byte {}, {n} bytes wanted, {} left)", self.what, self.pos, self.left()));
+            return damaged(format!(
+                "{} ends inside {item} (byte {}, {n} bytes wanted, {} left)",
+                self.what,
+                self.pos,
+                self.left()
+            ));
         }
         let s = &self.b[self.pos as usize..(self.pos + n) as usize];
         self.pos += n;
@@ -117,7 +122,8 @@ impl<'a> Cur<'a> {
 /// Refused when it would expand beyond `limit` bytes (openusd's output buffer).
 fn lz4(src: &[u8], limit: u64, mut out: Option<&mut Vec<u8>>, what: &str) -> Check<u64> {
     let bad = |why: &str| damaged(format!("{what}: the LZ4 data is corrupt ({why})"));
-    let over = |n: u64| damaged(format!("{what}: the LZ4 data expands beyond the {limit} bytes expected (to {n} at least)"));
+    let over =
+        |n: u64| damaged(format!("{what}: the LZ4 data expands beyond the {limit} bytes expected (to {n} at least)"));
     let mut n: u64 = 0;
     let mut i = 0usize;
     if src.is_empty() {
@@ -277,7 +283,12 @@ impl<'a> Crate<'a> {
         let mut sections: Vec<(String, u64, u64)> = Vec::new();
         for k in 0..n {
             let raw = t.take(16, "a section name")?;
-            let name = raw.split(|&c| c == 0).next().filter(|_| raw.contains(&0)).and_then(|s| std::str::from_utf8(s).ok()).unwrap_or("");
+            let name = raw
+                .split(|&c| c == 0)
+                .next()
+                .filter(|_| raw.contains(&0))
+                .and_then(|s| std::str::from_utf8(s).ok())
+                .unwrap_or("");
             let (start, size) = (t.u64("a section start")?, t.u64("a section size")?);
             if start.checked_add(size).is_none_or(|e| e > len) {
                 return damaged(format!(
@@ -290,7 +301,12 @@ impl<'a> Crate<'a> {
         }
         // openusd reads the first section of each name.
         let find = |name: &'static str| -> Option<Cur<'a>> {
-            sections.iter().find(|s| s.0 == name).map(|&(_, start, size)| Cur { b: self.b, pos: start, end: start + size, what: name })
+            sections.iter().find(|s| s.0 == name).map(|&(_, start, size)| Cur {
+                b: self.b,
+                pos: start,
+                end: start + size,
+                what: name,
+            })
         };
         if let Some(mut s) = find("TOKENS") {
             self.tokens = self.read_tokens(&mut s)?;
@@ -380,7 +396,9 @@ impl<'a> Crate<'a> {
         // block can expand to cannot be right; this also keeps openusd's size arithmetic from overflowing.
         if count > lz4_cap(size).saturating_mul(4) {
             let what = s.what;
-            return damaged(format!("{what} claims {count} integers at byte {at}, more than its {size} compressed bytes can hold"));
+            return damaged(format!(
+                "{what} claims {count} integers at byte {at}, more than its {size} compressed bytes can hold"
+            ));
         }
         let codes = (count * 2).div_ceil(8);
         // openusd sizes its buffer for 32-bit integers, whatever the width.
@@ -390,7 +408,11 @@ impl<'a> Crate<'a> {
         } else {
             let (n, _) = self.block(s, Some(estimate), false, "integers")?;
             if count > 0 && n < w + codes {
-                return damaged(format!("{}: {count} integers at byte {at} need {} bytes of codes, the block holds {n}", s.what, w + codes));
+                return damaged(format!(
+                    "{}: {count} integers at byte {at} need {} bytes of codes, the block holds {n}",
+                    s.what,
+                    w + codes
+                ));
             }
             return Ok(Vec::new());
         };
@@ -399,7 +421,11 @@ impl<'a> Crate<'a> {
         }
         let n = data.len() as u64;
         if n < w + codes {
-            return damaged(format!("{}: {count} integers at byte {at} need {} bytes of codes, the block holds {n}", s.what, w + codes));
+            return damaged(format!(
+                "{}: {count} integers at byte {at} need {} bytes of codes, the block holds {n}",
+                s.what,
+                w + codes
+            ));
         }
         let mut d = Cur { b: &data, pos: 0, end: n, what: s.what };
         let common = if width == Width::W64 { d.u64("integers")? as i64 } else { i64::from(d.u32("integers")? as i32) };
@@ -416,7 +442,9 @@ impl<'a> Crate<'a> {
                 let delta = match ((code >> (2 * j)) & 3, width) {
                     (0, _) => common,
                     (1, Width::W32) => i64::from(v.take(1, "integers")?[0] as i8),
-                    (1, Width::W64) | (2, Width::W32) => i64::from(i16::from_le_bytes(v.take(2, "integers")?.try_into().expect("2"))),
+                    (1, Width::W64) | (2, Width::W32) => {
+                        i64::from(i16::from_le_bytes(v.take(2, "integers")?.try_into().expect("2")))
+                    }
                     (2, Width::W64) | (3, Width::W32) => i64::from(v.u32("integers")? as i32),
                     _ => v.u64("integers")? as i64,
                 };
@@ -516,7 +544,10 @@ impl<'a> Crate<'a> {
             return damaged(format!("an array value is marked inlined (ValueRep {rep:#x})"));
         }
         if kind == 0 && rep & COMPRESSED != 0 {
-            return damaged(format!("an array of type {} is marked compressed (ValueRep {rep:#x})", (rep >> 48) & 0xff));
+            return damaged(format!(
+                "an array of type {} is marked compressed (ValueRep {rep:#x})",
+                (rep >> 48) & 0xff
+            ));
         }
         let mut c = self.at(p, "an array value");
         if p == 0 {
@@ -525,7 +556,8 @@ impl<'a> Crate<'a> {
         if self.version < (0, 5, 0) {
             c.u32("an array shape")?;
         }
-        let count = if self.version < (0, 7, 0) { u64::from(c.u32("an array count")?) } else { c.u64("an array count")? };
+        let count =
+            if self.version < (0, 7, 0) { u64::from(c.u32("an array count")?) } else { c.u64("an array count")? };
         let compressed = rep & COMPRESSED != 0
             && count >= 4
             && match kind {
@@ -578,11 +610,15 @@ impl<'a> Crate<'a> {
     /// Checks a value as openusd's `CrateFile::value` would read it.
     fn value(&mut self, rep: u64, depth: u32) -> Check<Info> {
         if depth > MAX_DEPTH {
-            return damaged(format!("values nest more than {MAX_DEPTH} levels deep (a dictionary or time samples holding itself?)"));
+            return damaged(format!(
+                "values nest more than {MAX_DEPTH} levels deep (a dictionary or time samples holding itself?)"
+            ));
         }
         if let Some(&info) = self.heights.get(&rep) {
             if depth + info.height > MAX_DEPTH {
-                return damaged(format!("values nest more than {MAX_DEPTH} levels deep (a dictionary or time samples holding itself?)"));
+                return damaged(format!(
+                    "values nest more than {MAX_DEPTH} levels deep (a dictionary or time samples holding itself?)"
+                ));
             }
             return Ok(info);
         }
@@ -670,7 +706,10 @@ impl<'a> Crate<'a> {
                         let at = c.pos;
                         for i in self.ints(&mut c, n, Width::W32, true)? {
                             if i as u32 as u64 >= lut {
-                                return damaged(format!("a float array at byte {at} names entry {} of a {lut}-entry table", i as u32));
+                                return damaged(format!(
+                                    "a float array at byte {at} names entry {} of a {lut}-entry table",
+                                    i as u32
+                                ));
                             }
                         }
                     }
@@ -710,7 +749,11 @@ impl<'a> Crate<'a> {
                 small(i, tokens, "token")
             }
             10 | 12 | 57 => {
-                let i = if inlined { p & 0xffff_ffff } else { u64::from(self.at(p, "a string value").u32("a string index")?) };
+                let i = if inlined {
+                    p & 0xffff_ffff
+                } else {
+                    u64::from(self.at(p, "a string value").u32("a string index")?)
+                };
                 if inlined && ty != 10 {
                     small(i, tokens, "token")
                 } else {
@@ -874,7 +917,10 @@ mod tests {
         let e = c.ints(&mut c.at(0, "T"), 100, Width::W32, false).unwrap_err();
         assert_eq!(e, format!("T: 100 integers at byte 0 need 29 bytes of codes, the block holds 13; {DAMAGED}"));
         let e = c.ints(&mut c.at(0, "T"), 1 << 40, Width::W32, false).unwrap_err();
-        assert_eq!(e, format!("T claims 1099511627776 integers at byte 0, more than its 15 compressed bytes can hold; {DAMAGED}"));
+        assert_eq!(
+            e,
+            format!("T claims 1099511627776 integers at byte 0, more than its 15 compressed bytes can hold; {DAMAGED}")
+        );
     }
 
     /// The seed .usdc with its FIELDS ValueReps replaced by `reps`: a new FIELDS section (the reps stored as
@@ -923,7 +969,10 @@ mod tests {
         c.run().unwrap();
         let mut small = Crate::new(seed, (0, 0, 0));
         small.budget = 100;
-        assert!(small.run().unwrap_err().contains("make the reader walk more than 100 elements for a file of 3894 bytes"));
+        assert!(small
+            .run()
+            .unwrap_err()
+            .contains("make the reader walk more than 100 elements for a file of 3894 bytes"));
         // the seed's reps, read back the way run() reads them
         let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
         let fields = (0..6).map(|k| toc + 8 + 32 * k).find(|&e| seed[e..e + 7] == *b"FIELDS\0").unwrap();
@@ -933,9 +982,14 @@ mod tests {
         c.ints(&mut s, count, Width::W32, false).unwrap();
         let (_, bytes) = c.block(&mut s, Some(count * 8), true, "reps").unwrap();
         let reps: Vec<u64> = bytes.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().unwrap())).collect();
-        assert_eq!(crate::mesh::usd::read("seed.usdc", &with_reps(seed, &reps), &Default::default()).unwrap().poses.len(), 2);
+        assert_eq!(
+            crate::mesh::usd::read("seed.usdc", &with_reps(seed, &reps), &Default::default()).unwrap().poses.len(),
+            2
+        );
         let n: usize = std::env::var("POSEMFA_USD_MUTATIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(std::env::var("POSEMFA_USD_MUTATION_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(7));
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(
+            std::env::var("POSEMFA_USD_MUTATION_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(7),
+        );
         let (mut loaded, mut refused) = (0, 0);
         for _ in 0..n {
             let mut r = reps.clone();

@@ -23,13 +23,13 @@ use super::component::Component;
 use super::data::Data;
 use super::estep::{e_step, Blocked, EStep};
 use super::init;
-use crate::memory;
 use super::params::{LambdaRule, Params};
 use super::result::Model;
 use super::squarem;
 use crate::error::{Error, Result};
-use serde::Serialize;
 use crate::geometry::Vec3;
+use crate::memory;
+use serde::Serialize;
 
 /// What one iteration did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -123,7 +123,13 @@ impl Fit {
     }
 
     /// [`Fit::from_components`] with each vertex's likeliest component, if known, for the first E-step's order.
-    fn from_components_owned(data: Data, estep: EStep, comps: Vec<Component>, params: &Params, owners: Option<&[u32]>) -> Fit {
+    fn from_components_owned(
+        data: Data,
+        estep: EStep,
+        comps: Vec<Component>,
+        params: &Params,
+        owners: Option<&[u32]>,
+    ) -> Fit {
         let floor = floor_for(&data, params);
         let mut fit = Fit {
             estep,
@@ -232,7 +238,8 @@ impl Fit {
     /// SQUAREM from θ0, θ1 (`sq_prev`) and θ2 (the current state, log-likelihood `ll2`): keeps the extrapolated
     /// state when its log-likelihood is at least `ll2`, else stays at θ2.
     fn try_extrapolation(&mut self, ll2: f64) {
-        let Some((theta, a)) = squarem::extrapolate(&self.sq_prev[0], &self.sq_prev[1], &self.comps, self.sq_step_max, self.floor)
+        let Some((theta, a)) =
+            squarem::extrapolate(&self.sq_prev[0], &self.sq_prev[1], &self.comps, self.sq_step_max, self.floor)
         else {
             // α = -1 (θ2 itself): let the next cycle try a longer step
             self.sq_step_max *= 4.0;
@@ -340,8 +347,6 @@ impl Fit {
         num / den.max(f64::MIN_POSITIVE)
     }
 
-
-
     /// Labels of the current state: I_j = argmax_k γ_kj (eq 20).
     pub fn labels(&self) -> Vec<u32> {
         labels_from_members(&self.members, self.data.n_vertices, self.comps.len())
@@ -350,8 +355,8 @@ impl Fit {
     /// The model of the current state (converged) or of the best state seen (not converged, e.g. the literal
     /// eq 18 cycling). Translations are returned in unit-box coordinates.
     pub fn model(&self) -> Model {
-        let current_is_best = self.converged
-            || self.best.as_ref().is_none_or(|b| self.trace.last().is_some_and(|&l| l >= b.0));
+        let current_is_best =
+            self.converged || self.best.as_ref().is_none_or(|b| self.trace.last().is_some_and(|&l| l >= b.0));
         if current_is_best {
             self.model_of(&self.comps, self.labels())
         } else {
@@ -364,7 +369,12 @@ impl Fit {
     }
 
     fn model_of(&self, comps: &[Component], labels: Vec<u32>) -> Model {
-        Model { log_likelihood: self.trace.clone(), iterations: self.trace.len(), converged: self.converged, ..model_of(&self.data, comps, labels) }
+        Model {
+            log_likelihood: self.trace.clone(),
+            iterations: self.trace.len(),
+            converged: self.converged,
+            ..model_of(&self.data, comps, labels)
+        }
     }
 }
 
@@ -442,7 +452,10 @@ pub fn labels_from_gamma(gamma: &[f64], m: usize) -> Vec<u32> {
 /// and some motion ([`check_motion`]).
 pub fn check_population(data: &Data, parts: usize, most_components: usize) -> Result<()> {
     if data.n_vertices < 3 {
-        return Err(Error::Data(format!("{} vertices; at least 3 are needed; use a mesh with more vertices", data.n_vertices)));
+        return Err(Error::Data(format!(
+            "{} vertices; at least 3 are needed; use a mesh with more vertices",
+            data.n_vertices
+        )));
     }
     check_data(data, parts, most_components)?;
     check_motion(data)

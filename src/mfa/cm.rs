@@ -238,7 +238,14 @@ avx2_fn! {
 
 /// Cycle 2 CM step (Λ, then R, then Φ, then optionally the parameter-expanded fold of [`px_fold`]) for every
 /// component. Returns n_k per component.
-pub fn cycle2(data: &Data, members: &Members, comps: &mut [Component], rule: LambdaRule, floor: f64, px: bool) -> Vec<f64> {
+pub fn cycle2(
+    data: &Data,
+    members: &Members,
+    comps: &mut [Component],
+    rule: LambdaRule,
+    floor: f64,
+    px: bool,
+) -> Vec<f64> {
     let m = comps.len();
     let ns = data.n_shapes;
     let mut masses = Vec::with_capacity(m);
@@ -364,7 +371,11 @@ mod px_tests {
         for lambda in [[0.07, 0.02, 0.034], [0.0789, 0.0369, 0.0221], [0.0726, 0.0203, 0.0341]] {
             let mut c = component(lambda);
             let hs: Vec<Vec<Vec3>> = (0..20)
-                .map(|j| (0..4).map(|i| [0.01 * j as f64, 0.02 * i as f64 - 0.01 * j as f64, 0.003 * (j * i) as f64]).collect())
+                .map(|j| {
+                    (0..4)
+                        .map(|i| [0.01 * j as f64, 0.02 * i as f64 - 0.01 * j as f64, 0.003 * (j * i) as f64])
+                        .collect()
+                })
                 .collect();
             let before: Vec<f64> = hs.iter().map(|h| c.log_weighted_density(&c.woodbury(), h)).collect();
             px_fold(&mut c, &Mat3::new(1.0, 1e-15, 0.0, 1e-15, 1.0, -2e-15, 0.0, -2e-15, 1.0));
@@ -434,7 +445,11 @@ mod sum_tests {
                     }
                 }
                 assert!((st.sq[i] - sq).abs() <= 1e-12 * sq, "shape {i}: S {} against {sq}", st.sq[i]);
-                assert!((st.cross[i] - cross).amax() <= 1e-12 * scale(&cross), "shape {i}: C {} against {cross}", st.cross[i]);
+                assert!(
+                    (st.cross[i] - cross).amax() <= 1e-12 * scale(&cross),
+                    "shape {i}: C {} against {cross}",
+                    st.cross[i]
+                );
             }
             let mut sums = comps.clone();
             let one: Members = (0..comps.len()).map(|q| if q == k { list.clone() } else { Vec::new() }).collect();
@@ -444,7 +459,11 @@ mod sum_tests {
             for i in 0..ns {
                 for d in 0..3 {
                     let b: f64 = list.iter().map(|m| m.g * data.point(m.j as usize, i)[d]).sum::<f64>() / n;
-                    assert!((sums[k].translations[i][d] - b).abs() <= 1e-12, "b {} against {b}", sums[k].translations[i][d]);
+                    assert!(
+                        (sums[k].translations[i][d] - b).abs() <= 1e-12,
+                        "b {} against {b}",
+                        sums[k].translations[i][d]
+                    );
                 }
             }
         }

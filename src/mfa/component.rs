@@ -75,16 +75,26 @@ impl Component {
             post_var[d] = 1.0 / m;
             log_det += m.ln();
         }
-        let rt_over_s: Vec<Mat3> = (0..ns)
-            .map(|i| {
-                self.rotations[i].transpose() * inv_s[i]
-            })
-            .collect();
+        let rt_over_s: Vec<Mat3> = (0..ns).map(|i| self.rotations[i].transpose() * inv_s[i]).collect();
         let log_norm = self.weight.ln() - 0.5 * (3.0 * ns as f64 * LN_2PI + log_det);
         let packed = (0..ns)
             .map(|i| {
                 let (b, r): (&Vec3, &Mat3) = (&self.translations[i], &rt_over_s[i]);
-                [b[0], b[1], b[2], inv_s[i], r[(0, 0)], r[(0, 1)], r[(0, 2)], r[(1, 0)], r[(1, 1)], r[(1, 2)], r[(2, 0)], r[(2, 1)], r[(2, 2)]]
+                [
+                    b[0],
+                    b[1],
+                    b[2],
+                    inv_s[i],
+                    r[(0, 0)],
+                    r[(0, 1)],
+                    r[(0, 2)],
+                    r[(1, 0)],
+                    r[(1, 1)],
+                    r[(1, 2)],
+                    r[(2, 0)],
+                    r[(2, 1)],
+                    r[(2, 2)],
+                ]
             })
             .collect();
         Woodbury { packed, shrink, post_gain, post_var, log_norm }
@@ -192,10 +202,12 @@ mod tests {
         for (ns, seed) in [(2, 1), (3, 2), (5, 3), (11, 4)] {
             let c = sample_component(ns, seed);
             let wb = c.woodbury();
-            let h: Vec<Vec3> = (0..ns).map(|i| {
-                let t = i as f64;
-                [0.1 * t.sin(), 0.2 * t.cos(), 0.05 * t]
-            }).collect();
+            let h: Vec<Vec3> = (0..ns)
+                .map(|i| {
+                    let t = i as f64;
+                    [0.1 * t.sin(), 0.2 * t.cos(), 0.05 * t]
+                })
+                .collect();
             let fast = c.log_weighted_density(&wb, &h);
             let (dense, ez_dense) = dense_log_density(&c, &h);
             assert!((fast - dense).abs() < 1e-8 * dense.abs().max(1.0), "ns={ns}: {fast} vs {dense}");

@@ -8,10 +8,10 @@
 //! on the same numbers wherever they are read. The population's coordinates are f32 in the unit box; centred,
 //! they are rounded once more to f32 (at most 6e-8 in the unit box).
 
-use crate::geometry::Vec3;
-use crate::mesh::Population;
 use super::component::Component;
 pub use super::estep::LANES;
+use crate::geometry::Vec3;
+use crate::mesh::Population;
 
 /// The data vectors regrouped for the E-step: blocks of [`LANES`] vertices that are close in the first shape
 /// (Morton order), stored structure-of-arrays, `h[(b * n_s + t) * 3 + c][l]` = coordinate c of vertex
@@ -217,7 +217,9 @@ impl Data {
     /// Mean squared distance of the vertices from their shape's centroid (unit box), over every vertex and
     /// shape: [`crate::mesh::Population::mean_squared_radius`] of the vertices held.
     pub fn mean_squared_radius(&self) -> f64 {
-        let sum: f64 = (0..self.n_vertices).map(|j| self.vertex(j).iter().map(|p| p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sum::<f64>()).sum();
+        let sum: f64 = (0..self.n_vertices)
+            .map(|j| self.vertex(j).iter().map(|p| p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sum::<f64>())
+            .sum();
         sum / (self.n_vertices * self.n_shapes).max(1) as f64
     }
 
@@ -304,7 +306,8 @@ fn morton_order(nv: usize, at: &dyn Fn(usize, usize) -> Vec3) -> Vec<usize> {
             let mut key = 0u64;
             for c in 0..3 {
                 let w = hi[c] - lo[c];
-                let t = if w > 0.0 && p[c].is_finite() { ((p[c] - lo[c]) / w * 1023.0).clamp(0.0, 1023.0) } else { 0.0 };
+                let t =
+                    if w > 0.0 && p[c].is_finite() { ((p[c] - lo[c]) / w * 1023.0).clamp(0.0, 1023.0) } else { 0.0 };
                 key |= spread(t as u32) << c;
             }
             (key, j)

@@ -1,8 +1,8 @@
 //! E-step: responsibilities γ_kj = P(k | h_j) (eq 12) and the log-likelihood (eq 10), in log space with
 //! log-sum-exp (log-densities of different components differ by 1e5-1e8 nats).
 
-use super::component::{Component, Woodbury};
 use super::cm::{Member, Members, GAMMA_SKIP};
+use super::component::{Component, Woodbury};
 use super::data::{Data, Layout};
 
 /// Floating-point operations per (vertex, shape) of the kernel: 3 (x = h - b) + 6 (|x|²/s) + 18
@@ -168,7 +168,10 @@ impl Blocked {
 }
 
 /// The arithmetic of the kernel: f64, and f32 for the screening pass.
-pub trait Real: Copy + std::ops::Add<Output = Self> + std::ops::Sub<Output = Self> + std::ops::Mul<Output = Self> + std::ops::AddAssign {}
+pub trait Real:
+    Copy + std::ops::Add<Output = Self> + std::ops::Sub<Output = Self> + std::ops::Mul<Output = Self> + std::ops::AddAssign
+{
+}
 impl Real for f64 {}
 impl Real for f32 {}
 
@@ -176,7 +179,12 @@ impl Real for f32 {}
 /// shape, f32 widened to `T`): the E-step's kernel, the same arithmetic as [`super::component::project_packed`]
 /// with the vertices in lanes.
 #[inline(always)]
-fn accumulate_block<T: Real + From<f32>>(packed: &[[T; 13]], h: &[[f32; LANES]], y: &mut [[T; LANES]; 3], sq: &mut [T; LANES]) {
+fn accumulate_block<T: Real + From<f32>>(
+    packed: &[[T; 13]],
+    h: &[[f32; LANES]],
+    y: &mut [[T; LANES]; 3],
+    sq: &mut [T; LANES],
+) {
     for (q, hi) in packed.iter().zip(h.chunks_exact(3)) {
         for l in 0..LANES {
             let x0 = T::from(hi[0][l]) - q[0];
@@ -348,7 +356,10 @@ impl EStep {
         if ts > 0 {
             for (k, wb) in wbs.iter().enumerate() {
                 self.packed32.extend(wb.packed[..ts].iter().map(|q| q.map(|v| v as f32)));
-                let s_min = self.blocked.layout.order[..ts].iter().map(|&i| comps[k].variances[i]).fold(f64::INFINITY, f64::min);
+                let s_min = self.blocked.layout.order[..ts]
+                    .iter()
+                    .map(|&i| comps[k].variances[i])
+                    .fold(f64::INFINITY, f64::min);
                 self.screen.push(Screen {
                     shrink: shrinks[k][ts - 1].map(|v| v as f32),
                     abs: (ts as f64 * (1.0 + SCREEN_ABS_S / s_min)) as f32,
@@ -366,7 +377,9 @@ impl EStep {
         self.group_bound.resize(m.next_multiple_of(LANES), f64::INFINITY);
         self.group_consts.clear();
         if gs > 0 {
-            self.group_consts.extend((0..m).step_by(LANES).map(|k0| GroupConsts::new(&wbs[k0..(k0 + LANES).min(m)], &shrinks[k0..], gs)));
+            self.group_consts.extend(
+                (0..m).step_by(LANES).map(|k0| GroupConsts::new(&wbs[k0..(k0 + LANES).min(m)], &shrinks[k0..], gs)),
+            );
         }
         for b in 0..self.blocked.n_blocks() {
             if b % GROUP_BLOCKS == 0 && gs > 0 {
@@ -423,7 +436,12 @@ impl EStep {
                     evals += ts * LANES;
                     screen_evals += ts * LANES;
                     screens += LANES;
-                    if screened_out(&self.packed32[k * ts..(k + 1) * ts], h32, &self.screen[k], threshold(&self.screen[k], best_min)) {
+                    if screened_out(
+                        &self.packed32[k * ts..(k + 1) * ts],
+                        h32,
+                        &self.screen[k],
+                        threshold(&self.screen[k], best_min),
+                    ) {
                         continue;
                     }
                 }
@@ -696,7 +714,8 @@ pub fn kernel_limit_f32_on(blocked: &Blocked, comps: &[Component], min_ms: f64) 
         return KernelRate { gflop: 0.0, ms: 0.0, gflops_per_s: f64::INFINITY };
     }
     let wbs = ordered_woodbury(comps, &blocked.layout.order);
-    let packed: Vec<[f32; 13]> = wbs.iter().flat_map(|wb| wb.packed[..ts].iter().map(|q| q.map(|v| v as f32))).collect();
+    let packed: Vec<[f32; 13]> =
+        wbs.iter().flat_map(|wb| wb.packed[..ts].iter().map(|q| q.map(|v| v as f32))).collect();
     let m = comps.len();
     let per_pass = (blocked.n_blocks() * LANES * m * (FLOPS_PER_SHAPE * ts + FLOPS_PER_SCREEN_CHECK)) as f64;
     measure(per_pass, min_ms, || screen_pass(blocked, &packed, m, ts) as f64)
@@ -857,12 +876,17 @@ mod tests {
         let ns = 3;
         let nv = 40;
         let shapes: Vec<Vec<[f64; 3]>> = (0..ns)
-            .map(|i| (0..nv).map(|j| {
-                let t = j as f64 * 0.1 + i as f64;
-                [t.sin(), (1.3 * t).cos(), 0.1 * t]
-            }).collect())
+            .map(|i| {
+                (0..nv)
+                    .map(|j| {
+                        let t = j as f64 * 0.1 + i as f64;
+                        [t.sin(), (1.3 * t).cos(), 0.1 * t]
+                    })
+                    .collect()
+            })
             .collect();
-        let pop = Population::from_unit_shapes((0..ns).map(|i| format!("{i}")).collect(), vec![[0, 1, 2]], shapes).unwrap();
+        let pop =
+            Population::from_unit_shapes((0..ns).map(|i| format!("{i}")).collect(), vec![[0, 1, 2]], shapes).unwrap();
         let data = Data::from_population(&pop);
         let comps: Vec<Component> = (0..3)
             .map(|k| Component {

@@ -180,7 +180,12 @@ pub fn component_from_points(data: &Data, members: &[usize], n_total: usize, flo
 /// [`component_from_points`] of `Data::from_population_subset(pop, members)`'s vertices, all of them, without
 /// the copy: the same points (each shape centred on the members' centroid, rounded to f32 as `Data` stores
 /// them), so the same component bit for bit.
-pub fn component_from_population(pop: &crate::mesh::Population, members: &[usize], n_total: usize, floor: f64) -> Component {
+pub fn component_from_population(
+    pop: &crate::mesh::Population,
+    members: &[usize],
+    n_total: usize,
+    floor: f64,
+) -> Component {
     let offsets = super::data::Data::centroids(pop, members);
     component_from_population_centred(pop, members, &offsets, n_total, floor)
 }
@@ -309,13 +314,16 @@ mod tests {
 
     #[test]
     fn procrustes_start_recovers_a_rigid_cluster() {
-        let rest: Vec<Vec3> = (0..30).map(|j| {
-            let t = j as f64;
-            [0.3 * (t * 0.7).sin(), 0.1 * (t * 1.3).cos(), 0.05 * (t * 0.37).sin()]
-        }).collect();
+        let rest: Vec<Vec3> = (0..30)
+            .map(|j| {
+                let t = j as f64;
+                [0.3 * (t * 0.7).sin(), 0.1 * (t * 1.3).cos(), 0.05 * (t * 0.37).sin()]
+            })
+            .collect();
         let truth: Vec<Mat3> = (0..4).map(|i| axis_angle([1.0, 0.5, i as f64], 0.4 * i as f64)).collect();
         let shapes: Vec<Vec<Vec3>> = truth.iter().map(|r| rest.iter().map(|&p| mat_vec(r, p)).collect()).collect();
-        let pop = Population::from_unit_shapes((0..4).map(|i| i.to_string()).collect(), vec![[0, 1, 2]], shapes).unwrap();
+        let pop =
+            Population::from_unit_shapes((0..4).map(|i| i.to_string()).collect(), vec![[0, 1, 2]], shapes).unwrap();
         let data = Data::from_population(&pop);
         let comps = components_from_labels(&data, &vec![0; 30], 1e-9);
         assert_eq!(comps.len(), 1);
@@ -333,10 +341,14 @@ mod tests {
     #[test]
     fn kmeans_is_seeded_and_separates_blobs() {
         let shapes: Vec<Vec<Vec3>> = (0..2)
-            .map(|i| (0..60).map(|j| {
-                let c = (j / 20) as f64;
-                [c + 0.01 * (j as f64).sin(), 0.01 * (j as f64 + i as f64).cos(), 0.0]
-            }).collect())
+            .map(|i| {
+                (0..60)
+                    .map(|j| {
+                        let c = (j / 20) as f64;
+                        [c + 0.01 * (j as f64).sin(), 0.01 * (j as f64 + i as f64).cos(), 0.0]
+                    })
+                    .collect()
+            })
             .collect();
         let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], vec![[0, 1, 2]], shapes).unwrap();
         let data = Data::from_population(&pop);

@@ -2,10 +2,10 @@
 //! the screen) are measured on the fitted model and the population, and the E-step's time is compared with
 //! the time those kernels need for the same arithmetic.
 
+use super::aecm::StageStats;
 use super::component::Component;
 use super::data::Data;
 use super::estep::{kernel_limit_f32_on, kernel_limit_on, Blocked, KernelRate};
-use super::aecm::StageStats;
 use serde::Serialize;
 
 #[derive(Debug, Clone, Serialize)]
@@ -34,7 +34,13 @@ pub fn limit_report(data: &Data, parts: &[Component], stats: &[StageStats], min_
     let f64_rate = kernel_limit_on(&blocked, parts, min_ms);
     let f32_rate = kernel_limit_f32_on(&blocked, parts, min_ms);
     drop(blocked);
-    let frac = |flops: f64, flops_f32: f64, ms: f64| if ms > 0.0 { kernel_ms(flops, flops_f32, &f64_rate, &f32_rate) / ms } else { 0.0 };
+    let frac = |flops: f64, flops_f32: f64, ms: f64| {
+        if ms > 0.0 {
+            kernel_ms(flops, flops_f32, &f64_rate, &f32_rate) / ms
+        } else {
+            0.0
+        }
+    };
     let stage_fractions = stats.iter().map(|s| frac(s.estep_flops, s.estep_flops_f32, s.estep_ms)).collect();
     let sum = |f: fn(&StageStats) -> f64| stats.iter().map(f).sum::<f64>();
     let fraction = frac(sum(|s| s.estep_flops), sum(|s| s.estep_flops_f32), sum(|s| s.estep_ms));

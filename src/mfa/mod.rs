@@ -25,6 +25,6 @@ pub mod params;
 pub mod result;
 pub mod squarem;
 
-pub use params::{LambdaRule, Params, PartRule};
 pub use component::Component;
+pub use params::{LambdaRule, Params, PartRule};
 pub use result::Model;

@@ -226,9 +226,10 @@ impl Params {
             match t.parse::<f64>() {
                 Ok(x) if x.is_finite() => Ok(x),
                 // (Rust reads 1e400 as infinity)
-                Ok(x) if x.is_infinite() && !t.to_ascii_lowercase().contains("inf") => {
-                    Err(format!("'{t}' is too {}: it must be {allowed}", if x > 0.0 { "large" } else { "far below zero" }))
-                }
+                Ok(x) if x.is_infinite() && !t.to_ascii_lowercase().contains("inf") => Err(format!(
+                    "'{t}' is too {}: it must be {allowed}",
+                    if x > 0.0 { "large" } else { "far below zero" }
+                )),
                 _ => Err(format!("'{t}' is not a number: it must be {allowed}")),
             }
         };
@@ -444,10 +445,23 @@ mod tests {
     #[test]
     fn form_fields_are_read_and_each_bad_one_is_named_with_what_is_allowed() {
         let base = Params { refine: false, ..Params::default() };
-        let p = base.with_fields(&[("parts", " 7 "), ("targetParts", "auto"), ("seed", "3"), ("tol", "1e-4"), ("varianceFloor", "1e-6")]).unwrap();
-        assert_eq!((p.parts, p.target_parts, p.seed, p.tol, p.variance_floor, p.refine), (7, None, 3, 1e-4, 1e-6, false));
+        let p = base
+            .with_fields(&[
+                ("parts", " 7 "),
+                ("targetParts", "auto"),
+                ("seed", "3"),
+                ("tol", "1e-4"),
+                ("varianceFloor", "1e-6"),
+            ])
+            .unwrap();
+        assert_eq!(
+            (p.parts, p.target_parts, p.seed, p.tol, p.variance_floor, p.refine),
+            (7, None, 3, 1e-4, 1e-6, false)
+        );
         assert_eq!(base.with_fields(&[("targetParts", "12")]).unwrap().target_parts, Some(12));
-        let e = base.with_fields(&[("tol", "abc"), ("targetParts", "seven"), ("parts", "0"), ("varianceFloor", "")]).unwrap_err();
+        let e = base
+            .with_fields(&[("tol", "abc"), ("targetParts", "seven"), ("parts", "0"), ("varianceFloor", "")])
+            .unwrap_err();
         let by = |f: &str| e.iter().find(|q| q.field == f).map(|q| q.message.clone()).unwrap_or_default();
         assert_eq!(e.len(), 4, "{e:?}");
         assert_eq!(by("tol"), format!("'abc' is not a number: it must be {ALLOWED_TOL}"));
@@ -464,12 +478,27 @@ mod tests {
         assert_eq!(base.with_fields(&[("parts", "1.2e1")]).unwrap().parts, 12);
         let big = base.with_fields(&[("parts", "1e9")]).unwrap_err();
         assert_eq!(big[0].message, format!("1000000000 is too large: it must be {ALLOWED_PARTS}"));
-        assert_eq!(base.with_fields(&[("seed", "1e30")]).unwrap_err()[0].message, format!("'1e30' is too large: it must be {ALLOWED_SEED}"));
-        assert_eq!(base.with_fields(&[("parts", "2.5")]).unwrap_err()[0].message, format!("'2.5' is not a whole number: it must be {ALLOWED_PARTS}"));
+        assert_eq!(
+            base.with_fields(&[("seed", "1e30")]).unwrap_err()[0].message,
+            format!("'1e30' is too large: it must be {ALLOWED_SEED}")
+        );
+        assert_eq!(
+            base.with_fields(&[("parts", "2.5")]).unwrap_err()[0].message,
+            format!("'2.5' is not a whole number: it must be {ALLOWED_PARTS}")
+        );
         // beyond f64 (read as infinity): too large, not "not a number"; a huge value in range checks shown short
-        assert_eq!(base.with_fields(&[("tol", "1e400")]).unwrap_err()[0].message, format!("'1e400' is too large: it must be {ALLOWED_TOL}"));
-        assert_eq!(base.with_fields(&[("tol", "inf")]).unwrap_err()[0].message, format!("'inf' is not a number: it must be {ALLOWED_TOL}"));
-        assert_eq!(base.with_fields(&[("varianceFloor", "1e30")]).unwrap_err()[0].message, format!("1e30 must be {ALLOWED_VARIANCE_FLOOR}"));
+        assert_eq!(
+            base.with_fields(&[("tol", "1e400")]).unwrap_err()[0].message,
+            format!("'1e400' is too large: it must be {ALLOWED_TOL}")
+        );
+        assert_eq!(
+            base.with_fields(&[("tol", "inf")]).unwrap_err()[0].message,
+            format!("'inf' is not a number: it must be {ALLOWED_TOL}")
+        );
+        assert_eq!(
+            base.with_fields(&[("varianceFloor", "1e30")]).unwrap_err()[0].message,
+            format!("1e30 must be {ALLOWED_VARIANCE_FLOOR}")
+        );
         // a negative count is named as negative, with what is allowed
         let neg = base.with_fields(&[("targetParts", "-3")]).unwrap_err();
         assert_eq!(neg[0].message, format!("'-3' is negative: it must be {ALLOWED_TARGET_PARTS}"));

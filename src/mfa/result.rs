@@ -31,17 +31,17 @@ impl Model {
 
     /// Shape `i` rebuilt from the latent shape: R^i_{I_j} v_j^ref + b^i_{I_j} (eq 22).
     pub fn reconstruct(&self, shape: usize) -> Vec<Vec3> {
-        self.latent
-            .iter()
-            .zip(&self.labels)
-            .map(|(&v, &l)| self.parts[l as usize].place(shape, v))
-            .collect()
+        self.latent.iter().zip(&self.labels).map(|(&v, &l)| self.parts[l as usize].place(shape, v)).collect()
     }
 
     /// The latent shape with every part moved to where it is in shape i (v_j^ref + b^i_{l_j}) but not turned:
     /// the parts of eq 21 are all centred on the origin, on top of each other; this spreads them out to be seen.
     pub fn latent_placed(&self, shape: usize) -> Vec<Vec3> {
-        self.latent.iter().zip(&self.labels).map(|(&v, &l)| add(v, self.parts[l as usize].translations[shape])).collect()
+        self.latent
+            .iter()
+            .zip(&self.labels)
+            .map(|(&v, &l)| add(v, self.parts[l as usize].translations[shape]))
+            .collect()
     }
 
     /// Residuals ε_j^i = v_j^i - (R^i v_j^ref + b^i): the "muscle" motion, per shape and vertex.

@@ -75,7 +75,8 @@ pub fn align_latent_frame(c: &mut Component, reference: &Component) {
     let qs = signed_permutations();
     let mut best = (f64::NEG_INFINITY, 0);
     for (n, q) in qs.iter().enumerate() {
-        let score: f64 = c.rotations.iter().zip(&reference.rotations).map(|(r, r0)| (r0.transpose() * r * q).trace()).sum();
+        let score: f64 =
+            c.rotations.iter().zip(&reference.rotations).map(|(r, r0)| (r0.transpose() * r * q).trace()).sum();
         if score > best.0 {
             best = (score, n);
         }

@@ -9,10 +9,10 @@
 //! a smoothly bending blob 0.9 or less, however many parts it is cut into. The verdict is "articulated" from
 //! [`MIN_EXPLAINED`] up, with at least two parts.
 
-use crate::mfa::data::Data;
 use super::hierarchy::FitResult;
-use crate::mfa::result::Model;
 use crate::mesh::Population;
+use crate::mfa::data::Data;
+use crate::mfa::result::Model;
 use serde::Serialize;
 
 /// Least explained fraction of the motion for "articulated".
@@ -164,8 +164,8 @@ pub fn diagnose(pop: &Population, model: &Model) -> Diagnosis {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::parts::hierarchy::fit;
     use crate::mfa::Params;
+    use crate::parts::hierarchy::fit;
     use crate::synth::{generate, Preset, Spec};
 
     fn verdict(preset: Preset, seed: u64) -> Diagnosis {
@@ -198,7 +198,11 @@ mod tests {
         // ... but the population is articulated: the part rule's own parts say so, and the reason gives both
         let d = diagnose_fit(&g.population, &r);
         assert!(d.articulated, "{d:?}");
-        assert!(d.reason.contains("what the part rule decided in this fit") && d.reason.contains("the 3 parts asked for"), "{}", d.reason);
+        assert!(
+            d.reason.contains("what the part rule decided in this fit") && d.reason.contains("the 3 parts asked for"),
+            "{}",
+            d.reason
+        );
         assert_eq!((d.parts, d.explained), (3, asked.explained));
         let g = generate(&Spec { preset: Preset::Blob, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
         let r = fit(&g.population, &Params { target_parts: Some(6), ..Params::default() }, &mut |_| true).unwrap();
@@ -216,8 +220,16 @@ mod tests {
         assert!(!diagnose(&g.population, &r.model).articulated);
         let d = diagnose_fit(&g.population, &r);
         assert!(d.undecided && !d.articulated, "{d:?}");
-        assert!(d.reason.contains("a count the part rule did not judge") && !d.reason.contains("deformation model"), "{}", d.reason);
-        assert!(d.reason.contains("of the motion that one rigid body leaves") && !d.reason.contains("  "), "{}", d.reason);
+        assert!(
+            d.reason.contains("a count the part rule did not judge") && !d.reason.contains("deformation model"),
+            "{}",
+            d.reason
+        );
+        assert!(
+            d.reason.contains("of the motion that one rigid body leaves") && !d.reason.contains("  "),
+            "{}",
+            d.reason
+        );
         // enough parts fixed by hand: the verdict stands
         let r = fit(&g.population, &Params { parts: 40, refine: false, ..Params::default() }, &mut |_| true).unwrap();
         let d = diagnose_fit(&g.population, &r);

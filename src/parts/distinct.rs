@@ -20,11 +20,11 @@
 use super::labels::{adjacency, compact, weighted_median};
 pub use super::merge_tree::CurvePoint;
 use super::motion_labels::motion_residual;
-use crate::mfa::params::Params;
-use crate::mfa::result::Model;
 use crate::geometry::rotation::{angle_between, to_quat};
 use crate::geometry::Mat3;
 use crate::mesh::Population;
+use crate::mfa::params::Params;
+use crate::mfa::result::Model;
 
 /// Motion of a part relative to pose r, per pose: R^i (R^r)^T (free of the part's latent frame).
 fn relative_motion(rotations: &[Mat3], r: usize) -> Vec<Mat3> {
@@ -49,7 +49,8 @@ pub fn blend_references(pop: &Population) -> Vec<usize> {
 /// band moves as one fixed blend of its two sides: near 0. A part with a joint of its own turns independently:
 /// large. Infinity without two neighbours that move apart (more than 1e-3 rad RMS).
 pub fn blend_ratio(model: &Model, k: usize, adjacent: &[usize], refs: &[usize]) -> f64 {
-    let mut ratios: Vec<f64> = refs.iter().map(|&r| blend_ratio_from(model, k, adjacent, r, f64::NEG_INFINITY)).collect();
+    let mut ratios: Vec<f64> =
+        refs.iter().map(|&r| blend_ratio_from(model, k, adjacent, r, f64::NEG_INFINITY)).collect();
     if ratios.is_empty() {
         return f64::INFINITY;
     }
@@ -314,7 +315,10 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
         order.sort_by_key(|&k| members[k].len());
         let mut flesh = |k: usize| {
             let side_ids: Vec<usize> = sides[k].iter().map(|&a| ids[a]).collect();
-            if *rotation_memo.entry((ids[k], side_ids.clone())).or_insert_with(|| is_blend(model, k, &sides[k], &refs, ratio)) {
+            if *rotation_memo
+                .entry((ids[k], side_ids.clone()))
+                .or_insert_with(|| is_blend(model, k, &sides[k], &refs, ratio))
+            {
                 return Some(f64::NAN);
             }
             let f = *fit_memo
@@ -327,14 +331,22 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
                 for k in (0..model.n_parts()).filter(|&k| members[k].len() < 60) {
                     let r = blend_ratio(model, k, &sides[k], &refs);
                     let f = blend_fit_ratio(model, pop, k, &members[k], &sides[k]);
-                    eprintln!("kept: part {k} ({} vertices) adjacent {:?} sides {:?} blend {r:.3} fit {f:.3}", members[k].len(), adjacent[k], sides[k]);
+                    eprintln!(
+                        "kept: part {k} ({} vertices) adjacent {:?} sides {:?} blend {r:.3} fit {f:.3}",
+                        members[k].len(),
+                        adjacent[k],
+                        sides[k]
+                    );
                 }
             }
             return dissolved;
         };
         if std::env::var_os("POSEMFA_DEBUG").is_some() {
             let r = blend_ratio(model, k, &sides[k], &refs);
-            eprintln!("flesh: part {k} ({} vertices) dissolved, blend ratio {r:.3}, blend fit {f:.3}", members[k].len());
+            eprintln!(
+                "flesh: part {k} ({} vertices) dissolved, blend ratio {r:.3}, blend fit {f:.3}",
+                members[k].len()
+            );
         }
         for &j in &members[k] {
             for (i, s) in pop.shapes().enumerate() {
@@ -493,8 +505,10 @@ mod tests {
         let mk = relative_motion(&model.parts[k].rotations, r);
         let ms: Vec<Vec<Mat3>> = adjacent.iter().map(|&a| relative_motion(&model.parts[a].rotations, r)).collect();
         // the neighbours' motions as quaternions once (slerp converts both ends at every t otherwise)
-        let qs: Vec<Vec<crate::geometry::rotation::Quat>> = ms.iter().map(|m| m.iter().map(to_quat).collect()).collect();
-        let rms = |f: &dyn Fn(usize) -> f64| ((0..mk.len()).map(|i| f(i).powi(2)).sum::<f64>() / mk.len() as f64).sqrt();
+        let qs: Vec<Vec<crate::geometry::rotation::Quat>> =
+            ms.iter().map(|m| m.iter().map(to_quat).collect()).collect();
+        let rms =
+            |f: &dyn Fn(usize) -> f64| ((0..mk.len()).map(|i| f(i).powi(2)).sum::<f64>() / mk.len() as f64).sqrt();
         let mut best = f64::INFINITY;
         for x in 0..ms.len() {
             for y in x + 1..ms.len() {
@@ -504,7 +518,8 @@ mod tests {
                     continue;
                 }
                 // slerp(ma[i], mb[i], t) = paths[i].matrix_at(t), bit for bit
-                let paths: Vec<crate::geometry::rotation::SlerpPath> = qs[x].iter().zip(&qs[y]).map(|(&a, &b)| crate::geometry::rotation::SlerpPath::new(a, b)).collect();
+                let paths: Vec<crate::geometry::rotation::SlerpPath> =
+                    qs[x].iter().zip(&qs[y]).map(|(&a, &b)| crate::geometry::rotation::SlerpPath::new(a, b)).collect();
                 for step in 0..=20 {
                     let t = step as f64 / 20.0;
                     let e = rms(&|i| angle_between(&mk[i], &paths[i].matrix_at(t)));
@@ -541,7 +556,10 @@ mod tests {
             let other: Vec<Mat3> = (0..ns).map(|_| axis_angle(cx, 2.0 * (u() - 0.5))).collect();
             let m = model(vec![comp(a), comp(b), comp(k), comp(other)]);
             for r in 0..ns {
-                let (new, old) = (blend_ratio_from(&m, 2, &[0, 1, 3], r, f64::NEG_INFINITY), blend_ratio_from_matrices(&m, 2, &[0, 1, 3], r));
+                let (new, old) = (
+                    blend_ratio_from(&m, 2, &[0, 1, 3], r, f64::NEG_INFINITY),
+                    blend_ratio_from_matrices(&m, 2, &[0, 1, 3], r),
+                );
                 assert!((new - old).abs() <= 1e-9 * old.max(1e-3), "trial {trial} ref {r}: {new} against {old}");
             }
             // the early-stopping decision is the full ratio's, for every threshold and reference set around it
@@ -549,7 +567,11 @@ mod tests {
             for cut in [0.05, 0.1, 0.2, 0.4, 0.8] {
                 for n in [1, 2, 5, ns] {
                     let full = blend_ratio(&m, 2, &[0, 1, 3], &refs[..n]);
-                    assert_eq!(is_blend(&m, 2, &[0, 1, 3], &refs[..n], cut), full < cut, "trial {trial}: {full} against {cut}, {n} references");
+                    assert_eq!(
+                        is_blend(&m, 2, &[0, 1, 3], &refs[..n], cut),
+                        full < cut,
+                        "trial {trial}: {full} against {cut}, {n} references"
+                    );
                     seen[(full < cut) as usize] += 1;
                 }
             }
@@ -619,7 +641,8 @@ mod tests {
     #[test]
     fn a_wide_blend_band_is_flesh_by_positions_and_a_limb_is_not() {
         // the arm with a blend band twice the default: the elbow's band as a part of its own (part 3)
-        let g = generate(&Spec { preset: Preset::Arm, vertices: 1500, poses: 8, joint_band: 0.10, ..Spec::default() }).unwrap();
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 1500, poses: 8, joint_band: 0.10, ..Spec::default() })
+            .unwrap();
         let pop = &g.population;
         let idx = |name| crate::synth::part_index(Preset::Arm, name).unwrap() as u32;
         let (upper, forearm) = (idx("upper_arm"), idx("forearm"));
@@ -630,7 +653,8 @@ mod tests {
                 labels[j] = 3;
             }
         }
-        let members: Vec<Vec<usize>> = (0..4).map(|k| (0..labels.len()).filter(|&j| labels[j] == k).collect()).collect();
+        let members: Vec<Vec<usize>> =
+            (0..4).map(|k| (0..labels.len()).filter(|&j| labels[j] == k).collect()).collect();
         assert!(members.iter().all(|m| m.len() >= 20), "{:?}", members.iter().map(|m| m.len()).collect::<Vec<_>>());
         let parts = members
             .iter()

@@ -22,16 +22,16 @@
 //! subset of the vertices; the coarse and refined labels of all vertices come from the E-step of those stages'
 //! components on the whole population, and stage 3 runs on all vertices.
 
-use crate::mfa::aecm::{Fit, StepInfo};
-use crate::mfa::component::Component;
-pub use crate::mfa::aecm::StageStats;
 use super::labels::compact;
-use crate::mfa::data::Data;
-use crate::mfa::estep::Blocked;
-use crate::mfa::params::{PartRule, Params};
-use crate::mfa::result::Model;
 use crate::error::{Error, Result};
 use crate::mesh::Population;
+pub use crate::mfa::aecm::StageStats;
+use crate::mfa::aecm::{Fit, StepInfo};
+use crate::mfa::component::Component;
+use crate::mfa::data::Data;
+use crate::mfa::estep::Blocked;
+use crate::mfa::params::{Params, PartRule};
+use crate::mfa::result::Model;
 use serde::Serialize;
 
 /// Where the pipeline is.
@@ -40,7 +40,11 @@ use serde::Serialize;
 pub enum Stage {
     Coarse,
     /// Refining coarse part `part` (0-based) of `of`, trying `sub_parts` components.
-    Refine { part: usize, of: usize, sub_parts: usize },
+    Refine {
+        part: usize,
+        of: usize,
+        sub_parts: usize,
+    },
     Final,
     Done,
 }
@@ -173,7 +177,13 @@ struct Best {
 
 /// The residual h_j - (R Λ E[z|h_j] + b) of vertex `j` of `fit`'s data under component `c`, appended to `out`
 /// (3 n_s values).
-fn push_residual(fit: &Fit, c: &crate::mfa::component::Component, wb: &crate::mfa::component::Woodbury, j: usize, out: &mut Vec<f64>) {
+fn push_residual(
+    fit: &Fit,
+    c: &crate::mfa::component::Component,
+    wb: &crate::mfa::component::Woodbury,
+    j: usize,
+    out: &mut Vec<f64>,
+) {
     let h = fit.data().vertex(j).to_vec();
     let e = c.posterior_mean(wb, &h);
     let v = [c.lambda[0] * e[0], c.lambda[1] * e[1], c.lambda[2] * e[2]];
@@ -380,12 +390,14 @@ impl Pipeline {
         } else {
             params.clone()
         };
-        let subset = (params.refine && params.subset_vertices > 0 && pop.n_vertices() >= SUBSET_FACTOR * params.subset_vertices)
-            .then(|| super::multires::spread_subset(pop, params.subset_vertices));
+        let subset =
+            (params.refine && params.subset_vertices > 0 && pop.n_vertices() >= SUBSET_FACTOR * params.subset_vertices)
+                .then(|| super::multires::spread_subset(pop, params.subset_vertices));
         let data = match &subset {
             Some(s) => {
                 // the final stage runs on every vertex: the budget is checked for all of them first
-                let most = crate::memory::max_components(params.parts, params.refine, params.max_subparts, pop.n_vertices());
+                let most =
+                    crate::memory::max_components(params.parts, params.refine, params.max_subparts, pop.n_vertices());
                 crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
                 Data::from_population_subset(pop, s)
             }
@@ -429,9 +441,9 @@ impl Pipeline {
         let target = coarse_target(params.coarse_vertices, pop.n_shapes());
         let on_coarse = params.coarse_vertices > 0
             && pop.n_vertices() >= COARSE_FACTOR * target
-            && params.target_parts.is_none_or(|n| {
-                super::part_count::check_target(n, target, params.min_part_vertices).is_ok()
-            });
+            && params
+                .target_parts
+                .is_none_or(|n| super::part_count::check_target(n, target, params.min_part_vertices).is_ok());
         // (the last run's data first: see [`Fine::full`]); the data are judged on every vertex (a motion of a few
         // vertices no seed holds is still motion)
         let full = on_coarse.then(|| lay_out(Data::from_population(pop)));
@@ -634,7 +646,11 @@ impl Pipeline {
                     stage,
                     iteration: 0,
                     total_iterations: self.total_iterations,
-                    log_likelihood: self.final_model.as_ref().and_then(|m| m.log_likelihood.last().copied()).unwrap_or(f64::NAN),
+                    log_likelihood: self
+                        .final_model
+                        .as_ref()
+                        .and_then(|m| m.log_likelihood.last().copied())
+                        .unwrap_or(f64::NAN),
                     parts: self.final_model.as_ref().map_or(0, |m| m.n_parts()),
                     run_finished: true,
                 })
@@ -755,7 +771,10 @@ impl Pipeline {
             let after = merged.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
             self.part_rounds.push(PartRound { parts: before + dissolved, dissolved, after });
             if std::env::var_os("POSEMFA_DEBUG").is_some() {
-                eprintln!("part rule, round {}: {dissolved} parts dissolved as flesh, merges {before} -> {after} parts", self.decide_rounds);
+                eprintln!(
+                    "part rule, round {}: {dissolved} parts dissolved as flesh, merges {before} -> {after} parts",
+                    self.decide_rounds
+                );
             }
             if dissolved > 0 || after < before {
                 self.refined_labels = merged.clone();
@@ -786,7 +805,12 @@ impl Pipeline {
             }
         }
         let n = match self.params.target_parts {
-            Some(n) if !(model.n_parts() == n && compact(&model.labels).iter().max().map_or(0, |&l| l as usize + 1) == n) => n,
+            Some(n)
+                if !(model.n_parts() == n
+                    && compact(&model.labels).iter().max().map_or(0, |&l| l as usize + 1) == n) =>
+            {
+                n
+            }
             _ => {
                 // the model is final: with the part rule's motion labels, its parts are fitted to them
                 if distinct && rounds == 0 && !fitted {
@@ -1084,7 +1108,8 @@ impl Pipeline {
     }
 
     fn sub_fit(&self, r: &mut Refinement, labels: &[u32]) -> Result<Fit> {
-        let (data, layout) = r.laid.take().unwrap_or_else(|| lay_out(Data::from_population_subset(&self.pop, &r.members[r.part])));
+        let (data, layout) =
+            r.laid.take().unwrap_or_else(|| lay_out(Data::from_population_subset(&self.pop, &r.members[r.part])));
         Fit::from_labels_laid_out(data, layout, labels, &self.sub_params())
     }
 
@@ -1228,7 +1253,8 @@ fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32
     // (uncut, the start's parts are single patches of about 6 vertices, too few to tell a slice of a band from a
     // part of its own: on the skinned characters the flesh rule there moved the parts' agreement with the
     // skeleton by -0.05 to +0.04)
-    let labels = if params.refine && !uncut && !exact { dissolve_start_flesh(pop, data, &cut, params) } else { cut.clone() };
+    let labels =
+        if params.refine && !uncut && !exact { dissolve_start_flesh(pop, data, &cut, params) } else { cut.clone() };
     Ok((cut, labels))
 }
 
@@ -1248,7 +1274,10 @@ fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &
         super::islands::connect_parts(&mut model, pop, false, params.min_part_vertices);
     }
     if std::env::var_os("POSEMFA_DEBUG").is_some() {
-        eprintln!("start: {dissolved} parts dissolved as flesh before the first AECM ({:.1} ms)", crate::clock::now_ms() - t0);
+        eprintln!(
+            "start: {dissolved} parts dissolved as flesh before the first AECM ({:.1} ms)",
+            crate::clock::now_ms() - t0
+        );
     }
     compact(&model.labels)
 }
@@ -1315,7 +1344,8 @@ mod tests {
     #[test]
     fn the_start_loses_a_band_slice_and_keeps_the_limbs() {
         // the arm with a wide blend band at the elbow, the band a start part of its own (label 3)
-        let g = generate(&Spec { preset: Preset::Arm, vertices: 1500, poses: 8, joint_band: 0.10, ..Spec::default() }).unwrap();
+        let g = generate(&Spec { preset: Preset::Arm, vertices: 1500, poses: 8, joint_band: 0.10, ..Spec::default() })
+            .unwrap();
         let pop = &g.population;
         let idx = |name| part_index(Preset::Arm, name).unwrap() as u32;
         let (upper, forearm) = (idx("upper_arm"), idx("forearm"));
@@ -1331,7 +1361,8 @@ mod tests {
         let start = dissolve_start_flesh(pop, &data, &sliced, &params);
         assert_eq!(start.iter().max(), Some(&2), "the slice went to its sides");
         // (a wide band's middle is about as near one side's motion as the other's)
-        let (before, after) = (adjusted_rand_index(&sliced, &g.part_of_vertex), adjusted_rand_index(&start, &g.part_of_vertex));
+        let (before, after) =
+            (adjusted_rand_index(&sliced, &g.part_of_vertex), adjusted_rand_index(&start, &g.part_of_vertex));
         assert!(after > 0.9 && after > before, "adjusted Rand against the truth {before} -> {after}");
         // the three true parts are no blend of each other: all stay
         let kept = dissolve_start_flesh(pop, &data, &g.part_of_vertex, &params);
@@ -1345,7 +1376,12 @@ mod tests {
         let (cut, start) = tree_start(pop, &Data::from_population(pop), &Params::default()).unwrap();
         let count = |l: &[u32]| l.iter().map(|&x| x as usize + 1).max().unwrap_or(0);
         let truth = count(&g.part_of_vertex);
-        assert!(count(&start) >= truth && count(&cut) >= count(&start), "cut {}, start {}, truth {truth}", count(&cut), count(&start));
+        assert!(
+            count(&start) >= truth && count(&cut) >= count(&start),
+            "cut {}, start {}, truth {truth}",
+            count(&cut),
+            count(&start)
+        );
         // every start part lies inside one true part (the joints are where the tree stops)
         let mut inside = 0;
         for k in 0..count(&start) as u32 {
@@ -1378,7 +1414,11 @@ mod tests {
         // from one run to the next; a start again from labels begins below it
         let (first, second) = (&runs[0], &runs[1]);
         let last = *first.last().unwrap();
-        assert!(second[0] >= last - 1e-9 * last.abs(), "second run starts at {} after the first ended at {last}", second[0]);
+        assert!(
+            second[0] >= last - 1e-9 * last.abs(),
+            "second run starts at {} after the first ended at {last}",
+            second[0]
+        );
         assert!(second.len() < first.len(), "{} iterations after {}", second.len(), first.len());
         let result = pipe.result();
         assert_eq!(result.model.n_parts(), 18);
@@ -1396,7 +1436,9 @@ mod tests {
         let mut cold = Pipeline::new(&g.population, &Params::default()).unwrap();
         let state = cold.refit("distinct", &merged).unwrap();
         let State::Final(mut cold) = state else { panic!("a refit is a final-stage run") };
-        let State::Final(mut warm) = pipe.refit_warm("distinct", &merged).unwrap() else { panic!("a refit is a final-stage run") };
+        let State::Final(mut warm) = pipe.refit_warm("distinct", &merged).unwrap() else {
+            panic!("a refit is a final-stage run")
+        };
         // every part that is one of the last run's (all but at most the union) starts from that run's component
         let before = crate::mfa::data::to_frame(warm.data(), &last.parts);
         let same = super::super::labels::same_parts(&merged, &last.labels);
@@ -1441,7 +1483,8 @@ mod tests {
                 size_a[x as usize] += 1;
                 size_b[y as usize] += 1;
             }
-            let same = overlap.iter().filter(|(&(x, y), &k)| 2 * k > size_a[x as usize] && 2 * k > size_b[y as usize]).count();
+            let same =
+                overlap.iter().filter(|(&(x, y), &k)| 2 * k > size_a[x as usize] && 2 * k > size_b[y as usize]).count();
             assert_eq!(same, n, "coarse {coarse_vertices}: {same} of the {n} parts shown came out of the refit");
             let ari = adjusted_rand_index(a, b);
             assert!(ari > 0.9, "coarse {coarse_vertices}: the refit moved away from the partition shown ({ari:.3})");
@@ -1450,7 +1493,11 @@ mod tests {
         let short = Params { start_labels: Some(vec![0; 10]), ..Params::default() };
         let e = Pipeline::new(&g.population, &short).err().expect("refused").to_string();
         assert!(e.contains("startLabels has 10 labels for a population of"), "{e}");
-        let distinct = Params { part_rule: PartRule::Distinct, start_labels: Some(vec![0; g.population.n_vertices()]), ..Params::default() };
+        let distinct = Params {
+            part_rule: PartRule::Distinct,
+            start_labels: Some(vec![0; g.population.n_vertices()]),
+            ..Params::default()
+        };
         let e = Pipeline::new(&g.population, &distinct).err().expect("refused").to_string();
         assert!(e.contains("startLabels needs the merge tree's part rule"), "{e}");
     }
@@ -1526,7 +1573,12 @@ mod tests {
         while !pipe.is_done() {
             let p = pipe.step().unwrap();
             if let Some((ll, parts)) = last.filter(|&(_, parts)| parts == p.parts) {
-                assert!(p.log_likelihood >= ll - 1e-9 * ll.abs(), "{:?}: {} after {ll} ({parts} parts)", p.stage, p.log_likelihood);
+                assert!(
+                    p.log_likelihood >= ll - 1e-9 * ll.abs(),
+                    "{:?}: {} after {ll} ({parts} parts)",
+                    p.stage,
+                    p.log_likelihood
+                );
             }
             last = (!p.run_finished).then_some((p.log_likelihood, p.parts));
         }
@@ -1544,7 +1596,10 @@ mod tests {
         assert_eq!(result.model.n_parts(), all.model.n_parts());
         let truth = adjusted_rand_index(&result.model.labels, &g.part_of_vertex);
         let same = adjusted_rand_index(&result.model.labels, &all.model.labels);
-        assert!(truth > 0.95 && same > 0.95, "adjusted Rand against the truth {truth}, against the fit on all vertices {same}");
+        assert!(
+            truth > 0.95 && same > 0.95,
+            "adjusted Rand against the truth {truth}, against the fit on all vertices {same}"
+        );
         // and the fit of all vertices is converged at the fit's tolerance, as good as the one decided there
         assert!(result.model.converged);
         let (rmse, rmse_all) = (result.model.rmse(pop), all.model.rmse(pop));

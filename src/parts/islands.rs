@@ -18,8 +18,8 @@
 //! other label (a separate mesh component that shares its label with another one) cannot be joined to
 //! anything and stays counted.
 
-use crate::mfa::result::Model;
 use crate::mesh::Population;
+use crate::mfa::result::Model;
 
 /// Connected pieces of every label: `piece[v]` (u32::MAX for vertices in no triangle) and each piece's
 /// (label, size).

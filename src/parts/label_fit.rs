@@ -166,7 +166,9 @@ mod tests {
         let spec = Spec { preset: Preset::Quadruped, vertices: 6000, poses: 10, seed: 1, ..Spec::default() };
         let g = generate(&spec).unwrap();
         let params = Params::default();
-        let mut fit = crate::mfa::aecm::Fit::from_labels(Data::from_population(&g.population), &g.part_of_vertex, &params).unwrap();
+        let mut fit =
+            crate::mfa::aecm::Fit::from_labels(Data::from_population(&g.population), &g.part_of_vertex, &params)
+                .unwrap();
         fit.run(&mut |_| true);
         let mut model = fit.model();
         assert_eq!(model.n_parts(), g.n_parts());

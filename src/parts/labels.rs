@@ -92,7 +92,11 @@ pub fn weighted_log_mean_between(values: &[f64], weights: &[usize], lo: f64, hi:
             mass += inside;
         }
     }
-    if mass > 0.0 { (sum / mass).exp() } else { weighted_median(values, weights) }
+    if mass > 0.0 {
+        (sum / mass).exp()
+    } else {
+        weighted_median(values, weights)
+    }
 }
 
 #[cfg(test)]

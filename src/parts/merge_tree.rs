@@ -238,7 +238,11 @@ fn farthest_first(pop: &Population, most: usize) -> Vec<usize> {
     let sample: Vec<usize> = (0..nv).step_by(stride).collect();
     let points: Vec<Vec<[f64; 3]>> = (0..ns).map(|i| sample.iter().map(|&j| pop.point(i, j)).collect()).collect();
     let dist = |a: &[[f64; 3]], i: usize| -> f64 {
-        points[i].iter().zip(a).map(|(p, r)| (p[0] - r[0]).powi(2) + (p[1] - r[1]).powi(2) + (p[2] - r[2]).powi(2)).sum()
+        points[i]
+            .iter()
+            .zip(a)
+            .map(|(p, r)| (p[0] - r[0]).powi(2) + (p[1] - r[1]).powi(2) + (p[2] - r[2]).powi(2))
+            .sum()
     };
     // the mean shape at the sampled vertices
     let mut means = vec![[0.0; 3]; sample.len()];
@@ -254,7 +258,10 @@ fn farthest_first(pop: &Population, most: usize) -> Vec<usize> {
     let mut chosen = vec![first];
     let mut near: Vec<f64> = (0..ns).map(|i| dist(&points[first], i)).collect();
     while chosen.len() < most {
-        let next = (0..ns).filter(|i| !chosen.contains(i)).max_by(|&x, &y| near[x].total_cmp(&near[y]).then(y.cmp(&x))).expect("poses left");
+        let next = (0..ns)
+            .filter(|i| !chosen.contains(i))
+            .max_by(|&x, &y| near[x].total_cmp(&near[y]).then(y.cmp(&x)))
+            .expect("poses left");
         chosen.push(next);
         for i in 0..ns {
             near[i] = near[i].min(dist(&points[next], i));
@@ -406,7 +413,9 @@ pub fn seeded_patches(pop: &Population, count: usize, hops: bool) -> (Vec<u32>, 
                     let d = level.len().wrapping_sub(1);
                     let Some(top) = level.last_mut() else { break None };
                     match top.peek() {
-                        Some(&std::cmp::Reverse(j)) if dist[j as usize] as usize == d => break (d > 0).then_some(j as usize),
+                        Some(&std::cmp::Reverse(j)) if dist[j as usize] as usize == d => {
+                            break (d > 0).then_some(j as usize)
+                        }
                         Some(_) => {
                             top.pop();
                         }
@@ -566,7 +575,8 @@ impl MergeTree {
             .map(|(st, size)| {
                 // start: each pose onto the first
                 let c = st.centred();
-                let mut rot: Vec<Mat3> = (0..q).map(|i| if i == 0 { IDENTITY } else { best_rotation(&c[i * q]) }).collect();
+                let mut rot: Vec<Mat3> =
+                    (0..q).map(|i| if i == 0 { IDENTITY } else { best_rotation(&c[i * q]) }).collect();
                 let sse = rigid_sse(&st, &mut rot);
                 Some(Node { stats: st, rot, sse, size })
             })
@@ -639,7 +649,9 @@ impl MergeTree {
             let node = Node { stats, rot, sse, size };
             let id = nodes.len() as u32;
             let variance = total_sse * per_variance;
-            total_sse += node.sse - nodes[a as usize].as_ref().map_or(0.0, |n| n.sse) - nodes[b as usize].as_ref().map_or(0.0, |n| n.sse);
+            total_sse += node.sse
+                - nodes[a as usize].as_ref().map_or(0.0, |n| n.sse)
+                - nodes[b as usize].as_ref().map_or(0.0, |n| n.sse);
             merges.push(Merge { a, b, parts: live, rise, score: rise / typical, variance });
             nodes[a as usize] = None;
             nodes[b as usize] = None;
@@ -652,7 +664,8 @@ impl MergeTree {
                 adjacent[c as usize].remove(&a);
                 adjacent[c as usize].remove(&b);
                 adjacent[c as usize].insert(id);
-                let lower = [a, b].iter().filter_map(|&x| pending.remove(&key(c, x))).map(|p| p.raw_lower).fold(0.0, f64::max);
+                let lower =
+                    [a, b].iter().filter_map(|&x| pending.remove(&key(c, x))).map(|p| p.raw_lower).fold(0.0, f64::max);
                 let slack = 1e-9 * (spread + nodes[c as usize].as_ref().expect("live").stats.spread());
                 let raw_lower = (lower - raw.max(0.0) - slack).max(0.0);
                 let small = size_of(&nodes, c).min(size);
@@ -890,7 +903,8 @@ mod tests {
         let shape = |s: f64| -> Vec<[f64; 3]> {
             (0..150).map(|j| [(j / 3) as f64 / 50.0, (j % 3) as f64 * 0.01 * s, 0.0]).collect()
         };
-        let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], faces, vec![shape(1.0), shape(2.0)]).unwrap();
+        let pop =
+            Population::from_unit_shapes(vec!["a".into(), "b".into()], faces, vec![shape(1.0), shape(2.0)]).unwrap();
         let (owner, seeds) = seeded_patches(&pop, 10, false);
         assert_eq!(seeds.len(), 50);
         assert!(owner.iter().all(|&o| (o as usize) < seeds.len()));
@@ -904,11 +918,16 @@ mod tests {
     /// first seed at its distance. On a mesh of two pieces (a strip, a fan) and vertices on no triangle.
     #[test]
     fn seeds_by_hops_are_the_plain_farthest_point_sampling() {
-        let mut faces: Vec<[u32; 3]> = (0..30u32).map(|t| if t % 2 == 0 { [t, t + 1, t + 2] } else { [t + 1, t, t + 2] }).collect();
+        let mut faces: Vec<[u32; 3]> =
+            (0..30u32).map(|t| if t % 2 == 0 { [t, t + 1, t + 2] } else { [t + 1, t, t + 2] }).collect();
         faces.extend((0..9u32).map(|k| [40, 41 + k, 42 + k]));
         let nv = 53;
-        let shape = |s: f64| -> Vec<[f64; 3]> { (0..nv).map(|j| [j as f64 / nv as f64, (j % 2) as f64 * 0.1 * s, 0.0]).collect() };
-        let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], faces.clone(), vec![shape(1.0), shape(2.0)]).unwrap();
+        let shape = |s: f64| -> Vec<[f64; 3]> {
+            (0..nv).map(|j| [j as f64 / nv as f64, (j % 2) as f64 * 0.1 * s, 0.0]).collect()
+        };
+        let pop =
+            Population::from_unit_shapes(vec!["a".into(), "b".into()], faces.clone(), vec![shape(1.0), shape(2.0)])
+                .unwrap();
         let mut adj = vec![Vec::new(); nv];
         for f in &faces {
             for s in 0..3 {
@@ -936,7 +955,10 @@ mod tests {
             let nearest = |from: &Vec<Vec<usize>>, j: usize| from.iter().map(|d| d[j]).min().unwrap();
             loop {
                 // (vertices 32-39, 51 and 52 are on no triangle: never seeds)
-                let far = (0..nv).filter(|&j| !adj[j].is_empty()).max_by(|&a, &b| nearest(&from, a).cmp(&nearest(&from, b)).then(b.cmp(&a))).unwrap();
+                let far = (0..nv)
+                    .filter(|&j| !adj[j].is_empty())
+                    .max_by(|&a, &b| nearest(&from, a).cmp(&nearest(&from, b)).then(b.cmp(&a)))
+                    .unwrap();
                 let d = nearest(&from, far);
                 if d == 0 || (seeds.len() >= count && d != usize::MAX) {
                     break;
@@ -948,7 +970,11 @@ mod tests {
             assert_eq!(got, seeds, "{count} seeds");
             for j in (0..nv).filter(|&j| !adj[j].is_empty()) {
                 let d = nearest(&from, j);
-                assert_eq!(owner[j] as usize, (0..seeds.len()).find(|&k| from[k][j] == d).unwrap(), "{count} seeds, vertex {j}");
+                assert_eq!(
+                    owner[j] as usize,
+                    (0..seeds.len()).find(|&k| from[k][j] == d).unwrap(),
+                    "{count} seeds, vertex {j}"
+                );
             }
         }
     }
@@ -957,7 +983,8 @@ mod tests {
     /// shapes are asked about afresh.
     #[test]
     fn the_kept_pose_order_gives_each_count_what_a_fresh_search_does() {
-        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 300, poses: 30, seed: 5, ..Spec::default() }).unwrap();
+        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 300, poses: 30, seed: 5, ..Spec::default() })
+            .unwrap();
         let mut pop = g.population.clone();
         for most in [2, 5, TREE_POSES, SPREAD_ORDER, 29] {
             let mut fresh = farthest_first(&pop, most);
@@ -978,7 +1005,8 @@ mod tests {
     /// cheapest of all adjacent live pairs at that moment, each pair's rise computed afresh.
     #[test]
     fn every_merge_is_the_cheapest_adjacent_pair() {
-        let g = generate(&Spec { preset: Preset::Quadruped, vertices: 700, poses: 9, seed: 3, ..Spec::default() }).unwrap();
+        let g =
+            generate(&Spec { preset: Preset::Quadruped, vertices: 700, poses: 9, seed: 3, ..Spec::default() }).unwrap();
         let pop = &g.population;
         let tree = MergeTree::build(pop, 1e-14);
         let poses = spread_poses(pop, TREE_POSES);
@@ -1011,7 +1039,11 @@ mod tests {
         for (m, mg) in tree.merges.iter().enumerate() {
             let cheapest = edges.iter().map(|&(a, b)| rise(&stats, &own, a, b)).fold(f64::INFINITY, f64::min);
             assert!(edges.contains(&(mg.a.min(mg.b), mg.a.max(mg.b))), "merge {m} joins no adjacent pair");
-            assert!(mg.rise <= cheapest * (1.0 + 1e-6) + 1e-15, "merge {m}: rise {} but a pair rises {cheapest}", mg.rise);
+            assert!(
+                mg.rise <= cheapest * (1.0 + 1e-6) + 1e-15,
+                "merge {m}: rise {} but a pair rises {cheapest}",
+                mg.rise
+            );
             let id = (tree.n_leaves + m) as u32;
             let joined = stats[mg.a as usize].as_ref().unwrap().plus(stats[mg.b as usize].as_ref().unwrap());
             own.push(sse(&joined));

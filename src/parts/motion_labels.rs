@@ -13,8 +13,8 @@
 //! part k). Only the labels and the moved vertices' latent images (eq 21 under their new part) change; the
 //! parts' motions stay.
 
-use crate::mfa::result::Model;
 use crate::mesh::Population;
+use crate::mfa::result::Model;
 
 /// The residual r_k(j) of vertex `h` (one point per shape) under a part's motion.
 pub fn motion_residual(part: &crate::mfa::Component, h: &[[f64; 3]]) -> f64 {
@@ -179,7 +179,8 @@ mod tests {
             weight: 1.0,
         };
         for trial in 0..40 {
-            let h: Vec<[f64; 3]> = (0..ns).map(|i| [x(300 + trial * 40 + i), x(900 + trial * 40 + i), x(1700 + trial * 40 + i)]).collect();
+            let h: Vec<[f64; 3]> =
+                (0..ns).map(|i| [x(300 + trial * 40 + i), x(900 + trial * 40 + i), x(1700 + trial * 40 + i)]).collect();
             let r = motion_residual(&part, &h);
             for stride in 2..=ns {
                 let some: Vec<usize> = (trial % stride..ns).step_by(stride).take(BOUND_SHAPES).collect();
@@ -192,4 +193,3 @@ mod tests {
         }
     }
 }
-

@@ -9,14 +9,14 @@
 //! density of samples, and two places that coincide in one shape but move apart in the other fall in different
 //! cells, so a small part that moves on its own is sampled too.
 
+use crate::mesh::Population;
 use crate::mfa::aecm::labels_from_gamma;
+use crate::mfa::aecm::Fit;
 use crate::mfa::component::Component;
 use crate::mfa::data::{to_frame, Data};
-use crate::mfa::aecm::Fit;
 use crate::mfa::estep::e_step_pruned;
 use crate::mfa::params::Params;
 use crate::mfa::result::Model;
-use crate::mesh::Population;
 
 /// Vertex ids (ascending) of about `target` well-spread vertices (see the module doc); all vertices when the
 /// population has at most `target`.
@@ -137,7 +137,11 @@ mod tests {
                         if j < 9000 {
                             [0.1 * (t * 0.37).sin().abs(), 0.1 * (t * 0.11).cos().abs(), 0.1 * (t * 0.07).sin().abs()]
                         } else {
-                            [0.5 + 0.5 * (t * 0.37).sin().abs(), 0.5 + 0.5 * (t * 0.11).cos().abs(), 0.5 * i as f64 * (t * 0.07).sin().abs()]
+                            [
+                                0.5 + 0.5 * (t * 0.37).sin().abs(),
+                                0.5 + 0.5 * (t * 0.11).cos().abs(),
+                                0.5 * i as f64 * (t * 0.07).sin().abs(),
+                            ]
                         }
                     })
                     .collect()

@@ -186,7 +186,8 @@ mod tests {
         };
         let (a, b) = (part(&[0.0, 0.4, -0.3, 0.8]), part(&[0.0, -0.2, 0.5, 0.1]));
         let x = [1.0, 0.5, 0.2];
-        let (ta, tb): (Vec<Vec3>, Vec<Vec3>) = ((0..4).map(|i| a.place(i, x)).collect(), (0..4).map(|i| b.place(i, x)).collect());
+        let (ta, tb): (Vec<Vec3>, Vec<Vec3>) =
+            ((0..4).map(|i| a.place(i, x)).collect(), (0..4).map(|i| b.place(i, x)).collect());
         let mut e = Vec::new();
         // moved by a alone: nothing left, with a offered; something without it
         assert!(pair_blend_residual(&ta, &[&a, &b], &mut e) < 1e-20);
@@ -228,7 +229,8 @@ mod tests {
         let elbow = g.joint_centers[forearm as usize].expect("the forearm has a joint");
         let from_elbow = |j: usize| crate::geometry::norm(crate::geometry::sub(g.rest[j], elbow));
         let mut across = |part: u32| -> f64 {
-            let mut d: Vec<f64> = arm.iter().filter(|&&j| g.part_of_vertex[j] == part).map(|&j| from_elbow(j)).collect();
+            let mut d: Vec<f64> =
+                arm.iter().filter(|&&j| g.part_of_vertex[j] == part).map(|&j| from_elbow(j)).collect();
             d.sort_by(f64::total_cmp);
             let mid = d[d.len() / 2];
             let (a, b): (Vec<usize>, Vec<usize>) =

@@ -27,15 +27,15 @@
 //! or when the parts left touch no other part (a mesh of separate pieces): each gives an error that says
 //! what to ask for instead.
 
+use super::islands::connect_labels;
+use super::pair_blend::Blends;
+use crate::error::{Error, Result};
+use crate::mesh::Population;
 use crate::mfa::aecm::Fit;
 use crate::mfa::component::Component;
 use crate::mfa::data::Data;
 use crate::mfa::init::{component_from_points, kmeans};
-use super::islands::connect_labels;
-use super::pair_blend::Blends;
 use crate::mfa::params::Params;
-use crate::error::{Error, Result};
-use crate::mesh::Population;
 use std::collections::{BTreeSet, HashMap};
 
 /// Checks that `n` parts of at least `min_part_vertices` vertices can exist on `n_vertices` vertices.
@@ -147,7 +147,12 @@ impl<'a> Counter<'a> {
         let mut sub = Data::from_population_subset(self.pop, members);
         let positions = sub.clone();
         // residuals under the part's own rigid motion: h_j - (R Λ E[z|h_j] + b), as the refinement's second rule
-        let whole = component_from_points(&positions, &(0..members.len()).collect::<Vec<_>>(), members.len(), self.params.floor());
+        let whole = component_from_points(
+            &positions,
+            &(0..members.len()).collect::<Vec<_>>(),
+            members.len(),
+            self.params.floor(),
+        );
         let mut residuals = Vec::with_capacity(sub.n_vertices * sub.n_shapes * 3);
         for l in 0..members.len() {
             let h = positions.vertex(l).to_vec();
@@ -176,7 +181,9 @@ impl<'a> Counter<'a> {
                 })
                 .collect();
             let wbs: Vec<_> = comps.iter().map(|c| c.woodbury()).collect();
-            let score = |l: usize, h: u32| comps[h as usize].log_weighted_density(&wbs[h as usize], &positions.vertex(l).to_vec());
+            let score = |l: usize, h: u32| {
+                comps[h as usize].log_weighted_density(&wbs[h as usize], &positions.vertex(l).to_vec())
+            };
             connect_labels(&mut halves, &faces, &score, None, 1);
             let split: [Vec<usize>; 2] =
                 [0u32, 1].map(|h| (0..members.len()).filter(|&l| halves[l] == h).map(|l| members[l]).collect());
@@ -308,7 +315,12 @@ impl<'a> Counter<'a> {
 /// Labels with exactly `n` parts (renumbered 0..n), from `labels` (Algorithm 1's result; each label one
 /// connected piece of the mesh, as [`super::islands::connect_parts`] leaves them), by the splits and merges of
 /// the module doc.
-pub fn labels_with_count(pop: &Population, labels: &[u32], n: usize, params: &Params) -> Result<(Vec<u32>, CountChange)> {
+pub fn labels_with_count(
+    pop: &Population,
+    labels: &[u32],
+    n: usize,
+    params: &Params,
+) -> Result<(Vec<u32>, CountChange)> {
     let params = &params.for_radius(pop.mean_squared_radius());
     check_target(n, pop.n_vertices(), params.min_part_vertices)?;
     if labels.len() != pop.n_vertices() {
@@ -370,7 +382,8 @@ mod tests {
     fn one_split_more_finds_the_joint_inside_a_merged_limb() {
         // the arm's upper arm and forearm given as one part: asked for the true count, the split is the elbow
         let g = generate(&Spec { preset: Preset::Arm, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
-        let (upper, forearm) = (part_index(Preset::Arm, "upper_arm").unwrap() as u32, part_index(Preset::Arm, "forearm").unwrap() as u32);
+        let (upper, forearm) =
+            (part_index(Preset::Arm, "upper_arm").unwrap() as u32, part_index(Preset::Arm, "forearm").unwrap() as u32);
         let merged: Vec<u32> = g.part_of_vertex.iter().map(|&l| if l == forearm { upper } else { l }).collect();
         let (labels, change) = labels_with_count(&g.population, &merged, 3, &Params::default()).unwrap();
         assert_eq!((change.from, change.splits, change.merges), (2, 1, 0));
@@ -384,7 +397,8 @@ mod tests {
         let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
         let names = crate::synth::part_names(Preset::Quadruped);
         let idx = |n: &str| part_index(Preset::Quadruped, n).unwrap_or_else(|| panic!("{n} not in {names:?}")) as u32;
-        let pairs = [(idx("front_left_upper"), idx("front_left_lower")), (idx("hind_right_upper"), idx("hind_right_lower"))];
+        let pairs =
+            [(idx("front_left_upper"), idx("front_left_lower")), (idx("hind_right_upper"), idx("hind_right_lower"))];
         let merged: Vec<u32> =
             g.part_of_vertex.iter().map(|&l| pairs.iter().find(|p| p.1 == l).map_or(l, |p| p.0)).collect();
         let n = g.n_parts();
@@ -393,7 +407,11 @@ mod tests {
         // each merged leg cut in two: most of its upper part's vertices in one part, most of its lower's in another
         let most = |t: u32| {
             let mut count = HashMap::new();
-            g.part_of_vertex.iter().zip(&labels).filter(|p| *p.0 == t).for_each(|p| *count.entry(*p.1).or_insert(0usize) += 1);
+            g.part_of_vertex
+                .iter()
+                .zip(&labels)
+                .filter(|p| *p.0 == t)
+                .for_each(|p| *count.entry(*p.1).or_insert(0usize) += 1);
             count.into_iter().max_by_key(|c| (c.1, c.0)).unwrap().0
         };
         for &(u, l) in &pairs {

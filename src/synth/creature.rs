@@ -433,11 +433,7 @@ fn hand() -> Design {
         // flexion: the axis across the finger, turning its tip towards the palm side (-z)
         let flex = if *f == "thumb" { unit(cross(dir, [0.0, 0.0, -1.0])) } else { unit(cross([0.0, 0.0, 1.0], dir)) };
         let spread = unit(cross(dir, flex));
-        joints.extend([
-            j(&[(flex, -0.2, 1.0), (spread, -0.15, 0.15)]),
-            j(&[(flex, 0.0, 1.2)]),
-            j(&[(flex, 0.0, 0.8)]),
-        ]);
+        joints.extend([j(&[(flex, -0.2, 1.0), (spread, -0.15, 0.15)]), j(&[(flex, 0.0, 1.2)]), j(&[(flex, 0.0, 0.8)])]);
         limbs.push(LimbDef {
             attach_t: t,
             attach_phi: phi.to_radians(),

@@ -22,7 +22,15 @@ pub struct Example {
 }
 
 fn quadruped_spec() -> Spec {
-    Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, seed: 0, joint_band: 0.01, max_angle_deg: 60.0, ..Spec::default() }
+    Spec {
+        preset: Preset::Quadruped,
+        vertices: 3000,
+        poses: 10,
+        seed: 0,
+        joint_band: 0.01,
+        max_angle_deg: 60.0,
+        ..Spec::default()
+    }
 }
 
 /// The creatures of other proportions (issue 15) at the generator's defaults, 3 000 vertices and 10 poses.

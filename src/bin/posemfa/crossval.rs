@@ -27,8 +27,9 @@ pub fn run(a: Args) -> Result<(), String> {
         g.weights = Weights::Fitted;
     }
     let opts = g.rig_options();
-    let folds = crossval(&pop, &params, &opts, &mut |i, n| eprintln!("fold {}/{n}: leaving out {}", i + 1, pop.names[i]))
-        .map_err(|e| e.to_string())?;
+    let folds =
+        crossval(&pop, &params, &opts, &mut |i, n| eprintln!("fold {}/{n}: leaving out {}", i + 1, pop.names[i]))
+            .map_err(|e| e.to_string())?;
     for f in &folds {
         out!(
             "{}: in sample {:.4}, held out {:.4}, ratio {:.3} ({} bones, fit {:.0} ms, solve {:.1} ms)",

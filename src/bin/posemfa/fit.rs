@@ -40,7 +40,17 @@ pub fn run(o: Args) -> Result<(), String> {
         load_ms
     );
     let d = posemfa::parts::diagnosis::diagnose_fit(&pop, &result);
-    out!("  {}: {}", if d.undecided { "no verdict" } else if d.articulated { "articulated" } else { "NOT articulated" }, d.reason);
+    out!(
+        "  {}: {}",
+        if d.undecided {
+            "no verdict"
+        } else if d.articulated {
+            "articulated"
+        } else {
+            "NOT articulated"
+        },
+        d.reason
+    );
     if let Some(g) = &truth {
         out!("  ground truth: {}", ground_truth_json(g, m));
     } else {

@@ -149,8 +149,17 @@ mod tests {
 
     #[test]
     fn flags_refine_paper_whatever_the_order() {
-        let cli = Cli::try_parse_from(["posemfa", "interpolate", "d", "--paper-root", "--paper", "--no-residual", "--from", "1"])
-            .map_err(|e| e.to_string());
+        let cli = Cli::try_parse_from([
+            "posemfa",
+            "interpolate",
+            "d",
+            "--paper-root",
+            "--paper",
+            "--no-residual",
+            "--from",
+            "1",
+        ])
+        .map_err(|e| e.to_string());
         // --to, --t, --out are required
         assert!(cli.is_err());
         let words = ["posemfa", "interpolate", "d", "--paper-root", "--paper", "--no-residual"];

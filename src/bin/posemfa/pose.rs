@@ -53,9 +53,8 @@ pub fn read_frames(paths: &[String]) -> Result<Vec<(String, Vec<[f64; 3]>)>, Str
         named.push((f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(), bytes));
     }
     named.sort_by(|a, b| posemfa::mesh::population::natural_cmp(&a.0, &b.0));
-    let loaded = posemfa::mesh::load::load(named).map_err(|errors| {
-        errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n")
-    })?;
+    let loaded = posemfa::mesh::load::load(named)
+        .map_err(|errors| errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))?;
     Ok(loaded.poses.into_iter().map(|(n, m)| (n, m.positions)).collect())
 }
 

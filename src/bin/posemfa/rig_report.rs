@@ -54,7 +54,10 @@ pub fn run(a: Args) -> Result<(), String> {
             timings.insert("write".into(), ms(t).into());
             info.insert("options".into(), serde_json::to_value(g).unwrap_or_default());
             info.insert("parts".into(), result.model.n_parts().into());
-            info.insert("islands".into(), posemfa::parts::islands::island_count(&result.model.labels, &pop.faces).into());
+            info.insert(
+                "islands".into(),
+                posemfa::parts::islands::island_count(&result.model.labels, &pop.faces).into(),
+            );
             info.insert("solver_trace".into(), rig.trace.clone().into());
             glb
         }

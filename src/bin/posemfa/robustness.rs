@@ -37,7 +37,11 @@ pub fn run(o: Args) -> Result<(), String> {
             let labels: Vec<u32> = serde_json::from_str(&text)
                 .map_err(|e| format!("{path}: {e}; give a JSON array of non-negative integers, one per vertex"))?;
             if labels.len() != pop.n_vertices() {
-                return Err(format!("{path}: {} labels for {} vertices; give one per vertex", labels.len(), pop.n_vertices()));
+                return Err(format!(
+                    "{path}: {} labels for {} vertices; give one per vertex",
+                    labels.len(),
+                    pop.n_vertices()
+                ));
             }
             Some(labels)
         }

@@ -6,8 +6,8 @@ use clap::ValueHint;
 use posemfa::export::gltf::{GltfOptions, Joints, Morphs, Weights};
 use posemfa::mesh::gltf::PoseSource;
 use posemfa::mesh::Population;
-use posemfa::parts::hierarchy::{FitResult, Pipeline, Progress, Stage};
 use posemfa::mfa::{LambdaRule, Params, PartRule};
+use posemfa::parts::hierarchy::{FitResult, Pipeline, Progress, Stage};
 
 // ---------------------------------------------------------------- value parsers
 
@@ -209,11 +209,13 @@ pub struct FitArgs {
 fn read_labels(path: &std::path::Path) -> Result<Vec<u32>, String> {
     let shown = path.display();
     let text = std::fs::read_to_string(path).map_err(|e| format!("--start-labels {shown}: cannot read it: {e}"))?;
-    let value: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("--start-labels {shown}: not JSON ({e}); give an array of labels or a fit JSON"))?;
+    let value: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| format!("--start-labels {shown}: not JSON ({e}); give an array of labels or a fit JSON"))?;
     let labels = value.get("labels").unwrap_or(&value);
     serde_json::from_value(labels.clone()).map_err(|_| {
-        format!("--start-labels {shown}: not an array of whole numbers (one part per vertex) nor a fit JSON with `labels`")
+        format!(
+            "--start-labels {shown}: not an array of whole numbers (one part per vertex) nor a fit JSON with `labels`"
+        )
     })
 }
 
@@ -250,7 +252,9 @@ impl FitArgs {
         if let Some(e) = self.refine_threshold {
             if let Some(rule @ (PartRule::Distinct | PartRule::Tree)) = self.part_rule {
                 let name = PART_RULES.iter().find(|r| r.1 == rule).map_or("", |r| r.0);
-                return Err(format!("--refine-threshold is the paper's part rule (threshold): leave out --part-rule {name}"));
+                return Err(format!(
+                    "--refine-threshold is the paper's part rule (threshold): leave out --part-rule {name}"
+                ));
             }
             p.refine_threshold = e;
             p.part_rule = PartRule::Threshold;
@@ -389,7 +393,10 @@ pub struct BandArgs {
 }
 
 /// Fits (quietly) and builds the articulated model.
-pub fn articulate_fit(fit: &FitArgs, band: &BandArgs) -> Result<(Population, posemfa::articulate::Articulation), String> {
+pub fn articulate_fit(
+    fit: &FitArgs,
+    band: &BandArgs,
+) -> Result<(Population, posemfa::articulate::Articulation), String> {
     let (params, pop, _truth) = fit.load()?;
     let result = run_fit(&params, &pop, true)?;
     let art = band.articulate(&result, &pop)?;
@@ -398,7 +405,11 @@ pub fn articulate_fit(fit: &FitArgs, band: &BandArgs) -> Result<(Population, pos
 
 impl BandArgs {
     /// The articulated model of a fit.
-    pub fn articulate(&self, result: &FitResult, pop: &Population) -> Result<posemfa::articulate::Articulation, String> {
+    pub fn articulate(
+        &self,
+        result: &FitResult,
+        pop: &Population,
+    ) -> Result<posemfa::articulate::Articulation, String> {
         posemfa::articulate::Articulation::with_band(&result.model, pop, self.band).map_err(|e| e.to_string())
     }
 }

@@ -23,7 +23,8 @@ pub struct Args {
 pub fn run(a: Args) -> Result<(), String> {
     let (pop, _truth) = a.input.load()?;
     let budget = posemfa::memory::budget_bytes().map_err(|e| e.to_string())?;
-    let (faces, shapes) = posemfa::mesh::subdivide::subdivide(&pop, a.levels as usize, budget).map_err(|e| e.to_string())?;
+    let (faces, shapes) =
+        posemfa::mesh::subdivide::subdivide(&pop, a.levels as usize, budget).map_err(|e| e.to_string())?;
     let out_dir = std::path::Path::new(&a.out);
     std::fs::create_dir_all(out_dir).map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
     let mut taken = std::collections::HashSet::new();
@@ -56,7 +57,9 @@ pub fn run(a: Args) -> Result<(), String> {
 fn file_stem(name: &str) -> String {
     let base = std::path::Path::new(name);
     let whole = match (base.file_stem(), base.extension()) {
-        (Some(stem), Some(ext)) if ext.to_string_lossy().chars().all(|c| c.is_ascii_alphanumeric()) => stem.to_string_lossy().into_owned(),
+        (Some(stem), Some(ext)) if ext.to_string_lossy().chars().all(|c| c.is_ascii_alphanumeric()) => {
+            stem.to_string_lossy().into_owned()
+        }
         _ => base.file_name().map_or_else(|| name.to_string(), |n| n.to_string_lossy().into_owned()),
     };
     whole.chars().map(|c| if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') { c } else { '-' }).collect()
