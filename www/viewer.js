@@ -3,34 +3,11 @@
 // fit in the worker keeps the CPU.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { viewAxes } from './view-axes.js';
 
 THREE.ColorManagement.enabled = false; // colours go to the screen as given: exact pixels for the tests
 
 const BACKGROUND = 0xeef0f3;
-
-/** The view axes for a mesh of flat xyz `reference`: the camera looks across the thinnest side of its box (a
- * horse from its flank; `view`), with `up` the next axis up (y, or z when y is the thinnest) and `right` the third.
- * `side` (+1 / -1): it looks from +view unless the shape reaches out much farther the other way from its mean
- * (more than 1.5 times as far): then from there, so that what sticks out is in front (the hand's thumb before
- * the palm, not behind it). */
-export function viewAxes(reference) {
-  const n = reference.length / 3;
-  if (!n) return { view: 2, up: 1, right: 0, side: 1 };
-  const lo = [Infinity, Infinity, Infinity];
-  const hi = [-Infinity, -Infinity, -Infinity];
-  const mean = [0, 0, 0];
-  for (let k = 0; k < reference.length; k++) {
-    const c = k % 3;
-    lo[c] = Math.min(lo[c], reference[k]);
-    hi[c] = Math.max(hi[c], reference[k]);
-    mean[c] += reference[k] / n;
-  }
-  const size = hi.map((h, c) => h - lo[c]);
-  const view = size.indexOf(Math.min(...size));
-  const up = view === 1 ? 2 : 1;
-  const side = mean[view] - lo[view] > 1.5 * (hi[view] - mean[view]) ? -1 : 1;
-  return { view, up, right: 3 - view - up, side };
-}
 
 export class Viewer {
   constructor(container) {
@@ -40,7 +17,8 @@ export class Viewer {
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
     this.renderer.setClearColor(BACKGROUND);
     this.renderer.domElement.tabIndex = 0;
-    this.renderer.domElement.setAttribute('aria-label', 'mesh view: drag to orbit, wheel to zoom, click a vertex');
+    this.renderer.domElement.setAttribute('aria-label', 'mesh view: drag to orbit, wheel to zoom, click a vertex; keys: arrows pan, Shift+arrows orbit, + and - zoom, 0 resets the camera');
+    this.renderer.domElement.addEventListener('keydown', (e) => this.zoomKey(e));
     container.appendChild(this.renderer.domElement);
 
     this.scene = new THREE.Scene();
@@ -252,11 +230,35 @@ export class Viewer {
     this.frame();
   }
 
+  /** The view focused: + and - move the camera toward and away from its target (the wheel's zoom), 0 frames the
+   * shapes again (Reset camera); the arrows are OrbitControls' (undamped). */
+  zoomKey(e) {
+    if (e.key.startsWith('Arrow')) {
+      // a press moves at once: damped, its small step fell under OrbitControls' own threshold and stopped there
+      this.controls.enableDamping = false;
+      setTimeout(() => { this.controls.enableDamping = true; }); // after OrbitControls' listener has run
+      return;
+    }
+    if (e.altKey || e.ctrlKey || e.metaKey) return;
+    const step = { '+': 0.8, '=': 0.8, '-': 1.25, _: 1.25 }[e.key];
+    if (e.key === '0') this.reset();
+    else if (step) {
+      this.camera.position.sub(this.controls.target).multiplyScalar(step).add(this.controls.target);
+      this.userMoved = true;
+      this.controls.update();
+      this.requestRender();
+      for (const f of this.cameraListeners) f();
+    } else return;
+    e.preventDefault();
+  }
+
   /** OrbitControls orbit about the camera's up axis as it was when they were made: made anew when it changes. */
   makeControls() {
     this.controls?.dispose();
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.enableDamping = true;
+    this.controls.listenToKeyEvents(this.renderer.domElement); // arrows pan, Shift / Ctrl + arrows orbit
+    this.controls.keyRotateSpeed = 10; // a press turns 2π·10/height: about 5° on a 700-pixel view
     this.controls.addEventListener('change', () => {
       this.requestRender();
       for (const f of this.cameraListeners) f();

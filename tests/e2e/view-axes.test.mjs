@@ -1,9 +1,9 @@
-// The framing camera's axes (www/viewer.js viewAxes): across the thinnest side, from the side the shape reaches
+// The framing camera's axes (www/view-axes.js viewAxes): across the thinnest side, from the side the shape reaches
 // out to (the Hand example's thumb in front of its palm). Pure functions: no browser.
 // Run: node --test tests/e2e/view-axes.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { viewAxes } from '../../www/viewer.js';
+import { viewAxes } from '../../www/view-axes.js';
 
 // A slab 2 x 1 x 0.1 (thin along z) as a grid of points, and a finger of `length` along `dir` from its middle.
 function slab(finger = null) {

@@ -1,0 +1,52 @@
+// The ninth newcomer's review (docs/page-fixes.md, thirty-fourth session) on the built page (dist/): what a
+// first-time user found misleading, each fix checked as the user met it.
+// Run: npm run build && node --test tests/e2e/review9.test.mjs
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { pageSession, waitState } from './helpers.mjs';
+
+const session = pageSession();
+
+test('the 3D view takes keys once focused: arrows pan, Shift+arrows orbit, + and - zoom, 0 frames again', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const camera = () => page.evaluate(() => {
+    const c = window.posemfa.urlState().view.cam;
+    const d = Math.hypot(c[0] - c[3], c[1] - c[4], c[2] - c[5]);
+    return { c, d };
+  });
+  // the camera is in the link once the user moved it; before that, the framed camera
+  await page.focus('#view canvas');
+  const framed = await camera();
+  const settle = () => page.waitForTimeout(600); // OrbitControls' damping glides on for a few frames
+  await page.keyboard.press('+');
+  await settle();
+  const nearer = await camera();
+  assert.ok(nearer.d < 0.9 * framed.d, `+ zooms in: ${framed.d} -> ${nearer.d}`);
+  await page.keyboard.press('-');
+  await page.keyboard.press('-');
+  await settle();
+  assert.ok((await camera()).d > nearer.d * 1.4, '- zooms out');
+  await page.keyboard.press('0');
+  await settle();
+  const again = await camera();
+  assert.ok(Math.abs(again.d - framed.d) < 1e-6 * framed.d, `0 frames again: ${framed.d} / ${again.d}`);
+  // Shift+arrow turns the camera about its target (its distance stays), an arrow moves the target
+  await page.keyboard.press('Shift+ArrowLeft');
+  await settle();
+  const turned = await camera();
+  assert.ok(Math.abs(turned.d - framed.d) < 1e-3 * framed.d, 'an orbit keeps the distance');
+  // by the whole step at once (2π·10 / the view's height), not the damped fraction of it
+  const height = await page.evaluate(() => document.querySelector('#view canvas').clientHeight);
+  const offset = (c) => [0, 1, 2].map((i) => c[i] - c[3 + i]);
+  const [u, v] = [offset(framed.c), offset(turned.c)];
+  const angle = Math.acos(Math.min(1, u.reduce((s, x, i) => s + x * v[i], 0) / (framed.d * turned.d)));
+  assert.ok(Math.abs(angle / (2 * Math.PI * 10 / height) - 1) < 0.05, `Shift+ArrowLeft turned ${angle} rad`);
+  await page.keyboard.press('ArrowUp');
+  await settle();
+  const panned = await camera();
+  assert.ok(Math.hypot(...panned.c.slice(3).map((x, i) => x - turned.c[3 + i])) > 1e-3 * framed.d, 'ArrowUp pans the target');
+  assert.match(await page.getAttribute('#view canvas', 'aria-label'), /arrows pan, Shift\+arrows orbit, \+ and - zoom, 0 resets the camera/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
