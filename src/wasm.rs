@@ -107,7 +107,11 @@ impl WasmPopulation {
             Population::from_files_all_errors(names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect())
         };
         match read {
-            Ok(p) => Ok(WasmPopulation { inner: Rc::new(p) }),
+            // poses with no motion are refused as a bad file is: the page keeps what it had
+            Ok(p) => match p.still_error() {
+                Some(e) => Err(thrown(&[e.problem()])),
+                None => Ok(WasmPopulation { inner: Rc::new(p) }),
+            },
             Err(errors) => Err(thrown(&errors.iter().map(Error::problem).collect::<Vec<_>>())),
         }
     }
@@ -195,7 +199,9 @@ impl WasmPopulation {
         if labels.len() != self.inner.n_vertices() {
             return Err(js_err(format!("{} labels for {} vertices", labels.len(), self.inner.n_vertices())));
         }
-        Ok(Uint32Array::from(crate::articulate::graph::colour_parts(&labels, &self.inner.faces, n_colours).as_slice()))
+        Ok(Uint32Array::from(
+            crate::articulate::graph::colour_parts(&labels, self.inner.graph_faces(), n_colours).as_slice(),
+        ))
     }
 
     /// [`Population::part_colours`] keeping the colours of earlier partitions where a part is the same (more
@@ -235,7 +241,8 @@ impl WasmPopulation {
             at += parts;
         }
         Ok(Uint32Array::from(
-            crate::articulate::graph::colour_parts_like(&labels, &self.inner.faces, n_colours, &earlier).as_slice(),
+            crate::articulate::graph::colour_parts_like(&labels, self.inner.graph_faces(), n_colours, &earlier)
+                .as_slice(),
         ))
     }
 }
@@ -366,7 +373,7 @@ impl Fitter {
             }
             labels = all;
         }
-        let c = crate::articulate::graph::colour_parts(&labels, &self.pop.faces, n_colours);
+        let c = crate::articulate::graph::colour_parts(&labels, self.pop.graph_faces(), n_colours);
         let per_component: Vec<u32> =
             (0..k).map(|p| c.get(p).copied().unwrap_or((p % n_colours.max(1)) as u32)).collect();
         Uint32Array::from(per_component.as_slice())

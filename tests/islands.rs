@@ -18,7 +18,7 @@ fn islands_of(pop: &Population, params: &Params) -> (usize, usize) {
     let json: serde_json::Value = serde_json::from_str(&fit_to_json(pop, &r)).unwrap();
     let reported = json["islands"].as_u64().expect("islands in the JSON") as usize;
     // the JSON's figure is the labels' own count
-    assert_eq!(reported, island_count(&r.model.labels, &pop.faces));
+    assert_eq!(reported, island_count(&r.model.labels, pop.graph_faces()));
     (reported, r.model.n_parts())
 }
 

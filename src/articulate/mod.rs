@@ -221,8 +221,8 @@ impl Articulation {
         let n_parts = model.parts.len();
         // the shapes one at a time in f64 (a copy of them all would be 24 bytes per vertex-pose at once)
         let shapes = || pop.shapes().map(|s| s.to_vec());
-        let graph = PartGraph::new(&model.labels, &pop.faces, n_parts, &pop.shape(0).to_vec());
-        let joints = joints::joints(&graph, model, &pop.faces, shapes());
+        let graph = PartGraph::new(&model.labels, pop.graph_faces(), n_parts, &pop.shape(0).to_vec());
+        let joints = joints::joints(&graph, model, pop.graph_faces(), shapes());
         let mut part_area = vec![0.0; n_parts];
         for s in shapes() {
             for f in pop.faces.iter() {
@@ -244,7 +244,8 @@ impl Articulation {
             .max_by(|&a, &b| part_area[a].total_cmp(&part_area[b]).then(b.cmp(&a)))
             .expect("at least one used part");
         let rigid_weights = SkinWeights::rigid(&model.labels);
-        let smooth_weights = skin::smooth_weights(&graph, &model.labels, &model.latent, &pop.faces, shapes(), band);
+        let smooth_weights =
+            skin::smooth_weights(&graph, &model.labels, &model.latent, pop.graph_faces(), shapes(), band);
         Ok(Articulation {
             model: model.clone(),
             faces: pop.faces.clone(),

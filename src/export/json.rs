@@ -120,7 +120,7 @@ impl FitJson {
             complete: result.complete,
             rmse: m.rmse(pop),
             e_rms: crate::export::rig_report::fit_e_rms(pop, m),
-            islands: crate::parts::islands::island_count(&m.labels, &pop.faces),
+            islands: crate::parts::islands::island_count(&m.labels, pop.graph_faces()),
             timings_ms,
             stage_stats: result.stats.clone(),
             diagnosis: crate::parts::diagnosis::diagnose_finished(pop, result),

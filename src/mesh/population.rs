@@ -54,15 +54,23 @@ pub struct Population {
     /// Where the shapes came from, for people: "11 OBJ files", "48 morph targets of mesh 'horse' in
     /// horse.glb, ...", "241 frames of animation 'Walk' (sampled at its keyframes, 24 fps) ...".
     pub source: String,
-    /// The poses in farthest-first order, worked out once for these coordinates ([`Population::pose_order`]).
-    pose_order: PoseOrder,
+    /// What is worked out once for these coordinates: the poses in farthest-first order
+    /// ([`Population::pose_order`]) and the faces the connectivity follows ([`Population::graph_faces`]).
+    derived: Derived,
 }
 
-/// A slot for [`Population::pose_order`], shared by the clones that share the coordinates. Not part of a
-/// population's value: two populations with equal coordinates are equal whether or not it is filled.
+/// The slots for [`Population::pose_order`] and [`Population::graph_faces`], shared by the clones that share
+/// the coordinates. Not part of a population's value: two populations with equal coordinates are equal whether
+/// or not they are filled.
 #[derive(Debug, Clone, Default)]
-struct PoseOrder(std::sync::Arc<std::sync::OnceLock<Vec<usize>>>);
-impl PartialEq for PoseOrder {
+struct Derived(std::sync::Arc<DerivedSlots>);
+#[derive(Debug, Default)]
+struct DerivedSlots {
+    pose_order: std::sync::OnceLock<Vec<usize>>,
+    /// None: no seams, the faces themselves.
+    graph_faces: std::sync::OnceLock<Option<Vec<[u32; 3]>>>,
+}
+impl PartialEq for Derived {
     fn eq(&self, _: &Self) -> bool {
         true
     }
@@ -175,6 +183,57 @@ pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
     (ab.len() - i).cmp(&(bb.len() - j)).then_with(|| a.cmp(b))
 }
 
+/// [`Population::graph_faces`] when some vertices are the same point in every pose: the faces, then each face
+/// with such a vertex again with it replaced by the other vertex at that point (for a later one the first, the
+/// one of lowest index; for the first the next one).
+/// None when there are none. Exact equality of the stored coordinates: duplicates written by an exporter are
+/// the same numbers, and two vertices that only touch in some poses (lips, fingertips) stay apart.
+fn seam_bridged(pop: &Population) -> Option<Vec<[u32; 3]>> {
+    let nv = pop.n_vertices;
+    let first = pop.points.get(..nv)?;
+    // the vertices in the order of their first pose's coordinates: equal points next to each other
+    let key = |j: u32| first[j as usize].map(f32::to_bits);
+    let mut order: Vec<u32> = (0..nv as u32).collect();
+    order.sort_unstable_by_key(|&j| (key(j), j));
+    let mut same = vec![u32::MAX; nv];
+    let mut any = false;
+    let mut lead = 0;
+    for k in 1..order.len() {
+        let (r, j) = (order[lead], order[k]);
+        if key(j) != key(r) {
+            lead = k;
+            continue;
+        }
+        let everywhere = pop.shapes().all(|s| s.points[j as usize] == s.points[r as usize]);
+        if everywhere {
+            same[j as usize] = r;
+            any = true;
+        }
+    }
+    if !any {
+        return None;
+    }
+    // each face at such a point again on the other vertex there (a later one's on the first, the first's on the
+    // first later one), so that both have the neighbours of both: the same distances along the edges
+    let mut other = same.clone();
+    for j in 0..nv {
+        let r = same[j];
+        if r != u32::MAX && other[r as usize] == u32::MAX {
+            other[r as usize] = j as u32;
+        }
+    }
+    let mut faces = pop.faces.to_vec();
+    for f in pop.faces.iter() {
+        if f.iter().any(|&v| other[v as usize] != u32::MAX) {
+            let g = f.map(|v| if other[v as usize] == u32::MAX { v } else { other[v as usize] });
+            if g[0] != g[1] && g[1] != g[2] && g[0] != g[2] {
+                faces.push(g);
+            }
+        }
+    }
+    Some(faces)
+}
+
 impl Population {
     pub fn n_shapes(&self) -> usize {
         self.points.len().checked_div(self.n_vertices).unwrap_or(0)
@@ -209,6 +268,35 @@ impl Population {
         self.points.chunks_exact(nv).map(|points| Shape { points })
     }
 
+    /// An error when every shape is the first one moved as a whole (each vertex within 1e-6 of the unit box of
+    /// its place there, once each shape's centroid is taken out): such poses have no motion to learn, and the
+    /// page refuses them as it refuses a bad file, keeping what it had. None otherwise. (The fit makes the same
+    /// check on its data: `mfa::aecm`.)
+    pub fn still_error(&self) -> Option<Error> {
+        let centroid = |s: Shape<'_>| {
+            let n = s.len().max(1) as f64;
+            s.iter().fold([0.0; 3], |a, p| [a[0] + p[0] / n, a[1] + p[1] / n, a[2] + p[2] / n])
+        };
+        let first = self.shapes().next()?;
+        let c0 = centroid(first);
+        let moved = self.shapes().skip(1).any(|s| {
+            let c = centroid(s);
+            s.iter().zip(first.iter()).any(|(p, q)| (0..3).any(|d| ((p[d] - c[d]) - (q[d] - c0[d])).abs() > 1e-6))
+        });
+        let names = match self.names.len() {
+            0..=3 => self.names.join(", "),
+            n => format!("{} and {} more", self.names[..2].join(", "), n - 2),
+        };
+        (!moved).then(|| Error::Population {
+            file: names,
+            message: format!(
+                "all {} poses are the same shape (every vertex at the same place in each, up to one move of the whole \
+                 mesh): there is no motion to learn; open poses in which the parts move",
+                self.n_shapes()
+            ),
+        })
+    }
+
     /// Mean over the shapes of the mean squared distance of the vertices from the shape's centroid (unit box):
     /// the population's size, the same however the poses are turned (which its bounding box is not).
     pub fn mean_squared_radius(&self) -> f64 {
@@ -236,14 +324,23 @@ impl Population {
     pub fn set_shapes(&mut self, shapes: &[Vec<[f64; 3]>]) {
         assert!(shapes.iter().all(|s| s.len() == self.n_vertices), "every shape needs {} vertices", self.n_vertices);
         self.points = std::sync::Arc::new(shapes.iter().flatten().map(|&p| narrow(p)).collect());
-        self.pose_order = PoseOrder::default();
+        self.derived = Derived::default();
     }
 
     /// An order of the poses that depends on the coordinates alone (the part rule's farthest-first order,
     /// [`crate::parts::merge_tree::spread_poses`]): `compute` runs the first time it is asked for, and the
     /// population and its clones keep the answer until their shapes are replaced.
     pub fn pose_order(&self, compute: impl FnOnce() -> Vec<usize>) -> &[usize] {
-        self.pose_order.0.get_or_init(compute)
+        self.derived.0.pose_order.get_or_init(compute)
+    }
+
+    /// The triangles for the code that follows the mesh's connectivity (the patches and the merge tree, the
+    /// parts' adjacency, islands, the part graph and its joints): the faces, and where two vertices are the same
+    /// point in every pose (an exporter split them at a seam or per face corner, or two pieces of the mesh meet
+    /// there), every face of each again on the other, so that a part does not end at a seam. The faces
+    /// themselves when no two vertices are (the usual case). Drawing, volumes and exports use `faces`.
+    pub fn graph_faces(&self) -> &[[u32; 3]] {
+        self.derived.0.graph_faces.get_or_init(|| seam_bridged(self)).as_deref().unwrap_or(&self.faces)
     }
 
     /// The population of the listed vertices only (`vertices[c]` becomes vertex c), with `faces` over the new
@@ -259,7 +356,7 @@ impl Population {
             n_vertices: vertices.len(),
             normalization: self.normalization,
             source: self.source.clone(),
-            pose_order: PoseOrder::default(),
+            derived: Derived::default(),
         }
     }
 
@@ -319,7 +416,7 @@ impl Population {
             n_vertices,
             normalization,
             source,
-            pose_order: PoseOrder::default(),
+            derived: Derived::default(),
         })
     }
 
@@ -507,7 +604,7 @@ impl Population {
             n_vertices,
             normalization,
             source,
-            pose_order: PoseOrder::default(),
+            derived: Derived::default(),
         })
     }
 
@@ -743,6 +840,49 @@ fn check_same_mesh(first_name: &str, first: &Mesh, name: &str, mesh: &Mesh) -> R
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn poses_that_are_one_shape_moved_as_a_whole_are_still() {
+        let base = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let moved = |dx: f64, bend: f64| -> Vec<[f64; 3]> {
+            base.iter().enumerate().map(|(j, p)| [p[0] + dx, p[1], if j == 2 { bend } else { 0.0 }]).collect()
+        };
+        let pop = |shapes| Population::from_unit_shapes(vec!["a.obj".into(), "b.obj".into()], vec![[0, 1, 2]], shapes);
+        let still = pop(vec![moved(0.0, 0.0), moved(0.25, 0.0)]).unwrap().still_error().expect("still");
+        assert!(
+            matches!(&still, Error::Population { file, message } if file == "a.obj, b.obj"
+            && message.starts_with("all 2 poses are the same shape")),
+            "{still:?}"
+        );
+        assert!(pop(vec![moved(0.0, 0.0), moved(0.25, 0.01)]).unwrap().still_error().is_none());
+    }
+
+    #[test]
+    fn vertices_at_one_point_in_every_pose_are_joined_for_the_connectivity_only() {
+        // two triangles that share an edge's points but not its vertices (2 = 4 and 1 = 5 in every pose), and
+        // vertex 6 on vertex 0 in the first pose only (touching, not the same point)
+        let faces = vec![[0, 1, 2], [4, 5, 3], [6, 2, 1]];
+        let shape = |t: f64| -> Vec<[f64; 3]> {
+            let (a, b, c, d) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, t], [1.5, 1.0, 0.0]);
+            vec![a, b, c, d, c, b, [0.0, t, 0.0]]
+        };
+        let pop =
+            Population::from_unit_shapes(vec!["a".into(), "b".into()], faces.clone(), vec![shape(0.0), shape(0.3)])
+                .unwrap();
+        assert_eq!(*pop.faces, faces, "the faces themselves are as given");
+        // the face on 4 and 5 again on 2 and 1, the faces on 1 and 2 again on 5 and 4; vertex 6 is not 0
+        assert_eq!(pop.graph_faces(), &[[0, 1, 2], [4, 5, 3], [6, 2, 1], [0, 5, 4], [2, 1, 3], [6, 4, 5]]);
+        assert_eq!(crate::parts::islands::island_count(&[0; 7], pop.graph_faces()), 0);
+        assert_eq!(crate::parts::islands::island_count(&[0; 7], &pop.faces), 1);
+        // without such vertices, the faces
+        let plain = Population::from_unit_shapes(
+            vec!["a".into(), "b".into()],
+            vec![[0, 1, 2]],
+            vec![shape(0.0)[..3].to_vec(), shape(0.3)[..3].to_vec()],
+        )
+        .unwrap();
+        assert!(std::ptr::eq(plain.graph_faces(), plain.faces.as_slice()));
+    }
 
     fn tri(offset: f64) -> Mesh {
         Mesh { positions: vec![[offset, 0.0, 0.0], [1.0 + offset, 0.0, 0.0], [0.0, 2.0, 0.0]], faces: vec![[0, 1, 2]] }

@@ -36,7 +36,7 @@ impl CoarseMesh {
         let mut around: Vec<Vec<(u32, bool)>> = vec![Vec::new(); n];
         let mut lowest_of: Vec<Vec<(u32, u32)>> = vec![Vec::new(); n];
         let mut faces: Vec<[u32; 3]> = Vec::new();
-        for f in pop.faces.iter() {
+        for f in pop.graph_faces().iter() {
             let p = f.map(|v| patch[v as usize]);
             for s in 0..3 {
                 let (a, b) = (p[s], p[(s + 1) % 3]);

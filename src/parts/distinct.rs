@@ -292,7 +292,7 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
         if model.n_parts() < 3 {
             return dissolved;
         }
-        let (adjacent, members) = adjacency(&model.labels, &pop.faces, model.n_parts());
+        let (adjacent, members) = adjacency(&model.labels, pop.graph_faces(), model.n_parts());
         // the sides a slice of flesh lies between: its neighbours at least its own size (a band slice is thinner
         // than the bodies it joins; a small part of its own, whose rotation a few vertices barely fix, must not
         // make a whole limb look like a blend of it and the next limb)
@@ -402,14 +402,14 @@ pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f
 pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &Params) -> (Vec<u32>, Vec<CurvePoint>) {
     let params = &params.for_radius(pop.mean_squared_radius());
     let mut labels = compact(labels);
-    let (_, members) = adjacency(&labels, &pop.faces, 0);
+    let (_, members) = adjacency(&labels, pop.graph_faces(), 0);
     let mut err: Vec<f64> = members.iter().map(|m| rigid_variance(pop, m, params)).collect();
     let sizes: Vec<usize> = members.iter().map(|m| m.len()).collect();
     let s_ref = weighted_median(&err, &sizes).max(params.floor());
     let mut cache: std::collections::HashMap<(u32, u32), (f64, f64)> = std::collections::HashMap::new();
     let mut curve = Vec::new();
     loop {
-        let (adjacent, members) = adjacency(&labels, &pop.faces, 0);
+        let (adjacent, members) = adjacency(&labels, pop.graph_faces(), 0);
         let n_total = labels.len().max(1) as f64;
         let variance = members.iter().zip(&err).map(|(m, e)| m.len() as f64 * e).sum::<f64>() / n_total;
         let mut best: Option<((u32, u32), f64, f64)> = None;

@@ -1308,7 +1308,7 @@ pub fn merge_rigid_neighbours(pop: &Population, labels: &[u32], params: &Params)
             members[l as usize].push(j);
         }
         let mut pairs = std::collections::BTreeSet::new();
-        for f in pop.faces.iter() {
+        for f in pop.graph_faces().iter() {
             for e in 0..3 {
                 let (a, b) = (labels[f[e] as usize], labels[f[(e + 1) % 3] as usize]);
                 if a != b {

@@ -210,7 +210,7 @@ pub fn connect_parts(model: &mut Model, pop: &Population, new_parts: bool, min_v
     let score = |v: usize, l: u32| parts[l as usize].log_weighted_density(&wbs[l as usize], &h(v));
     let old = model.labels.clone();
     let split = if new_parts { Some(SPLIT_FRACTION) } else { None };
-    let repair = connect_labels(&mut model.labels, &pop.faces, &score, split, min_vertices.max(1));
+    let repair = connect_labels(&mut model.labels, pop.graph_faces(), &score, split, min_vertices.max(1));
     let n_old = model.parts.len();
     for (n, &from) in repair.split_from.iter().enumerate() {
         let l = (n_old + n) as u32;

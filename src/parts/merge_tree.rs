@@ -287,7 +287,7 @@ fn edges(pop: &Population) -> Vec<(u32, u32, f64)> {
 /// The mesh's edges (i < j, sorted, unique).
 fn edge_list(pop: &Population) -> Vec<(u32, u32)> {
     let mut e: Vec<(u32, u32)> = Vec::with_capacity(pop.faces.len() * 3);
-    for f in pop.faces.iter() {
+    for f in pop.graph_faces().iter() {
         for s in 0..3 {
             let (a, b) = (f[s], f[(s + 1) % 3]);
             if a != b {
@@ -584,7 +584,7 @@ impl MergeTree {
         // node adjacency: mesh edges between patches, and every other connected piece of the mesh linked to
         // its nearest one (so the tree ends in one node)
         let mut adjacent: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); n_leaves];
-        for f in pop.faces.iter() {
+        for f in pop.graph_faces().iter() {
             for s in 0..3 {
                 let (a, b) = (leaves[f[s] as usize], leaves[f[(s + 1) % 3] as usize]);
                 if a != b {

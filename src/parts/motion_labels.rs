@@ -72,7 +72,7 @@ pub fn label_by_motion(model: &mut Model, pop: &Population) -> usize {
     if m < 2 {
         return 0;
     }
-    let (adjacent, _) = super::labels::adjacency(&model.labels, &pop.faces, m);
+    let (adjacent, _) = super::labels::adjacency(&model.labels, pop.graph_faces(), m);
     let mut moved = 0;
     let ns = pop.n_shapes();
     let mut h = vec![[0.0; 3]; ns];

@@ -220,7 +220,7 @@ mod tests {
                 (!m.is_empty()).then(|| fit(&m))
             })
             .collect();
-        let mut blends = Blends::new(&data, &pop.faces, labels.clone(), motions);
+        let mut blends = Blends::new(&data, pop.graph_faces(), labels.clone(), motions);
         // the truth's cut
         let (fore, rest): (Vec<usize>, Vec<usize>) = arm.iter().partition(|&&j| g.part_of_vertex[j] == forearm);
         let (before, truth) = blends.split_residuals(k, &[fit(&rest), fit(&fore)]);

@@ -139,7 +139,7 @@ impl<'a> Counter<'a> {
         }
         let faces: Vec<[u32; 3]> = self
             .pop
-            .faces
+            .graph_faces()
             .iter()
             .filter(|f| f.iter().all(|&v| local[v as usize] != u32::MAX))
             .map(|f| f.map(|v| local[v as usize]))
@@ -204,7 +204,7 @@ impl<'a> Counter<'a> {
     fn adjacent_pairs(&self) -> BTreeSet<(usize, usize)> {
         let labels = self.labels();
         let mut pairs = BTreeSet::new();
-        for f in self.pop.faces.iter() {
+        for f in self.pop.graph_faces().iter() {
             for e in 0..3 {
                 let (a, b) = (labels[f[e] as usize] as usize, labels[f[(e + 1) % 3] as usize] as usize);
                 if a != b {
@@ -219,7 +219,7 @@ impl<'a> Counter<'a> {
         let live: Vec<usize> = (0..self.parts.len()).filter(|&k| self.parts[k].is_some()).collect();
         if self.blends.is_none() {
             let motions = self.parts.iter().map(|p| p.as_ref().map(|m| self.motion(m))).collect();
-            self.blends = Some(Blends::new(self.data, &self.pop.faces, self.labels(), motions));
+            self.blends = Some(Blends::new(self.data, self.pop.graph_faces(), self.labels(), motions));
         }
         for &k in &live {
             if !self.cuts.contains_key(&k) {

@@ -56,7 +56,7 @@ pub fn run(a: Args) -> Result<(), String> {
             info.insert("parts".into(), result.model.n_parts().into());
             info.insert(
                 "islands".into(),
-                posemfa::parts::islands::island_count(&result.model.labels, &pop.faces).into(),
+                posemfa::parts::islands::island_count(&result.model.labels, pop.graph_faces()).into(),
             );
             info.insert("solver_trace".into(), rig.trace.clone().into());
             glb
