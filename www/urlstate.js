@@ -10,7 +10,7 @@
 //                              ("Refine N parts"): the link makes the fit, then the Refine
 //   teach=N, stage=coarse|refine|final   a teaching fit N steps in (and the Algorithm 1 stage it was in): the
 //                              link opens on the same step (the steps are deterministic)
-//   view=parts|stages|recon|latent|interp|truth   flat=0|1   pose=I (0-based)
+//   view=parts|stages|recon|latent|interp|pose|truth   flat=0|1   pose=I (0-based)
 //   a=I, b=J, t=0..1, side=0|1, skin=rigid|smooth, residual=0|1     interpolation
 //   cam=PX,PY,PZ,TX,TY,TZ      camera position and target (exact numbers)
 //   embed=1                    minimal view for an iframe (hides header, panel, toolbar, poses, interpolation
@@ -21,7 +21,7 @@ import { state, subscribe } from './state.js';
 
 export const CONTROLS = ['header', 'panel', 'toolbar', 'modes', 'caption', 'poses', 'interp', 'info', 'presets', 'teach'];
 const EMBED_HIDES = ['header', 'panel', 'toolbar', 'poses', 'interp'];
-const MODES = ['parts', 'stages', 'recon', 'latent', 'interp', 'truth'];
+const MODES = ['parts', 'stages', 'recon', 'latent', 'interp', 'pose', 'truth'];
 const STAGES = ['coarse', 'refine', 'final', 'done'];
 const ORDER = ['ex', 'gen', 'src', 'parts', 'bones', 'seed', 'tol', 'floor', 'lambda', 'refine', 'cut', 'teach', 'stage', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];
 

@@ -3,7 +3,7 @@
 // Run: npm run build && node --test tests/e2e/review9.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, asPayload } from './helpers.mjs';
 
 const session = pageSession();
 
@@ -47,6 +47,29 @@ test('the 3D view takes keys once focused: arrows pan, Shift+arrows orbit, + and
   const panned = await camera();
   assert.ok(Math.hypot(...panned.c.slice(3).map((x, i) => x - turned.c[3 + i])) > 1e-3 * framed.d, 'ArrowUp pans the target');
   assert.match(await page.getAttribute('#view canvas', 'aria-label'), /arrows pan, Shift\+arrows orbit, \+ and - zoom, 0 resets the camera/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('a link made in the Pose view opens in the Pose view', async () => {
+  const { page, context, log } = await session.open('#ex=quadruped&view=pose');
+  await page.waitForFunction(() => window.posemfa?.fitCount() >= 1 && !window.posemfa.restoring(), null, { timeout: 120000 });
+  await page.waitForFunction(() => window.posemfa.mode() === 'pose' && window.posemfa.pose?.ready(), null, { timeout: 120000 });
+  await page.waitForFunction(() => /[#&]view=pose(&|$)/.test(location.hash), null, { timeout: 10000 });
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('poses that are all one shape are refused at load, and the fitted population stays', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const before = await page.evaluate(() => ({ summary: window.posemfa.summary(), errors: window.posemfa.loadErrorCount() }));
+  const text = 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n';
+  await page.setInputFiles('[data-testid=file-input]', asPayload([{ name: 'a.obj', text }, { name: 'b.obj', text }]));
+  await page.waitForFunction((n) => window.posemfa.loadErrorCount() > n, before.errors, { timeout: 30000 });
+  assert.match(await page.textContent('[data-testid=errors]'), /a\.obj, b\.obj: all 2 poses are the same shape .*: there is no motion to learn; open poses in which the parts move/);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  assert.deepEqual(await page.evaluate(() => window.posemfa.summary()), before.summary);
   assert.deepEqual(log.errors, []);
   await context.close();
 });
