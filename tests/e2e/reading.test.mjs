@@ -112,7 +112,7 @@ test('Refine says it set "Parts in the end", while the field holds its count', a
   await page.waitForFunction((x) => window.posemfa.fitCount() > x, c, { timeout: 120000 });
   assert.equal((await summary(page)).parts, n);
   assert.equal(await page.inputValue('#params [name=targetParts]'), String(n));
-  assert.equal(await text(page, '[data-testid=refine-note]'), `Refine fits with “Parts in the end” set to ${n}, and the field keeps it: later fits too make exactly ${n} parts until it is auto (empty) again.`);
+  assert.equal(await text(page, '[data-testid=refine-note]'), `Refine fits with “Parts in the end” set to ${n}, and the field keeps it: later fits too make exactly ${n} parts, each its own (not this partition: Refine again from the slider for that), until it is auto (empty) again.`);
   // the field emptied (auto): the line goes
   await page.fill('#params [name=targetParts]', '');
   assert.equal(await page.isHidden('[data-testid=refine-note]'), true);

@@ -73,3 +73,24 @@ test('poses that are all one shape are refused at load, and the fitted populatio
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('after Refine the part rule\'s chart says it judged the refined parts and changed nothing', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.evaluate((v) => {
+    const s = document.getElementById('tree-slider');
+    s.value = String(v);
+    s.dispatchEvent(new Event('input'));
+  }, parts - 2);
+  await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), parts - 2);
+  await page.click('[data-testid=tree-refine]');
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 90000 });
+  assert.equal(await waitState(page, ['fitted', 'error'], 90000), 'fitted');
+  const title = await page.evaluate(() => document.getElementById('part-curve').dataset.title);
+  assert.match(title, new RegExp(`^part rule on the refined parts, not applied: \\d+ merges? would make ${parts - 2} → \\d+$`));
+  assert.equal(await page.textContent('#part-curve-note'), `The chart is the part rule on the ${parts - 2} parts refined from the merge tree: it judges them, and a Refine keeps them as they are.`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

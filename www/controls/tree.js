@@ -23,7 +23,7 @@ function showRefineNote() {
   if (!holds) refined = null;
   $('refine-note').hidden = !holds;
   $('refine-note').textContent = holds
-    ? `Refine fits with “Parts in the end” set to ${refined}, and the field keeps it: later fits too make exactly ${parts(refined)} until it is auto (empty) again.`
+    ? `Refine fits with “Parts in the end” set to ${refined}, and the field keeps it: later fits too make exactly ${parts(refined)}, each its own (not this partition: Refine again from the slider for that), until it is auto (empty) again.`
     : '';
 }
 

@@ -15,8 +15,9 @@ export function decade(k) {
   return `10${String(k).split('').map((c) => SUPERSCRIPT[c]).join('')}`;
 }
 
-/** ratio: the distinct ratio the fit compared the scores with (the line; none when unknown). */
-export function drawPartCurve(canvas, curve, { ratio = null } = {}) {
+/** ratio: the distinct ratio the fit compared the scores with (the line; none when unknown). applied: false when
+ * the fit's parts were given to it (a Refine): the rule judged them, but changed nothing. */
+export function drawPartCurve(canvas, curve, { ratio = null, applied = true } = {}) {
   const surface = clearedCanvas(canvas);
   if (!surface || curve.length === 0) return;
   const { g, w, h, style } = surface;
@@ -34,7 +35,9 @@ export function drawPartCurve(canvas, curve, { ratio = null } = {}) {
   const next = stop.merged ? 'no pair left' : Number.isFinite(stop.score) ? `the next pair scored ${stop.score.toFixed(1)}` : 'no pair left';
   // the core keeps the decisions of the part rule's last round only (a fit can run it again after a refit): the
   // title says so, so that its count is not read as the whole rule's (the Stages view's start to "after")
-  const title = `part rule, last round: ${merges} merge${merges === 1 ? '' : 's'}, ${curve[0].parts} → ${kept} part${kept === 1 ? '' : 's'}`;
+  const title = applied
+    ? `part rule, last round: ${merges} merge${merges === 1 ? '' : 's'}, ${curve[0].parts} → ${kept} part${kept === 1 ? '' : 's'}`
+    : `part rule on the refined parts, not applied: ${merges} merge${merges === 1 ? '' : 's'} would make ${curve[0].parts} → ${kept}`;
   canvas.dataset.title = title;
   let top = 20;
   if (g.measureText(`${title} (${next})`).width + 4 <= w) label(`${title} (${next})`, 4, 12);

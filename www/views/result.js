@@ -128,14 +128,18 @@ function showResult() {
   $('part-curve-note').hidden = curve.length === 0;
   $('part-curve-note').textContent = curve.length ? curveNote(s) : '';
   // the line the scores were compared with: the distinct ratio of the fit's parameters (the form never changes it)
-  drawPartCurve($('part-curve'), curve, { ratio: state.baseParams?.distinctRatio ?? null });
+  drawPartCurve($('part-curve'), curve, { ratio: state.baseParams?.distinctRatio ?? null, applied: !refinedParts(s) });
 }
+
+// The parts were given to the fit (a Refine, startLabels): the rule ran no round on them, it only recorded their tree.
+const refinedParts = (s) => isTreeFit(state.model) && (s.partRounds ?? []).length === 0;
 
 // How the fit came to the count the chart's last round began with (the chart is that round's merges only): the
 // merge tree's start and the flesh dissolved on it before the first AECM, then every round of the part rule, as
 // the core recorded them (summary.startParts, summary.partRounds).
 function curveNote(s) {
   const n = (k) => `${k} part${k === 1 ? '' : 's'}`;
+  if (refinedParts(s)) return `The chart is the part rule on the ${n(s.parts)} refined from the merge tree: it judges them, and a Refine keeps them as they are.`;
   const said = [];
   if (isTreeFit(state.model)) {
     const flesh = s.startParts != null ? s.coarseParts - s.startParts : 0;
