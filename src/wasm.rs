@@ -1097,7 +1097,8 @@ impl WasmPoser {
     }
 
     /// New frames of the same mesh (files as for a population) solved onto the rig: {names, eRms (per frame), eRmsAll,
-    /// positions: [flat xyz per frame, skinned, unit box], glb (the rig with clip "frames")}.
+    /// positions: [flat xyz per frame, skinned, unit box], bones: [per frame, 12 numbers a bone as `bones`], glb
+    /// (the rig with clip "frames")}.
     #[wasm_bindgen(js_name = addFrames)]
     pub fn add_frames(&self, names: Vec<String>, files: Vec<Uint8Array>) -> Result<JsValue, JsValue> {
         if names.len() != files.len() {
@@ -1121,6 +1122,13 @@ impl WasmPoser {
             positions.push(&flat_f32(&self.inner.to_unit(&self.inner.rig.rig.skin(b))).into());
         }
         set("positions", positions.into())?;
+        // each frame's bones as `setBones` takes them: the page sets a frame shown to export it or read its
+        // pose-space coordinates
+        let bones = Array::new();
+        for b in &solved.bones {
+            bones.push(&Float64Array::from(crate::export::pose_glb::flat_bones(b).as_slice()).into());
+        }
+        set("bones", bones.into())?;
         set("glb", Uint8Array::from(glb.as_slice()).into())?;
         Ok(obj.into())
     }

@@ -7,18 +7,37 @@
 export function poseQueries(getModel, generation = getModel) {
   let poser = null;
   let owner = null;
+  let frameBones = null; // the last added frames' bones (12 numbers a bone, one Float64Array a frame)
   const current = () => {
     if (!poser || owner !== generation()) throw new Error('pose mode: the model changed; open pose mode again');
     return poser;
   };
   const posed = (p) => ({ positions: p.positions(), angles: p.angles() });
+  // Runs `ask` with the poser set to added frame f (what the view shows while frames play or are paused on
+  // one), then puts the pose made back: the exports and the sliders' coordinates of a frame come from the core
+  // as those of a made pose do.
+  const atFrame = (f, ask) => {
+    const p = current();
+    if (!frameBones) throw new Error('the added frames came without their bones from the core (src/wasm.rs Poser.addFrames gives them): rebuild the wasm (npm run build:wasm), then add the frames again');
+    const bones = frameBones[f];
+    if (!bones) throw new Error(`no added frame ${f + 1}: ${frameBones.length} frames were added`);
+    const made = p.bones();
+    p.setBones(bones);
+    try {
+      return ask(p);
+    } finally {
+      p.setBones(made);
+    }
+  };
   return {
     poseStart: (opts) => {
       poser?.free();
       poser = null;
       owner = generation();
+      frameBones = null;
       poser = getModel().poser(opts ?? {});
-      return { skeleton: poser.skeleton(), ...posed(poser) };
+      // coords: the rest pose's coordinates along the pose space's modes (what its sliders show)
+      return { skeleton: poser.skeleton(), ...posed(poser), coords: poser.poseVector().coords };
     },
     poseTurn: (bone, axis, angle) => {
       const p = current();
@@ -52,6 +71,63 @@ export function poseQueries(getModel, generation = getModel) {
     poseTouches: (bone) => current().touches(bone),
     poseObj: (header) => current().objText(header),
     poseGlb: () => current().poseGlb(),
-    poseAddFrames: (names, files) => current().addFrames(names, files.map((b) => new Uint8Array(b))),
+    poseAddFrames: (names, files) => {
+      const p = current();
+      let r;
+      try {
+        r = p.addFrames(names, files.map((b) => new Uint8Array(b)));
+      } catch (e) {
+        throw namedFrameError(e, names);
+      }
+      frameBones = r.bones ?? null;
+      delete r.bones; // they stay here (atFrame); bonesKept: the frames' exports and coordinates can be asked
+      r.bonesKept = frameBones !== null;
+      return r;
+    },
+    poseFrameVector: (f) => atFrame(f, (p) => p.poseVector()),
+    poseFrameObj: (f, header) => atFrame(f, (p) => p.objText(header)),
+    poseFrameGlb: (f) => atFrame(f, (p) => p.poseGlb()),
   };
+}
+
+// The core's refusal of a frame of another vertex count ("frame 2 has 5000 vertices but the rig has 8431: ...",
+// src/articulate/pose.rs solve_frames) names the frame by its place among the files in the natural order of
+// their names (src/wasm.rs addFrames sorts them so); the page knows the files by name, so the message names the
+// file. A file of several frames (glTF) makes the places differ from the files': its message stays as it was.
+const VERTEX_COUNT = /frame (\d+) has (\d+) vertices but the rig has (\d+)/;
+function namedFrameError(e, names) {
+  const m = VERTEX_COUNT.exec(String(e?.message ?? ''));
+  const byFrame = names.every((n) => /\.(obj|ply)$/i.test(n)) ? names.slice().sort(naturalOrder) : null;
+  const file = m && byFrame?.[Number(m[1]) - 1];
+  if (!file) return e;
+  const message = `${file} has ${m[2]} vertices but the rig has ${m[3]}: add frames of the fitted mesh (the same vertices in the same order, as the training poses)`;
+  return Object.assign(new Error(message), { problems: [{ kind: 'population', file: null, line: null, message }] });
+}
+
+// The core's natural order of file names (src/mesh/population.rs natural_cmp): runs of digits compare as numbers,
+// other bytes without case; then the shorter rest first, then the bytes.
+function naturalOrder(a, b) {
+  const [x, y] = [new TextEncoder().encode(a), new TextEncoder().encode(b)];
+  const digit = (c) => c >= 48 && c <= 57;
+  const lower = (c) => (c >= 65 && c <= 90 ? c + 32 : c);
+  let [i, j] = [0, 0];
+  while (i < x.length && j < y.length) {
+    if (digit(x[i]) && digit(y[j])) {
+      const [si, sj] = [i, j];
+      while (i < x.length && digit(x[i])) i++;
+      while (j < y.length && digit(y[j])) j++;
+      const na = String.fromCharCode(...x.subarray(si, i)).replace(/^0+/, '');
+      const nb = String.fromCharCode(...y.subarray(sj, j)).replace(/^0+/, '');
+      if (na.length !== nb.length) return na.length - nb.length;
+      if (na !== nb) return na < nb ? -1 : 1;
+    } else {
+      if (lower(x[i]) !== lower(y[j])) return lower(x[i]) - lower(y[j]);
+      i++;
+      j++;
+    }
+  }
+  const rest = (x.length - i) - (y.length - j);
+  if (rest) return rest;
+  for (let k = 0; k < Math.min(x.length, y.length); k++) if (x[k] !== y[k]) return x[k] - y[k];
+  return x.length - y.length;
 }

@@ -87,23 +87,7 @@ impl FitJson {
                 .parts
                 .iter()
                 .map(|c| PartJson {
-                    rotations: c
-                        .rotations
-                        .iter()
-                        .map(|r| {
-                            [
-                                r[(0, 0)],
-                                r[(0, 1)],
-                                r[(0, 2)],
-                                r[(1, 0)],
-                                r[(1, 1)],
-                                r[(1, 2)],
-                                r[(2, 0)],
-                                r[(2, 1)],
-                                r[(2, 2)],
-                            ]
-                        })
-                        .collect(),
+                    rotations: c.rotations.iter().map(crate::geometry::row_major).collect(),
                     translations: c.translations.clone(),
                     lambda: c.lambda,
                     variances: c.variances.clone(),

@@ -547,28 +547,9 @@ impl Poser {
         Ok((solved, e, glb))
     }
 
-    /// The bones as 12 numbers each ([R row-major | t]), for undo.
+    /// The bones as 12 numbers each ([R row-major | t]), for undo ([`flat_bones`]).
     pub fn bones_flat(&self) -> Vec<f64> {
-        self.current
-            .iter()
-            .flat_map(|m| {
-                let r = &m.rotation;
-                [
-                    r[(0, 0)],
-                    r[(0, 1)],
-                    r[(0, 2)],
-                    r[(1, 0)],
-                    r[(1, 1)],
-                    r[(1, 2)],
-                    r[(2, 0)],
-                    r[(2, 1)],
-                    r[(2, 2)],
-                    m.translation[0],
-                    m.translation[1],
-                    m.translation[2],
-                ]
-            })
-            .collect()
+        flat_bones(&self.current)
     }
 
     /// Restores bones from [`Poser::bones_flat`] (rotations re-orthonormalised).
@@ -600,4 +581,9 @@ impl Poser {
     pub fn reset(&mut self) {
         self.current = self.rig.rest_bones();
     }
+}
+
+/// Bones as 12 numbers each ([R row-major | t]): what [`Poser::set_bones_flat`] takes.
+pub fn flat_bones(bones: &[RigidMotion]) -> Vec<f64> {
+    bones.iter().flat_map(|m| crate::geometry::row_major(&m.rotation).into_iter().chain(m.translation)).collect()
 }

@@ -15,6 +15,12 @@ pub type Mat3 = nalgebra::Matrix3<f64>;
 
 pub const IDENTITY: Mat3 = Mat3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
 
+/// A matrix's nine numbers row by row (as JSON and the page read a rotation).
+#[inline]
+pub fn row_major(m: &Mat3) -> [f64; 9] {
+    [m[(0, 0)], m[(0, 1)], m[(0, 2)], m[(1, 0)], m[(1, 1)], m[(1, 2)], m[(2, 0)], m[(2, 1)], m[(2, 2)]]
+}
+
 /// A matrix from its rows.
 #[inline]
 pub fn from_rows(r: [[f64; 3]; 3]) -> Mat3 {

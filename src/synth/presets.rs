@@ -61,7 +61,7 @@ pub fn examples() -> Vec<Example> {
         Example {
             id: "arm",
             title: "Two-link arm (3 parts)",
-            note: "The smallest articulated case: base, upper arm, forearm. The merge tree's start (Stages) is the three bones and thin slices of skin at the two joints, which the part rule dissolves as flesh: 3 rigid parts remain; Step by step shows the paper's coarse stage over-split it.",
+            note: "The smallest articulated case: base, upper arm, forearm. The start (Stages) is the three bones and thin slices of skin at the joints, dissolved as flesh: 3 parts remain; Step by step shows the paper's coarse stage over-split it.",
             fails_on_purpose: false,
             spec: Spec { preset: Preset::Arm, vertices: 1500, poses: 8, joint_band: 0.01, ..Spec::default() },
             params: Params::default(),

@@ -7,6 +7,7 @@ import { interpValues } from './interp-values.js';
 import { showProblems } from '../problems.js';
 import { eRmsText, percentText, ERMS_UNIT } from '../erms.js';
 import { download, safeName, populationStem } from '../download.js';
+import { exportPoseObj } from './pose-export.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -62,7 +63,9 @@ export function installExports() {
   // The core writes what the view shows, in the population's original units, exact floats: every mesh shown
   // side by side as one OBJ object named for what it is (original | reconstruction, coarse | refined | final...),
   // a mesh coloured by parts with one group per part of that stage.
+  // In the Pose view the mesh shown is the poser's (a pose made, or an added frame): it writes that (pose-export.js).
   $('export-obj').addEventListener('click', orReport(async () => {
+    if (state.mode === 'pose') return exportPoseObj();
     const slots = state.shown;
     if (!slots.length) return;
     const names = slots.map((x) => x.name);

@@ -4,7 +4,8 @@
 // principal modes of the training poses' joint rotations (0 = the mean pose), "Random pose" within the training
 // range. Export the posed mesh (OBJ) and the pose (.glb with a one-frame clip). "Add frames": frames of the same
 // mesh solved onto the rig (the bones with the weights fixed) and played. Everything is computed by the core
-// (src/export/pose_glb.rs, through the worker's pose queries); this file only shows and asks.
+// (src/export/pose_glb.rs, through the worker's pose queries); this file only shows and asks (the drag:
+// pose-drag.js; the files of what is shown: pose-export.js).
 import { state, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { viewer } from '../views/viewer-instance.js';
@@ -12,14 +13,16 @@ import { renderView, registerView } from '../views/render.js';
 import { showProblems } from '../problems.js';
 import { eRmsText, ERMS_UNIT } from '../erms.js';
 import { download, populationStem } from '../download.js';
+import { describePoseShown, exportPoseObj, exportPoseGlb } from './pose-export.js';
+import { installPoseDrag } from './pose-drag.js';
 
 const $ = (id) => document.getElementById(id);
 const STEP = (10 * Math.PI) / 180; // a button press: 10 degrees
 
 // What pose mode shows: the skeleton of the poser, the current mesh and angles, the undo stack, added frames.
-// whole: what the last action made of the whole pose ('random', 'mean', 'modes', 'rest'), null after a part was
-// turned (the caption then names that part)
-const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, dragging: -1, whole: null, undo: [], frames: null, frame: 0, playing: false };
+// whole: what the last action made of the whole pose ('random', 'mean', 'modes', 'rest', 'training': training
+// pose `training` as the rig makes it), null after a part was turned (the caption then names that part)
+const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, dragging: -1, whole: null, training: 0, undo: [], frames: null, frame: 0, playing: false };
 
 // the pose space's modes come largest first (the core's PCA of the training poses); the first few get a slider
 const MODE_SLIDERS = 6;
@@ -34,18 +37,36 @@ const restName = () => `“${state.pop.names[restPose()]}”`;
 /** The mesh pose mode shows (for views/render.js), or null before the poser is ready. */
 export async function poseView() {
   await ensureStarted();
-  const frames = pose.frames && pose.playing !== null && pose.showFrames;
+  const frames = frameShown() >= 0;
   const positions = frames ? pose.frames.positions[pose.frame] : pose.positions;
   const name = frames ? `frame ${pose.frames.names[pose.frame]}` : 'posed';
   const caption = frames
-    ? `Added frame “${pose.frames.names[pose.frame]}” (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${eRmsText(pose.frames.eRms[pose.frame])} (${ERMS_UNIT})`
-    : pose.whole
-      ? `Pose mode: ${wholePose()} (drag a part to turn it about its joint)`
-      : pose.bone >= 0
-      ? `Pose mode: ${pose.skeleton.names[pose.bone]} turned ${pose.angles[pose.bone].toFixed(1)}° from the rest pose ${restName()} at its joint (drag a part to turn it about its joint)`
-      : `Pose mode: the rest pose, the rig's bind pose (${restName()} rebuilt from its parts); drag a part to turn it about its joint`;
+    ? `Added ${frameWords()} (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${eRmsText(pose.frames.eRms[pose.frame])} (${ERMS_UNIT})`
+    : pose.whole || pose.bone >= 0
+      ? `Pose mode: ${madeWords()} (drag a part to turn it about its joint)`
+      : `Pose mode: ${madeWords()}; drag a part to turn it about its joint`;
   return { slots: [{ positions, colours: state.colours.final.vertexColours, name }], caption };
 }
+
+// The added frame the view shows (while frames play or are paused on one), else -1: the pose made is shown.
+const frameShown = () => (pose.frames && pose.showFrames ? pose.frame : -1);
+const frameWords = () => `frame “${pose.frames.names[pose.frame]}”`;
+
+// The pose made, in words (the caption's and the posed mesh's OBJ header's).
+function madeWords() {
+  if (pose.whole) return wholePose();
+  if (pose.bone >= 0) return `${pose.skeleton.names[pose.bone]} turned ${pose.angles[pose.bone].toFixed(1)}° from the rest pose ${restName()} at its joint`;
+  return `the rest pose, the rig's bind pose (${restName()} rebuilt from its parts)`;
+}
+
+// What the Pose view's exports write (www/controls/pose-export.js): the frame shown, else the pose made.
+describePoseShown(() => {
+  if (!pose.skeleton || pose.gen !== state.gen) return null;
+  const f = frameShown();
+  return f >= 0
+    ? { frame: f, name: pose.frames.names[f], header: `frame ${pose.frames.names[f]} solved onto the rig (posemfa pose mode): E_RMS ${eRmsText(pose.frames.eRms[f])} (${ERMS_UNIT})` }
+    : { frame: -1, name: 'pose', header: `a pose made in posemfa pose mode: ${madeWords()}` };
+});
 
 // The caption's words for a pose made of all the parts at once (pose.whole).
 function wholePose() {
@@ -55,6 +76,7 @@ function wholePose() {
     mean: 'the mean pose of the training poses',
     modes: 'a pose from the pose-space sliders (0 = the mean pose)',
     rest: `the rest pose, the rig's bind pose (${restName()} rebuilt from its parts)`,
+    training: `training pose “${state.pop.names[pose.training]}” as the rig makes it (its bones solved onto the rig)`,
   }[pose.whole];
 }
 
@@ -75,6 +97,7 @@ async function ensureStarted() {
     pose.frames = null;
     pose.showFrames = false;
     fillControls();
+    setModeSliders(r.coords); // the rest pose's coordinates (0 would be the mean pose, not the one shown)
     const n = r.skeleton.nModes;
     const sliders = Math.min(n, MODE_SLIDERS);
     $('pose-status').textContent = `${r.skeleton.order.length} bones, ${n} pose-space direction${n === 1 ? '' : 's'}: the main directions of the training poses' joint rotations (0: their mean pose; ±: their spread, one standard deviation)${n > sliders ? `; sliders for the ${sliders} largest` : ''}`;
@@ -144,8 +167,8 @@ function took(r, { sliders = true } = {}) {
 
 // the undo stack keeps what the caption said of each pose with its bones (pose.whole)
 async function remember() {
-  const whole = pose.whole;
-  pose.undo.push({ bones: await query('poseBones'), whole });
+  const { whole, training } = pose;
+  pose.undo.push({ bones: await query('poseBones'), whole, training });
   if (pose.undo.length > 100) pose.undo.shift();
 }
 
@@ -165,6 +188,24 @@ const orReport = (f) => (...a) => {
   queue = run;
   return run;
 };
+
+/** Shows training pose i as the rig makes it (its bones solved onto the rig): a thumbnail or the pose list
+ * picked in the Pose view. */
+export const showTrainingPose = orReport(async (i) => {
+  await ensureStarted();
+  await remember();
+  pose.whole = 'training';
+  pose.training = i;
+  took(await query('poseTraining', i));
+});
+
+// The pose-space sliders follow the added frame shown (its coordinates along the modes, from the core; an
+// answer for a frame no longer shown is dropped). Frames the core gave no bones for leave them where they are.
+function followFrame() {
+  const f = pose.frame;
+  if (!pose.frames?.bonesKept) return;
+  query('poseFrameVector', f).then((v) => frameShown() === f && setModeSliders(v.coords), (e) => { $('pose-status').textContent = e.message; });
+}
 
 // The view direction (camera -> scene): turns are about it, so a part turns in the plane of the screen.
 function viewAxis() {
@@ -188,80 +229,6 @@ async function applyModes(whole = 'modes') {
   took(await query('poseModes', modeValues()), { sliders: false });
 }
 
-// Drag: pointer down on a part (capture phase, before the orbit controls) selects it; moving turns it about the
-// view direction through its joint, by the angle the pointer sweeps around the joint on the screen: the part
-// follows the pointer whichever way it goes. Within NEAR pixels of the joint the angle is not read (it jumps
-// there). The pose before the drag goes on the undo stack at its first turn (a click that turns nothing adds
-// no undo step).
-const NEAR = 8;
-const SWEPT = 1e-6; // radians: less is rounding
-function installDrag() {
-  const view = $('view');
-  let drag = null;
-  let busy = false;
-  let pending = 0;
-  view.addEventListener('pointerdown', (e) => {
-    if (state.mode !== 'pose' || !pose.skeleton || e.button !== 0) return;
-    const hit = viewer.pick(e.clientX, e.clientY);
-    if (!hit) return;
-    e.stopPropagation();
-    e.preventDefault();
-    const bone = pose.skeleton.boneOfVertex[hit.vertex];
-    const mine = { bone, pivot: null, last: null, remembered: false };
-    drag = mine;
-    pose.dragging = bone;
-    pose.bone = bone;
-    $('pose-part').value = String(bone);
-    showAngle();
-    query('poseJoint', bone).then((j) => {
-      if (drag !== mine) return;
-      mine.pivot = viewer.screenPoint(hit.slot, j);
-      mine.last = viewer.angleAround(mine.pivot, e.clientX, e.clientY, NEAR);
-    }, (err) => {
-      // no joint to turn about (the model changed under the press): the drag turns nothing, and says why
-      if (drag === mine) drag = null;
-      $('pose-status').textContent = err.message ?? String(err);
-    });
-  }, { capture: true });
-  window.addEventListener('pointermove', async (e) => {
-    if (!drag?.pivot) return;
-    const now = viewer.angleAround(drag.pivot, e.clientX, e.clientY, NEAR);
-    if (now === null) {
-      drag.last = null;
-      return;
-    }
-    if (drag.last !== null) {
-      let d = now - drag.last;
-      if (d > Math.PI) d -= 2 * Math.PI;
-      if (d < -Math.PI) d += 2 * Math.PI;
-      pending += d;
-    }
-    drag.last = now;
-    // (a move straight at or away from the joint sweeps nothing but rounding)
-    if (busy || Math.abs(pending) < SWEPT) return;
-    busy = true;
-    const mine = drag;
-    try {
-      if (!mine.remembered) {
-        mine.remembered = true;
-        await remember();
-      }
-      // what the pointer swept while a turn was on its way is turned next, also after the pointer stops
-      while (Math.abs(pending) >= SWEPT) {
-        const angle = pending;
-        pending = 0;
-        await turn(mine.bone, angle);
-      }
-    } finally {
-      busy = false;
-    }
-  });
-  window.addEventListener('pointerup', () => {
-    drag = null;
-    pose.dragging = -1;
-  });
-}
-
 // Play the added frames: one frame per half second, looping, until Pause.
 function playFrames() {
   if (!pose.frames) return;
@@ -280,6 +247,7 @@ function playFrames() {
       last = now;
       pose.frame = (pose.frame + 1) % pose.frames.names.length;
       document.body.dataset.poseFrame = String(pose.frame);
+      followFrame();
       renderView();
     }
     requestAnimationFrame(tick);
@@ -289,7 +257,7 @@ function playFrames() {
 
 export function installPose() {
   registerView('pose', poseView, { pending: 'Pose mode: building the rig… (the mesh shown is still the last view\'s)' });
-  installDrag();
+  installPoseDrag(pose, { remember, turn, showAngle });
   $('pose-part').addEventListener('change', () => {
     pose.bone = Number($('pose-part').value);
     pose.whole = null;
@@ -309,6 +277,7 @@ export function installPose() {
     if (!last) return;
     const r = await query('poseSetBones', Array.from(last.bones));
     pose.whole = last.whole;
+    pose.training = last.training;
     took(r);
   }));
   $('pose-reset').addEventListener('click', orReport(async () => {
@@ -328,12 +297,8 @@ export function installPose() {
     pose.whole = 'random';
     took(await query('poseModes', Array.from(c)), { sliders: false });
   }));
-  $('pose-export-obj').addEventListener('click', orReport(async () => {
-    download(`posemfa-${populationStem()}-pose.obj`, await query('poseObj', 'a pose made in posemfa pose mode'), 'model/obj');
-  }));
-  $('pose-export-glb').addEventListener('click', orReport(async () => {
-    download(`posemfa-${populationStem()}-pose.glb`, await query('poseGlb'), 'model/gltf-binary');
-  }));
+  $('pose-export-obj').addEventListener('click', orReport(exportPoseObj));
+  $('pose-export-glb').addEventListener('click', orReport(exportPoseGlb));
   $('pose-frames').addEventListener('change', orReport(async (e) => {
     const files = [...e.target.files];
     if (!files.length) return;
@@ -342,6 +307,7 @@ export function installPose() {
     const r = await query('poseAddFrames', files.map((f) => f.name), bytes);
     pose.frames = r;
     pose.frame = 0;
+    showProblems([]); // an earlier refusal of frames is answered
     const mean = r.eRmsAll; // over all the frames, from the core
     $('pose-status').textContent = `${r.names.length} frames solved onto the rig: E_RMS ${eRmsText(mean)}`;
     $('pose-status').dataset.erms = String(mean);
@@ -382,6 +348,9 @@ export function installPose() {
       modes: (c) => query('poseModes', c).then((r) => { took(r); return Array.from(r.positions); }),
       training: (i) => query('poseTraining', i).then((r) => { took(r); return Array.from(r.positions); }),
       vector: () => query('poseVector'),
+      frameVector: (f) => query('poseFrameVector', f),
+      // the positions the view shows (the made pose or the frame shown)
+      shownPositions: () => state.shown[0] && Array.from(state.shown[0].positions),
       frames: () => pose.frames && { names: pose.frames.names, eRms: Array.from(pose.frames.eRms), frame: pose.frame },
     },
   });

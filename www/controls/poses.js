@@ -2,6 +2,7 @@
 import { state, update, subscribe } from '../state.js';
 import { viewer } from '../views/viewer-instance.js';
 import { thumbnailColours } from '../views/render.js';
+import { showTrainingPose } from './pose.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -29,8 +30,11 @@ function fillPoseLists(names) {
   }));
 }
 
-/** Shows pose i. */
-export const choosePose = (i) => update({ pose: i, hoverPart: null });
+/** Shows pose i; in the Pose view, as the rig makes it (the view shows the rig's poses, not the files'). */
+export const choosePose = (i) => {
+  update({ pose: i, hoverPart: null });
+  if (state.mode === 'pose') showTrainingPose(i);
+};
 
 // The pose shown is marked in the strip; in pose mode none is (the view shows a pose made from the rig, not a
 // training pose).
