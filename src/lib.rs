@@ -36,17 +36,17 @@ macro_rules! avx2_fn {
     };
 }
 
-pub mod articulate;
 pub mod clock;
 pub mod error;
-pub mod export;
-pub mod fuzzing;
 pub mod geometry;
-pub mod memory;
 pub mod mesh;
 pub mod metrics;
+pub mod memory;
 pub mod mfa;
 pub mod parts;
+pub mod articulate;
+pub mod export;
+pub mod fuzzing;
 pub mod synth;
 
 #[cfg(target_arch = "wasm32")]

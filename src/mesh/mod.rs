@@ -7,10 +7,10 @@ pub mod gltf;
 pub mod load;
 pub mod obj;
 pub mod ply;
-pub mod population;
-pub mod subdivide;
 pub mod usd;
 pub mod usdc_check;
+pub mod population;
+pub mod subdivide;
 
 pub use population::{Normalization, Population};
 

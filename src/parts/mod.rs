@@ -18,16 +18,16 @@
 //! - [`diagnosis`]: whether the population looks articulated (how much of the motion rigid parts explain).
 //! - [`robustness`]: fits over seeds and nuisance variants, and how much they agree.
 
-pub mod coarse_mesh;
-pub mod diagnosis;
-pub mod distinct;
-pub mod hierarchy;
-pub mod islands;
-pub mod label_fit;
 pub mod labels;
-pub mod merge_tree;
 pub mod motion_labels;
-pub mod multires;
+pub mod islands;
+pub mod merge_tree;
+pub mod coarse_mesh;
+pub mod distinct;
 pub mod pair_blend;
 pub mod part_count;
+pub mod label_fit;
+pub mod multires;
+pub mod hierarchy;
+pub mod diagnosis;
 pub mod robustness;
