@@ -1,37 +1,16 @@
-// A sixth newcomer's review: a failed fit's view is not captioned "the fit in progress"; the E_RMS figures say
+// A sixth newcomer's review: the E_RMS figures say
 // they are per coordinate (the RMSE is per vertex) and a small one is not written "0.000"; after a count asked
-// for, the part rule's note says how its last decision became the parts shown; a cancelled fit's caption.
+// for, the part rule's note says how its last decision became the parts shown; a cancelled fit's caption. (Its
+// failed first fit of two identical poses is gone: such poses are refused at load now, review9.test.mjs.)
 // Run: npm run build && node --test tests/e2e/review6.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState, asPayload, moveTreeSlider, openCancelledFirstFit } from './helpers.mjs';
+import { pageSession, waitState, moveTreeSlider, openCancelledFirstFit } from './helpers.mjs';
 
 const session = pageSession();
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const text = (page, sel) => page.locator(sel).innerText();
 const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-
-test('a fit that fails leaves no "fit in progress" caption: the view says it is not fitted', async () => {
-  const { page, context, log } = await session.open();
-  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
-  // two poses that are the same point set: nothing moves, so the core refuses the fit of the new population
-  const obj = `v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n`;
-  const c = await page.evaluate(() => window.posemfa.fitCount());
-  await page.setInputFiles('[data-testid=file-input]', asPayload([{ name: 'a.obj', text: obj }, { name: 'b.obj', text: obj }]));
-  await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state !== 'fitting', c, { timeout: 60000 });
-  assert.match(await text(page, '[data-testid=errors]'), /^The fit failed/);
-  await frames(page);
-  assert.equal(await text(page, '#caption'), 'Pose “a.obj”, not fitted (grey)');
-  // a file the drop ignored is still named beside the failure of the fit the drop started
-  const d = await page.evaluate(() => window.posemfa.fitCount());
-  await page.setInputFiles('[data-testid=file-input]', asPayload([{ name: 'a.obj', text: obj }, { name: 'b.obj', text: obj }, { name: 'notes.txt', text: 'hello' }]));
-  await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state !== 'fitting', d, { timeout: 60000 });
-  const box = await text(page, '[data-testid=errors]');
-  assert.match(box, /^The fit failed/);
-  assert.match(box, /ignored \(not a mesh, point cache, glTF buffer or \.zip\): notes\.txt/);
-  assert.deepEqual(log.errors, []);
-  await context.close();
-});
 
 test('E_RMS: per coordinate, as the rig\'s; a small one in significant digits, not "0.000"', async () => {
   const { page, context, log } = await session.open('#ex=arm');
