@@ -2,6 +2,8 @@
 // (Debian's, through playwright-core), and OBJ text of small generated articulated populations.
 import http from 'node:http';
 import { readFile, stat } from 'node:fs/promises';
+import { readFileSync, readdirSync } from 'node:fs';
+import { execFileSync } from 'node:child_process';
 import { extname, join, normalize, resolve, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { before, after } from 'node:test';
@@ -286,4 +288,15 @@ export async function openCancelledFirstFit(session, path) {
   await page.reload();
   await page.waitForFunction(() => window.posemfa?.fitCount() > 0, null, { timeout: 120000 });
   return opened;
+}
+
+/** The OBJ files of `folder` in natural order, as { name, text } (for asPayload). */
+export const objFiles = (folder) => readdirSync(folder).filter((f) => f.endsWith('.obj'))
+  .sort((a, b) => a.localeCompare(b, 'en', { numeric: true }))
+  .map((name) => ({ name, text: readFileSync(join(folder, name), 'utf8') }));
+
+/** Builds the debug CLI if needed; returns its path. */
+export function debugCli() {
+  execFileSync('cargo', ['build', '--quiet', '--bin', 'posemfa'], { cwd: ROOT, stdio: 'inherit' });
+  return join(ROOT, 'target', 'debug', 'posemfa');
 }

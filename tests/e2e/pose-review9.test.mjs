@@ -10,18 +10,14 @@ import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
-import { pageSession, asPayload, ROOT, enterPoseMode, waitState } from './helpers.mjs';
+import { pageSession, asPayload, ROOT, enterPoseMode, waitState, objFiles, debugCli } from './helpers.mjs';
 
 const session = pageSession();
 let dir;
 let opened = null;
 
-const objFiles = (folder) => readdirSync(folder).filter((f) => f.endsWith('.obj')).sort((a, b) => a.localeCompare(b, 'en', { numeric: true }))
-  .map((name) => ({ name, text: readFileSync(path.join(folder, name), 'utf8') }));
-
 before(() => {
-  execFileSync('cargo', ['build', '--quiet', '--bin', 'posemfa'], { cwd: ROOT, stdio: 'inherit' });
-  const bin = path.join(ROOT, 'target', 'debug', 'posemfa');
+  const bin = debugCli();
   dir = mkdtempSync(path.join(tmpdir(), 'posemfa-pose-review9-'));
   // the training poses; new frames of the same mesh (another seed); frames of another mesh (fewer vertices)
   execFileSync(bin, ['generate', 'quadruped', '--vertices', '1500', '--poses', '6', '--seed', '4', '--out', path.join(dir, 'pop')]);

@@ -11,17 +11,13 @@ import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
-import { pageSession, waitState, asPayload, ROOT, enterPoseMode } from './helpers.mjs';
+import { pageSession, waitState, asPayload, ROOT, enterPoseMode, objFiles, debugCli } from './helpers.mjs';
 
 const session = pageSession();
 let dir;
 
-const objFiles = (folder) => readdirSync(folder).filter((f) => f.endsWith('.obj')).sort((a, b) => a.localeCompare(b, 'en', { numeric: true }))
-  .map((name) => ({ name, text: readFileSync(path.join(folder, name), 'utf8') }));
-
 before(() => {
-  execFileSync('cargo', ['build', '--quiet', '--bin', 'posemfa'], { cwd: ROOT, stdio: 'inherit' });
-  const bin = path.join(ROOT, 'target', 'debug', 'posemfa');
+  const bin = debugCli();
   dir = mkdtempSync(path.join(tmpdir(), 'posemfa-pose-page-'));
   // the same mesh (the design and the vertex count make it), other poses (the seed draws the angles)
   execFileSync(bin, ['generate', 'quadruped', '--vertices', '1500', '--poses', '6', '--seed', '4', '--out', path.join(dir, 'pop')]);
