@@ -77,6 +77,23 @@ type Res<T> = std::result::Result<T, Fail>;
 /// `skip_faces`: one-line `f` statements are passed over unread ([`parse_obj_positions`]).
 fn parse(bytes: &[u8], skip_faces: bool) -> Res<Mesh> {
     let text = decode(bytes)?;
+    parse_text(text, skip_faces).map_err(|f| on_cut_last_line(text, f))
+}
+
+/// An error on the file's last line when the file ends without a line end: what a copy, download or export
+/// that stopped leaves (`v 0.12` or `f 5438 5` torn mid-number), so the message says so.
+fn on_cut_last_line(text: &[u8], mut fail: Fail) -> Fail {
+    let ends_mid_line = text.last().is_some_and(|&b| b != b'\n' && b != b'\r');
+    if ends_mid_line && fail.line == line_and_column(text, text.len()).0 {
+        fail.message.push_str(
+            " (this is the file's last line and the file ends in it, without a line end: it looks cut short, as an \
+             interrupted copy, download or export leaves it; copy or export it again)",
+        );
+    }
+    fail
+}
+
+fn parse_text(text: &[u8], skip_faces: bool) -> Res<Mesh> {
     let mut reader = Reader { skip_faces, ..Reader::default() };
     // A capacity guess from the file's size (bounded by the bytes present, never by a number in the file):
     // pages reserved but never written cost nothing, and growing a vector copies it.
@@ -975,6 +992,20 @@ mod tests {
         // (it skips the faces it does not read: a face the full reading refuses passes unread)
         assert!(parse_obj("t.obj", b"v 0 0 0\nf 1 2 3\n").is_err());
         assert_eq!(parse_obj_positions("t.obj", b"v 0 0 0\nf 1 2 3\n").unwrap(), vec![[0.0; 3]]);
+    }
+
+    #[test]
+    fn an_error_where_the_file_stops_mid_line_says_it_looks_cut_short() {
+        let cut = "looks cut short";
+        // torn in a vertex and in a face: the last line, no line end
+        assert_err("v 0 0 0\nv 1 0 0\nv 0 1", 3, &["2 coordinates", cut]);
+        assert_err("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1", 5, &["face has 1 vertex,", cut]);
+        // the same errors in a whole file (a line end after them, or lines after them) are not called cut
+        for whole in ["v 0 0 0\nv 1 0 0\nv 0 1\n", "v 0 0 0\nv 1 0 0\nv 0 1\nv 1 1 1"] {
+            let (line, message) = err(whole);
+            assert_eq!(line, 3);
+            assert!(!message.contains(cut), "{message}");
+        }
     }
 
     #[test]

@@ -811,16 +811,22 @@ fn check_same_mesh(first_name: &str, first: &Mesh, name: &str, mesh: &Mesh) -> R
             message: format!("has {here} {what} but {first_name} has {there}; {rule}"),
         })
     };
-    if mesh.positions.len() != first.positions.len() {
-        return differ(
-            "vertices",
-            mesh.positions.len(),
-            first.positions.len(),
-            "every shape must be the same mesh in another pose",
-        );
+    // fewer than the first: also what a file cut short by a copy or download that stopped has
+    let cut = |here: usize, there: usize| {
+        if here < there {
+            " (or, if this file is a copy of the same mesh, it was cut short: copy or export it again)"
+        } else {
+            ""
+        }
+    };
+    let (here, there) = (mesh.positions.len(), first.positions.len());
+    if here != there {
+        let rule = format!("every shape must be the same mesh in another pose{}", cut(here, there));
+        return differ("vertices", here, there, &rule);
     }
-    if mesh.faces.len() != first.faces.len() {
-        return differ("triangles", mesh.faces.len(), first.faces.len(), "every shape must share the same faces");
+    let (here, there) = (mesh.faces.len(), first.faces.len());
+    if here != there {
+        return differ("triangles", here, there, &format!("every shape must share the same faces{}", cut(here, there)));
     }
     if let Some(k) = (0..mesh.faces.len()).find(|&k| mesh.faces[k] != first.faces[k]) {
         return Err(Error::Population {
