@@ -1110,6 +1110,9 @@ impl WasmPoser {
             .map_err(|errors| thrown(&errors.iter().map(Error::problem).collect::<Vec<_>>()))?;
         let frame_names: Vec<String> = loaded.poses.iter().map(|(n, _)| n.clone()).collect();
         let frames: Vec<Vec<[f64; 3]>> = loaded.poses.into_iter().map(|(_, m)| m.positions).collect();
+        let sizes = frame_names.iter().zip(&frames).map(|(n, f)| (n.as_str(), f.len()));
+        crate::articulate::pose::check_frame_sizes(sizes, self.inner.rig.rig.n_vertices(), None)
+            .map_err(|e| thrown(&[e.problem()]))?;
         let (solved, e, glb) = self.inner.add_frames(&frames)?;
         let obj = js_sys::Object::new();
         let set =

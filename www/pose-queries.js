@@ -73,12 +73,8 @@ export function poseQueries(getModel, generation = getModel) {
     poseGlb: () => current().poseGlb(),
     poseAddFrames: (names, files) => {
       const p = current();
-      let r;
-      try {
-        r = p.addFrames(names, files.map((b) => new Uint8Array(b)));
-      } catch (e) {
-        throw namedFrameError(e, names);
-      }
+      // a frame of another mesh is refused by the core naming its file (src/articulate/pose.rs check_frame_sizes)
+      const r = p.addFrames(names, files.map((b) => new Uint8Array(b)));
       frameBones = r.bones ?? null;
       delete r.bones; // they stay here (atFrame); bonesKept: the frames' exports and coordinates can be asked
       r.bonesKept = frameBones !== null;
@@ -88,46 +84,4 @@ export function poseQueries(getModel, generation = getModel) {
     poseFrameObj: (f, header) => atFrame(f, (p) => p.objText(header)),
     poseFrameGlb: (f) => atFrame(f, (p) => p.poseGlb()),
   };
-}
-
-// The core's refusal of a frame of another vertex count ("frame 2 has 5000 vertices but the rig has 8431: ...",
-// src/articulate/pose.rs solve_frames) names the frame by its place among the files in the natural order of
-// their names (src/wasm.rs addFrames sorts them so); the page knows the files by name, so the message names the
-// file. A file of several frames (glTF) makes the places differ from the files': its message stays as it was.
-const VERTEX_COUNT = /frame (\d+) has (\d+) vertices but the rig has (\d+)/;
-function namedFrameError(e, names) {
-  const m = VERTEX_COUNT.exec(String(e?.message ?? ''));
-  const byFrame = names.every((n) => /\.(obj|ply)$/i.test(n)) ? names.slice().sort(naturalOrder) : null;
-  const file = m && byFrame?.[Number(m[1]) - 1];
-  if (!file) return e;
-  const message = `${file} has ${m[2]} vertices but the rig has ${m[3]}: add frames of the fitted mesh (the same vertices in the same order, as the training poses)`;
-  return Object.assign(new Error(message), { problems: [{ kind: 'population', file: null, line: null, message }] });
-}
-
-// The core's natural order of file names (src/mesh/population.rs natural_cmp): runs of digits compare as numbers,
-// other bytes without case; then the shorter rest first, then the bytes.
-function naturalOrder(a, b) {
-  const [x, y] = [new TextEncoder().encode(a), new TextEncoder().encode(b)];
-  const digit = (c) => c >= 48 && c <= 57;
-  const lower = (c) => (c >= 65 && c <= 90 ? c + 32 : c);
-  let [i, j] = [0, 0];
-  while (i < x.length && j < y.length) {
-    if (digit(x[i]) && digit(y[j])) {
-      const [si, sj] = [i, j];
-      while (i < x.length && digit(x[i])) i++;
-      while (j < y.length && digit(y[j])) j++;
-      const na = String.fromCharCode(...x.subarray(si, i)).replace(/^0+/, '');
-      const nb = String.fromCharCode(...y.subarray(sj, j)).replace(/^0+/, '');
-      if (na.length !== nb.length) return na.length - nb.length;
-      if (na !== nb) return na < nb ? -1 : 1;
-    } else {
-      if (lower(x[i]) !== lower(y[j])) return lower(x[i]) - lower(y[j]);
-      i++;
-      j++;
-    }
-  }
-  const rest = (x.length - i) - (y.length - j);
-  if (rest) return rest;
-  for (let k = 0; k < Math.min(x.length, y.length); k++) if (x[k] !== y[k]) return x[k] - y[k];
-  return x.length - y.length;
 }

@@ -179,6 +179,27 @@ pub struct FrameSolve {
     pub steps: Vec<usize>,
 }
 
+/// The first of the named frames (name, vertex count) that is not the rig's mesh, refused by its name: what the
+/// page and the CLI check before [`solve_frames`], which knows the frames only by their place. `rig` names the
+/// rig's file in the message where there is one.
+pub fn check_frame_sizes<'a>(
+    frames: impl IntoIterator<Item = (&'a str, usize)>,
+    nv: usize,
+    rig: Option<&str>,
+) -> Result<()> {
+    match frames.into_iter().find(|&(_, n)| n != nv) {
+        None => Ok(()),
+        Some((name, n)) => Err(Error::Population {
+            file: name.to_string(),
+            message: format!(
+                "has {n} vertices but the rig {}has {nv}: add frames of the fitted mesh (the same vertices in the \
+                 same order, as the training poses)",
+                rig.map(|r| format!("{r} ")).unwrap_or_default()
+            ),
+        }),
+    }
+}
+
 /// Every bone's motion per frame, weights and bind positions fixed (module doc). Frames must have the rig's
 /// vertex count (same mesh, same vertex order). They are read once, in order, into the solve's own
 /// vertex-by-vertex copy: a caller can make each frame as it is asked for (pose mode's training poses in
@@ -565,5 +586,23 @@ pub fn median_ratio(folds: &[Fold]) -> f64 {
         0 => f64::NAN,
         n if n % 2 == 1 => r[n / 2],
         n => 0.5 * (r[n / 2 - 1] + r[n / 2]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_frame_of_another_mesh_is_refused_by_its_name() {
+        assert!(check_frame_sizes([("a.obj", 5), ("b.obj", 5)], 5, None).is_ok());
+        let e = check_frame_sizes([("a.obj", 5), ("b10.obj", 4), ("c.obj", 3)], 5, Some("rig.glb")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "file b10.obj: has 4 vertices but the rig rig.glb has 5: add frames of the fitted mesh (the same \
+             vertices in the same order, as the training poses)"
+        );
+        let e = check_frame_sizes([("c.obj", 3)], 5, None).unwrap_err();
+        assert!(e.to_string().contains("but the rig has 5"), "{e}");
     }
 }

@@ -976,6 +976,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
 
     let mut poses_raw: Vec<(String, Vec<DVec3>)> = Vec::new();
     let description;
+    let mut clips = String::new();
     if use_animation {
         let all: Vec<gltf::Animation> = doc.animations().collect();
         let anim = match &options.animation {
@@ -1036,6 +1037,19 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
                 }
             }
         };
+        // the others a user may have meant, and how to read one of them
+        if options.animation.is_none() && animations.len() > 1 {
+            let names: Vec<String> = animations
+                .iter()
+                .map(|a| a.name().filter(|n| !n.is_empty()).map_or(format!("#{}", a.index()), |n| format!("'{n}'")))
+                .collect();
+            clips = format!(
+                "; of the {} animations that move it ({}) the one with the most keyframes is read (the CLI's \
+                 --animation NAME reads another)",
+                names.len(),
+                names.join(", ")
+            );
+        }
         description = format!("{} frames of {aname} ({how}) of {mname}", times.len());
         for (fi, &t) in times.iter().enumerate() {
             let mut local = rest.clone();
@@ -1124,7 +1138,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
         format!("{n_file} vertices welded to {n_welded} (seams split by the exporter)")
     };
     let more = if others > 0 { format!(" (the largest of {} meshes)", others + 1) } else { String::new() };
-    let source = format!("{description} in {file}{more}; {weld_note}");
+    let source = format!("{description} in {file}{more}; {weld_note}{clips}");
     let poses = poses_raw
         .into_iter()
         .map(|(name, pos)| (format!("{file} {name}"), Mesh { positions: weld.keep(&pos), faces: weld.faces.clone() }))
@@ -1309,6 +1323,32 @@ mod tests {
         let f = load(&quad(|_| {}), &Options { frames: Some(5), ..Options::default() }).unwrap();
         assert_eq!(f.poses.len(), 5);
         assert_eq!(f.poses[1].1.positions[1], [1.0, 0.0, 0.5]);
+    }
+
+    #[test]
+    fn several_animations_that_move_the_mesh_are_named_with_the_one_read() {
+        let two = |v: &mut serde_json::Value| {
+            let walk = v["animations"][0].clone();
+            let mut idle = walk.clone();
+            idle["name"] = json!("Idle");
+            v["animations"] = json!([walk, idle]);
+        };
+        let g = load(&quad(two), &Options::default()).unwrap();
+        assert!(g.source.starts_with("3 frames of animation 'Walk'"), "{}", g.source);
+        assert!(
+            g.source.ends_with(
+                "; of the 2 animations that move it ('Walk', 'Idle') the one with the most keyframes is read (the \
+                 CLI's --animation NAME reads another)"
+            ),
+            "{}",
+            g.source
+        );
+        // asked for by name: the one read, and no list
+        let idle = load(&quad(two), &Options { animation: Some("Idle".into()), ..Options::default() }).unwrap();
+        assert!(idle.source.starts_with("3 frames of animation 'Idle'"), "{}", idle.source);
+        assert!(!idle.source.contains("animations that move it"), "{}", idle.source);
+        // one animation: no list
+        assert!(!load(&quad(|_| {}), &Options::default()).unwrap().source.contains("animations that move it"));
     }
 
     #[test]

@@ -173,7 +173,7 @@ test('B6: frames of another vertex count are refused naming the file; a later go
   await page.setInputFiles('[data-testid=pose-frames]', asPayload([{ name: 'a10.obj', text: small[0].text }, { name: 'a2.obj', text: good[0].text }]));
   await page.waitForFunction(() => /vertices/.test(document.getElementById('errors').textContent), null, { timeout: 30000 });
   const text = await errorsText(page);
-  assert.match(text, new RegExp(`a10\\.obj has ${nSmall} vertices but the rig has ${nv}: add frames of the fitted mesh`));
+  assert.match(text, new RegExp(`a10\\.obj: has ${nSmall} vertices but the rig has ${nv}: add frames of the fitted mesh`));
   assert.doesNotMatch(text, /invalid request/);
   assert.doesNotMatch(await page.locator('[data-testid=pose-status]').innerText(), /invalid request/);
   await page.setInputFiles('[data-testid=pose-frames]', asPayload(good.slice(0, 2)));

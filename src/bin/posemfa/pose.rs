@@ -67,13 +67,8 @@ pub fn run(a: Args) -> Result<(), String> {
     let frames = read_frames(&a.frames)?;
     let read_ms = ms(t);
     let nv = rig.rig.n_vertices();
-    if let Some((name, f)) = frames.iter().find(|(_, f)| f.len() != nv) {
-        return Err(format!(
-            "{name} has {} vertices but the rig {} has {nv}: the frames must be the rig's mesh (same vertices, same order)",
-            f.len(),
-            a.rig
-        ));
-    }
+    posemfa::articulate::pose::check_frame_sizes(frames.iter().map(|(n, f)| (n.as_str(), f.len())), nv, Some(&a.rig))
+        .map_err(|e| e.to_string())?;
     let points: Vec<Vec<[f64; 3]>> = frames.iter().map(|(_, f)| f.clone()).collect();
     let t = std::time::Instant::now();
     let solved = solve_frames(&rig.rig, &points).map_err(|e| e.to_string())?;
