@@ -14,7 +14,8 @@ const $ = (id) => document.getElementById(id);
 // A cancelled first fit's model stays exportable (someone who stopped a long fit may want what it reached), and
 // each button says it writes that partial model: its JSON has "complete": false and no diagnosis, its rig and
 // OBJ groups are its parts where it stopped.
-const GLTF_TITLE = $('export-gltf').title;
+// (each button's own tooltip, index.html, when the model is a finished fit)
+const TITLES = Object.fromEntries(['export-json', 'export-obj', 'export-gltf'].map((id) => [id, $(id).title]));
 const PARTIAL = 'the partial model where the cancelled fit stopped, not a finished fit';
 
 function showButtons() {
@@ -22,14 +23,14 @@ function showButtons() {
   const tag = partial ? ' (partial)' : '';
   $('export-json').disabled = !state.model;
   $('export-json').textContent = `Model JSON${tag}`;
-  $('export-json').title = partial ? `${PARTIAL} ("complete": false, no diagnosis)` : '';
+  $('export-json').title = partial ? `${PARTIAL} ("complete": false, no diagnosis)` : TITLES['export-json'];
   $('export-obj').disabled = !state.pop;
   const n = state.shown.length;
   $('export-obj').textContent = `${n > 1 ? `OBJ of the ${n} shown meshes` : 'OBJ of the shown mesh'}${tag}`;
-  $('export-obj').title = partial ? `the shown meshes with the parts of ${PARTIAL} (and its geometry, in the views made from the model)` : '';
+  $('export-obj').title = partial ? `the shown meshes with the parts of ${PARTIAL} (and its geometry, in the views made from the model)` : TITLES['export-obj'];
   $('export-gltf').disabled = !state.model;
   $('export-gltf').textContent = `glTF (.glb)${tag}`;
-  $('export-gltf').title = partial ? `the rig of ${PARTIAL}` : GLTF_TITLE;
+  $('export-gltf').title = partial ? `the rig of ${PARTIAL}` : TITLES['export-gltf'];
 }
 
 /** The rig options of the export panel ({weights, influences, joints, morphs}: src/export/rig_report.rs). */

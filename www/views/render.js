@@ -44,7 +44,9 @@ const VIEWS = {
     // a cancelled fit's parts are where it stopped (said before the count, not inside the colours' clause); no
     // model and no fit (none yet, or the fit failed): grey, and the caption says so
     const stopped = model?.summary.cancelled ? ' where the cancelled fit stopped' : '';
-    const by = model ? `coloured by part${stopped} (${partsShown(model.summary.parts)})` : state.fitId ? 'coloured by the parts of the fit in progress' : 'not fitted (grey)';
+    // a fit in progress has no parts before its first stage ends (the merge tree's start): grey until then
+    const live = state.colours.live ? 'coloured by the parts of the fit in progress' : 'grey until the fit in progress has its first parts';
+    const by = model ? `coloured by part${stopped} (${partsShown(model.summary.parts)})` : state.fitId ? live : 'not fitted (grey)';
     return { slots: single(P, `pose ${poseName(pose)}`, { kind: 'pose', pose }), caption: `Pose “${poseName(pose)}”, ${by}` };
   },
   // The three stages of what ran: the merge tree's start, the part rule's parts and the final AECM (the default

@@ -1,0 +1,66 @@
+// What the ninth review's notes left (docs/page-fixes.md, thirty-fifth session) on the built page (dist/): the
+// caption during a fit, the export buttons' tooltips, a file cut short.
+// Run: npm run build && node --test tests/e2e/review10.test.mjs
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { pageSession, waitState, asPayload, tubePopulation } from './helpers.mjs';
+
+const session = pageSession();
+
+test('while a fit has no parts yet the caption says the mesh is grey, not coloured by parts', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  // every caption the parts view shows from the drop on, with the page's state when it showed it
+  await page.evaluate(() => {
+    window.captionsSeen = [];
+    const caption = document.getElementById('caption');
+    new MutationObserver(() => window.captionsSeen.push({ text: caption.textContent, state: document.body.dataset.state }))
+      .observe(caption, { childList: true, characterData: true, subtree: true });
+  });
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.setInputFiles('[data-testid=file-input]', asPayload(tubePopulation({ poses: 6 }).files));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  const seen = await page.evaluate(() => window.captionsSeen);
+  const during = seen.filter((c) => c.state === 'fitting').map((c) => c.text);
+  assert.ok(during.length > 0, `captions while fitting: ${JSON.stringify(seen)}`);
+  // the new population comes with no parts: grey, and the caption says so until the first parts arrive
+  assert.match(during[0], /grey until the fit in progress has its first parts/);
+  const first = during.findIndex((t) => /coloured by the parts of the fit in progress/.test(t));
+  if (first >= 0) assert.ok(during.slice(first).every((t) => !/grey until/.test(t)), `parts, then grey again: ${during.join(' | ')}`);
+  assert.match(await page.textContent('#caption'), /coloured by part/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('every export button says what it writes before it is pressed', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const ids = ['export-json', 'export-obj', 'export-gltf', 'pose-export-obj', 'pose-export-glb', 'pose-export-frames'];
+  const titles = await page.evaluate((list) => list.map((id) => document.getElementById(id)?.title ?? null), ids);
+  titles.forEach((t, k) => assert.ok(t && t.length > 10, `#${ids[k]} has a tooltip: ${t}`));
+  assert.equal(new Set(titles).size, ids.length, 'each says its own');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('a pose file cut short is refused naming its file and line, saying it looks cut short; the population stays', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const before = await page.evaluate(() => ({ summary: window.posemfa.summary(), errors: window.posemfa.loadErrorCount() }));
+  const { files } = tubePopulation({ poses: 3 });
+  // the second pose stops in the middle of a vertex line, as an interrupted copy leaves it
+  const whole = files[1].text;
+  const cutAt = whole.indexOf('\n', Math.floor(whole.length / 4)) + 6;
+  const cut = whole.slice(0, cutAt);
+  const line = cut.split('\n').length;
+  assert.doesNotMatch(cut.slice(-5), /\n/); // it ends 5 characters into a vertex line
+  await page.setInputFiles('[data-testid=file-input]', asPayload([files[0], { name: files[1].name, text: cut }, files[2]]));
+  await page.waitForFunction((n) => window.posemfa.loadErrorCount() > n, before.errors, { timeout: 30000 });
+  const text = await page.textContent('[data-testid=errors]');
+  assert.ok(text.includes(`${files[1].name}, line ${line}: `), text);
+  assert.match(text, /looks cut short.*copy or export it again/);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  assert.deepEqual(await page.evaluate(() => window.posemfa.summary()), before.summary);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
