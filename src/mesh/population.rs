@@ -349,13 +349,32 @@ impl Population {
     pub fn restricted(&self, vertices: &[usize], faces: Vec<[u32; 3]>) -> Population {
         debug_assert!(faces.iter().flatten().all(|&v| (v as usize) < vertices.len()));
         let points = self.shapes().flat_map(|s| vertices.iter().map(move |&j| s.points[j])).collect();
+        Population::assembled(
+            self.names.clone(),
+            faces,
+            points,
+            vertices.len(),
+            self.normalization,
+            self.source.clone(),
+        )
+    }
+
+    /// A population from its parts, with nothing derived yet (every constructor ends here).
+    fn assembled(
+        names: Vec<String>,
+        faces: Vec<[u32; 3]>,
+        points: Vec<[f32; 3]>,
+        n_vertices: usize,
+        normalization: Normalization,
+        source: String,
+    ) -> Population {
         Population {
-            names: self.names.clone(),
+            names,
             faces: std::sync::Arc::new(faces),
             points: std::sync::Arc::new(points),
-            n_vertices: vertices.len(),
-            normalization: self.normalization,
-            source: self.source.clone(),
+            n_vertices,
+            normalization,
+            source,
             derived: Derived::default(),
         }
     }
@@ -409,15 +428,7 @@ impl Population {
             names.push(name);
         }
         let source = format!("{} shapes", names.len());
-        Ok(Population {
-            names,
-            faces: std::sync::Arc::new(faces),
-            points: std::sync::Arc::new(points),
-            n_vertices,
-            normalization,
-            source,
-            derived: Derived::default(),
-        })
+        Ok(Population::assembled(names, faces, points, n_vertices, normalization, source))
     }
 
     /// Reads every file (name, bytes) with the reader its extension calls for ([`super::load`]: OBJ, PLY,
@@ -597,15 +608,8 @@ impl Population {
         }
         let mut faces = std::mem::take(&mut named[0].1.faces);
         faces.shrink_to_fit();
-        Ok(Population {
-            names: named.into_iter().map(|n| n.0).collect(),
-            faces: std::sync::Arc::new(faces),
-            points: std::sync::Arc::new(points),
-            n_vertices,
-            normalization,
-            source,
-            derived: Derived::default(),
-        })
+        let names = named.into_iter().map(|n| n.0).collect();
+        Ok(Population::assembled(names, faces, points, n_vertices, normalization, source))
     }
 
     fn from_loaded(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
