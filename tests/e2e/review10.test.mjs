@@ -64,3 +64,23 @@ test('a pose file cut short is refused naming its file and line, saying it looks
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('a drop while the pose strip is still being drawn draws the new population\'s strip, with no error', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  // many poses: the strip takes seconds to draw, one thumbnail at a time, after the fit
+  let fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.setInputFiles('[data-testid=file-input]', asPayload(tubePopulation({ poses: 48 }).files));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  const drawing = await page.evaluate(() => document.getElementById('pose-strip').dataset.drawn ?? null);
+  // another mesh (other vertex count), dropped while the strip above is drawn
+  fits = await page.evaluate(() => window.posemfa.fitCount());
+  const other = tubePopulation({ poses: 3, ringsPerSegment: 8 });
+  await page.setInputFiles('[data-testid=file-input]', asPayload(other.files));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  await page.waitForFunction((d) => (document.getElementById('pose-strip').dataset.drawn ?? null) !== d, drawing, { timeout: 60000 });
+  assert.equal(await page.locator('#pose-strip canvas').count(), 3);
+  assert.equal(await page.evaluate(() => window.posemfa.summary().vertices), other.nVertices);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

@@ -62,14 +62,17 @@ function drawThumbnails() {
   const canvases = [...$('pose-strip').querySelectorAll('canvas')];
   const colours = thumbnailColours();
   drawnWith = colours;
+  // the population drawn: a drop while the strip is drawn (a minute for 399 frames in software WebGL) ends this
+  // drawing, whose canvases, positions and colours are the old population's (the viewer has the new faces)
+  const pop = state.pop;
   let i = 0;
   const next = () => {
-    if (token !== thumbsToken || !state.pop) return;
+    if (token !== thumbsToken || state.pop !== pop || !pop) return;
     if (i >= canvases.length) {
       $('pose-strip').dataset.drawn = String(token); // every thumbnail drawn (for the tests)
       return;
     }
-    viewer.thumbnail(state.pop.positions[i], colours, canvases[i]);
+    viewer.thumbnail(pop.positions[i], colours, canvases[i]);
     i++;
     setTimeout(next, 0);
   };
@@ -87,7 +90,10 @@ export function installPoses() {
     $('pose-strip').children[i].focus();
   });
   subscribe((s, changed) => {
-    if (changed.has('pop')) fillPoseLists(s.pop.names);
+    if (changed.has('pop')) {
+      thumbsToken++; // the old population's drawing stops (its strip is gone)
+      fillPoseLists(s.pop.names);
+    }
     if (changed.has('pose') || changed.has('mode')) showPose(s.pose);
     if (changed.has('model') && s.model) setTimeout(drawThumbnails, 0);
     // the merge tree's slider recolours the main view: the thumbnails follow (and go back with it)
