@@ -16,16 +16,19 @@ export function download(name, data, type) {
 export const safeName = (s) => s.replace(/\.(obj|ply|glb|gltf|fbx|usd[acz]?|pc2|mdd|zip)$/i, '').replace(/[^A-Za-z0-9._-]+/g, '_');
 
 /** The population's name in file names: the example's id, the generator and its seed, or what the files'
- * names share (horse1.obj ... horse11.obj: "horse"; the first file's name when they share nothing). */
+ * names share (horse1.obj ... horse11.obj: "horse"); when they share nothing (1.obj ... 11.obj), their folder's
+ * name (a folder or .zip dropped), else "population". */
 export function populationStem() {
   const src = state.source;
   if (!src) return 'population';
   if (src.example) return src.example.id;
   if (src.spec) return `${src.spec.preset}-seed${src.spec.seed ?? 0}`;
-  const names = (src.names ?? []).map((n) => safeName(n.split('/').pop()));
-  if (!names.length) return 'population';
-  let common = names[0];
+  const paths = src.names ?? [];
+  const names = paths.map((n) => safeName(n.split('/').pop()));
+  if (names.length === 1) return names[0];
+  let common = names[0] ?? '';
   for (const n of names) while (!n.startsWith(common)) common = common.slice(0, -1);
   common = common.replace(/[-_. 0-9]+$/, '');
-  return common || names[0];
+  const folder = paths[0]?.split('/').slice(-2, -1)[0];
+  return common || (folder ? safeName(folder) : 'population');
 }

@@ -1,9 +1,12 @@
 // What the ninth review's notes left (docs/page-fixes.md, thirty-fifth session) on the built page (dist/): the
-// caption during a fit, the export buttons' tooltips, a file cut short.
+// caption during a fit, tooltips, a file cut short; and the tenth review's (helper-12): a drop while the strip
+// is drawn, export names, the strip's labels of one file's frames.
 // Run: npm run build && node --test tests/e2e/review10.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState, asPayload, tubePopulation } from './helpers.mjs';
+import { readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { pageSession, waitState, asPayload, tubePopulation, ROOT } from './helpers.mjs';
 
 const session = pageSession();
 
@@ -81,6 +84,47 @@ test('a drop while the pose strip is still being drawn draws the new population\
   await page.waitForFunction((d) => (document.getElementById('pose-strip').dataset.drawn ?? null) !== d, drawing, { timeout: 60000 });
   assert.equal(await page.locator('#pose-strip canvas').count(), 3);
   assert.equal(await page.evaluate(() => window.posemfa.summary().vertices), other.nVertices);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('export names: an interpolation by its two poses and t, files sharing no name by "population", a rig by its options', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  // 1.obj, 2.obj, ...: the names share nothing but digits
+  const files = tubePopulation({ poses: 4 }).files.map((f, k) => ({ name: `${k + 1}.obj`, text: f.text }));
+  await page.setInputFiles('[data-testid=file-input]', asPayload(files));
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f && document.body.dataset.state === 'fitted', fits, { timeout: 120000 });
+  const saved = async (selector) => (await Promise.all([page.waitForEvent('download'), page.click(selector)]))[0].suggestedFilename();
+  assert.equal(await saved('#export-json'), 'posemfa-population-model.json');
+  // the Pose selector on another pose than the interpolation's: the name follows the interpolation
+  await page.selectOption('#pose-select', '3');
+  await page.check('#modes input[value=interp]', { force: true });
+  await page.waitForFunction(() => window.posemfa.mode() === 'interp');
+  await page.selectOption('#pose-a', '0');
+  await page.selectOption('#pose-b', '2');
+  await page.waitForFunction(() => /“1\.obj” → “3\.obj”/.test(document.getElementById('caption').textContent), null, { timeout: 30000 });
+  assert.match(await saved('#export-obj'), /^posemfa-population-1-to-3-t0\.50-.+\.obj$/);
+  await page.selectOption('#rig select[name=morphs]', 'residual');
+  assert.match(await saved('#export-gltf'), /^posemfa-population-rig-.+-\d+bones.*-residual-morphs\.glb$/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('the pose strip labels a glTF\'s frames by frame, not by the file name they all share', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  const buffer = readFileSync(join(ROOT, 'tests/fixtures/blender/quadruped-shapekeys.glb'));
+  await page.setInputFiles('[data-testid=file-input]', [{ name: 'quadruped-shapekeys.glb', mimeType: 'model/gltf-binary', buffer }]);
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  const labels = await page.locator('#pose-strip span').allTextContents();
+  const titles = await page.locator('#pose-strip button').evaluateAll((bs) => bs.map((b) => b.title));
+  assert.ok(labels.length > 2);
+  assert.ok(titles.every((t) => t.startsWith('quadruped-shapekeys.glb ')), titles.join(' | '));
+  assert.ok(labels.every((l, k) => !l.includes('.glb') && titles[k].endsWith(` ${l}`)), labels.join(' | '));
+  assert.equal(new Set(labels).size, labels.length);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

@@ -3,7 +3,6 @@
 import { state, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { poseName } from '../views/render.js';
-import { interpValues } from './interp-values.js';
 import { showProblems } from '../problems.js';
 import { eRmsText, percentText, ERMS_UNIT } from '../erms.js';
 import { download, safeName, populationStem } from '../download.js';
@@ -59,6 +58,17 @@ const orReport = (f) => async () => {
   }
 };
 
+// The OBJ's file name after the population: what the first mesh shown is of (its pose, or the two poses and t of
+// an interpolation) unless the meshes' own names say it ("pose_5", "latent-posed-pose-5"), then those names.
+function shownInName(what, names) {
+  const named = safeName(names.join('+'));
+  if (what.kind === 'interpolation' || what.kind === 'linear') {
+    return `${safeName(poseName(what.from))}-to-${safeName(poseName(what.to))}-t${what.t.toFixed(2)}-${named}`;
+  }
+  const pose = Number.isInteger(what.pose) && !what.kind.startsWith('latent') ? safeName(poseName(what.pose)) : '';
+  return pose && !named.includes(pose) ? `${pose}-${named}` : named;
+}
+
 export function installExports() {
   $('export-json').addEventListener('click', orReport(async () => download(`posemfa-${populationStem()}-model.json`, await query('toJson'), 'application/json')));
   // The core writes what the view shows, in the population's original units, exact floats: every mesh shown
@@ -70,8 +80,7 @@ export function installExports() {
     const slots = state.shown;
     if (!slots.length) return;
     const names = slots.map((x) => x.name);
-    const t = state.mode === 'interp' ? `-t${interpValues().t.toFixed(2)}` : '';
-    const name = `posemfa-${populationStem()}-${safeName(poseName(state.pose))}-${safeName(names.join('+'))}${t}.obj`;
+    const name = `posemfa-${populationStem()}-${shownInName(slots[0].what, names)}.obj`;
     const header = `${$('caption').textContent}\nobjects: ${names.join(', ')}\nposemfa, ${state.pop.nVertices} vertices and ${state.pop.faces.length / 3} triangles per object`;
     const meshes = slots.map((x) => ({ name: x.name, what: x.what, parts: state.model ? x.parts ?? null : null }));
     download(name, await query('objScene', meshes, header), 'model/obj');
@@ -83,7 +92,8 @@ export function installExports() {
     $('rig-erms').textContent = '…';
     const r = await query('rig', opts);
     showRig(r, opts);
-    download(`posemfa-${populationStem()}-rig-${opts.weights}-${r.bones}bones.glb`, r.glb, 'model/gltf-binary');
+    const extras = `${opts.joints === 'fixed' ? '-fixed-joints' : ''}${opts.morphs !== 'none' ? `-${opts.morphs}-morphs` : ''}`;
+    download(`posemfa-${populationStem()}-rig-${opts.weights}-${r.bones}bones${extras}.glb`, r.glb, 'model/gltf-binary');
   }));
   $('rig').addEventListener('change', () => {
     $('rig-erms').textContent = '–';

@@ -6,6 +6,14 @@ import { showTrainingPose } from './pose.js';
 
 const $ = (id) => document.getElementById(id);
 
+// The strip's label of each pose: the file's own name (the full path is in the title); the poses of one file
+// (a glTF's, FBX's or USD's frames: "character.glb frame 012") by what tells them apart ("frame 012").
+function stripLabels(names) {
+  const file = /^(.+?\.[A-Za-z0-9]+) ./.exec(names[0] ?? '')?.[1];
+  const oneFile = file && names.length > 1 && names.every((n) => n.startsWith(`${file} `));
+  return names.map((n) => (oneFile ? n.slice(file.length + 1) : n.split('/').pop()));
+}
+
 function fillPoseLists(names) {
   const opts = () => names.map((n, i) => Object.assign(document.createElement('option'), { value: i, textContent: n }));
   $('pose-select').replaceChildren(...opts());
@@ -13,6 +21,7 @@ function fillPoseLists(names) {
   $('pose-b').replaceChildren(...opts());
   $('pose-a').value = 0;
   $('pose-b').value = Math.min(1, names.length - 1);
+  const labels = stripLabels(names);
   $('pose-strip').replaceChildren(...names.map((n, i) => {
     const b = document.createElement('button');
     b.type = 'button';
@@ -23,7 +32,7 @@ function fillPoseLists(names) {
     c.width = 160;
     c.height = 120;
     const label = document.createElement('span');
-    label.textContent = n.split('/').pop(); // the file's own name; the full path is in the title
+    label.textContent = labels[i];
     b.append(c, label);
     b.addEventListener('click', () => choosePose(i));
     return b;
