@@ -87,8 +87,14 @@ impl WasmPopulation {
     /// pose, one .glb / .gltf with its .bin files, a .pc2 / .mdd point cache with its base mesh; any other
     /// extension is refused by name, .mtl ignored). Throws an Error with one problem per file that has one (`problems`,
     /// each {kind, file, line, message}; the message has one line per problem).
+    /// `animation`: for a glTF, the animation to read (a name of `clips`; default the one with the most
+    /// keyframes).
     #[wasm_bindgen(constructor)]
-    pub fn new(names: Vec<String>, files: Vec<Uint8Array>) -> Result<WasmPopulation, JsValue> {
+    pub fn new(
+        names: Vec<String>,
+        files: Vec<Uint8Array>,
+        animation: Option<String>,
+    ) -> Result<WasmPopulation, JsValue> {
         if names.len() != files.len() {
             return Err(js_err("names and files differ in length"));
         }
@@ -104,7 +110,9 @@ impl WasmPopulation {
                 Ok(())
             })
         } else {
-            Population::from_files_all_errors(names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect())
+            let options = crate::mesh::gltf::Options { animation, ..Default::default() };
+            let files = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
+            Population::from_files_all_errors_with(files, &options)
         };
         match read {
             // poses with no motion are refused as a bad file is: the page keeps what it had
@@ -121,6 +129,21 @@ impl WasmPopulation {
     #[wasm_bindgen(getter)]
     pub fn source(&self) -> String {
         self.inner.source.clone()
+    }
+
+    /// A glTF's animations that move its mesh, {names, read} (`read`: the index of the one the poses came
+    /// from), or null for poses of another source.
+    #[wasm_bindgen(getter)]
+    pub fn clips(&self) -> Result<JsValue, JsValue> {
+        match &self.inner.clips {
+            None => Ok(JsValue::NULL),
+            Some(c) => {
+                let obj = js_sys::Object::new();
+                js_sys::Reflect::set(&obj, &"names".into(), &to_js(&c.names)?)?;
+                js_sys::Reflect::set(&obj, &"read".into(), &JsValue::from(c.read as u32))?;
+                Ok(obj.into())
+            }
+        }
     }
 
     #[wasm_bindgen(getter, js_name = nShapes)]

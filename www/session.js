@@ -42,7 +42,7 @@ function takeFault() {
 }
 
 // A key naming the work in hand (population and fit parameters): the restart cap counts per key.
-export const jobKey = (source, params) => JSON.stringify([source?.label, source?.spec ?? source?.names, params]);
+export const jobKey = (source, params) => JSON.stringify([source?.label, source?.spec ?? source?.names, source?.animation, params]);
 
 /** The state to return to when a load fails: whatever was there before. */
 export const restingState = () => (state.fitId ? 'fitting' : state.model ? 'fitted' : state.pop ? 'idle' : 'error');
@@ -85,6 +85,13 @@ export async function loadFiles(got) {
   startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes, { fresh: true });
 }
 
+/** The same files read again with another of their glTF's animations (the Population panel's list), fitted with
+ * the form's parameters; a refusal keeps what is loaded. */
+export function readAnimation(name) {
+  if (!state.source?.bytes) return;
+  startLoad({ ...state.source, animation: name }, []);
+}
+
 /** Whether `model`'s parts came from the merge tree, as the core says (summary.partsFrom): the default part rule
  * with the refinement on; Algorithm 1 otherwise, and always in Step by step. The Stages view and the Parts line
  * name the stages after it. */
@@ -103,7 +110,7 @@ async function startLoad(source, notes, { fit: fitting = true, fresh = false } =
     req = client.request({ type: 'generate', spec: source.spec, fit }, { job });
   } else {
     const files = source.bytes.map((b) => b.buffer.slice(b.byteOffset, b.byteOffset + b.byteLength));
-    req = client.request({ type: 'load', names: source.names, files, fit }, { transfer: files, job });
+    req = client.request({ type: 'load', names: source.names, files, fit, animation: source.animation }, { transfer: files, job });
   }
   update({ loading: { id: req.id, source, fit, notes, fresh }, phase: 'loading' });
   const fitDone = fit ? client.expect(fit.id, { onEvent: onProgress }) : null;

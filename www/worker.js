@@ -104,6 +104,7 @@ function describe(pop, truth = null) {
     nShapes: pop.nShapes,
     nVertices: pop.nVertices,
     provenance: pop.source,
+    clips: pop.clips, // a glTF's animations that move the mesh, {names, read}, or null
     faces: pop.faces(),
     positions,
     truth,
@@ -133,7 +134,8 @@ function load(data) {
   const { id, names, files } = data;
   let pop;
   try {
-    pop = new wasm.Population(names, files.map((b) => new Uint8Array(b)));
+    // animation: a glTF's clip to read (the page's Animation list), else the core's choice
+    pop = new wasm.Population(names, files.map((b) => new Uint8Array(b)), data.animation ?? undefined);
   } catch (e) {
     if (isCrash(e)) return crashed(e);
     post({ type: 'load-error', id, problems: problemsOf(e) });

@@ -1080,7 +1080,8 @@ impl Weld {
             .into_iter()
             .map(|(name, positions)| (format!("{file} {name}"), Mesh { positions, faces: self.faces.clone() }))
             .collect();
-        Gltf { file: file.to_string(), poses, source, vertices_in_file: n_file, vertices_welded: n_welded }
+        // (FBX takes and USD clips are not offered to choose from yet: the CLI's --animation picks a take)
+        Gltf { file: file.to_string(), poses, source, vertices_in_file: n_file, vertices_welded: n_welded, clips: None }
     }
 }
 

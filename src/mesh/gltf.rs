@@ -98,6 +98,17 @@ pub struct Gltf {
     /// Vertices as stored in the file, and after welding.
     pub vertices_in_file: usize,
     pub vertices_welded: usize,
+    /// The animations that move the mesh, when the poses came from one of them ([`Clips`]).
+    pub clips: Option<Clips>,
+}
+
+/// The animations of a file that move its mesh, each by what [`Options::animation`] takes (its name, else its
+/// index), and the one the poses came from: what a page offers to read another.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Clips {
+    pub names: Vec<String>,
+    /// Index in `names` of the one read.
+    pub read: usize,
 }
 
 /// Reads the glTF file in `files` (the one `.glb`/`.gltf`), taking external buffers from the other files.
@@ -977,6 +988,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     let mut poses_raw: Vec<(String, Vec<DVec3>)> = Vec::new();
     let description;
     let mut clips = String::new();
+    let mut clip_list = None;
     if use_animation {
         let all: Vec<gltf::Animation> = doc.animations().collect();
         let anim = match &options.animation {
@@ -1006,6 +1018,10 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             }
         };
         let aname = name_of(anim.name(), "animation", anim.index());
+        let key =
+            |a: &gltf::Animation| a.name().filter(|n| !n.is_empty()).map_or(a.index().to_string(), str::to_string);
+        let names: Vec<String> = animations.iter().map(key).collect();
+        clip_list = animations.iter().position(|a| a.index() == anim.index()).map(|read| Clips { names, read });
         let channels = read_channels(&data, &anim, &aname)?;
         let mut keys: Vec<f64> = channels.iter().flat_map(|c| c.times.iter().copied()).collect();
         keys.sort_by(f64::total_cmp);
@@ -1044,8 +1060,8 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
                 .map(|a| a.name().filter(|n| !n.is_empty()).map_or(format!("#{}", a.index()), |n| format!("'{n}'")))
                 .collect();
             clips = format!(
-                "; of the {} animations that move it ({}) the one with the most keyframes is read (the CLI's \
-                 --animation NAME reads another)",
+                "; of the {} animations that move it ({}) the one with the most keyframes is read (the page's \
+                 Animation list or the CLI's --animation NAME reads another)",
                 names.len(),
                 names.join(", ")
             );
@@ -1143,7 +1159,14 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
         .into_iter()
         .map(|(name, pos)| (format!("{file} {name}"), Mesh { positions: weld.keep(&pos), faces: weld.faces.clone() }))
         .collect();
-    Ok(Gltf { file: file.to_string(), poses, source, vertices_in_file: n_file, vertices_welded: n_welded })
+    Ok(Gltf {
+        file: file.to_string(),
+        poses,
+        source,
+        vertices_in_file: n_file,
+        vertices_welded: n_welded,
+        clips: clip_list,
+    })
 }
 
 fn morph(md: &MeshData, weights: &[f64]) -> Vec<DVec3> {
@@ -1338,17 +1361,24 @@ mod tests {
         assert!(
             g.source.ends_with(
                 "; of the 2 animations that move it ('Walk', 'Idle') the one with the most keyframes is read (the \
-                 CLI's --animation NAME reads another)"
+                 page's Animation list or the CLI's --animation NAME reads another)"
             ),
             "{}",
             g.source
         );
         // asked for by name: the one read, and no list
+        let names = vec!["Walk".to_string(), "Idle".to_string()];
+        assert_eq!(g.clips, Some(Clips { names: names.clone(), read: 0 }));
         let idle = load(&quad(two), &Options { animation: Some("Idle".into()), ..Options::default() }).unwrap();
         assert!(idle.source.starts_with("3 frames of animation 'Idle'"), "{}", idle.source);
+        assert_eq!(idle.clips, Some(Clips { names, read: 1 }));
         assert!(!idle.source.contains("animations that move it"), "{}", idle.source);
-        // one animation: no list
-        assert!(!load(&quad(|_| {}), &Options::default()).unwrap().source.contains("animations that move it"));
+        // one animation: no list; morph targets: no clips
+        let one = load(&quad(|_| {}), &Options::default()).unwrap();
+        assert!(!one.source.contains("animations that move it"));
+        assert_eq!(one.clips, Some(Clips { names: vec!["Walk".into()], read: 0 }));
+        let targets = Options { source: PoseSource::MorphTargets, ..Options::default() };
+        assert_eq!(load(&quad(|_| {}), &targets).unwrap().clips, None);
     }
 
     #[test]

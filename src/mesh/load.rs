@@ -145,6 +145,8 @@ pub struct Loaded {
     pub poses: Vec<(String, Mesh)>,
     /// Where the poses came from, for people ("48 morph targets of mesh 'horse' in horse.glb").
     pub source: String,
+    /// A glTF's animations that move its mesh and the one read ([`gltf::Clips`]).
+    pub clips: Option<gltf::Clips>,
 }
 
 /// Reads one per-pose mesh file by its extension (.obj or .ply; any other is refused by name).
@@ -245,7 +247,7 @@ pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std:
                 (format!("{cache_name} frame {:0width$}", f + 1), Mesh { positions, faces: base.faces.clone() })
             })
             .collect();
-        return Ok(Loaded { poses, source });
+        return Ok(Loaded { poses, source, clips: None });
     }
     if let Some(l) = load_scene(&files, &kinds, n_gltf + n_mesh, options)? {
         return Ok(l);
@@ -261,7 +263,7 @@ pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std:
             ));
         }
         let g = gltf::load_files(&files, options)?;
-        return Ok(Loaded { poses: g.poses, source: g.source });
+        return Ok(Loaded { poses: g.poses, source: g.source, clips: g.clips });
     }
     let mut poses = Vec::with_capacity(n_mesh);
     // (each error with its file's place, for the set's first mismatch among the files that read to join them)
@@ -287,7 +289,7 @@ pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std:
         return Err(errors.into_iter().map(|e| e.1).collect());
     }
     let poses = poses.into_iter().map(|(_, name, m)| (name, m)).collect();
-    Ok(Loaded { poses, source: mesh_files_source(n_obj, n_ply) })
+    Ok(Loaded { poses, source: mesh_files_source(n_obj, n_ply), clips: None })
 }
 
 /// An FBX or USD file (alone): its poses. None when no such file was given.
@@ -315,7 +317,7 @@ fn load_scene(
         fbx::read(name, bytes, options)
     };
     let g = g.map_err(|e| vec![e])?;
-    Ok(Some(Loaded { poses: g.poses, source: g.source }))
+    Ok(Some(Loaded { poses: g.poses, source: g.source, clips: g.clips }))
 }
 
 /// Where poses read from one mesh file each came from: "11 OBJ files", "1 OBJ and 2 PLY files".

@@ -54,6 +54,8 @@ pub struct Population {
     /// Where the shapes came from, for people: "11 OBJ files", "48 morph targets of mesh 'horse' in
     /// horse.glb, ...", "241 frames of animation 'Walk' (sampled at its keyframes, 24 fps) ...".
     pub source: String,
+    /// A glTF's animations that move its mesh and the one the poses came from (None for other sources).
+    pub clips: Option<super::gltf::Clips>,
     /// What is worked out once for these coordinates: the poses in farthest-first order
     /// ([`Population::pose_order`]) and the faces the connectivity follows ([`Population::graph_faces`]).
     derived: Derived,
@@ -375,6 +377,7 @@ impl Population {
             n_vertices,
             normalization,
             source,
+            clips: None,
             derived: Derived::default(),
         }
     }
@@ -445,9 +448,17 @@ impl Population {
     }
 
     /// Like [`Population::from_files`] but reports every file's error, in natural order of the names.
-    pub fn from_files_all_errors(mut files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
+    pub fn from_files_all_errors(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
+        Population::from_files_all_errors_with(files, &super::gltf::Options::default())
+    }
+
+    /// [`Population::from_files_all_errors`] with choices for glTF, FBX and USD files (which animation...).
+    pub fn from_files_all_errors_with(
+        mut files: Vec<(String, Vec<u8>)>,
+        options: &super::gltf::Options,
+    ) -> std::result::Result<Population, Vec<Error>> {
         files.sort_by(|a, b| natural_cmp(&a.0, &b.0));
-        Population::from_loaded(files).map_err(|e| {
+        Population::from_files_with(files, options).map_err(|e| {
             if e.is_empty() {
                 vec![Error::Io("no files were given".into())]
             } else {
@@ -624,6 +635,7 @@ impl Population {
         let loaded = super::load::load_with(files, options)?;
         let mut population = Population::from_meshes(loaded.poses).map_err(|e| vec![e])?;
         population.source = loaded.source;
+        population.clips = loaded.clips;
         Ok(population)
     }
 

@@ -128,3 +128,26 @@ test('the pose strip labels a glTF\'s frames by frame, not by the file name they
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('a glTF with two animations that move the mesh offers the other one, and reads it when chosen', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  assert.equal(await page.locator('#clip-row').isVisible(), false, 'no list for OBJ poses');
+  let fits = await page.evaluate(() => window.posemfa.fitCount());
+  const buffer = readFileSync(join(ROOT, 'tests/fixtures/blender/quadruped-skinned-seams.glb'));
+  await page.setInputFiles('[data-testid=file-input]', [{ name: 'quadruped-skinned-seams.glb', mimeType: 'model/gltf-binary', buffer }]);
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  assert.equal(await page.locator('#clip-row').isVisible(), true);
+  const options = await page.locator('#clip option').allTextContents();
+  assert.deepEqual(options, ['interpolated', 'training poses']);
+  assert.equal(await page.inputValue('#clip'), 'interpolated');
+  assert.match(await page.textContent('#pop-source'), /frames of animation 'interpolated' .*of the 2 animations that move it/);
+  fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.selectOption('#clip', 'training poses');
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f && document.body.dataset.state === 'fitted', fits, { timeout: 120000 });
+  assert.match(await page.textContent('#pop-source'), /frames of animation 'training poses' /);
+  assert.doesNotMatch(await page.textContent('#pop-source'), /animations that move it/);
+  assert.equal(await page.inputValue('#clip'), 'training poses');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

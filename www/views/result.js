@@ -2,7 +2,7 @@
 // the file list; the fit's progress (stage, iteration, elapsed time, log-likelihood and its plot); the
 // result (parts, RMSE, iterations, fit time, ground-truth accuracy).
 import { state, subscribe } from '../state.js';
-import { onFitProgress, isTreeFit } from '../session.js';
+import { onFitProgress, isTreeFit, readAnimation } from '../session.js';
 import { drops } from '../trace.js';
 import { accuracyText, tiedText } from '../ground-truth.js';
 import { plot } from './viewer-instance.js';
@@ -45,6 +45,11 @@ function showPopulation(pop, source) {
   const provenance = pop.truth ? '' : pop.provenance;
   $('pop-source').hidden = !provenance;
   $('pop-source').textContent = provenance ? `Poses: ${provenance}` : '';
+  // a glTF with several animations that move its mesh: the one read, and the others to read instead
+  const clips = pop.clips?.names.length > 1 ? pop.clips : null;
+  $('clip-row').hidden = !clips;
+  $('clip').replaceChildren(...(clips?.names ?? []).map((n) => Object.assign(document.createElement('option'), { value: n, textContent: n })));
+  if (clips) $('clip').value = clips.names[clips.read];
   const ex = source?.example;
   $('example-note').hidden = !ex;
   $('example-note').classList.toggle('fails', !!ex?.failsOnPurpose);
@@ -211,6 +216,7 @@ function wholeFit(runs, final) {
 }
 
 export function installResult() {
+  $('clip').addEventListener('change', (e) => readAnimation(e.target.value));
   onFitProgress((m) => {
     if (runsFor !== m.id) [runsFor, runsFinished] = [m.id, 0];
     if (fitRuns.id !== m.id) fitRuns = { id: m.id, values: [], runs: [] };
