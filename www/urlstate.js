@@ -104,6 +104,13 @@ export function formatHash(s) {
   return ORDER.filter((k) => k in q).map((k) => `${k}=${encodeURIComponent(q[k]).replace(/%2C/g, ',')}`).join('&');
 }
 
+/** What a hash holds that parseHash did not take ("parts=abc", "view=wat", an unknown key), as "key=value". */
+export function unreadInHash(hash) {
+  const kept = new Set(new URLSearchParams(formatHash(parseHash(hash))).keys());
+  const given = [...new URLSearchParams(String(hash).replace(/^#/, ''))];
+  return given.filter(([k, v]) => !kept.has(k) && !(k === 'bones' && v === 'auto')).map(([k, v]) => `${k}=${v}`);
+}
+
 /** Hides the controls the flags name (body classes hide-NAME; see embed.css). */
 export function applyEmbedFlags(s, body = document.body) {
   const hidden = new Set([...(s.embed ? EMBED_HIDES : []), ...(s.hide ?? [])]);
@@ -317,9 +324,13 @@ export function installUrlState(ctx) {
     /** At the worker's 'ready': loads the population the hash names. False: the page's default applies. */
     start() {
       const s = parseHash(location.hash);
-      if (s.src === 'files') {
-        note = 'This link was made from opened files, which a link cannot carry: open them again. Showing the default example.';
-      }
+      const said = [];
+      if (s.src === 'files') said.push('This link was made from opened files, which a link cannot carry: open them again. Showing the default example.');
+      const ids = state.examples.map((e) => e.id);
+      if (s.ex && !ids.includes(s.ex)) said.push(`This link names the example “${s.ex}”, which is not one of the built-in examples (${ids.join(', ')}): showing the default example.`);
+      const unread = unreadInHash(location.hash).filter((kv) => !kv.startsWith('ex='));
+      if (unread.length) said.push(`Ignored in this link (not values this page reads): ${unread.join(', ')}.`);
+      if (said.length) note = said.join(' ');
       return load(s);
     },
   };

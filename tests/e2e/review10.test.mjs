@@ -151,3 +151,20 @@ test('a glTF with two animations that move the mesh offers the other one, and re
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('a link with an unknown example or unreadable values says what it ignored', async () => {
+  const { page, context, log } = await session.open('#ex=nonsense&parts=abc&view=wat&seed=3');
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await page.waitForFunction(() => /This link names the example/.test(document.getElementById('errors').textContent), null, { timeout: 30000 });
+  const text = await page.textContent('[data-testid=errors]');
+  assert.match(text, /This link names the example “nonsense”, which is not one of the built-in examples \(.*quadruped.*\): showing the default example\./);
+  assert.match(text, /Ignored in this link \(not values this page reads\): parts=abc, view=wat\./);
+  assert.doesNotMatch(text, /seed=3/);
+  // a link the page reads whole says nothing
+  const again = await context.newPage();
+  await again.goto(`${page.url().split('#')[0]}#ex=quadruped&view=stages`);
+  assert.equal(await waitState(again, ['fitted', 'error'], 120000), 'fitted');
+  assert.equal(await again.textContent('[data-testid=errors]'), '');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
