@@ -512,7 +512,8 @@ impl FitModel {
     }
 
     /// {shapes, vertices, parts, partsFrom: "merge tree" | "Algorithm 1", coarseParts (the merge tree's start, or
-    /// Algorithm 1's coarse parts), refinedParts, rmse, rmseOriginal (in the original units), eRms (the
+    /// Algorithm 1's coarse parts), refinedParts, refine (the refinement ran), partsAsked (the exact count asked
+    /// for, or null), rmse, rmseOriginal (in the original units), eRms (the
     /// rig's measure, [`crate::export::rig_report::fit_e_rms`]),
     /// iterations, converged, complete,
     /// logLikelihood: [...], stageStats: [...],
@@ -529,6 +530,7 @@ impl FitModel {
             "shapes": m.n_shapes, "vertices": m.n_vertices, "parts": m.n_parts(),
             "partsFrom": if self.result.from_merge_tree { "merge tree" } else { "Algorithm 1" },
             "coarseParts": s.coarse_parts, "refinedParts": s.refined_parts,
+            "refine": self.result.refined, "partsAsked": self.result.parts_asked,
             "rmse": rmse, "rmseOriginal": self.pop.normalization.length_to_original(rmse),
             "eRms": crate::export::rig_report::fit_e_rms(&self.pop, m),
             "iterations": m.iterations, "converged": m.converged,

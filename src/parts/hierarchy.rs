@@ -117,6 +117,10 @@ pub struct FitResult {
     /// m = `parts`; or a partition given to start from, [`Params::start_labels`]), so too few parts cannot be
     /// told from a shape that is no articulated one ([`super::diagnosis::diagnose_fit`]).
     pub count_unjudged: bool,
+    /// The refinement ran (`refine` on): Algorithm 1's refined stage is its own, not the coarse one again.
+    pub refined: bool,
+    /// The exact part count asked for (`target_parts`), if one was.
+    pub parts_asked: Option<usize>,
 }
 
 impl FitResult {
@@ -1188,6 +1192,8 @@ impl Pipeline {
             start_parts: self.start_parts,
             decided_labels: self.decided_labels.as_deref().map(|d| self.everywhere(d)),
             merge_tree,
+            refined: self.params.refine,
+            parts_asked: self.params.target_parts,
             tree_count: self.tree_count,
             from_merge_tree: self.params.part_rule == PartRule::Tree && self.params.refine,
             count_unjudged: !self.params.refine || self.params.start_labels.is_some(),

@@ -151,7 +151,9 @@ test('a cancelled fit gets no verdict: "cancelled: the diagnosis needs a finishe
   assert.equal(await page.locator('[data-testid=diagnosis].fails').count(), 0);
   assert.match(await text(page, '#stage'), /^cancelled: where the fit stopped$/); // not "best": it may not be
   // with the refinement off the fit is Algorithm 1's: its stages by Algorithm 1's names
-  assert.match(await text(page, '#stage-parts'), /^\(coarse \d+, refined \d+, cancelled\)$/);
+  assert.match(await text(page, '#stage-parts'), /^\(coarse \d+, no refinement, cancelled\)$/);
+  // its iterations are the run's it stopped in, not "the final stage's"
+  assert.match(await text(page, '#iterations'), /^\d+ in the run where the fit was cancelled$/);
   assert.deepEqual(log.errors, []);
   await context.close();
 });
@@ -189,7 +191,7 @@ test('the Stages view names what ran: the merge tree\'s stages for the default f
   const a = await summary(page);
   // (a part of the coarse fit in pieces is a part per piece: the count after that is said when it is more)
   const pieces = a.parts > a.refinedParts ? `; ${a.parts} once each part is one connected piece` : '';
-  assert.match(await text(page, '#stage-parts'), new RegExp(`^\\(coarse ${a.coarseParts}, refined ${a.refinedParts}${pieces}\\)$`));
+  assert.match(await text(page, '#stage-parts'), new RegExp(`^\\(coarse ${a.coarseParts}, no refinement${pieces}\\)$`));
   await mode(page, 'stages');
   await page.waitForFunction(() => /^Algorithm 1 on pose/.test(document.getElementById('caption').textContent));
   await frames(page);

@@ -168,3 +168,20 @@ test('a link with an unknown example or unreadable values says what it ignored',
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('with the refinement off and a count asked for, the parts line says both, not "refined"', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await page.uncheck('#params input[name=refine]');
+  await page.fill('#params input[name=targetParts]', '5');
+  await page.click('#fit');
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f && document.body.dataset.state === 'fitted', fits, { timeout: 120000 });
+  const s = await page.evaluate(() => window.posemfa.summary());
+  assert.equal(s.parts, 5);
+  assert.deepEqual([s.refine, s.partsAsked], [false, 5]);
+  assert.equal(await page.textContent('#stage-parts'), `(coarse ${s.coarseParts}, no refinement; 5 as asked in “Parts in the end”)`);
+  assert.match(await page.textContent('#iterations'), /^\d+ in the final stage/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

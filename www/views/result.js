@@ -107,7 +107,11 @@ function showResult() {
   // stages: said the same for a finished fit and for one cancelled before it finished (which has no tree yet)
   // (Algorithm 1 without the refinement: a part of the coarse fit in pieces becomes a part per piece)
   const pieces = s && s.complete && !s.cancelled && !isTreeFit(state.model) && s.parts > s.refinedParts ? `; ${s.parts} once each part is one connected piece` : '';
-  const stages = isTreeFit(state.model) ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}${pieces}`;
+  // (the refinement off: no refined stage of its own; an exact count asked for in "Parts in the end" says so, a
+  // Refine's count has its own note)
+  const algorithm1 = s?.refine === false ? `coarse ${s?.coarseParts}, no refinement${pieces}` : `coarse ${s?.coarseParts}, refined ${s?.refinedParts}${pieces}`;
+  const asked = Number.isInteger(s?.partsAsked) && !state.model?.refinedFromTree ? `; ${s.partsAsked} as asked in “Parts in the end”` : '';
+  const stages = (isTreeFit(state.model) ? `started from the merge tree's ${s?.coarseParts} part${s?.coarseParts === 1 ? '' : 's'}` : algorithm1) + asked;
   $('stage-parts').textContent = s ? `(${stages}${s.cancelled ? ', cancelled' : ''})` : '';
   // a generated population is in the unit box already: one figure for both units when they print the same
   const [unit, original] = s ? [s.rmse.toExponential(3), s.rmseOriginal.toExponential(3)] : [];
@@ -117,7 +121,9 @@ function showResult() {
   $('rmse').textContent = !s ? '–' : unit === original ? `${unit} (unit box = original units)${eRms}` : `${unit} (unit box) = ${original} original units${eRms}`;
   // a finished fit that stopped at the iteration cap says so (it is not converged)
   const how = s?.converged ? ', converged' : s?.complete ? ', not converged: stopped at the iteration cap' : '';
-  $('iterations').textContent = s ? `${s.iterations} in the final stage${how}` : '–';
+  // a cancelled fit's iterations are those of the run it stopped in, which need not be the final stage's
+  const where = s?.cancelled ? 'in the run where the fit was cancelled' : 'in the final stage';
+  $('iterations').textContent = s ? `${s.iterations} ${where}${s.cancelled ? '' : how}` : '–';
   $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
   $('truth-acc').textContent = accuracyText(s?.groundTruth);
   $('truth-acc').classList.toggle('good', s?.groundTruth?.ari >= 0.95);
