@@ -185,3 +185,24 @@ test('with the refinement off and a count asked for, the parts line says both, n
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('in the Interpolate view the pose strip marks From and To and takes no clicks', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const pressed = () => page.locator('#pose-strip button').evaluateAll((bs) => bs.map((b) => b.getAttribute('aria-pressed') === 'true'));
+  await page.check('#modes input[value=interp]', { force: true });
+  await page.waitForFunction(() => window.posemfa.mode() === 'interp');
+  await page.selectOption('#pose-a', '1');
+  await page.selectOption('#pose-b', '3');
+  const marks = await pressed();
+  assert.deepEqual(marks.map((p, k) => (p ? k : -1)).filter((k) => k >= 0), [1, 3]);
+  assert.equal(await page.locator('#pose-strip button:not([disabled])').count(), 0);
+  assert.match(await page.getAttribute('#pose-strip', 'title'), /From and To/);
+  // back in the Parts view the strip is the pose list again
+  await page.check('#modes input[value=parts]', { force: true });
+  await page.waitForFunction(() => window.posemfa.mode() === 'parts');
+  assert.equal(await page.locator('#pose-strip button[disabled]').count(), 0);
+  assert.equal((await pressed()).filter(Boolean).length, 1);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

@@ -47,10 +47,17 @@ export const choosePose = (i) => {
 
 // The pose shown is marked in the strip; in pose mode none is (the view shows a pose made from the rig, not a
 // training pose).
+// In the Interpolate view the From / To lists choose the poses shown: the strip marks those two and waits.
 function showPose(i) {
   $('pose-select').value = i;
   const made = state.mode === 'pose';
-  [...$('pose-strip').children].forEach((b, k) => b.setAttribute('aria-pressed', String(!made && k === i)));
+  const interp = state.mode === 'interp';
+  const ends = interp ? [Number($('pose-a').value), Number($('pose-b').value)] : [];
+  $('pose-strip').title = interp ? 'the Interpolate view shows the poses chosen in From and To above' : '';
+  [...$('pose-strip').children].forEach((b, k) => {
+    b.disabled = interp;
+    b.setAttribute('aria-pressed', String(interp ? ends.includes(k) : !made && k === i));
+  });
 }
 
 let thumbsToken = 0;
@@ -90,6 +97,7 @@ function drawThumbnails() {
 
 export function installPoses() {
   $('pose-select').addEventListener('change', (e) => choosePose(Number(e.target.value)));
+  for (const id of ['pose-a', 'pose-b']) $(id).addEventListener('change', () => showPose(state.pose));
   $('pose-strip').addEventListener('keydown', (e) => {
     const step = { ArrowLeft: -1, ArrowRight: 1 }[e.key];
     if (!step || !state.pop) return;
@@ -103,7 +111,7 @@ export function installPoses() {
       thumbsToken++; // the old population's drawing stops (its strip is gone)
       fillPoseLists(s.pop.names);
     }
-    if (changed.has('pose') || changed.has('mode')) showPose(s.pose);
+    if (changed.has('pose') || changed.has('mode') || changed.has('pop')) showPose(s.pose);
     if (changed.has('model') && s.model) setTimeout(drawThumbnails, 0);
     // the merge tree's slider recolours the main view: the thumbnails follow (and go back with it)
     else if (s.model && ['treeParts', 'mode', 'colours'].some((k) => changed.has(k)) && thumbnailColours() !== drawnWith) {
