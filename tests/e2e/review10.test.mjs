@@ -6,7 +6,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { pageSession, waitState, asPayload, tubePopulation, ROOT } from './helpers.mjs';
+import { pageSession, waitState, asPayload, tubePopulation, moveTreeSlider, ROOT } from './helpers.mjs';
 
 const session = pageSession();
 
@@ -174,7 +174,10 @@ test('with the refinement off and a count asked for, the parts line says both, n
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
   const fits = await page.evaluate(() => window.posemfa.fitCount());
   await page.uncheck('#params input[name=refine]');
+  assert.equal(await page.textContent('#fit'), 'Fit');
   await page.fill('#params input[name=targetParts]', '5');
+  // the button says the count the field asks for, which later fits keep
+  assert.equal(await page.textContent('#fit'), 'Fit 5 parts');
   await page.click('#fit');
   await page.waitForFunction((f) => window.posemfa.fitCount() > f && document.body.dataset.state === 'fitted', fits, { timeout: 120000 });
   const s = await page.evaluate(() => window.posemfa.summary());
@@ -182,6 +185,9 @@ test('with the refinement off and a count asked for, the parts line says both, n
   assert.deepEqual([s.refine, s.partsAsked], [false, 5]);
   assert.equal(await page.textContent('#stage-parts'), `(coarse ${s.coarseParts}, no refinement; 5 as asked in “Parts in the end”)`);
   assert.match(await page.textContent('#iterations'), /^\d+ in the final stage/);
+  assert.equal(await page.textContent('#fit'), 'Fit 5 parts');
+  await page.click('#reset-params');
+  assert.equal(await page.textContent('#fit'), 'Fit');
   assert.deepEqual(log.errors, []);
   await context.close();
 });
@@ -203,6 +209,20 @@ test('in the Interpolate view the pose strip marks From and To and takes no clic
   await page.waitForFunction(() => window.posemfa.mode() === 'parts');
   assert.equal(await page.locator('#pose-strip button[disabled]').count(), 0);
   assert.equal((await pressed()).filter(Boolean).length, 1);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('after Refine N the Fit button says the N parts later fits will keep', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await moveTreeSlider(page, parts - 2);
+  await page.click('[data-testid=tree-refine]');
+  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 90000 });
+  assert.equal(await page.textContent('#fit'), `Fit ${parts - 2} parts`);
+  assert.match(await page.getAttribute('#fit', 'title'), /empty it \(auto\) for the part rule's own count/);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

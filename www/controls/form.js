@@ -25,6 +25,21 @@ export function fillParams(p) {
   checking = Promise.resolve(null); // a check still in flight is of the old values
   showFieldProblems([]);
   showStartUse();
+  showFitCount();
+}
+
+/** The Fit button says the count a fit will be made to, while "Parts in the end" holds one (typed, a link's, or
+ * a Refine's, which stays for later fits): "Fit 8 parts"; plain "Fit" for the part rule's own count. */
+export function showFitCount() {
+  const n = bones(form().targetParts.value);
+  $('fit').textContent = Number.isInteger(n) ? `Fit ${n} part${n === 1 ? '' : 's'}` : 'Fit';
+  $('fit').title = Number.isInteger(n) ? `exactly ${n} as “Parts in the end” asks; empty it (auto) for the part rule's own count` : '';
+}
+
+/** Sets "Parts in the end" (the merge tree's Refine). */
+export function setTargetParts(n) {
+  form().targetParts.value = String(n);
+  showFitCount();
 }
 
 /** Whether Fit ignores Initial parts and Seed: the merge tree (the default part rule, with the refinement on)
@@ -48,6 +63,7 @@ export function resetForNewPopulation(defaults) {
   const f = form();
   f.targetParts.value = defaults.targetParts ?? '';
   f.paperLambda.checked = defaults.lambdaRule === 'paper-eq18';
+  showFitCount();
 }
 
 // "Parts in the end": empty or auto = the part rule's own count (null); a whole number as a number; anything else
@@ -131,6 +147,7 @@ export function installForm({ startFit, cancelFit, runExample, check }) {
   });
   // a refused field is checked again as it is typed: its mark goes as soon as it is fixed
   $('params').addEventListener('input', (e) => {
+    if (e.target.name === 'targetParts') showFitCount();
     if (TEXT_FIELDS.includes(e.target.name) && $('params').dataset.invalid) checkedParams({ vertices: checkedFor });
   });
   // and a field is checked as soon as it is left changed, not only when Fit is pressed

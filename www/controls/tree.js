@@ -7,6 +7,7 @@ import { state, update, subscribe } from '../state.js';
 import { query, startFit } from '../session.js';
 import { paletteColours } from '../colors.js';
 import { renderView } from '../views/render.js';
+import { setTargetParts } from './form.js';
 
 const $ = (id) => document.getElementById(id);
 const parts = (n) => `${n} part${n === 1 ? '' : 's'}`;
@@ -89,7 +90,7 @@ export async function refine(n) {
     return false;
   }
   if (mine !== token) return false; // a new model came meanwhile: its tree is another
-  $('params').targetParts.value = String(n);
+  setTargetParts(n);
   refined = n;
   showRefineNote();
   startFit({ startLabels: labels });
