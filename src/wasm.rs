@@ -1054,6 +1054,12 @@ impl WasmPoser {
         Float64Array::from(self.inner.angles().as_slice())
     }
 
+    /// Every bone's largest angle from the rest pose over the training poses, degrees.
+    #[wasm_bindgen(js_name = trainingAngles)]
+    pub fn training_angles(&self) -> Float64Array {
+        Float64Array::from(self.inner.training_angles().as_slice())
+    }
+
     /// Bone k's joint in the current pose (3 numbers, unit box).
     #[wasm_bindgen(js_name = jointPosition)]
     pub fn joint_position(&self, k: usize) -> Result<Float64Array, JsValue> {

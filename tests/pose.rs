@@ -197,6 +197,25 @@ dual_test! {
         assert!(e_out < 3.0 * e_in + 0.5, "held out {e_out} vs in sample {e_in}");
     }
 
+    fn a_posers_training_angles_are_each_bones_largest_over_its_training_poses() {
+        let g = creature(6, 3);
+        let (art, _) = fitted(&g.population);
+        let mut poser = posemfa::export::pose_glb::Poser::new(&art, &g.population, &GltfOptions::default()).unwrap();
+        let most = poser.training_angles();
+        assert_eq!(most.len(), poser.rig.rig.n_bones());
+        let mut reached = vec![false; most.len()];
+        for i in 0..g.population.n_shapes() {
+            poser.set_training(i).unwrap();
+            for (k, a) in poser.angles().iter().enumerate() {
+                assert!(*a <= most[k] + 1e-9, "pose {i}, bone {k}: {a} > {}", most[k]);
+                reached[k] |= (most[k] - a).abs() < 1e-9;
+            }
+        }
+        assert!(reached.iter().all(|&r| r), "each bone's largest is one of the poses'");
+        // the parts that move turn by tens of degrees in the generator's poses
+        assert!(most.iter().any(|&a| a > 10.0), "{most:?}");
+    }
+
     fn a_rig_glb_read_back_and_written_with_frames_plays_the_solve() {
         let g = creature(6, 2);
         let (art, rig) = fitted(&g.population);

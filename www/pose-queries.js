@@ -36,8 +36,9 @@ export function poseQueries(getModel, generation = getModel) {
       owner = generation();
       frameBones = null;
       poser = getModel().poser(opts ?? {});
-      // coords: the rest pose's coordinates along the pose space's modes (what its sliders show)
-      return { skeleton: poser.skeleton(), ...posed(poser), coords: poser.poseVector().coords };
+      // coords: the rest pose's coordinates along the pose space's modes (what its sliders show); trainingAngles:
+      // each bone's largest angle from the rest pose over the training poses (what a made pose is read against)
+      return { skeleton: poser.skeleton(), ...posed(poser), coords: poser.poseVector().coords, trainingAngles: Array.from(poser.trainingAngles()) };
     },
     poseTurn: (bone, axis, angle) => {
       const p = current();

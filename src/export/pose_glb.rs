@@ -490,10 +490,26 @@ impl Poser {
 
     /// Every bone's angle from the rest pose (degrees): of its rotation relative to its parent's (the root's own).
     pub fn angles(&self) -> Vec<f64> {
-        crate::articulate::pose::local_rotations(&self.rig.rig, &self.current)
+        self.angles_of(&self.current)
+    }
+
+    fn angles_of(&self, bones: &[RigidMotion]) -> Vec<f64> {
+        crate::articulate::pose::local_rotations(&self.rig.rig, bones)
             .iter()
             .map(|q| crate::geometry::rotation::angle(q).to_degrees())
             .collect()
+    }
+
+    /// Every bone's largest angle from the rest pose over the training poses (degrees, as [`Poser::angles`]): how
+    /// far the poses it was learnt from turn it, against which a pose made by hand can be read.
+    pub fn training_angles(&self) -> Vec<f64> {
+        let mut most = vec![0.0f64; self.rig.rig.n_bones()];
+        for pose in &self.training {
+            for (m, a) in most.iter_mut().zip(self.angles_of(pose)) {
+                *m = m.max(a);
+            }
+        }
+        most
     }
 
     /// Where bone k's joint is in the current pose (its parent carries it; the root's: itself).

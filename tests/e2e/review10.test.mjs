@@ -6,7 +6,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { pageSession, waitState, asPayload, tubePopulation, moveTreeSlider, ROOT } from './helpers.mjs';
+import { pageSession, waitState, asPayload, tubePopulation, moveTreeSlider, enterPoseMode, ROOT } from './helpers.mjs';
 
 const session = pageSession();
 
@@ -223,6 +223,28 @@ test('after Refine N the Fit button says the N parts later fits will keep', asyn
   await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 90000 });
   assert.equal(await page.textContent('#fit'), `Fit ${parts - 2} parts`);
   assert.match(await page.getAttribute('#fit', 'title'), /empty it \(auto\) for the part rule's own count/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('a part turned past what the training poses do is said to be beyond them', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await enterPoseMode(page);
+  const angle = () => page.locator('[data-testid=pose-angle]').innerText();
+  assert.match(await angle(), /^0\.0° \(training poses: up to [0-9.]+°\)$/);
+  const most = Number(/up to ([0-9.]+)°/.exec(await angle())[1]);
+  // 10° a press, until past the training poses' largest turn of this part
+  for (let k = 0; k < Math.ceil(most / 10) + 1; k++) {
+    const before = await angle();
+    await page.click('#pose-plus');
+    await page.waitForFunction((b) => document.querySelector('[data-testid=pose-angle]').innerText !== b, before, { timeout: 20000 });
+  }
+  assert.match(await angle(), new RegExp(`^[0-9.]+° \\(beyond the training poses, which turn it at most ${most.toFixed(1).replace('.', '\\.')}°\\)$`));
+  assert.equal(await page.locator('[data-testid=pose-angle].beyond').count(), 1);
+  await page.click('#pose-reset');
+  await page.waitForFunction(() => /^0\.0° /.test(document.querySelector('[data-testid=pose-angle]').innerText), null, { timeout: 20000 });
+  assert.equal(await page.locator('[data-testid=pose-angle].beyond').count(), 0);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

@@ -89,6 +89,7 @@ async function ensureStarted() {
     const r = await query('poseStart', {});
     pose.gen = state.gen;
     pose.skeleton = r.skeleton;
+    pose.trainingAngles = r.trainingAngles;
     pose.positions = r.positions;
     pose.angles = r.angles;
     pose.bone = -1;
@@ -147,9 +148,14 @@ function setModeSliders(coeffs) {
   for (const i of document.querySelectorAll('#pose-modes input')) i.value = String(coeffs[Number(i.dataset.mode)] ?? 0);
 }
 
+// The part's angle, read against the training poses': a pose made past them is the rig's guess, not learnt.
 function showAngle() {
   const k = Number($('pose-part').value);
-  $('pose-angle').textContent = pose.angles && k >= 0 ? `${pose.angles[k].toFixed(1)}°` : '–';
+  const [a, most] = [pose.angles?.[k], pose.trainingAngles?.[k]];
+  const beyond = a !== undefined && most !== undefined && a > most + 0.05;
+  const against = most === undefined ? '' : beyond ? ` (beyond the training poses, which turn it at most ${most.toFixed(1)}°)` : ` (training poses: up to ${most.toFixed(1)}°)`;
+  $('pose-angle').textContent = a !== undefined && k >= 0 ? `${a.toFixed(1)}°${against}` : '–';
+  $('pose-angle').classList.toggle('beyond', beyond);
   $('pose-undo').disabled = pose.undo.length === 0;
 }
 
