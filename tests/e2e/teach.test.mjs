@@ -334,7 +334,9 @@ test('the state in the URL round-trips: a shared link restores the same view', a
   // (OrbitControls re-derives the position from spherical coordinates on every frame: last-digit changes)
   stateB.view.cam.forEach((c, i) => assert.ok(Math.abs(c - stateA.view.cam[i]) < 1e-6, `camera ${stateB.view.cam} vs ${stateA.view.cam}`));
   assert.notDeepEqual(stateA.view.cam, defaultCam, 'the camera was moved');
-  assert.equal(await b.page.locator('#pose-strip button:nth-child(4)').getAttribute('aria-pressed'), 'true');
+  // in the Interpolate view the strip marks the From and To poses (the pose chosen, 3, is in the state above)
+  const marked = await b.page.locator('#pose-strip button').evaluateAll((bs) => bs.map((x, k) => (x.getAttribute('aria-pressed') === 'true' ? k : -1)).filter((k) => k >= 0));
+  assert.deepEqual(marked, [1, 6]);
   // The same picture, up to a few anti-aliased pixels (the camera's last digits, above).
   const pixelsB = await canvasPixels(b.page);
   assert.equal(pixelsB.length, pixelsA.length);
