@@ -1053,12 +1053,9 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
                 }
             }
         };
-        // the others a user may have meant, and how to read one of them
-        if options.animation.is_none() && animations.len() > 1 {
-            let names: Vec<String> = animations
-                .iter()
-                .map(|a| a.name().filter(|n| !n.is_empty()).map_or(format!("#{}", a.index()), |n| format!("'{n}'")))
-                .collect();
+        // the others a user may have meant, each as --animation takes it, and how to read one of them
+        if let Some(c) = clip_list.as_ref().filter(|c| options.animation.is_none() && c.names.len() > 1) {
+            let names: Vec<String> = c.names.iter().map(|n| format!("'{n}'")).collect();
             clips = format!(
                 "; of the {} animations that move it ({}) the one with the most keyframes is read (the page's \
                  Animation list or the CLI's --animation NAME reads another)",

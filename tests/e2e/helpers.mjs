@@ -271,6 +271,18 @@ export async function moveTreeSlider(page, n) {
   return page.evaluate(() => ({ ...document.getElementById('tree-slider').dataset }));
 }
 
+/** Runs `action` (async) and waits until the fit it starts has ended (the page's fit count goes up); with
+ * `fitted`, until the page is fitted again too. */
+export async function afterNextFit(page, action, { fitted = false, timeout = 120000 } = {}) {
+  const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await action();
+  await page.waitForFunction(([f, want]) => window.posemfa.fitCount() > f && (!want || document.body.dataset.state === 'fitted'), [fits, fitted], { timeout });
+}
+
+/** Drops `files` (a setInputFiles payload: asPayload(...) or { name, mimeType, buffer } entries) through the
+ * page's file input and waits for the fit that follows (afterNextFit). */
+export const dropAndFit = (page, files, opts) => afterNextFit(page, () => page.setInputFiles('[data-testid=file-input]', files), opts);
+
 /** Opens `path` in `session` (a pageSession) with Cancel pressed as soon as the page's first fit runs, and waits
  * for that fit to end: on a population large enough that Cancel lands in the fit's first run (e.g.
  * '?preset=quadruped&vertices=20000&poses=10'), the page keeps and shows where the fit stopped. */

@@ -6,7 +6,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { pageSession, waitState, asPayload, tubePopulation, moveTreeSlider, enterPoseMode, ROOT } from './helpers.mjs';
+import { pageSession, waitState, asPayload, tubePopulation, moveTreeSlider, enterPoseMode, afterNextFit, dropAndFit, ROOT } from './helpers.mjs';
 
 const session = pageSession();
 
@@ -20,9 +20,7 @@ test('while a fit has no parts yet the caption says the mesh is grey, not colour
     new MutationObserver(() => window.captionsSeen.push({ text: caption.textContent, state: document.body.dataset.state }))
       .observe(caption, { childList: true, characterData: true, subtree: true });
   });
-  const fits = await page.evaluate(() => window.posemfa.fitCount());
-  await page.setInputFiles('[data-testid=file-input]', asPayload(tubePopulation({ poses: 6 }).files));
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  await dropAndFit(page, asPayload(tubePopulation({ poses: 6 }).files));
   const seen = await page.evaluate(() => window.captionsSeen);
   const during = seen.filter((c) => c.state === 'fitting').map((c) => c.text);
   assert.ok(during.length > 0, `captions while fitting: ${JSON.stringify(seen)}`);
@@ -72,15 +70,11 @@ test('a drop while the pose strip is still being drawn draws the new population\
   const { page, context, log } = await session.open();
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
   // many poses: the strip takes seconds to draw, one thumbnail at a time, after the fit
-  let fits = await page.evaluate(() => window.posemfa.fitCount());
-  await page.setInputFiles('[data-testid=file-input]', asPayload(tubePopulation({ poses: 48 }).files));
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  await dropAndFit(page, asPayload(tubePopulation({ poses: 48 }).files));
   const drawing = await page.evaluate(() => document.getElementById('pose-strip').dataset.drawn ?? null);
   // another mesh (other vertex count), dropped while the strip above is drawn
-  fits = await page.evaluate(() => window.posemfa.fitCount());
   const other = tubePopulation({ poses: 3, ringsPerSegment: 8 });
-  await page.setInputFiles('[data-testid=file-input]', asPayload(other.files));
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  await dropAndFit(page, asPayload(other.files));
   await page.waitForFunction((d) => (document.getElementById('pose-strip').dataset.drawn ?? null) !== d, drawing, { timeout: 60000 });
   assert.equal(await page.locator('#pose-strip canvas').count(), 3);
   assert.equal(await page.evaluate(() => window.posemfa.summary().vertices), other.nVertices);
@@ -91,11 +85,9 @@ test('a drop while the pose strip is still being drawn draws the new population\
 test('export names: an interpolation by its two poses and t, files sharing no name by "population", a rig by its options', async () => {
   const { page, context, log } = await session.open();
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
-  const fits = await page.evaluate(() => window.posemfa.fitCount());
   // 1.obj, 2.obj, ...: the names share nothing but digits
   const files = tubePopulation({ poses: 4 }).files.map((f, k) => ({ name: `${k + 1}.obj`, text: f.text }));
-  await page.setInputFiles('[data-testid=file-input]', asPayload(files));
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f && document.body.dataset.state === 'fitted', fits, { timeout: 120000 });
+  await dropAndFit(page, asPayload(files), { fitted: true });
   const saved = async (selector) => (await Promise.all([page.waitForEvent('download'), page.click(selector)]))[0].suggestedFilename();
   assert.equal(await saved('#export-json'), 'posemfa-population-model.json');
   // the Pose selector on another pose than the interpolation's: the name follows the interpolation
@@ -115,10 +107,8 @@ test('export names: an interpolation by its two poses and t, files sharing no na
 test('the pose strip labels a glTF\'s frames by frame, not by the file name they all share', async () => {
   const { page, context, log } = await session.open();
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
-  const fits = await page.evaluate(() => window.posemfa.fitCount());
   const buffer = readFileSync(join(ROOT, 'tests/fixtures/blender/quadruped-shapekeys.glb'));
-  await page.setInputFiles('[data-testid=file-input]', [{ name: 'quadruped-shapekeys.glb', mimeType: 'model/gltf-binary', buffer }]);
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  await dropAndFit(page, [{ name: 'quadruped-shapekeys.glb', mimeType: 'model/gltf-binary', buffer }]);
   const labels = await page.locator('#pose-strip span').allTextContents();
   const titles = await page.locator('#pose-strip button').evaluateAll((bs) => bs.map((b) => b.title));
   assert.ok(labels.length > 2);
@@ -133,18 +123,14 @@ test('a glTF with two animations that move the mesh offers the other one, and re
   const { page, context, log } = await session.open();
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
   assert.equal(await page.locator('#clip-row').isVisible(), false, 'no list for OBJ poses');
-  let fits = await page.evaluate(() => window.posemfa.fitCount());
   const buffer = readFileSync(join(ROOT, 'tests/fixtures/blender/quadruped-skinned-seams.glb'));
-  await page.setInputFiles('[data-testid=file-input]', [{ name: 'quadruped-skinned-seams.glb', mimeType: 'model/gltf-binary', buffer }]);
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000 });
+  await dropAndFit(page, [{ name: 'quadruped-skinned-seams.glb', mimeType: 'model/gltf-binary', buffer }]);
   assert.equal(await page.locator('#clip-row').isVisible(), true);
   const options = await page.locator('#clip option').allTextContents();
   assert.deepEqual(options, ['interpolated', 'training poses']);
   assert.equal(await page.inputValue('#clip'), 'interpolated');
   assert.match(await page.textContent('#pop-source'), /frames of animation 'interpolated' .*of the 2 animations that move it/);
-  fits = await page.evaluate(() => window.posemfa.fitCount());
-  await page.selectOption('#clip', 'training poses');
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f && document.body.dataset.state === 'fitted', fits, { timeout: 120000 });
+  await afterNextFit(page, () => page.selectOption('#clip', 'training poses'), { fitted: true });
   assert.match(await page.textContent('#pop-source'), /frames of animation 'training poses' /);
   assert.doesNotMatch(await page.textContent('#pop-source'), /animations that move it/);
   assert.equal(await page.inputValue('#clip'), 'training poses');
@@ -172,14 +158,12 @@ test('a link with an unknown example or unreadable values says what it ignored',
 test('with the refinement off and a count asked for, the parts line says both, not "refined"', async () => {
   const { page, context, log } = await session.open();
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
-  const fits = await page.evaluate(() => window.posemfa.fitCount());
   await page.uncheck('#params input[name=refine]');
   assert.equal(await page.textContent('#fit'), 'Fit');
   await page.fill('#params input[name=targetParts]', '5');
   // the button says the count the field asks for, which later fits keep
   assert.equal(await page.textContent('#fit'), 'Fit 5 parts');
-  await page.click('#fit');
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f && document.body.dataset.state === 'fitted', fits, { timeout: 120000 });
+  await afterNextFit(page, () => page.click('#fit'), { fitted: true });
   const s = await page.evaluate(() => window.posemfa.summary());
   assert.equal(s.parts, 5);
   assert.deepEqual([s.refine, s.partsAsked], [false, 5]);
@@ -217,10 +201,8 @@ test('after Refine N the Fit button says the N parts later fits will keep', asyn
   const { page, context, log } = await session.open();
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
   const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
-  const fits = await page.evaluate(() => window.posemfa.fitCount());
   await moveTreeSlider(page, parts - 2);
-  await page.click('[data-testid=tree-refine]');
-  await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 90000 });
+  await afterNextFit(page, () => page.click('[data-testid=tree-refine]'), { timeout: 90000 });
   assert.equal(await page.textContent('#fit'), `Fit ${parts - 2} parts`);
   assert.match(await page.getAttribute('#fit', 'title'), /empty it \(auto\) for the part rule's own count/);
   assert.deepEqual(log.errors, []);
