@@ -6,8 +6,9 @@
 //! buffer view and buffer in 64-bit arithmetic *before* anything is allocated, so a file that claims 4 G
 //! vertices is refused at once.
 //!
-//! Which mesh: the one with the most vertices (all its triangle primitives, in order), or the one named by
-//! [`Options::mesh`]. Which poses, in this order of preference ([`Options::source`] to choose):
+//! Which mesh: the one with the most vertices (all its triangle primitives, in order), together with every
+//! other mesh bound to the same skin (a character's head, body and clothes, read as one mesh), or the one
+//! named by [`Options::mesh`] alone. Which poses, in this order of preference ([`Options::source`] to choose):
 //! - **animation**: an animation that moves the mesh (its morph weights, or the joints of its skin), sampled
 //!   at its keyframe times, or at [`Options::frames`] evenly spaced times. Skinned meshes are posed by linear
 //!   blend skinning over the node hierarchy (JOINTS_0/WEIGHTS_0 and JOINTS_1/WEIGHTS_1: 4 or 8 influences);
@@ -900,10 +901,48 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
             .ok_or_else(|| err(file, "no mesh".into()))?,
     };
     let mname = name_of(mesh.name(), "mesh", mesh.index());
-    let others = meshes.len() - 1;
     let node = doc.nodes().find(|n| n.mesh().is_some_and(|m| m.index() == mesh.index()));
-    check_read_size(&data, &mesh, &mname, crate::memory::budget_bytes()?)?;
-    let md = read_mesh(&data, &mesh)?;
+    let budget = crate::memory::budget_bytes()?;
+    check_read_size(&data, &mesh, &mname, budget)?;
+    let mut md = read_mesh(&data, &mesh)?;
+    // A character is often several meshes (head, body, clothes) bound to one skin: unless a mesh was asked
+    // for, every mesh that skin moves is read with the largest, as one mesh (each node of a skinned mesh
+    // ignores its own transform, so their vertices are in one frame already).
+    let mut joined = vec![mname.clone()];
+    let skin_index = node.as_ref().and_then(|n| n.skin()).map(|s| s.index());
+    if let (None, Some(si), true) = (&options.mesh, skin_index, md.targets.is_empty()) {
+        let mut seen = vec![mesh.index()];
+        for n in doc.nodes() {
+            let (Some(m), Some(s)) = (n.mesh(), n.skin()) else { continue };
+            let no_targets = m.primitives().all(|p| p.morph_targets().len() == 0);
+            let surface = m.primitives().any(|p| {
+                use gltf::mesh::Mode::*;
+                matches!(p.mode(), Triangles | TriangleStrip | TriangleFan)
+            });
+            if s.index() != si || seen.contains(&m.index()) || !no_targets || !surface {
+                continue;
+            }
+            seen.push(m.index());
+            let name = name_of(m.name(), "mesh", m.index());
+            check_read_size(&data, &m, &name, budget)?;
+            let more = read_mesh(&data, &m)?;
+            let offset = md.positions.len() as u32;
+            md.faces.extend(more.faces.iter().map(|f| f.map(|v| v + offset)));
+            md.positions.extend(more.positions);
+            md.influences.extend(more.influences);
+            joined.push(name);
+        }
+    }
+    let others = meshes.len() - joined.len();
+    let shown = match joined.as_slice() {
+        [one] => one.clone(),
+        [first @ .., last] => format!(
+            "meshes {} and {} (one skin moves them; read as one mesh)",
+            first.iter().map(|n| n.trim_start_matches("mesh ")).collect::<Vec<_>>().join(", "),
+            last.trim_start_matches("mesh ")
+        ),
+        [] => mname.clone(),
+    };
     let n_file = md.positions.len();
 
     let mut parents = vec![None; doc.nodes().len()];
@@ -1063,7 +1102,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
                 names.join(", ")
             );
         }
-        description = format!("{} frames of {aname} ({how}) of {mname}", times.len());
+        description = format!("{} frames of {aname} ({how}) of {shown}", times.len());
         for (fi, &t) in times.iter().enumerate() {
             let mut local = rest.clone();
             let mut weights = default_weights.clone();
@@ -1150,7 +1189,13 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     } else {
         format!("{n_file} vertices welded to {n_welded} (seams split by the exporter)")
     };
-    let more = if others > 0 { format!(" (the largest of {} meshes)", others + 1) } else { String::new() };
+    let more = match (others, joined.len()) {
+        (0, _) => String::new(),
+        (o, 1) if options.mesh.is_some() => format!(" (one of {} meshes)", o + 1),
+        (o, 1) => format!(" (the largest of {} meshes)", o + 1),
+        (1, _) => " (1 other mesh not read)".to_string(),
+        (o, _) => format!(" ({o} other meshes not read)"),
+    };
     let source = format!("{description} in {file}{more}; {weld_note}{clips}");
     let poses = poses_raw
         .into_iter()
@@ -1388,6 +1433,40 @@ mod tests {
         assert!((p[2][0] + 1.0).abs() < 1e-6 && (p[2][1] - 1.0).abs() < 1e-6, "{:?}", p[2]);
         assert_eq!(p[1], [1.0, 0.0, 0.0]);
         assert_eq!(g.poses[0].1.positions, g.poses[2].1.positions);
+    }
+
+    #[test]
+    fn meshes_of_one_skin_are_read_as_one() {
+        // the quad's mesh twice more: "hat" bound to the same skin, "prop" not skinned
+        let three = |v: &mut serde_json::Value| {
+            skinned(v);
+            let prim = v["meshes"][0]["primitives"][0].clone();
+            let meshes = v["meshes"].as_array_mut().unwrap();
+            meshes.push(json!({"name": "hat", "primitives": [prim]}));
+            meshes.push(json!({"name": "prop", "primitives": [{"attributes": {"POSITION": 0}, "indices": 3}]}));
+            let nodes = v["nodes"].as_array_mut().unwrap();
+            nodes.push(json!({"name": "hat", "mesh": 1, "skin": 0}));
+            nodes.push(json!({"name": "prop", "mesh": 2}));
+            v["scenes"] = json!([{"nodes": [0, 1, 3, 4]}]);
+        };
+        let g = load(&quad(three), &Options::default()).unwrap();
+        assert_eq!(g.vertices_in_file, 10, "{}", g.source);
+        assert!(
+            g.source.contains(
+                "of meshes 'quad' and 'hat' (one skin moves them; read as one mesh) in t.gltf (1 other mesh not read)"
+            ),
+            "{}",
+            g.source
+        );
+        // the hat follows the same joints: its copy of vertex 2 turns with the quad's, so both weld to one
+        assert_eq!(g.vertices_welded, 4);
+        let p = &g.poses[1].1.positions;
+        assert!((p[2][0] + 1.0).abs() < 1e-6 && (p[2][1] - 1.0).abs() < 1e-6, "{:?}", p[2]);
+        assert_eq!(g.poses[1].1.faces.len(), 4);
+        // one mesh asked for: that one alone
+        let one = load(&quad(three), &Options { mesh: Some("hat".into()), ..Options::default() }).unwrap();
+        assert_eq!(one.vertices_in_file, 5);
+        assert!(one.source.contains("of mesh 'hat' in t.gltf (one of 3 meshes)"), "{}", one.source);
     }
 
     #[test]

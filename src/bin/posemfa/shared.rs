@@ -104,7 +104,8 @@ pub struct InputArgs {
     #[arg(value_name = "DIR_OR_FILES", required = true, value_hint = ValueHint::AnyPath, help = format!("A {}", inputs_help()),
           help_heading = "Arguments")]
     pub inputs: Vec<String>,
-    /// glTF, FBX, USD input: the mesh / object (name or index; default the animated one with most vertices)
+    /// glTF, FBX, USD input: the mesh / object (name or index; default the animated one with most vertices,
+    /// in glTF with every mesh its skin moves)
     #[arg(long = "object", visible_alias = "mesh", value_name = "NAME")]
     mesh: Option<String>,
     /// glTF / FBX input: the animation or take (name or index; default the one with most keyframes / longest)
