@@ -18,6 +18,8 @@ pub enum Error {
     Request(String),
     /// Reading or writing a file failed.
     Io(String),
+    /// A model file ([`crate::model_file`]) cannot be read, or does not belong to the population given with it.
+    ModelFile { file: String, message: String },
 }
 
 impl fmt::Display for Error {
@@ -30,6 +32,7 @@ impl fmt::Display for Error {
             Error::Data(m) => write!(f, "cannot fit this population: {m}"),
             Error::Request(m) => write!(f, "invalid request: {m}"),
             Error::Io(m) => write!(f, "{m}"),
+            Error::ModelFile { file, message } => write!(f, "model file {file}: {message}"),
         }
     }
 }
@@ -62,6 +65,7 @@ impl Error {
             Error::Data(_) => ("data", None, None, self.to_string()),
             Error::Request(_) => ("request", None, None, self.to_string()),
             Error::Io(_) => ("io", None, None, self.to_string()),
+            Error::ModelFile { file, message } => ("model", Some(file.clone()), None, message.clone()),
         };
         Problem { kind, file, line, message }
     }

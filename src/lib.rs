@@ -41,6 +41,7 @@ pub mod error;
 pub mod geometry;
 pub mod mesh;
 pub mod metrics;
+pub mod model_file;
 pub mod memory;
 pub mod mfa;
 pub mod parts;

@@ -382,6 +382,33 @@ impl Population {
         }
     }
 
+    /// A population as a model file stored it ([`crate::model_file`]): its unit-box points as they were, pose
+    /// after pose, with the names in their order; `file` names the model file in errors.
+    pub fn from_saved(
+        file: &str,
+        names: Vec<String>,
+        faces: Vec<[u32; 3]>,
+        points: Vec<[f32; 3]>,
+        normalization: Normalization,
+        source: String,
+    ) -> Result<Population> {
+        let n_vertices = points.len() / names.len().max(1);
+        if names.len() < 2 || n_vertices == 0 || points.len() != names.len() * n_vertices {
+            return Err(Error::ModelFile {
+                file: file.into(),
+                message: format!(
+                    "{} points cannot be {} poses of one mesh; save the model again",
+                    points.len(),
+                    names.len()
+                ),
+            });
+        }
+        if let Some(e) = repeated_name(names.iter().map(|n| n.as_str())) {
+            return Err(e);
+        }
+        Ok(Population::assembled(names, faces, points, n_vertices, normalization, source))
+    }
+
     /// Validates, orders by natural sort of the names, and normalises into the unit box.
     pub fn from_meshes(named: Vec<(String, Mesh)>) -> Result<Population> {
         Population::from_meshes_sharing(named, false)

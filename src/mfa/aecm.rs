@@ -520,8 +520,8 @@ fn check_motion(data: &Data) -> Result<()> {
 }
 
 /// Time and work of one stage.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-#[serde(rename_all = "camelCase")]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
 pub struct StageStats {
     pub name: String,
     pub iterations: usize,

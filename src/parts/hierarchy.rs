@@ -66,7 +66,8 @@ pub struct Progress {
 }
 
 /// Part counts of the three stages.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StageParts {
     pub coarse_parts: usize,
     pub refined_parts: usize,
@@ -76,8 +77,8 @@ pub struct StageParts {
 /// One decision round of the part rule ([`PartRule::Distinct`] or [`PartRule::Tree`], after a final AECM): the
 /// parts it judged (the AECM's, each made one connected piece), how many of them it dissolved as flesh, and how
 /// many were left after its merges.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "camelCase")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
 pub struct PartRound {
     pub parts: usize,
     pub dissolved: usize,

@@ -697,6 +697,11 @@ impl MergeTree {
         self.merges[..k].iter().map(|x| x.rise).sum::<f64>() / k as f64
     }
 
+    /// A tree as a model file stored it ([`crate::model_file`], which checks every merge joins two earlier nodes).
+    pub fn from_saved(leaves: Vec<u32>, n_leaves: usize, merges: Vec<Merge>, typical: f64, middle: f64) -> MergeTree {
+        MergeTree { leaves, n_leaves, merges, typical, middle }
+    }
+
     /// The part rule's yardstick on the tree of a fit's parts: [`MergeTree::middle`]. The median
     /// ([`MergeTree::typical`]) falls where the parts' variances climb steeply, so a small change of the data
     /// moves it far: on horse-gallop with each pose dropped in turn it moved 1.09-1.67e-6 and the count split

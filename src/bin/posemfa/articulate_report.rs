@@ -31,7 +31,7 @@ pub struct Args {
 pub fn run(a: Args) -> Result<(), String> {
     let t = a.t;
     let t0 = posemfa::clock::now_ms();
-    let (pop, art) = articulate_fit(&a.fit, &a.band)?;
+    let (pop, art) = articulate_fit("articulate-report", &a.fit, &a.band)?;
     let fit_ms = posemfa::clock::now_ms() - t0;
     let i = pose_index("--from", a.from, pop.n_shapes())?;
     let j = pose_index("--to", a.to, pop.n_shapes())?;

@@ -24,7 +24,7 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), String> {
     let out = &a.out;
-    let (pop, art) = articulate_fit(&a.fit, &a.band)?;
+    let (pop, art) = articulate_fit("export-gltf", &a.fit, &a.band)?;
     let mut g = a.rig.options(&pop)?;
     if let Some(s) = a.samples {
         g.samples_per_second = s;

@@ -59,7 +59,7 @@ pub fn run(a: Args) -> Result<(), String> {
     }
     opts.skin = a.skin.unwrap_or_default();
     opts.blend = a.blend.unwrap_or_default();
-    let (pop, art) = articulate_fit(&a.fit, &a.band)?;
+    let (pop, art) = articulate_fit("interpolate", &a.fit, &a.band)?;
     let i = pose_index("--from", a.from, pop.n_shapes())?;
     let j = pose_index("--to", a.to, pop.n_shapes())?;
     let (pos, how) = if a.linear {

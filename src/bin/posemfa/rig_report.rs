@@ -1,6 +1,6 @@
 //! `posemfa rig-report DIR_OR_FILES... [--glb FILE.glb]`: how well a rig's .glb reproduces the poses.
 
-use crate::shared::{run_fit, BandArgs, FitArgs, RigArgs};
+use crate::shared::{BandArgs, FitArgs, RigArgs};
 use clap::ValueHint;
 
 /// Fit, build and write the rig, then play its .glb's "training poses" clip by linear blend skinning and print
@@ -29,7 +29,17 @@ pub fn run(a: Args) -> Result<(), String> {
     let t_all = std::time::Instant::now();
     let mut timings = serde_json::Map::new();
     let t = std::time::Instant::now();
-    let (params, pop, _truth) = a.fit.load()?;
+    // the poses, and with --model the fit too (without it the fit is made below, unless --glb gives the rig)
+    let (params, pop, mut saved) = match &a.fit.input.model {
+        Some(_) => {
+            let f = a.fit.fitted_with_data("rig-report")?;
+            (f.params, f.pop, Some(f.result))
+        }
+        None => {
+            let (params, pop, _truth) = a.fit.load()?;
+            (params, pop, None)
+        }
+    };
     timings.insert("read".into(), ms(t).into());
     let mut info = serde_json::Map::new();
     let glb = match &a.glb {
@@ -39,9 +49,15 @@ pub fn run(a: Args) -> Result<(), String> {
             glb
         }
         None => {
-            let t = std::time::Instant::now();
-            let result = run_fit(&params, &pop, true)?;
-            timings.insert("fit".into(), ms(t).into());
+            let result = match saved.take() {
+                Some(result) => result,
+                None => {
+                    let t = std::time::Instant::now();
+                    let result = crate::shared::run_fit(&params, &pop, true)?;
+                    timings.insert("fit".into(), ms(t).into());
+                    result
+                }
+            };
             let t = std::time::Instant::now();
             let art = a.band.articulate(&result, &pop)?;
             timings.insert("articulate".into(), ms(t).into());

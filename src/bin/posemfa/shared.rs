@@ -7,6 +7,7 @@ use posemfa::export::gltf::{GltfOptions, Joints, Morphs, Weights};
 use posemfa::mesh::gltf::PoseSource;
 use posemfa::mesh::Population;
 use posemfa::mfa::{LambdaRule, Params, PartRule};
+use posemfa::model_file::ModelFile;
 use posemfa::parts::hierarchy::{FitResult, Pipeline, Progress, Stage};
 
 // ---------------------------------------------------------------- value parsers
@@ -101,9 +102,15 @@ const POSE_SOURCES: &[(&str, PoseSource)] =
 #[derive(clap::Args)]
 #[command(next_help_heading = "Input options")]
 pub struct InputArgs {
-    #[arg(value_name = "DIR_OR_FILES", required = true, value_hint = ValueHint::AnyPath, help = format!("A {}", inputs_help()),
+    #[arg(value_name = "DIR_OR_FILES", required_unless_present = "model", value_hint = ValueHint::AnyPath,
+          help = format!("A {}; with --model, optional: the poses the model was fitted to (when the model file was \
+                          saved without them)", inputs_help()),
           help_heading = "Arguments")]
     pub inputs: Vec<String>,
+    /// A fitted model (.posemfa, from `posemfa fit --save` or the page's Save model) in place of fitting: its
+    /// parameters, parts and, when it holds them, its poses
+    #[arg(long, value_name = "FILE.posemfa", value_hint = ValueHint::FilePath)]
+    pub model: Option<std::path::PathBuf>,
     /// glTF, FBX, USD input: the mesh / object (name or index; default the animated one with most vertices,
     /// in glTF with every mesh its skin moves)
     #[arg(long = "object", visible_alias = "mesh", value_name = "NAME")]
@@ -132,6 +139,80 @@ impl InputArgs {
     /// The population (and its truth when generated).
     pub fn load(&self) -> Result<(Population, Option<posemfa::synth::Generated>), String> {
         load_inputs(&self.inputs, &self.gltf())
+    }
+
+    /// Refuses --model in a command that fits every time or fits nothing (`command` names it).
+    pub fn no_model(&self, command: &str) -> Result<(), String> {
+        match &self.model {
+            Some(m) => Err(format!(
+                "{command} does not use a saved fit; --model {} is for the commands that use one fit (fit, \
+                 interpolate, export-gltf, rig-report, articulate-report)",
+                m.display()
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The model file at `path`, read and checked.
+pub fn read_model(path: &std::path::Path) -> Result<ModelFile, String> {
+    let name = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read model file {name}: {e}"))?;
+    ModelFile::from_bytes(&name, &bytes).map_err(|e| e.to_string())
+}
+
+/// A fit: read from --model (with the poses of DIR_OR_FILES when given, checked to be the model's mesh), or made
+/// now from the poses with the fit options. `quiet` false: the stages go to stderr as they start.
+pub struct Fitted {
+    pub params: Params,
+    pub pop: Population,
+    pub result: FitResult,
+    pub truth: Option<posemfa::synth::Generated>,
+    /// The poses are the model's reconstructions, not data: a model file saved without its poses and no
+    /// DIR_OR_FILES.
+    pub stand_in: bool,
+    /// Read from --model: the figures measured on the poses when it was saved.
+    pub saved_summary: Option<posemfa::model_file::Summary>,
+}
+
+impl FitArgs {
+    /// The fit these options ask for (see [`Fitted`]).
+    pub fn fitted(&self, quiet: bool) -> Result<Fitted, String> {
+        let Some(path) = &self.input.model else {
+            let (params, pop, truth) = self.load()?;
+            let result = run_fit(&params, &pop, quiet)?;
+            return Ok(Fitted { params, pop, result, truth, stand_in: false, saved_summary: None });
+        };
+        let mut saved = read_model(path)?;
+        let mut truth = None;
+        if !self.input.inputs.is_empty() {
+            let (pop, t) = self.input.load()?;
+            saved = saved.with_population(&path.display().to_string(), pop).map_err(|e| e.to_string())?;
+            truth = t;
+        }
+        Ok(Fitted {
+            stand_in: !saved.has_data,
+            saved_summary: Some(saved.summary),
+            params: saved.params,
+            pop: saved.population,
+            result: saved.result,
+            truth,
+        })
+    }
+
+    /// [`FitArgs::fitted`] for a command that needs the poses themselves (`command` names it): a model saved
+    /// without them needs DIR_OR_FILES.
+    pub fn fitted_with_data(&self, command: &str) -> Result<Fitted, String> {
+        let f = self.fitted(true)?;
+        if f.stand_in {
+            let path = self.input.model.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
+            return Err(format!(
+                "model file {path} was saved without its poses, and {command} needs them (the residuals, the skin \
+                 weights and the errors are measured on them): give the poses it was fitted to after the options \
+                 (DIR_OR_FILES), or save the model with its poses"
+            ));
+        }
+        Ok(f)
     }
 }
 
@@ -265,6 +346,7 @@ impl FitArgs {
 
     /// The parameters (checked) and the population (and its truth when generated).
     pub fn load(&self) -> Result<(Params, Population, Option<posemfa::synth::Generated>), String> {
+        self.input.no_model("this command")?;
         let params = self.params()?;
         params.validate().map_err(|e| e.to_string())?;
         let (pop, truth) = self.input.load()?;
@@ -393,15 +475,15 @@ pub struct BandArgs {
     band: f64,
 }
 
-/// Fits (quietly) and builds the articulated model.
+/// Fits (quietly) or reads --model, and builds the articulated model (`command` names the subcommand).
 pub fn articulate_fit(
+    command: &str,
     fit: &FitArgs,
     band: &BandArgs,
 ) -> Result<(Population, posemfa::articulate::Articulation), String> {
-    let (params, pop, _truth) = fit.load()?;
-    let result = run_fit(&params, &pop, true)?;
-    let art = band.articulate(&result, &pop)?;
-    Ok((pop, art))
+    let f = fit.fitted_with_data(command)?;
+    let art = band.articulate(&f.result, &f.pop)?;
+    Ok((f.pop, art))
 }
 
 impl BandArgs {

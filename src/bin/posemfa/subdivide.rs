@@ -21,6 +21,7 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
+    a.input.no_model("subdivide")?;
     let (pop, _truth) = a.input.load()?;
     let budget = posemfa::memory::budget_bytes().map_err(|e| e.to_string())?;
     let (faces, shapes) =
