@@ -35,7 +35,8 @@ fn damaged(file: &str, what: &str, e: impl std::fmt::Display) -> Error {
 /// A crate layer (a .usdc file, or the crate layer of a .usdz): checked by [`super::usdc_check`] first, which
 /// refuses what would make openusd 0.6.0 allocate beyond the file or panic, then read by openusd.
 fn crate_layer(file: &str, bytes: &[u8], what: &str) -> Result<Box<dyn AbstractData>> {
-    super::usdc_check::check(bytes).map_err(|m| err(file, format!("cannot read the {what}: {m}")))?;
+    let memory = crate::memory::budget_bytes()?;
+    super::usdc_check::check(bytes, memory).map_err(|m| err(file, format!("cannot read the {what}: {m}")))?;
     let data = openusd::usdc::CrateData::open(Cursor::new(bytes.to_vec()), true).map_err(|e| damaged(file, what, e))?;
     Ok(Box::new(data))
 }

@@ -14,7 +14,9 @@
 //!   counts, string table entries naming tokens, and the path tree walked as openusd builds it (indices in
 //!   range, no entry visited twice);
 //! - the values read later (the ValueReps of the FIELDS section): every array's count against the bytes after
-//!   it (by element size, compressed or not), every token / string / path index in range, dictionaries and
+//!   it (by element size; a compressed integer array against the codes its LZ4 block really decodes to, 2 bits
+//!   per integer, not against an LZ4 ratio, which USD's integer coding outdoes), openusd's allocations for all
+//!   the arrays together within the memory budget, every token / string / path index in range, dictionaries and
 //!   time samples followed (their jumps inside the file, at most [`MAX_DEPTH`] levels deep, so a value that
 //!   contains itself is refused), and the flag combinations on which openusd's debug assertions fire; values
 //!   already checked are not walked again, and the whole walk is bounded (about 1000 elements per byte of
@@ -43,8 +45,11 @@ fn damaged<T>(what: String) -> Check<T> {
 }
 
 /// Checks a crate file (starting with `PXR-USDC`); `Err` is the message (what is wrong and what to do).
-pub fn check(bytes: &[u8]) -> Check<()> {
+/// `memory` bounds what openusd may allocate to decode the file's arrays, all of them together (the memory
+/// budget, [`crate::memory::budget_bytes`]).
+pub fn check(bytes: &[u8], memory: u64) -> Check<()> {
     let mut c = Crate::new(bytes, (0, 0, 0));
+    c.memory_budget = memory;
     c.run()
 }
 
@@ -193,7 +198,12 @@ fn lz4(src: &[u8], limit: u64, mut out: Option<&mut Vec<u8>>, what: &str) -> Che
     }
 }
 
-/// LZ4 expands at most about 255:1 (a match of 255 bytes per length byte).
+/// LZ4 expands at most about 255:1 (a match of 255 bytes per length byte). This bounds what a block can
+/// really decode to; it does not bound openusd's buffer for integers, which is sized from the element count
+/// (about 4.25 bytes per integer) while USD's integer coding stores a run of equal steps in 2 bits per
+/// integer before LZ4 shrinks those code bytes 255:1: an all-triangle mesh's `faceVertexCounts` (14 410
+/// threes) is 33 compressed bytes for a 61 247-byte buffer. So integer counts are bounded by the decoded size
+/// (2 bits per integer at least, see [`Crate::ints`]) and by the memory budget, not by this ratio.
 fn lz4_cap(compressed: u64) -> u64 {
     compressed.saturating_mul(255).saturating_add(16)
 }
@@ -219,6 +229,13 @@ struct Crate<'a> {
     /// ValueReps pointing at the same large array would otherwise make the check quadratic.
     work: std::cell::Cell<u64>,
     budget: u64,
+    /// Bytes openusd allocates to decode the arrays checked so far (its buffers and its output vectors,
+    /// each value counted once), and how many it may: every array of the file decoded at once must fit in the
+    /// memory budget. A file claims a large array only with the data to back it (see [`Crate::ints`]), so what
+    /// this refuses is a file whose data really decodes to more than the budget, or many values over the
+    /// same data.
+    memory: std::cell::Cell<u64>,
+    memory_budget: u64,
 }
 
 /// The integer width openusd decodes an integer array with.
@@ -233,7 +250,42 @@ impl<'a> Crate<'a> {
         // Generous: a constant array of a million floats codes to about 1 kB (LZ4 of integer codes), so a valid
         // file can hold about 1000 elements per byte.
         let budget = (b.len() as u64).saturating_mul(1024).saturating_add(1 << 24);
-        Crate { b, version, tokens: 0, strings: 0, paths: 0, heights: HashMap::new(), work: Default::default(), budget }
+        Crate {
+            b,
+            version,
+            tokens: 0,
+            strings: 0,
+            paths: 0,
+            heights: HashMap::new(),
+            work: Default::default(),
+            budget,
+            memory: Default::default(),
+            memory_budget: crate::memory::NATIVE_BUDGET_BYTES,
+        }
+    }
+
+    /// openusd will allocate `bytes` to decode `what` (at byte `at`): refused when the file's arrays then
+    /// take more than the memory budget.
+    fn allocates(&self, bytes: u64, what: &str, at: u64) -> Check<()> {
+        use crate::memory::show_bytes;
+        let total = self.memory.get().saturating_add(bytes);
+        self.memory.set(total);
+        if total > self.memory_budget {
+            let knob = if cfg!(target_arch = "wasm32") {
+                "; the command-line program has a budget of 8 GiB (POSEMFA_MEMORY_BUDGET changes it)"
+            } else {
+                ", or raise the budget with POSEMFA_MEMORY_BUDGET (e.g. 32G) if this machine has the memory"
+            };
+            return Err(format!(
+                "{what} at byte {at} takes {} to decode, which brings the file's arrays to {}, more than the memory \
+                 budget of {}; the file is damaged, or far larger than a pose population: export only the animated \
+                 mesh{knob}",
+                show_bytes(bytes),
+                show_bytes(total),
+                show_bytes(self.memory_budget)
+            ));
+        }
+        Ok(())
     }
 
     fn spend(&self, n: u64) -> Check<()> {
@@ -323,7 +375,7 @@ impl<'a> Crate<'a> {
         if let Some(mut s) = find("FIELDS") {
             let count = s.u64("the field count")?;
             self.ints(&mut s, count, Width::W32, false)?;
-            let (_, bytes) = self.block(&mut s, count.checked_mul(8), true, "field values")?;
+            let (_, bytes) = self.block(&mut s, count.checked_mul(8), true, true, "field values")?;
             if bytes.len() as u64 != count * 8 {
                 return damaged(format!("FIELDS claims {count} fields but holds {} bytes of values", bytes.len()));
             }
@@ -349,9 +401,11 @@ impl<'a> Crate<'a> {
     }
 
     /// A compressed block: `u64` size, a chunk count byte (0: one LZ4 block), the block. Its decompressed size
-    /// must not exceed `limit` (openusd's buffer; `None`: beyond what any file can hold). Gives the
-    /// decompressed size, and with `keep` the bytes.
-    fn block(&self, s: &mut Cur<'a>, limit: Option<u64>, keep: bool, item: &str) -> Check<(u64, Vec<u8>)> {
+    /// must not exceed `limit` (openusd's buffer; `None`: beyond what any file can hold). With `exact`, the
+    /// block must decompress to `limit` bytes, so a limit beyond what LZ4 can expand the block to is refused
+    /// before it is walked; otherwise `limit` is only an upper bound (openusd's estimate for integers). Gives
+    /// the decompressed size, and with `keep` the bytes.
+    fn block(&self, s: &mut Cur<'a>, limit: Option<u64>, exact: bool, keep: bool, item: &str) -> Check<(u64, Vec<u8>)> {
         let at = s.pos;
         let size = s.u64("a compressed size")?;
         if size > s.left() {
@@ -372,7 +426,7 @@ impl<'a> Crate<'a> {
                 s.what
             ));
         }
-        let Some(limit) = limit.filter(|&l| l <= lz4_cap(size)) else {
+        let Some(limit) = limit.filter(|&l| !exact || l <= lz4_cap(size)) else {
             return damaged(format!(
                 "{} claims {} bytes of {item} at byte {at}, more than its {size} compressed bytes can hold",
                 s.what,
@@ -403,29 +457,23 @@ impl<'a> Crate<'a> {
         let codes = (count * 2).div_ceil(8);
         // openusd sizes its buffer for 32-bit integers, whatever the width.
         let estimate = if count == 0 { 0 } else { 4 + codes + 4 * count };
-        let data = if decode {
-            self.block(s, Some(estimate), true, "integers")?.1
-        } else {
-            let (n, _) = self.block(s, Some(estimate), false, "integers")?;
-            if count > 0 && n < w + codes {
-                return damaged(format!(
-                    "{}: {count} integers at byte {at} need {} bytes of codes, the block holds {n}",
-                    s.what,
-                    w + codes
-                ));
-            }
-            return Ok(Vec::new());
-        };
+        // The block is walked (without keeping its bytes unless they are decoded here): its true decoded size
+        // bounds the count (2 bits of code per integer), then openusd's buffer and output are what the file's
+        // data backs, and they count against the memory budget.
+        let (n, data) = self.block(s, Some(estimate), false, decode, "integers")?;
         if count == 0 {
             return Ok(Vec::new());
         }
-        let n = data.len() as u64;
         if n < w + codes {
             return damaged(format!(
                 "{}: {count} integers at byte {at} need {} bytes of codes, the block holds {n}",
                 s.what,
                 w + codes
             ));
+        }
+        self.allocates(estimate.saturating_add(count.saturating_mul(w)), &format!("{}: {count} integers", s.what), at)?;
+        if !decode {
+            return Ok(Vec::new());
         }
         let mut d = Cur { b: &data, pos: 0, end: n, what: s.what };
         let common = if width == Width::W64 { d.u64("integers")? as i64 } else { i64::from(d.u32("integers")? as i32) };
@@ -459,7 +507,7 @@ impl<'a> Crate<'a> {
         let count = s.u64("the token count")?;
         let size = s.u64("the token bytes' size")?;
         let at = s.pos;
-        let (n, _) = self.block(s, Some(size), false, "tokens")?;
+        let (n, _) = self.block(s, Some(size), true, false, "tokens")?;
         if n != size {
             return damaged(format!("TOKENS claims {size} bytes of tokens at byte {at} but its data expands to {n}"));
         }
@@ -668,7 +716,9 @@ impl<'a> Crate<'a> {
         match ty {
             t if array && plain(t).is_some() => {
                 let (n, _, c) = self.array(rep, 0)?;
-                c.fits(n, plain(t).unwrap_or(1), "array elements")?;
+                let size = plain(t).unwrap_or(1);
+                c.fits(n, size, "array elements")?;
+                self.allocates(n * size, &format!("an array of {n} elements"), c.pos)?;
                 count(n)
             }
             3..=6 if array => {
@@ -677,7 +727,9 @@ impl<'a> Crate<'a> {
                 if packed {
                     self.ints(&mut c, n, width, false)?;
                 } else if n > 0 {
-                    c.fits(n, if ty >= 5 { 8 } else { 4 }, "integers")?;
+                    let size = if ty >= 5 { 8 } else { 4 };
+                    c.fits(n, size, "integers")?;
+                    self.allocates(n * size, &format!("an array of {n} integers"), c.pos)?;
                 }
                 count(n)
             }
@@ -693,8 +745,11 @@ impl<'a> Crate<'a> {
                 let (n, packed, mut c) = self.array(rep, 2)?;
                 if !packed {
                     c.fits(n, size, "numbers")?;
+                    self.allocates(n * size, &format!("an array of {n} numbers"), c.pos)?;
                     return count(n);
                 }
+                // (the integers and the lookup table are counted where they are checked)
+                let at = c.pos;
                 match c.u8("a float array code")? {
                     b'i' => {
                         self.ints(&mut c, n, Width::W32, false)?;
@@ -703,6 +758,7 @@ impl<'a> Crate<'a> {
                         let lut = u64::from(c.u32("a lookup table size")?);
                         c.fits(lut, size, "lookup table entries")?;
                         c.take(lut * size, "a lookup table")?;
+                        self.allocates(lut * size, &format!("a lookup table of {lut} numbers"), c.pos)?;
                         let at = c.pos;
                         for i in self.ints(&mut c, n, Width::W32, true)? {
                             if i as u32 as u64 >= lut {
@@ -715,6 +771,7 @@ impl<'a> Crate<'a> {
                     }
                     _ => {}
                 }
+                self.allocates(n.saturating_mul(size), &format!("an array of {n} numbers"), at)?;
                 count(n)
             }
             // Token array: u32 token indices.
@@ -959,6 +1016,134 @@ mod tests {
         out
     }
 
+    /// The seed's FIELDS ValueReps, read back the way run() reads them.
+    fn seed_reps(seed: &[u8]) -> Vec<u64> {
+        let c = Crate::new(seed, (0, 8, 0));
+        let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
+        let fields = (0..6).map(|k| toc + 8 + 32 * k).find(|&e| seed[e..e + 7] == *b"FIELDS\0").unwrap();
+        let start = u64::from_le_bytes(seed[fields + 16..fields + 24].try_into().unwrap());
+        let mut s = c.at(start, "FIELDS");
+        let count = s.u64("n").unwrap();
+        c.ints(&mut s, count, Width::W32, false).unwrap();
+        let (_, bytes) = c.block(&mut s, Some(count * 8), true, true, "reps").unwrap();
+        bytes.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().unwrap())).collect()
+    }
+
+    /// An LZ4 block that expands to `literals`, then `zeros` zero bytes (a match 1 back, so the last literal
+    /// must be 0), then the 5 literals `tail`; as usd-core's LZ4 writes a long run (one length byte per 255).
+    fn lz4_run(literals: &[u8], zeros: u64, tail: &[u8; 5]) -> Vec<u8> {
+        assert!(literals.len() < 15 && literals.last() == Some(&0) && zeros >= 19);
+        let mut b = vec![(literals.len() as u8) << 4 | 15];
+        b.extend_from_slice(literals);
+        b.extend_from_slice(&1u16.to_le_bytes());
+        let mut l = zeros - 4 - 15;
+        while l >= 255 {
+            b.push(255);
+            l -= 255;
+        }
+        b.push(l as u8);
+        b.push(5 << 4);
+        b.extend_from_slice(tail);
+        b
+    }
+
+    /// `n` equal integers (all 3, as an all-triangle mesh's faceVertexCounts) as usd-core codes them: common
+    /// value 0, one 2-bit code per integer (the first says "an int8 follows"), the int8 3.
+    fn all_threes(n: u64) -> Vec<u8> {
+        let codes = (2 * n).div_ceil(8);
+        let block = lz4_run(&[0, 0, 0, 0, 1, 0], codes - 6, &[0, 0, 0, 0, 3]);
+        let mut out = n.to_le_bytes().to_vec();
+        out.extend_from_slice(&(block.len() as u64 + 1).to_le_bytes());
+        out.push(0);
+        out.extend_from_slice(&block);
+        out
+    }
+
+    /// The seed with `payload` appended and every compressed int array ValueRep (faceVertexCounts and
+    /// faceVertexIndices) pointing at it.
+    fn with_int_arrays(seed: &[u8], payload: &[u8]) -> Vec<u8> {
+        let mut b = seed.to_vec();
+        let at = b.len() as u64;
+        b.extend_from_slice(payload);
+        let reps = seed_reps(seed);
+        let ints = |r: u64| (r >> 48) & 0xff == 3 && r & ARRAY != 0;
+        assert_eq!(reps.iter().filter(|&&r| ints(r)).count(), 2);
+        let reps: Vec<u64> =
+            reps.iter().map(|&r| if ints(r) { ARRAY | COMPRESSED | 3 << 48 | at } else { r }).collect();
+        with_reps(&b, &reps)
+    }
+
+    /// usd-core codes an all-triangle mesh's faceVertexCounts to a few dozen bytes: 300 000 threes are 75 005
+    /// bytes of codes, 310 bytes of LZ4, and openusd's buffer for them is 1 275 004 bytes (4100 x). Such a
+    /// file is read (issue 58: it was refused as damaged): openusd decodes the integers, and the reader sees
+    /// them (the counts add up to 900 000 corners, the indices are the same 300 000 threes).
+    #[test]
+    fn integer_arrays_that_code_to_a_few_bytes_are_read() {
+        let seed = include_bytes!("../../fuzz/seeds/arm-pointcache.usdc");
+        assert_eq!(&seed[8..11], &[0, 8, 0]);
+        let payload = all_threes(300_000);
+        assert_eq!(payload.len(), 16 + 1 + 310);
+        let file = with_int_arrays(seed, &payload);
+        check(&file, crate::memory::NATIVE_BUDGET_BYTES).unwrap();
+        let e = crate::mesh::usd::read("threes.usdc", &file, &Default::default()).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "file threes.usdc: mesh /World/Character/Body: faceVertexCounts add up to 900000 corners but \
+             faceVertexIndices has 300000; the file is damaged: export it again"
+        );
+    }
+
+    /// What an integer array may claim: at most 4 integers per byte its LZ4 block really decodes to (2 bits of
+    /// code each), and what openusd allocates for all the file's arrays within the memory budget.
+    #[test]
+    fn integer_arrays_that_claim_more_than_their_data_are_refused() {
+        let seed = include_bytes!("../../fuzz/seeds/arm-pointcache.usdc");
+        let at = seed.len();
+        // 210 000 integers claimed over the codes of 200 000
+        let mut payload = all_threes(200_000);
+        payload[..8].copy_from_slice(&210_000u64.to_le_bytes());
+        let e = check(&with_int_arrays(seed, &payload), u64::MAX).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "field 15: an array value: 210000 integers at byte {} need 52504 bytes of codes, the block holds 50005; {DAMAGED}",
+                at + 8
+            )
+        );
+        // a count beyond 4 x what LZ4 can expand the block to (212 bytes: 54 076): refused before it is walked
+        payload[..8].copy_from_slice(&300_000u64.to_le_bytes());
+        let e = check(&with_int_arrays(seed, &payload), u64::MAX).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "field 15: an array value claims 300000 integers at byte {}, more than its 212 compressed bytes can hold; {DAMAGED}",
+                at + 8
+            )
+        );
+        // real data over the budget: 1 000 000 threes take 4 250 004 bytes of openusd's buffer and 4 000 000 of
+        // integers (both int arrays' ValueReps are now the same value, counted once)
+        let file = with_int_arrays(seed, &all_threes(1_000_000));
+        check(&file, 8_300_000).unwrap();
+        let e = check(&file, 8_000_000).unwrap_err();
+        assert!(
+            e.starts_with(&format!(
+                "field 15: an array value: 1000000 integers at byte {} takes 7.9 MiB to decode, which brings the \
+                 file's arrays to 7.9",
+                at + 8
+            )),
+            "{e}"
+        );
+        assert!(e.contains(" MiB, more than the memory budget of 7.6 MiB; the file is damaged, or far larger than a pose population"), "{e}");
+        // 4 x 10^9 integers backed by 3.9 MB of LZ4 (a 1 GB run of zero codes) are refused by the default
+        // native budget, before anything is allocated
+        let file = with_int_arrays(seed, &all_threes(4_000_000_000));
+        assert!(file.len() > 3_900_000 && file.len() < 4_000_000, "{}", file.len());
+        let e = check(&file, crate::memory::NATIVE_BUDGET_BYTES).unwrap_err();
+        assert!(e.contains("4000000000 integers at byte"), "{e}");
+        assert!(e.contains("takes 30.73 GiB to decode"), "{e}");
+        assert!(e.contains("more than the memory budget of 8.00 GiB"), "{e}");
+    }
+
     /// Random changes to the ValueReps of the seed .usdc (type, flags, payload: the values openusd reads
     /// lazily), read through `usd::read`: none may panic or abort. `POSEMFA_USD_MUTATIONS` (default 3000).
     #[test]
@@ -973,15 +1158,7 @@ mod tests {
             .run()
             .unwrap_err()
             .contains("make the reader walk more than 100 elements for a file of 3894 bytes"));
-        // the seed's reps, read back the way run() reads them
-        let toc = u64::from_le_bytes(seed[16..24].try_into().unwrap()) as usize;
-        let fields = (0..6).map(|k| toc + 8 + 32 * k).find(|&e| seed[e..e + 7] == *b"FIELDS\0").unwrap();
-        let start = u64::from_le_bytes(seed[fields + 16..fields + 24].try_into().unwrap());
-        let mut s = c.at(start, "FIELDS");
-        let count = s.u64("n").unwrap();
-        c.ints(&mut s, count, Width::W32, false).unwrap();
-        let (_, bytes) = c.block(&mut s, Some(count * 8), true, "reps").unwrap();
-        let reps: Vec<u64> = bytes.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().unwrap())).collect();
+        let reps = seed_reps(seed);
         assert_eq!(
             crate::mesh::usd::read("seed.usdc", &with_reps(seed, &reps), &Default::default()).unwrap().poses.len(),
             2
