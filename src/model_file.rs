@@ -96,7 +96,13 @@ impl ModelFile {
 
     /// The file's bytes; with `with_population` (and the data at hand) the population's points too.
     pub fn to_bytes(&self, with_population: bool) -> Vec<u8> {
-        write(self, with_population && self.has_data)
+        let fit = Borrowed {
+            result: &self.result,
+            params: &self.params,
+            population: &self.population,
+            summary: &self.summary,
+        };
+        write(&fit, with_population && self.has_data)
     }
 
     /// Reads a model file (`file` names it in errors), checking every field.
@@ -111,6 +117,21 @@ impl ModelFile {
         self.population = pop;
         self.has_data = true;
         Ok(self)
+    }
+}
+
+/// What a model file is written from, borrowed (the page's model keeps its parts where they are).
+pub struct Borrowed<'a> {
+    pub result: &'a FitResult,
+    pub params: &'a Params,
+    pub population: &'a Population,
+    pub summary: &'a Summary,
+}
+
+impl Borrowed<'_> {
+    /// The file's bytes; with `with_points` the population's points too (only when it holds the data).
+    pub fn to_bytes(&self, with_points: bool) -> Vec<u8> {
+        write(self, with_points)
     }
 }
 
@@ -440,9 +461,9 @@ fn delta_varint(v: &[u32]) -> Vec<u8> {
     out
 }
 
-fn write(m: &ModelFile, with_points: bool) -> Vec<u8> {
-    let r = &m.result;
-    let pop = &m.population;
+fn write(m: &Borrowed, with_points: bool) -> Vec<u8> {
+    let r = m.result;
+    let pop = m.population;
     let model = &r.model;
     let mut body = Body::default();
     let flat_faces: Vec<u32> = pop.faces.iter().flatten().copied().collect();

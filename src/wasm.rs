@@ -275,6 +275,7 @@ impl WasmPopulation {
 pub struct Fitter {
     pipe: Pipeline,
     pop: Rc<Population>,
+    params: Rc<Params>,
 }
 
 impl Fitter {
@@ -288,7 +289,7 @@ impl Fitter {
         // the fit needs the memory more than a view of the last model does (rebuilt when asked again)
         forget_articulation(None);
         let pipe = make(&population.inner, &params)?;
-        Ok(Fitter { pipe, pop: population.inner.clone() })
+        Ok(Fitter { pipe, pop: population.inner.clone(), params: Rc::new(params) })
     }
 }
 
@@ -411,7 +412,8 @@ impl Fitter {
 
     /// The result so far (final model when done; otherwise the best available).
     pub fn result(&self) -> FitModel {
-        FitModel { result: Rc::new(self.pipe.result()), pop: self.pop.clone() }
+        let about = Rc::new(About { params: (*self.params).clone(), saved: None });
+        FitModel { result: Rc::new(self.pipe.result()), pop: self.pop.clone(), about }
     }
 }
 
@@ -420,11 +422,30 @@ impl Fitter {
 pub struct FitModel {
     result: Rc<FitResult>,
     pop: Rc<Population>,
+    about: Rc<About>,
+}
+
+/// What a model was fitted with, and for one opened from a model file saved without its poses, the figures
+/// measured on them when it was saved (its population's poses are then the model's reconstructions).
+struct About {
+    params: Params,
+    saved: Option<crate::model_file::Summary>,
 }
 
 impl FitModel {
     fn model(&self) -> &Model {
         &self.result.model
+    }
+
+    /// Refuses `what` (a view of the data) for a model opened without its poses.
+    fn needs_data(&self, what: &str) -> Result<(), JsValue> {
+        if self.about.saved.is_none() {
+            return Ok(());
+        }
+        Err(js_err(format!(
+            "{what} needs the poses, and this model file was saved without them: open it together with the poses it \
+             was fitted to (drop both at once), or save it with its poses"
+        )))
     }
 
     fn shape(&self, i: usize) -> Result<(), JsValue> {
@@ -486,6 +507,7 @@ impl FitModel {
     #[wasm_bindgen(js_name = vertexErrors)]
     pub fn vertex_errors(&self, shape: usize) -> Result<Float32Array, JsValue> {
         self.shape(shape)?;
+        self.needs_data("the reconstruction error")?;
         let e: Vec<f32> = self.model().vertex_errors(&self.pop, shape).iter().map(|&v| v as f32).collect();
         Ok(Float32Array::from(e.as_slice()))
     }
@@ -495,6 +517,7 @@ impl FitModel {
         if vertex >= self.model().n_vertices {
             return Err(js_err(format!("no vertex {vertex}")));
         }
+        self.needs_data("the responsibilities")?;
         Ok(Float64Array::from(self.model().responsibilities(&self.pop, vertex).as_slice()))
     }
 
@@ -525,18 +548,27 @@ impl FitModel {
     pub fn summary(&self) -> Result<JsValue, JsValue> {
         let m = self.model();
         let s = &self.result.stages;
-        let rmse = m.rmse(&self.pop);
+        let measured;
+        let figures = match &self.about.saved {
+            Some(saved) => saved,
+            None => {
+                measured = crate::model_file::Summary::measure(&self.pop, &self.result);
+                &measured
+            }
+        };
+        let rmse = figures.rmse;
         let v = serde_json::json!({
+            "hasData": self.about.saved.is_none(),
             "shapes": m.n_shapes, "vertices": m.n_vertices, "parts": m.n_parts(),
             "partsFrom": if self.result.from_merge_tree { "merge tree" } else { "Algorithm 1" },
             "coarseParts": s.coarse_parts, "refinedParts": s.refined_parts,
             "refine": self.result.refined, "partsAsked": self.result.parts_asked,
             "rmse": rmse, "rmseOriginal": self.pop.normalization.length_to_original(rmse),
-            "eRms": crate::export::rig_report::fit_e_rms(&self.pop, m),
+            "eRms": figures.e_rms,
             "iterations": m.iterations, "converged": m.converged,
             "complete": self.result.complete, "logLikelihood": m.log_likelihood,
             "stageStats": self.result.stats,
-            "diagnosis": crate::parts::diagnosis::diagnose_finished(&self.pop, &self.result),
+            "diagnosis": figures.diagnosis,
             "unfinished": (!self.result.complete).then_some(crate::parts::diagnosis::UNFINISHED),
             "partCurve": self.result.part_curve,
             "partRounds": self.result.part_rounds,
@@ -557,8 +589,34 @@ impl FitModel {
 
     /// The full result as JSON text (same format as the CLI's --json).
     #[wasm_bindgen(js_name = toJson)]
-    pub fn to_json(&self) -> String {
-        crate::export::json::fit_to_json(&self.pop, &self.result)
+    pub fn to_json(&self) -> Result<String, JsValue> {
+        self.needs_data("the JSON export (its RMSE, islands and diagnosis are measured on the poses)")?;
+        Ok(crate::export::json::fit_to_json(&self.pop, &self.result))
+    }
+
+    /// The model file (.posemfa) of this fit ([`crate::model_file`]); with `with_poses`, the population's
+    /// points too (a model opened without them is saved without them).
+    pub fn save(&self, with_poses: bool) -> Uint8Array {
+        let measured;
+        let summary = match &self.about.saved {
+            Some(s) => s,
+            None => {
+                measured = crate::model_file::Summary::measure(&self.pop, &self.result);
+                &measured
+            }
+        };
+        let fit = crate::model_file::Borrowed {
+            result: &self.result,
+            params: &self.about.params,
+            population: &self.pop,
+            summary,
+        };
+        Uint8Array::from(fit.to_bytes(with_poses && self.about.saved.is_none()).as_slice())
+    }
+
+    /// The parameters of the fit, as a plain object (camelCase, as the Fitter takes them).
+    pub fn params(&self) -> Result<JsValue, JsValue> {
+        to_js(&self.about.params)
     }
 }
 
@@ -572,6 +630,7 @@ impl FitModel {
 pub struct ParkedModel {
     kept: Parked,
     pop: Rc<Population>,
+    about: Rc<About>,
 }
 
 enum Parked {
@@ -623,6 +682,7 @@ impl FitModel {
     pub fn park(self) -> ParkedModel {
         let rc = self.result.clone();
         let pop = self.pop.clone();
+        let about = self.about.clone();
         drop(self); // its articulation goes with it
         let kept = match Rc::try_unwrap(rc) {
             Ok(mut result) => {
@@ -640,7 +700,7 @@ impl FitModel {
             }
             Err(shared) => Parked::Shared(shared),
         };
-        ParkedModel { kept, pop }
+        ParkedModel { kept, pop, about }
     }
 }
 
@@ -666,8 +726,55 @@ impl ParkedModel {
                 Rc::new(result)
             }
         };
-        FitModel { result, pop: self.pop }
+        FitModel { result, pop: self.pop, about: self.about }
     }
+}
+
+/// Opens a model file (.posemfa) without fitting: `names` / `files` hold exactly one .posemfa and, optionally, the
+/// pose files it was fitted to (read as the Population constructor reads them, `animation` likewise; checked to be
+/// the model's mesh, else refused by name). Returns {population: Population, model: FitModel, params, hasData}.
+#[wasm_bindgen(js_name = openModel)]
+pub fn open_model(names: Vec<String>, files: Vec<Uint8Array>, animation: Option<String>) -> Result<JsValue, JsValue> {
+    if names.len() != files.len() {
+        return Err(js_err("names and files differ in length"));
+    }
+    let is_model = |n: &str| n.to_ascii_lowercase().ends_with(&format!(".{}", crate::model_file::EXTENSION));
+    let Some(k) = names.iter().position(|n| is_model(n)) else {
+        return Err(js_err("no .posemfa model file among the files"));
+    };
+    if let Some(other) = names.iter().skip(k + 1).find(|n| is_model(n)) {
+        return Err(thrown(&[Error::ModelFile {
+            file: other.clone(),
+            message: format!("a second model file beside {}: open one model at a time", names[k]),
+        }
+        .problem()]));
+    }
+    let mut saved = crate::model_file::ModelFile::from_bytes(&names[k], &files[k].to_vec())?;
+    let (rest_names, rest_files): (Vec<String>, Vec<Uint8Array>) = names
+        .iter()
+        .zip(files.iter())
+        .enumerate()
+        .filter(|(i, _)| *i != k)
+        .map(|(_, (n, f))| (n.clone(), f.clone()))
+        .unzip();
+    if !rest_names.is_empty() {
+        let pop = WasmPopulation::new(rest_names, rest_files, animation)?;
+        let pop = Rc::try_unwrap(pop.inner).unwrap_or_else(|rc| (*rc).clone());
+        saved = saved.with_population(&names[k], pop)?;
+    }
+    let has_data = saved.has_data;
+    let pop = Rc::new(saved.population);
+    let about = Rc::new(About { params: saved.params, saved: (!has_data).then_some(saved.summary) });
+    let params = to_js(&about.params)?;
+    let model = FitModel { result: Rc::new(saved.result), pop: pop.clone(), about };
+    let obj = js_sys::Object::new();
+    let set =
+        |k: &str, v: JsValue| js_sys::Reflect::set(&obj, &k.into(), &v).map(|_| ()).map_err(|_| js_err("reflect"));
+    set("population", WasmPopulation { inner: pop }.into())?;
+    set("model", model.into())?;
+    set("params", params)?;
+    set("hasData", JsValue::from(has_data))?;
+    Ok(obj.into())
 }
 
 /// Bytes of wasm linear memory: it only grows, so this is the peak of the instance so far.
@@ -873,6 +980,7 @@ impl FitModel {
     /// take defaults (bindPose: the pose named reference, else the first). Returns {glb: Uint8Array, bones, eRms,
     /// maxError, maxErrorOverDiagonal, diagonal, poseErms: Float64Array, rigMs, writeMs, evaluateMs}.
     pub fn rig(&self, opts: JsValue) -> Result<JsValue, JsValue> {
+        self.needs_data("the rig (its weights are fitted and its error measured on the poses)")?;
         let req: crate::export::rig_report::RigRequest = from_js(opts, "rig options")?;
         let g = req.options(&self.pop)?;
         let r = crate::export::rig_report::export_rig(&*self.articulation()?, &self.pop, &g)?;
@@ -896,6 +1004,7 @@ impl FitModel {
     /// Pose mode (issue 28): the rig of `opts` (rig options as for [`FitModel::rig`]; default fitted weights),
     /// written and read back, its training poses solved onto it and their pose space.
     pub fn poser(&self, opts: JsValue) -> Result<WasmPoser, JsValue> {
+        self.needs_data("pose mode (its rig's weights are fitted to the poses)")?;
         let mut req: crate::export::rig_report::RigRequest = from_js(opts.clone(), "pose options")?;
         let given =
             !opts.is_undefined() && !opts.is_null() && js_sys::Reflect::has(&opts, &"weights".into()).unwrap_or(false);
