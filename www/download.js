@@ -13,7 +13,7 @@ export function download(name, data, type) {
 }
 
 /** `s` as a piece of a file name: a mesh file's extension dropped, every run of other characters one `_`. */
-export const safeName = (s) => s.replace(/\.(obj|ply|glb|gltf|fbx|usd[acz]?|pc2|mdd|zip)$/i, '').replace(/[^A-Za-z0-9._-]+/g, '_');
+export const safeName = (s) => s.replace(/\.(obj|ply|glb|gltf|fbx|usd[acz]?|pc2|mdd|zip|posemfa)$/i, '').replace(/[^A-Za-z0-9._-]+/g, '_');
 
 /** The population's name in file names: the example's id, the generator and its seed, or what the files'
  * names share (horse1.obj ... horse11.obj: "horse"); when they share nothing (1.obj ... 11.obj), their folder's

@@ -8,8 +8,9 @@ import { unzipSync } from 'fflate';
 const collator = new Intl.Collator(undefined, { numeric: true, sensitivity: 'base' });
 export const naturalSort = (items) => items.sort((a, b) => collator.compare(a.name, b.name));
 
-// Files the core reads (src/mesh/load.rs, FileKind::is_known_extension); images and .mtl files are not read.
-export const isMeshFile = (name) => /\.(obj|ply|glb|gltf|vrm|bin|pc2|mdd|fbx|usd|usda|usdc|usdz)$/i.test(name);
+// Files the core reads (src/mesh/load.rs, FileKind::is_known_extension, and model files: src/model_file.rs);
+// images and .mtl files are not read.
+export const isMeshFile = (name) => /\.(obj|ply|glb|gltf|vrm|bin|pc2|mdd|fbx|usd|usda|usdc|usdz|posemfa)$/i.test(name);
 const isZip = (name) => /\.zip$/i.test(name);
 const skip = (name) => /(^|\/)(__MACOSX\/|\.)/.test(name); // resource forks and hidden files
 
@@ -29,6 +30,14 @@ async function fromFile(file, name, out) {
   } else if (!skip(name)) {
     out.ignored.push(name);
   }
+}
+
+/** The files of `bytes` named `name` (a mesh or model file as is, a .zip opened), as a drop gives them. */
+export async function filesFromBytes(name, bytes) {
+  const out = emptyResult();
+  await fromFile(new Blob([bytes]), name, out);
+  naturalSort(out.files);
+  return out;
 }
 
 const fileOf = (entry) => new Promise((resolve, reject) => entry.file(resolve, reject));

@@ -9,7 +9,7 @@
 import './worker-client.js'; // first: the wasm module loads while three.js evaluates
 import { installUrlState } from './urlstate.js'; // second: an embedded page hides its controls at once
 import { state, update, subscribe } from './state.js';
-import { faultInjection, injectFault, onReady, generate, runExample, loadFiles, startFit, cancelFit, query } from './session.js';
+import { faultInjection, injectFault, onReady, generate, runExample, loadFiles, openUrl, startFit, cancelFit, query } from './session.js';
 import { viewer } from './views/viewer-instance.js';
 import { installViews, renderView } from './views/render.js';
 import { installInspect, pickVertex } from './views/inspect.js';
@@ -79,7 +79,7 @@ subscribe((s, changed) => {
 });
 
 const urlState = installUrlState({
-  viewer, readParams, renderView, runExample, generate, note, refine, teach: (count) => teach('teach-step', { count }),
+  viewer, readParams, fillParams, renderView, runExample, generate, openUrl, note, refine, teach: (count) => teach('teach-step', { count }),
 });
 installPoses(); // before the views: a new population's pose lists are filled before its first picture
 installViews();

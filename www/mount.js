@@ -8,8 +8,10 @@
 //   view.ready.then((summary) => console.log(summary.parts, summary.groundTruth?.ari));
 //   view.unmount();
 //
-// options: example (id of a built-in example; default: the first, the quadruped), or spec (a generator spec,
-// see Synthetic in src/wasm.rs); params (fit parameters over the example's); pose (0-based, default 0);
+// options: url (a model file .posemfa, a .zip of pose files, a .glb, a point cache in a .zip with its base mesh:
+// fetched with its progress in the caption and a Cancel button, www/fetch-source.js; the server must allow this
+// page to read it, docs/embed.md), or example (id of a built-in example; default: the first, the quadruped), or
+// spec (a generator spec, see Synthetic in src/wasm.rs); params (fit parameters over the example's); pose (0-based, default 0);
 // view: 'parts' (default) | 'truth' (the generator's ground truth); flat (unlit colours, default false);
 // worker: a Worker-like object that speaks www/worker.js's protocol, used instead of a worker of its own (the
 // article's shared pool, www/explain/pool.js, hands out such channels; unmount() terminates it).
@@ -19,6 +21,7 @@
 // worker, query(method, ...args) (a promise of the worker's reply) and on(f) (f(msg) for every message).
 import { Viewer } from './viewer.js';
 import { paletteColours } from './colors.js';
+import { fetchSource } from './fetch-source.js';
 
 export function mount(element, options = {}) {
   const box = document.createElement('div');
@@ -66,8 +69,38 @@ export function mount(element, options = {}) {
     handle(m);
     for (const f of listeners) f(m);
   };
+  const abort = new AbortController();
+  // A file from options.url: fetched, then loaded as a drop of it is (a model file opens without fitting).
+  async function fromUrl(defaults) {
+    const url = options.url;
+    const cancel = document.createElement('button');
+    cancel.type = 'button';
+    cancel.textContent = 'Cancel';
+    cancel.onclick = () => abort.abort();
+    const status = document.createElement('span');
+    status.textContent = `Fetching ${url}…`;
+    caption.replaceChildren(status, ' ', cancel);
+    let got;
+    try {
+      got = await fetchSource(url, {
+        signal: abort.signal,
+        onProgress: (n, total) => { status.textContent = `Fetching ${url}: ${(n / 1e6).toFixed(1)}${total ? ` of ${(total / 1e6).toFixed(1)}` : ''} MB`; },
+      });
+    } catch (e) {
+      return fail(abort.signal.aborted ? `Cancelled: ${url} was not opened` : `Cannot open ${url}: ${e.problems?.[0]?.message ?? e.message}`);
+    }
+    if (!got.files.length) return fail(`Cannot open ${url}: no mesh or model file in it`);
+    title = url.split('/').pop();
+    caption.textContent = title;
+    const files = got.files.map((f) => f.bytes.buffer.slice(f.bytes.byteOffset, f.bytes.byteOffset + f.bytes.byteLength));
+    const params = { ...defaults, ...(options.params ?? {}) };
+    worker.postMessage({ type: 'load', id: 1, names: got.files.map((f) => f.name), files, fit: { id: 2, params } }, files);
+  }
+
   const handle = (m) => {
-    if (m.type === 'ready') {
+    if (m.type === 'ready' && options.url) {
+      fromUrl(m.defaults);
+    } else if (m.type === 'ready') {
       const ex = options.spec ? null : (m.examples.find((e) => e.id === options.example) ?? m.examples[0]);
       if (options.example && ex && ex.id !== options.example) return fail(`no example "${options.example}"`);
       const params = { ...m.defaults, ...(ex?.params ?? {}), ...(options.params ?? {}) };
@@ -87,9 +120,10 @@ export function mount(element, options = {}) {
       const colours = truth ? paletteColours(pop.truth.partOfVertex, pop.truth.colours) : paletteColours(m.model.labels, m.model.colours.final);
       viewer.show([{ positions: pop.positions[pose], colours: colours.vertexColours }], { frame: first });
       const acc = summary.groundTruth ? `, adjusted Rand ${summary.groundTruth.ari.toFixed(3)}` : '';
+      const how = summary.opened ? `opened from ${summary.opened}` : `fitted in ${Math.round(summary.fitMs)} ms`;
       caption.textContent = title + (truth
         ? ` — ground truth, ${pop.truth.partNames.length} parts`
-        : ` — ${summary.parts} parts fitted in ${Math.round(summary.fitMs)} ms${acc}`);
+        : ` — ${summary.parts} parts ${how}${acc}`);
       setState('fitted');
       resolveReady({ ...summary });
     } else if (m.type === 'load-error') {
@@ -123,9 +157,12 @@ export function mount(element, options = {}) {
       return () => listeners.delete(f);
     },
     /** Stops the worker, frees the WebGL context and removes what mount() added. */
+    /** Stops fetching options.url (the caption says it was cancelled). */
+    cancel: () => abort.abort(),
     unmount() {
       if (!mounted) return;
       mounted = false;
+      abort.abort();
       worker.terminate();
       viewer.dispose();
       box.remove();

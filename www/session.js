@@ -7,6 +7,7 @@ import { state, update, subscribe } from './state.js';
 import { paletteColours } from './colors.js';
 import { checkedParams, fillParams, resetForNewPopulation } from './controls/form.js';
 import { showProblems, note } from './problems.js';
+import { fetchSource } from './fetch-source.js';
 
 const GREY = 0.78;
 const LIVE_MS = 250; // the mesh is recoloured at most this often while a fit runs
@@ -65,14 +66,62 @@ export function runExample(ex, params = {}, opts = {}) {
   generate(ex.spec, ex, null, opts);
 }
 
-/** Files from the picker or a drop ({ files, ignored, problems }, see drop.js), fitted at once. */
-export async function loadFiles(got) {
+/**
+ * Opens `url` (a link's src=URL): fetched with its progress and a Cancel over the view (#fetch-status), then
+ * opened as a drop of its files is. Resolves to null when the files went to the worker, else to what went wrong
+ * (the fetch failed or was cancelled: said over the view and in the problems box; what was loaded stays).
+ */
+export async function openUrl(url) {
+  const box = document.getElementById('fetch-status');
+  const text = document.getElementById('fetch-text');
+  const button = document.getElementById('fetch-cancel');
+  const abort = new AbortController();
+  box.hidden = false;
+  box.dataset.state = 'fetching';
+  button.textContent = 'Cancel';
+  button.onclick = () => abort.abort();
+  text.textContent = `Fetching ${url}…`;
+  const said = (message, state) => {
+    box.dataset.state = state;
+    text.textContent = message;
+    button.textContent = 'Close';
+    button.onclick = () => { box.hidden = true; };
+  };
+  let got;
+  try {
+    got = await fetchSource(url, {
+      signal: abort.signal,
+      onProgress: (n, total) => {
+        text.textContent = `Fetching ${url}: ${(n / 1e6).toFixed(1)}${total ? ` of ${(total / 1e6).toFixed(1)}` : ''} MB`;
+      },
+    });
+  } catch (e) {
+    if (abort.signal.aborted) {
+      const text = `Cancelled: ${url} was not opened${state.pop ? '; what was shown stays' : ''}.`;
+      said(text, 'cancelled');
+      return text;
+    }
+    const problems = e.problems ?? [{ file: url, line: null, message: String(e.message ?? e) }];
+    const text = `Cannot open ${url}: ${problems[0].message}.`;
+    said(text, 'error');
+    showProblems(problems, `Cannot open ${url}`);
+    update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
+    return text;
+  }
+  box.hidden = true;
+  loadFiles(got, { url });
+  return null;
+}
+
+/** Files from the picker or a drop ({ files, ignored, problems }, see drop.js), fitted at once (a model file:
+ * opened without fitting). `url`: the address they were fetched from (openUrl), kept in the link. */
+export async function loadFiles(got, { url = null } = {}) {
   const { files, ignored, problems } = await got;
   const notes = ignored.length ? [{ file: null, line: null, message: `ignored (not a mesh, point cache, glTF buffer or .zip): ${ignored.join(', ')}` }] : [];
   if (problems.length || files.length === 0) {
     // nothing to open: one problem, naming what was ignored (not a second one for it)
     const none = ignored.length ? `; ignored: ${ignored.join(', ')}` : '';
-    if (!files.length) problems.push({ file: null, line: null, message: `no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh, .fbx, .usd / .usda / .usdc / .usdz) in what was dropped or picked${none}` });
+    if (!files.length) problems.push({ file: null, line: null, message: `no mesh file (.obj, .ply, .glb, .gltf, .pc2 / .mdd with its base mesh, .fbx, .usd / .usda / .usdc / .usdz) nor model file (.posemfa) in what was dropped or picked${none}` });
     showProblems(files.length ? [...problems, ...notes] : problems);
     update({ loadErrorCount: state.loadErrorCount + 1, phase: restingState() });
     return;
@@ -82,7 +131,7 @@ export async function loadFiles(got) {
   // the defaults of the hidden parameters, the part count and the literal Λ step (seed, tolerance... as typed);
   // the form and settings show them once the core has accepted the files (onLoaded): a refused drop keeps
   // everything as it was
-  startLoad({ label, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes, { fresh: true });
+  startLoad({ label, url, names: files.map((f) => f.name), bytes: files.map((f) => f.bytes) }, notes, { fresh: !url });
 }
 
 /** The same files read again with another of their glTF's animations (the Population panel's list), fitted with
@@ -242,6 +291,14 @@ function onFitted({ model, kept: keptModel }) {
     refined: paletteColours(model.refinedLabels, model.colours.refined),
   };
   kept = null;
+  if (model.summary.opened) {
+    // a model file: the form shows the parameters it was fitted with (Fit again fits with them)
+    update({ baseParams: { ...state.defaults, ...model.params } });
+    fillParams(state.baseParams);
+    if (!model.summary.hasData) {
+      note(`${model.summary.opened} was saved without its poses: the poses shown are the model's reconstructions, and the reconstruction error, the responsibilities, the rig and pose mode need the poses. Drop the model file together with the pose files it was fitted to to see them.`);
+    }
+  }
   // the new model's own parts (not a merge tree cut the slider showed for the one before)
   update({ fitId: null, fitCount: state.fitCount + 1, model, gen: state.gen + 1, colours, treeParts: null, keptAfter: null, phase: 'fitted' });
 }

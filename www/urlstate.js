@@ -3,7 +3,9 @@
 //
 //   ex=ID                      a built-in example (posemfa::synth::presets), or
 //   gen=PRESET,VERTICES,POSES,SEED   a generated population, or
-//   src=files                  opened or dropped files (not in the link: the default example is shown)
+//   src=files                  opened or dropped files (not in the link: the default example is shown), or
+//   src=URL                    a file fetched from URL (a model file .posemfa, a .zip of poses, a .glb...;
+//                              www/fetch-source.js): a shared link fetches it again
 //   parts, bones=N|auto, seed, tol, floor, lambda=exact|paper-eq18, refine=0|1   fit parameters (the form's;
 //                              bones: "Parts in the end", targetParts; absent = auto, the part rule's own count)
 //   cut=N                      the parts were refined from the N-part partition of that fit's merge tree
@@ -38,7 +40,7 @@ export function parseHash(hash) {
     const [preset, vertices, poses, seed] = q.get('gen').split(',');
     s.gen = { preset, vertices: num(vertices) ?? 2500, poses: num(poses) ?? 8, seed: num(seed) ?? 0 };
   }
-  if (q.get('src') === 'files') s.src = 'files';
+  if (q.get('src')) s.src = q.get('src') === 'files' ? 'files' : q.get('src');
   const params = {};
   if (num(q.get('parts')) !== undefined) params.parts = num(q.get('parts'));
   if (q.get('bones') === 'auto') params.targetParts = null;
@@ -124,8 +126,9 @@ export function applyEmbedFlags(s, body = document.body) {
 applyEmbedFlags(parseHash(location.hash));
 
 /**
- * ctx (from main.js): { viewer, readParams, renderView, runExample, generate, note, teach(count), refine(n) (the
- *   merge tree's Refine: a promise of false when the tree cannot give n parts) }.
+ * ctx (from main.js): { viewer, readParams, fillParams, renderView, runExample, generate, openUrl(url) (a promise of
+ *   null, or of what went wrong when the fetch failed), note, teach(count), refine(n) (the merge tree's Refine: a promise of false when
+ *   the tree cannot give n parts) }.
  * Returns { start(): true when the hash chose what to load (and loaded it) }.
  */
 export function installUrlState(ctx) {
@@ -143,14 +146,15 @@ export function installUrlState(ctx) {
 
   function current() {
     const s = { ...source };
-    if (fitParams && !s.src) {
+    const linkable = s.src !== 'files'; // a URL is fetched again; dropped files cannot be
+    if (fitParams && linkable) {
       const { parts, targetParts, seed, tol, varianceFloor, lambdaRule, refine } = fitParams;
       s.params = { parts, targetParts, seed, tol, varianceFloor, lambdaRule, refine };
       if (cut) s.cut = cut;
     }
     const t = state.teach;
-    if (t && state.fitId === t.id && t.iteration > 0 && !s.src) s.teach = { steps: t.iteration, stage: t.stage?.kind ?? 'coarse' };
-    if (state.pop && !s.src) {
+    if (t && state.fitId === t.id && t.iteration > 0 && linkable) s.teach = { steps: t.iteration, stage: t.stage?.kind ?? 'coarse' };
+    if (state.pop && linkable) {
       s.view = {
         mode: state.mode,
         flat: $('flat').checked,
@@ -238,6 +242,19 @@ export function installUrlState(ctx) {
       ctx.generate(s.gen, null, s.params, opts);
       return true;
     }
+    if (s.src && s.src !== 'files') {
+      restoring = { ...s.view, teach: s.teach, cut: s.teach ? null : s.cut };
+      if (s.params) ctx.fillParams({ ...state.baseParams, ...s.params });
+      ctx.openUrl(s.src).then((failed) => {
+        if (!failed) return;
+        restoring = null;
+        if (state.pop || flags.embed) return;
+        // the page stays useful behind the message, and says it again once the example is in
+        note = `${failed} Showing the default example.`;
+        ctx.runExample(state.examples[0]);
+      });
+      return true;
+    }
     return false;
   }
 
@@ -248,7 +265,7 @@ export function installUrlState(ctx) {
     const s = parseHash(h);
     flags = s;
     applyEmbedFlags(s);
-    const sameSource = formatHash({ ex: s.ex, gen: s.gen, params: s.params, cut: s.cut }) === formatHash({ ...source, params: current().params, cut });
+    const sameSource = formatHash({ ex: s.ex, gen: s.gen, src: s.src, params: s.params, cut: s.cut }) === formatHash({ ...source, params: current().params, cut });
     if (sameSource && state.model) applyView(s.view ?? {});
     else load(s);
   });
@@ -293,7 +310,7 @@ export function installUrlState(ctx) {
     if (changed.has('teach') && !restoring) schedule(); // a Run makes steps without a click
     if (changed.has('pop')) {
       const src = st.source;
-      source = src?.example ? { ex: src.example.id } : src?.spec ? { gen: src.spec } : { src: 'files' };
+      source = src?.example ? { ex: src.example.id } : src?.spec ? { gen: src.spec } : { src: src?.url ?? 'files' };
       fitParams = null;
       if (note) {
         const text = note;

@@ -5,7 +5,10 @@
 //   page -> worker
 //     { type: 'load', id, names: string[], files: ArrayBuffer[], fit? }  mesh files (OBJ, PLY, glTF + .bin,
 //                                                                   point cache + base mesh): read by extension
-//                                                                   and validated in Rust
+//                                                                   and validated in Rust; with a .posemfa among
+//                                                                   them, the model file is opened instead of
+//                                                                   fitting (the others: its poses), and its
+//                                                                   model comes as 'fitted' (summary.opened, params)
 //     { type: 'generate', id, spec, fit? }                          a synthetic population (posemfa::synth)
 //                                                                   fit: { id, params, fault? }: start fitting it
 //                                                                   at once (as a 'fit' message would)
@@ -130,8 +133,35 @@ function sendPopulation(id, truth) {
   post({ type: 'loaded', id, population: p }, [p.faces.buffer, ...p.positions.map((a) => a.buffer)]);
 }
 
+// A model file (.posemfa) among the files: opened without fitting (src/model_file.rs), with the other files as the
+// poses it was fitted to if any (checked to be its mesh). The population goes to the page as a load's does, then
+// the model as a finished fit's does (under the fit's id when the load asked for a fit).
+const isModelFile = (name) => /\.posemfa$/i.test(name);
+
+function openModel(data) {
+  const { id, names, files } = data;
+  let opened;
+  try {
+    opened = wasm.openModel(names, files.map((b) => new Uint8Array(b)), data.animation ?? undefined);
+  } catch (e) {
+    if (isCrash(e)) return crashed(e);
+    post({ type: 'load-error', id, problems: problemsOf(e) });
+    return;
+  }
+  replacePopulation(opened.population);
+  sendPopulation(id, null);
+  model = opened.model;
+  memory.keepTree(model, false);
+  const msg = modelMessage(model);
+  Object.assign(msg.summary, { fitMs: 0, cancelled: false, opened: names.find(isModelFile) });
+  msg.params = opened.params;
+  modelComplete = !!msg.summary.complete;
+  post({ type: 'fitted', id: data.fit?.id ?? id, cancelled: false, fitMs: 0, model: msg });
+}
+
 function load(data) {
   const { id, names, files } = data;
+  if (names.some(isModelFile)) return openModel(data);
   let pop;
   try {
     // animation: a glTF's clip to read (the page's Animation list), else the core's choice
@@ -335,6 +365,7 @@ const QUERIES = {
   responsibilities: (v) => model.responsibilities(v),
   rotationAngles: (part, ref) => model.rotationAngles(part, ref),
   toJson: () => model.toJson(),
+  save: (withPoses) => model.save(!!withPoses), // the model file (.posemfa)
   interpolate: (i, j, t, opts) => model.interpolate(i, j, t, opts ?? {}),
   rig: (opts) => model.rig(opts ?? {}),
   articulationReport: (i, j, t) => model.articulationReport(i, j, t),

@@ -27,6 +27,8 @@ function showButtons() {
   const n = state.shown.length;
   $('export-obj').textContent = `${n > 1 ? `OBJ of the ${n} shown meshes` : 'OBJ of the shown mesh'}${tag}`;
   $('export-obj').title = partial ? `the shown meshes with the parts of ${PARTIAL} (and its geometry, in the views made from the model)` : TITLES['export-obj'];
+  $('export-model').disabled = !state.model;
+  $('export-model').textContent = `Save model${tag}`;
   $('export-gltf').disabled = !state.model;
   $('export-gltf').textContent = `glTF (.glb)${tag}`;
   $('export-gltf').title = partial ? `the rig of ${PARTIAL}` : TITLES['export-gltf'];
@@ -94,6 +96,12 @@ export function installExports() {
     showRig(r, opts);
     const extras = `${opts.joints === 'fixed' ? '-fixed-joints' : ''}${opts.morphs !== 'none' ? `-${opts.morphs}-morphs` : ''}`;
     download(`posemfa-${populationStem()}-rig-${opts.weights}-${r.bones}bones${extras}.glb`, r.glb, 'model/gltf-binary');
+  }));
+  // The fit as a model file (src/model_file.rs): the page, the embed and `posemfa --model` open it without fitting.
+  $('export-model').addEventListener('click', orReport(async () => {
+    const without = $('model-without-poses').checked || state.model.summary.hasData === false;
+    const bytes = await query('save', !without);
+    download(`posemfa-${populationStem()}${without ? '-without-poses' : ''}.posemfa`, bytes, 'application/octet-stream');
   }));
   $('rig').addEventListener('change', () => {
     $('rig-erms').textContent = '–';

@@ -1,0 +1,191 @@
+// Model files (.posemfa, src/model_file.rs) in the page: a file written by `posemfa fit --save` opens without
+// fitting and every view works from it; the page saves one; a link (src=URL, the embed's iframe form) fetches a
+// model file or a .zip of poses from the page's own server and from a second origin that allows it, and says
+// why when the second origin does not (the header it must send) or the address is not found; a cut file, a file
+// of a newer version and a model given poses of another mesh are refused by name, and what was shown stays.
+// Run: npm run build && node --test tests/e2e/model-file.test.mjs
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import http from 'node:http';
+import { readFileSync, readdirSync, mkdtempSync } from 'node:fs';
+import { readFile } from 'node:fs/promises';
+import { execFileSync } from 'node:child_process';
+import { join } from 'node:path';
+import { tmpdir } from 'node:os';
+import { zipSync, strToU8 } from 'fflate';
+import { pageSession, waitState, tubePopulation, debugCli } from './helpers.mjs';
+
+const session = pageSession();
+const summary = (page) => page.evaluate(() => window.posemfa.summary());
+const counters = (page) => page.evaluate(() => [window.posemfa.fitCount(), window.posemfa.loadErrorCount()]);
+const labels = (page) => page.evaluate(() => window.posemfa.fittedParts()?.labels ?? null);
+
+// A generated population written as OBJ and fitted by the CLI: its model file with and without the poses, its
+// JSON, and its pose files.
+const dir = mkdtempSync(join(tmpdir(), 'posemfa-model-'));
+const posesDir = join(dir, 'arm-poses');
+let cli;
+let withPoses;
+let withoutPoses;
+let fitJson;
+let poseFiles;
+before(() => {
+  cli = debugCli();
+  execFileSync(cli, ['generate', 'arm', '--vertices', '700', '--poses', '5', '--seed', '3', '--out', posesDir]);
+  poseFiles = readdirSync(posesDir).filter((n) => n.endsWith('.obj')).map((n) => ({ name: n, buffer: readFileSync(join(posesDir, n)) }));
+  execFileSync(cli, ['fit', posesDir, '--quiet', '--save', join(dir, 'arm.posemfa'), '--json', join(dir, 'arm.json')]);
+  execFileSync(cli, ['fit', '--model', join(dir, 'arm.posemfa'), '--quiet', '--save', join(dir, 'bare.posemfa'), '--without-poses']);
+  withPoses = readFileSync(join(dir, 'arm.posemfa'));
+  withoutPoses = readFileSync(join(dir, 'bare.posemfa'));
+  fitJson = JSON.parse(readFileSync(join(dir, 'arm.json'), 'utf8'));
+});
+
+// A second origin (another port): /cors/NAME with Access-Control-Allow-Origin, /plain/NAME without.
+let other;
+const served = new Map();
+before(async () => {
+  other = http.createServer((req, res) => {
+    const url = new URL(req.url, 'http://x');
+    const body = served.get(url.pathname.split('/').pop());
+    const headers = url.pathname.startsWith('/cors/') ? { 'access-control-allow-origin': '*' } : {};
+    if (!body) return res.writeHead(404, headers).end('not found');
+    res.writeHead(200, { ...headers, 'content-type': 'application/octet-stream' }).end(body);
+  });
+  await new Promise((ok) => other.listen(0, '127.0.0.1', ok));
+});
+after(() => new Promise((ok) => other.close(ok)));
+
+const tube = tubePopulation({ segments: 3, poses: 6 });
+const tubeZip = () => Buffer.from(zipSync(Object.fromEntries(tube.files.map((f) => [`tube/${f.name}`, strToU8(f.text)]))));
+
+async function fresh(path = '') {
+  const p = await session.open(path);
+  await waitState(p.page, ['fitted', 'idle', 'error'], 90000);
+  return p;
+}
+
+// Picks files ({ name, buffer }) and waits until they were opened or refused; returns whether they were refused.
+async function pick(page, files) {
+  const [fits, errs] = await counters(page);
+  await page.setInputFiles('[data-testid=file-input]', files.map((f) => ({ name: f.name, mimeType: 'application/octet-stream', buffer: f.buffer })));
+  await page.waitForFunction(([f, l]) => window.posemfa.fitCount() > f || window.posemfa.loadErrorCount() > l, [fits, errs], { timeout: 120000, polling: 50 });
+  return page.evaluate((l) => window.posemfa.loadErrorCount() > l, errs);
+}
+
+test('a model file opens without fitting, and every view works from it', async () => {
+  const { page, log, context } = await fresh();
+  const refused = await pick(page, [{ name: 'arm.posemfa', buffer: withPoses }]);
+  assert.equal(refused, false, await page.locator('[data-testid=errors]').innerText());
+  const s = await summary(page);
+  assert.equal(s.opened, 'arm.posemfa');
+  assert.equal(s.hasData, true);
+  assert.equal(s.parts, fitJson.parts.length);
+  assert.equal(s.rmse, fitJson.rmse, 'the RMSE the CLI measured');
+  assert.deepEqual(await labels(page), fitJson.labels, 'the labels the CLI fitted');
+  const stages = await page.evaluate(() => window.posemfa.stageParts('coarse').labels);
+  assert.deepEqual(stages, fitJson.coarse_labels);
+  const tree = await page.evaluate(() => window.posemfa.tree());
+  assert.ok(tree && tree.most >= tree.fewest, 'the merge tree slider has the saved tree');
+  assert.equal(tree.decided, fitJson.tree_count);
+  const cut = await page.evaluate((n) => window.posemfa.treePartition(n), tree.fewest);
+  assert.equal(new Set(cut.labels).size, tree.fewest);
+  for (const mode of ['stages', 'recon', 'latent', 'interp', 'pose', 'parts']) {
+    await page.check(`#modes input[value=${mode}]`);
+    await page.waitForFunction((m) => window.posemfa.mode() === m && window.posemfa.shown().length > 0, mode, { timeout: 60000 });
+  }
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  // saved again from the page: a model file that opens as the same fit
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('[data-testid=export-model]')]);
+  assert.match(download.suggestedFilename(), /\.posemfa$/);
+  const saved = await readFile(await download.path());
+  assert.equal(saved.subarray(0, 8).toString('latin1'), 'POSEMFA\0');
+  assert.equal(await pick(page, [{ name: 'again.posemfa', buffer: saved }]), false);
+  assert.deepEqual(await labels(page), fitJson.labels);
+  assert.deepEqual(log.errors, [], 'no console errors');
+  await context.close();
+});
+
+test('a model saved without its poses opens on its own and with its poses; poses of another mesh are refused', async () => {
+  const { page, context } = await fresh();
+  assert.equal(await pick(page, [{ name: 'bare.posemfa', buffer: withoutPoses }]), false);
+  let s = await summary(page);
+  assert.equal(s.hasData, false);
+  assert.deepEqual(await labels(page), fitJson.labels);
+  assert.match(await page.locator('[data-testid=errors]').innerText(), /saved without its poses/);
+  // with the poses it was fitted to
+  assert.equal(await pick(page, [{ name: 'bare.posemfa', buffer: withoutPoses }, ...poseFiles]), false, await page.locator('[data-testid=errors]').innerText());
+  s = await summary(page);
+  assert.equal(s.hasData, true);
+  assert.equal(s.rmse, fitJson.rmse);
+  // poses of another mesh: refused by name, the model shown stays
+  const before = await labels(page);
+  const other = tube.files.map((f) => ({ name: f.name, buffer: Buffer.from(f.text) }));
+  assert.equal(await pick(page, [{ name: 'bare.posemfa', buffer: withoutPoses }, ...other]), true);
+  assert.match(await page.locator('[data-testid=errors]').innerText(), /bare\.posemfa.*fitted to another mesh/s);
+  assert.deepEqual(await labels(page), before, 'the model shown stays');
+  await context.close();
+});
+
+test('a cut file and a file of a newer version are refused by name, and what was shown stays', async () => {
+  const { page, context } = await fresh();
+  const before = await labels(page);
+  assert.equal(await pick(page, [{ name: 'cut.posemfa', buffer: withPoses.subarray(0, withPoses.length - 1000) }]), true);
+  assert.match(await page.locator('[data-testid=errors]').innerText(), /cut\.posemfa.*cut short/s);
+  const newer = Buffer.from(withPoses);
+  newer.writeUInt32LE(2, 8);
+  assert.equal(await pick(page, [{ name: 'newer.posemfa', buffer: newer }]), true);
+  assert.match(await page.locator('[data-testid=errors]').innerText(), /format version 2.*newer posemfa/s);
+  assert.deepEqual(await labels(page), before);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  await context.close();
+});
+
+test('a link opens a model file or a .zip from its own server, in the embed, and keeps src', async () => {
+  const p = await session.open('');
+  // the page's own origin: answered by the test through the browser's routing
+  await p.context.route('**/links/**', (route) => {
+    const name = new URL(route.request().url()).pathname.split('/').pop();
+    const body = { 'arm.posemfa': withPoses, 'tube.zip': tubeZip() }[name];
+    return body ? route.fulfill({ status: 200, body, contentType: 'application/octet-stream' }) : route.fulfill({ status: 404, body: 'not found' });
+  });
+  await p.page.goto(p.page.url().replace(/#.*$/, '') + '#embed=1&src=links/arm.posemfa&view=interp');
+  await p.page.reload();
+  await waitState(p.page, ['fitted', 'error'], 90000);
+  const s = await summary(p.page);
+  assert.equal(s.opened, 'arm.posemfa');
+  assert.deepEqual(await labels(p.page), fitJson.labels);
+  await p.page.waitForFunction(() => window.posemfa.mode() === 'interp' && !window.posemfa.restoring(), null, { timeout: 60000 });
+  await p.page.waitForFunction(() => /src=links%2Farm\.posemfa|src=links\/arm\.posemfa/.test(location.hash), null, { timeout: 5000 });
+
+  await p.page.goto(p.page.url().replace(/#.*$/, '') + '#embed=1&src=links/tube.zip');
+  await p.page.reload();
+  await waitState(p.page, ['fitted', 'error'], 90000);
+  const z = await summary(p.page);
+  assert.equal(z.opened, undefined, 'a zip of poses is fitted');
+  assert.equal(z.shapes, 6);
+
+  await p.page.goto(p.page.url().replace(/#.*$/, '') + '#embed=1&src=links/none.posemfa');
+  await p.page.reload();
+  await p.page.waitForFunction(() => document.querySelector('[data-testid=fetch-status]').dataset.state === 'error', null, { timeout: 60000 });
+  assert.match(await p.page.locator('[data-testid=fetch-status]').innerText(), /HTTP 404.*not found/s);
+  await p.context.close();
+});
+
+test('a link to a second origin opens when the server allows it, and says which header is missing when not', async () => {
+  served.set('arm.posemfa', withPoses);
+  const base = `http://127.0.0.1:${other.address().port}`;
+  const p = await session.open(`#embed=1&src=${encodeURIComponent(`${base}/cors/arm.posemfa`)}`);
+  await waitState(p.page, ['fitted', 'error'], 90000);
+  assert.equal((await summary(p.page)).opened, 'arm.posemfa');
+  await p.context.close();
+
+  const q = await session.open(`#src=${encodeURIComponent(`${base}/plain/arm.posemfa`)}`);
+  await q.page.waitForFunction(() => document.querySelector('[data-testid=fetch-status]').dataset.state === 'error', null, { timeout: 60000 });
+  const said = await q.page.locator('[data-testid=fetch-status]').innerText();
+  assert.match(said, /does not let this page .* read the file/);
+  assert.match(said, /Access-Control-Allow-Origin/);
+  // the full page (not the embed) falls back to the default example behind the message
+  await waitState(q.page, ['fitted'], 90000);
+  assert.match(await q.page.locator('[data-testid=errors]').innerText(), /Access-Control-Allow-Origin/);
+  await q.context.close();
+});
