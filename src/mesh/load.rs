@@ -8,6 +8,8 @@
 //!   [`super::gltf`].
 //! - `.fbx` (binary FBX 7.x): the poses of one of its meshes, see [`super::fbx`].
 //! - `.usd`, `.usda`, `.usdc`, `.usdz`: the poses of one point-cached mesh, see [`super::usd`].
+//! - `.zip`: an archive of any of these, opened as the page opens one ([`super::zip_archive`]): its mesh files
+//!   (named `ARCHIVE/PATH`, in natural order) read as if they had been given, what was skipped said in the source.
 //! - `.mtl` files (OBJ materials) are ignored; a file with any other extension (or none) is refused by name,
 //!   with the list of what posemfa reads ([`formats_read`]), rather than read as OBJ.
 //!
@@ -35,6 +37,8 @@ pub enum FileKind {
     Resource,
     /// Files that come with meshes and are not read (`.mtl`).
     Ignored,
+    /// A `.zip` archive of mesh files, opened by [`load_with`] ([`super::zip_archive`]).
+    Zip,
     /// Any other extension, or none: refused by name ([`unknown_format`]).
     Unknown,
 }
@@ -80,6 +84,9 @@ const OTHER_EXTENSIONS: &[(&str, FileKind, bool)] = &[
     ("webp", FileKind::Resource, false),
     ("ktx2", FileKind::Resource, false),
     ("mtl", FileKind::Ignored, false),
+    // (not picked up from a folder: a folder's files and an archive of the same poses beside them would be read
+    // twice)
+    ("zip", FileKind::Zip, false),
 ];
 
 /// What posemfa reads, for people: ".obj, .ply, .glb/.gltf, .fbx, .usd/.usda/.usdc/.usdz, .pc2/.mdd with a base mesh" (from [`FORMATS`]).
@@ -177,8 +184,35 @@ pub fn load(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Loaded, Vec<Er
     load_with(files, &gltf::Options::default())
 }
 
-/// [`load`] with choices for glTF files (which mesh, which animation, how many frames, which poses).
+/// [`load`] with choices for glTF files (which mesh, which animation, how many frames, which poses). A `.zip`
+/// among the files is opened ([`super::zip_archive`]; all archives together may unpack to half the memory
+/// budget), its mesh files take its place, and the source says which archive they came from and what it
+/// skipped.
 pub fn load_with(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std::result::Result<Loaded, Vec<Error>> {
+    if !files.iter().any(|(n, _)| FileKind::of(n) == FileKind::Zip) {
+        return load_files(files, options);
+    }
+    let mut budget = crate::memory::budget_bytes().map_err(|e| vec![e])? / 2;
+    let mut opened = Vec::with_capacity(files.len());
+    let mut notes = Vec::new();
+    for (name, bytes) in files {
+        if FileKind::of(&name) != FileKind::Zip {
+            opened.push((name, bytes));
+            continue;
+        }
+        let archive = super::zip_archive::open(&name, &bytes, budget).map_err(|e| vec![e])?;
+        budget -= archive.unpacked;
+        notes.push(archive.note(&name));
+        opened.extend(archive.files);
+    }
+    opened.sort_by(|a, b| super::population::natural_cmp(&a.0, &b.0));
+    let mut loaded = load_files(opened, options)?;
+    loaded.source = format!("{}; {}", loaded.source, notes.join("; "));
+    Ok(loaded)
+}
+
+/// [`load_with`] once the archives are opened.
+fn load_files(files: Vec<(String, Vec<u8>)>, options: &gltf::Options) -> std::result::Result<Loaded, Vec<Error>> {
     let kinds: Vec<FileKind> = files.iter().map(|(n, _)| FileKind::of(n)).collect();
     let unknown: Vec<Error> = files
         .iter()
@@ -348,11 +382,30 @@ mod tests {
         assert_eq!(FileKind::of("avatar.vrm"), FileKind::Glb);
         assert_eq!(FileKind::of("body.mtl"), FileKind::Ignored);
         assert_eq!(FileKind::of("texture.png"), FileKind::Resource);
+        assert_eq!(FileKind::of("poses.ZIP"), FileKind::Zip);
+        assert!(!FileKind::is_known_extension("poses.zip"), "a folder's .zip is not read beside its files");
         for name in ["notes.txt", "pose1", ".hidden", "scene.blend", "a.obj/readme"] {
             assert_eq!(FileKind::of(name), FileKind::Unknown, "{name}");
             assert!(!FileKind::is_known_extension(name), "{name}");
         }
         assert!(!FileKind::is_known_extension("texture.png") && !FileKind::is_known_extension("body.mtl"));
+    }
+
+    /// A .zip given with the files is opened in place: its mesh files join the others in natural order, and
+    /// the source says where they came from.
+    #[test]
+    fn a_zip_among_the_files_is_opened() {
+        use std::io::Write;
+        let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        for path in ["p/b10.obj", "p/b2.obj", "notes.txt"] {
+            w.start_file(path, zip::write::SimpleFileOptions::default()).unwrap();
+            w.write_all(TRI).unwrap();
+        }
+        let z = w.finish().unwrap().into_inner();
+        let l = load(vec![("a1.obj".to_string(), TRI.to_vec()), ("set.zip".to_string(), z)]).unwrap();
+        let names: Vec<&str> = l.poses.iter().map(|p| p.0.as_str()).collect();
+        assert_eq!(names, ["a1.obj", "set.zip/p/b2.obj", "set.zip/p/b10.obj"]);
+        assert_eq!(l.source, "3 OBJ files; read from set.zip (2 mesh files; skipped notes.txt (not a mesh file))");
     }
 
     /// A file of an extension posemfa does not read is refused by name with the list of what it reads, not

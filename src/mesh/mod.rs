@@ -11,6 +11,7 @@ pub mod usd;
 pub mod usdc_check;
 pub mod population;
 pub mod subdivide;
+pub mod zip_archive;
 
 pub use population::{Normalization, Population};
 
