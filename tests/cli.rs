@@ -13,7 +13,7 @@ fn text(b: &[u8]) -> String {
 
 /// Every subcommand and, for each, options from each of its option groups.
 const COMMANDS: &[(&str, &[&str])] = &[
-    ("inspect", &[]),
+    ("inspect", &["--json", "--geometry", "--object", "--frames"]),
     (
         "fit",
         &[
@@ -478,4 +478,182 @@ fn robustness_drops_each_pose_in_turn() {
     // without the flag there is no such section
     let plain = posemfa(&["robustness", "synth:arm:600:5", "--seeds", "1"]);
     assert!(!text(&plain.stdout).contains("each pose dropped"));
+}
+
+/// `posemfa inspect` reads what `fit` reads (issue 58: it read every file as OBJ, so an .fbx or .usdc gave "a NUL
+/// byte ... not an OBJ text file"): each format posemfa generates, Blender's and usd-core's fixtures, a .zip and
+/// one pose file alone, with their pose, vertex and triangle counts and what the reader welded.
+#[test]
+fn inspect_reads_every_format_fit_reads() {
+    let root = std::env::temp_dir().join(format!("posemfa-cli-inspect-{}", std::process::id()));
+    let inspect = |path: &std::path::Path| -> serde_json::Value {
+        let r = posemfa(&["inspect", "--json", path.to_str().expect("utf-8 path")]);
+        assert!(r.status.success(), "inspect {}: {}", path.display(), text(&r.stderr));
+        serde_json::from_str(&text(&r.stdout)).unwrap_or_else(|e| panic!("inspect {}: {e}", path.display()))
+    };
+    let counts = |v: &serde_json::Value| (v["n_poses"].as_u64(), v["n_vertices"].as_u64(), v["n_triangles"].as_u64());
+    let mut generated = Vec::new();
+    for format in ["obj", "ply", "pc2", "glb"] {
+        let dir = root.join(format);
+        let r = posemfa(&[
+            "generate",
+            "arm",
+            "--vertices",
+            "600",
+            "--poses",
+            "5",
+            "--format",
+            format,
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        generated.push((format, inspect(&dir)));
+    }
+    let (_, obj) = &generated[0];
+    let (n_poses, n_vertices, n_triangles) = counts(obj);
+    assert_eq!(n_poses, Some(5));
+    assert!(n_vertices.unwrap() > 500 && n_triangles.unwrap() > n_vertices.unwrap(), "{obj}");
+    for (format, v) in &generated {
+        assert_eq!(counts(v), (n_poses, n_vertices, n_triangles), "--format {format}: {v}");
+        assert!(v["welded"].is_null(), "--format {format}: {v}");
+    }
+    assert_eq!(obj["source"], "5 OBJ files");
+    assert_eq!(
+        generated[2].1["source"].as_str().map(|s| s.starts_with("5 frames of the point cache poses.pc2")),
+        Some(true)
+    );
+
+    // the readers of other tools' files, with what they weld
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    for (file, want) in [
+        ("blender/quadruped-shapekeys.fbx", (6, 1198, 2392)),
+        ("blender/quadruped-skinned-seams.glb", (121, 1198, 2392)),
+        ("usd/arm-pointcache.usda", (5, 408, 812)),
+        ("usd/arm-pointcache.usdc", (5, 408, 812)),
+        ("usd/arm-pointcache.usdz", (5, 408, 812)),
+    ] {
+        let v = inspect(&fixtures.join(file));
+        assert_eq!(counts(&v), (Some(want.0), Some(want.1), Some(want.2)), "{file}: {v}");
+        if file.ends_with("seams.glb") {
+            assert_eq!(v["welded"]["vertices_in_file"], 7176, "{v}");
+            assert_eq!(v["welded"]["vertices"], 1198, "{v}");
+            assert_eq!(v["welded"]["why"], "seams split by the exporter", "{v}");
+        } else {
+            assert!(v["welded"].is_null(), "{file}: {v}");
+        }
+    }
+
+    // a .zip of the OBJ files in two folders, with a README and a resource fork
+    let zip_path = root.join("poses.zip");
+    let mut files: Vec<_> = std::fs::read_dir(root.join("obj")).unwrap().map(|e| e.unwrap().path()).collect();
+    files.sort();
+    let mut entries: Vec<(String, Vec<u8>)> = files
+        .iter()
+        .enumerate()
+        .map(|(k, f)| {
+            let name = f.file_name().unwrap().to_str().unwrap();
+            (format!("walk/{}/{name}", if k < 2 { "a" } else { "b" }), std::fs::read(f).unwrap())
+        })
+        .collect();
+    entries.push(("README.txt".into(), b"five poses of an arm".to_vec()));
+    entries.push(("__MACOSX/walk/a/._pose01.obj".into(), vec![0, 5, 22, 7]));
+    std::fs::write(&zip_path, zip_of(&entries)).unwrap();
+    let v = inspect(&zip_path);
+    assert_eq!(counts(&v), (n_poses, n_vertices, n_triangles), "{v}");
+    assert_eq!(
+        v["source"],
+        "5 OBJ files; read from poses.zip (5 mesh files; skipped README.txt (not a mesh file), \
+         __MACOSX/walk/a/._pose01.obj (macOS resource fork))"
+    );
+    assert_eq!(v["poses"][2], "poses.zip/walk/b/pose03.obj");
+
+    // the text form, and one pose file alone (which fit refuses: it needs two poses)
+    let r = posemfa(&["inspect", fixtures.join("blender/quadruped-skinned-seams.glb").to_str().unwrap()]);
+    let out = text(&r.stdout);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    assert!(out.contains("\nposes:      121: quadruped-skinned-seams.glb frame 001, "), "{out}");
+    assert!(out.contains("\nvertices:   1198\ntriangles:  2392\n"), "{out}");
+    assert!(
+        out.contains("\nwelded:     7176 vertices in the file welded to 1198 (seams split by the exporter)\n"),
+        "{out}"
+    );
+    let one = root.join("obj/pose01.obj");
+    let v = inspect(&one);
+    assert_eq!(counts(&v), (Some(1), n_vertices, n_triangles), "{v}");
+    assert_eq!(v["source"], "1 OBJ file (one pose: fit needs at least 2 poses of the same mesh)");
+    let r = posemfa(&["inspect", "--json", "--geometry", one.to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_str(&text(&r.stdout)).unwrap();
+    assert_eq!(v["vertices"].as_array().map(Vec::len) as Option<usize>, n_vertices.map(|n| n as usize));
+    assert_eq!(v["triangles"].as_array().map(Vec::len) as Option<usize>, n_triangles.map(|n| n as usize));
+
+    // errors are the reader's, exit 1
+    let bad = root.join("bad.usdc");
+    std::fs::write(&bad, b"PXR-USDC\0\x08\0\0\0\0\0\0").unwrap();
+    let r = posemfa(&["inspect", bad.to_str().unwrap()]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(
+        text(&r.stderr).starts_with("error: file bad.usdc: cannot read the USD crate file (usdc): "),
+        "{}",
+        text(&r.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// A zip of `entries` (path, bytes), deflated, as zip tools write one.
+fn zip_of(entries: &[(String, Vec<u8>)]) -> Vec<u8> {
+    use std::io::Write;
+    let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    for (path, bytes) in entries {
+        let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+        w.start_file(path.as_str(), options).unwrap();
+        w.write_all(bytes).unwrap();
+    }
+    w.finish().unwrap().into_inner()
+}
+
+/// `posemfa fit poses.zip` fits what the folder of the same files fits (the page opens a .zip; so does the CLI
+/// now), and a zip bomb is refused by name.
+#[test]
+fn fit_reads_a_zip_as_the_folder_and_refuses_a_bomb() {
+    let root = std::env::temp_dir().join(format!("posemfa-cli-zip-{}", std::process::id()));
+    let dir = root.join("set");
+    let r = posemfa(&["generate", "arm", "--vertices", "600", "--poses", "5", "--out", dir.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let entries: Vec<(String, Vec<u8>)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|f| (format!("arm/{}", f.file_name().unwrap().to_str().unwrap()), std::fs::read(&f).unwrap()))
+        .collect();
+    let zip_path = root.join("arm.zip");
+    std::fs::write(&zip_path, zip_of(&entries)).unwrap();
+    let fit = |input: &std::path::Path| {
+        let json = root.join("fit.json");
+        let r = posemfa(&["fit", input.to_str().unwrap(), "--json", json.to_str().unwrap(), "--quiet"]);
+        assert!(r.status.success(), "fit {}: {}", input.display(), text(&r.stderr));
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (text(&r.stdout), v["labels"].clone(), v["rmse"].as_f64().unwrap())
+    };
+    let (_, labels, rmse) = fit(&dir);
+    let (out, zip_labels, zip_rmse) = fit(&zip_path);
+    assert!(out.contains("poses: 5 OBJ files; read from arm.zip (5 mesh files)"), "{out}");
+    assert_eq!(zip_labels, labels);
+    assert_eq!(zip_rmse, rmse);
+
+    // a bomb: 3 MiB of spaces (3 kB deflated) with the memory budget at 4 MiB (a zip may unpack to half)
+    let bomb = root.join("bomb.zip");
+    std::fs::write(&bomb, zip_of(&[("pose1.obj".into(), vec![b' '; 3 << 20])])).unwrap();
+    let r = Command::new(env!("CARGO_BIN_EXE_posemfa"))
+        .args(["fit", bomb.to_str().unwrap()])
+        .env("POSEMFA_MEMORY_BUDGET", "4M")
+        .output()
+        .unwrap();
+    assert_eq!(r.status.code(), Some(1));
+    assert_eq!(
+        text(&r.stderr),
+        "error: file bomb.zip: its mesh files unpack to 3.0 MiB (as the archive declares), more than the 2.0 MiB a \
+         zip archive may unpack to (half the memory budget); the archive is a zip bomb, or far larger than a pose \
+         population: unzip it and give the folder instead\n"
+    );
+    let _ = std::fs::remove_dir_all(&root);
 }
