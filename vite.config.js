@@ -17,10 +17,11 @@ export default defineConfig({
   // three.js alone is about 550 KB minified: one chunk is fine for a page loaded once from a local host.
   build: {
     outDir: 'dist', emptyOutDir: true, target: 'es2022', assetsInlineLimit: 0, chunkSizeWarningLimit: 1024,
-    // The page, the article (explain.html), the embedding demo (www/embed-demo.html), and www/mount.js as
+    // The page, the article (explain.html), the embedding demo (www/embed-demo.html), the example paper page
+    // (examples/paper-demo/, which embeds a model file), and www/mount.js as
     // dist/mount.js: a stable name with its exports kept, for other pages to import (mount(element, options)).
     rolldownOptions: {
-      input: { index: 'index.html', explain: 'explain.html', 'embed-demo': 'www/embed-demo.html', mount: 'www/mount.js' },
+      input: { index: 'index.html', explain: 'explain.html', 'embed-demo': 'www/embed-demo.html', 'paper-demo': 'examples/paper-demo/index.html', mount: 'www/mount.js' },
       preserveEntrySignatures: 'exports-only',
       output: { entryFileNames: (chunk) => (chunk.name === 'mount' ? 'mount.js' : 'assets/[name]-[hash].js') },
     },

@@ -233,3 +233,56 @@ pub fn check_pose_read(
         Err(e) => panic!("the reader of {name} returned a non-Obj error: {e:?}"),
     }
 }
+
+// ------------------------------------------------------------------------------------- model files
+
+/// The `model_file` target's check of one input: reading `data` as a model file never panics; an error names the
+/// file; a model read is usable (labels within its parts, every cut of its merge tree, every pose rebuilt, its
+/// figures measured on its population) and, saved again, reads back as the same model.
+pub fn check_model_file(data: &[u8]) {
+    use crate::model_file::{ModelFile, Summary};
+    let name = "fuzz.posemfa";
+    let saved = match ModelFile::from_bytes(name, data) {
+        Ok(m) => m,
+        Err(e) => {
+            assert!(e.to_string().contains(name), "an error that does not name the file: {e}");
+            return;
+        }
+    };
+    let r = &saved.result;
+    let m = &r.model;
+    let pop = &saved.population;
+    assert_eq!((m.n_vertices, m.n_shapes), (pop.n_vertices(), pop.n_shapes()));
+    assert!(m.labels.iter().all(|&l| (l as usize) < m.n_parts()));
+    if let Some(cuts) = r.tree_cuts() {
+        let (most, fewest) = cuts.counts();
+        for count in fewest..=most.min(fewest + 64) {
+            assert_eq!(cuts.labels(count).len(), m.n_vertices);
+        }
+    }
+    for i in 0..m.n_shapes {
+        assert_eq!(m.reconstruct(i).len(), m.n_vertices);
+    }
+    let _ = Summary::measure(pop, r);
+    let again = ModelFile::from_bytes(name, &saved.to_bytes(true)).expect("a model saved again reads back");
+    assert_eq!(again.result.model, saved.result.model);
+    assert_eq!(again.population, saved.population);
+}
+
+/// Small model files for the `model_file` target's seed corpus: fits of generated populations, saved with and
+/// without their poses.
+pub fn model_file_seeds() -> Vec<(String, Vec<u8>)> {
+    use crate::model_file::ModelFile;
+    use crate::synth::{generate, Preset, Spec};
+    let mut out = Vec::new();
+    for (preset, vertices, poses) in [(Preset::Snake, 160, 3), (Preset::Arm, 200, 4)] {
+        let spec = Spec { preset, vertices, poses, ..Default::default() };
+        let Ok(g) = generate(&spec) else { continue };
+        let params = Params { max_iter: 10, ..Params::default() };
+        let Ok(result) = crate::parts::hierarchy::fit(&g.population, &params, &mut |_| true) else { continue };
+        let saved = ModelFile::new(g.population, result, params);
+        out.push((format!("{}-with-poses.posemfa", preset.name()), saved.to_bytes(true)));
+        out.push((format!("{}-without-poses.posemfa", preset.name()), saved.to_bytes(false)));
+    }
+    out
+}

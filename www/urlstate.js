@@ -16,13 +16,14 @@
 //   a=I, b=J, t=0..1, side=0|1, skin=rigid|smooth, residual=0|1     interpolation
 //   cam=PX,PY,PZ,TX,TY,TZ      camera position and target (exact numbers)
 //   embed=1                    minimal view for an iframe (hides header, panel, toolbar, poses, interpolation
-//                              controls); hide=NAME,... hides more; show=NAME,... brings some back. Names:
-//                              header, panel, toolbar, modes, caption, poses, interp, info, presets, teach
+//                              controls, the pose panel: parts are still dragged on the mesh); hide=NAME,...
+//                              hides more; show=NAME,... brings some back. Names: header, panel, toolbar, modes,
+//                              caption, poses, interp, posepanel, info, presets, teach
 import './embed.css';
 import { state, subscribe } from './state.js';
 
-export const CONTROLS = ['header', 'panel', 'toolbar', 'modes', 'caption', 'poses', 'interp', 'info', 'presets', 'teach'];
-const EMBED_HIDES = ['header', 'panel', 'toolbar', 'poses', 'interp'];
+export const CONTROLS = ['header', 'panel', 'toolbar', 'modes', 'caption', 'poses', 'interp', 'posepanel', 'info', 'presets', 'teach'];
+const EMBED_HIDES = ['header', 'panel', 'toolbar', 'poses', 'interp', 'posepanel'];
 const MODES = ['parts', 'stages', 'recon', 'latent', 'interp', 'pose', 'truth'];
 const STAGES = ['coarse', 'refine', 'final', 'done'];
 const ORDER = ['ex', 'gen', 'src', 'parts', 'bones', 'seed', 'tol', 'floor', 'lambda', 'refine', 'cut', 'teach', 'stage', 'view', 'flat', 'pose', 'a', 'b', 't', 'side', 'skin', 'residual', 'cam', 'embed', 'hide', 'show'];

@@ -348,4 +348,11 @@ fn format_seeds(root: &Path) {
         "gen_corpus: {n_ply} ply_parse, {n_cache} point_cache, {n_gltf} gltf_read, {n_fbx} fbx_read, {n_usd} usd_read seeds in {}",
         root.display()
     );
+    // model files: small fits saved with and without their poses
+    let model_dir = dir("model_file");
+    let seeds = posemfa::fuzzing::model_file_seeds();
+    for (name, bytes) in &seeds {
+        write(&model_dir, name, bytes);
+    }
+    println!("gen_corpus: {} model_file seeds in {}", seeds.len(), root.display());
 }

@@ -189,3 +189,24 @@ test('a link to a second origin opens when the server allows it, and says which 
   assert.match(await q.page.locator('[data-testid=errors]').innerText(), /Access-Control-Allow-Origin/);
   await q.context.close();
 });
+
+test('the example paper page shows its three views of one model file', async () => {
+  const { page, log, context } = await session.open('examples/paper-demo/index.html');
+  const frames = await page.locator('iframe[data-view]').all();
+  assert.equal(frames.length, 3);
+  const views = [];
+  for (const f of frames) {
+    await f.scrollIntoViewIfNeeded();
+    const frame = await (await f.elementHandle()).contentFrame();
+    await frame.waitForFunction(() => document.body.dataset.state === 'fitted' && !window.posemfa.restoring(), null, { timeout: 120000 });
+    const [mode, opened, panelShown] = await frame.evaluate(() => [
+      window.posemfa.mode(), window.posemfa.summary().opened, getComputedStyle(document.getElementById('pose-panel')).display !== 'none',
+    ]);
+    assert.match(opened, /\.posemfa$/, 'opened from the model file, not fitted');
+    assert.equal(panelShown, false, 'the embed hides the pose panel: the mesh is dragged');
+    views.push(mode);
+  }
+  assert.deepEqual(views, ['parts', 'interp', 'pose']);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
