@@ -6,6 +6,9 @@
 #       (cargo install, 2 minutes on a quiet 2-core machine, 11 under load; only when `wasm-bindgen --version` differs)
 #   Debian chromium + chromium-driver (headless browser tests; skipped with --no-browser)
 #   node_modules from package-lock.json (npm ci, only when missing or when package*.json changed)
+#   .venv-fixtures: a Python venv with Pixar's usd-core (PyPI, pinned), with which tests/usd_real_size.rs writes
+#       real-sized USD files when it runs (only when missing or of another version; Debian's python3-venv first
+#       if `python3 -m venv` cannot make one)
 #
 # Nothing prompts: apt runs with DEBIAN_FRONTEND=noninteractive, every network step has a timeout.
 # Usage: scripts/setup.sh [--no-browser]
@@ -106,6 +109,35 @@ if [ "$browser" = 1 ]; then
   fi
 else
   step "chromium + chromedriver: skipped (--no-browser)"
+fi
+
+# ---------------------------------------------------------------- usd-core (test fixtures written at test time)
+# tests/usd_real_size.rs has usd-core write 30 k-vertex .usda / .usdc / .usdz files (17 MB, not committed) and
+# reads them; scripts/fixtures/make-usd-real-size.sh does the same by hand.
+usd_core=26.11
+venv=.venv-fixtures
+usd_core_version() {
+  "$venv/bin/python" -c 'import pxr, importlib.metadata as m; print(m.version("usd-core"))' 2>/dev/null || true
+}
+if [ "$(usd_core_version)" = "$usd_core" ]; then
+  step "usd-core $usd_core in $venv: present"
+else
+  step "usd-core $usd_core in $venv: installing (python3 -m venv, pip install usd-core==$usd_core, ~1 min)"
+  command -v python3 >/dev/null || apt_install python3 python3-venv
+  if ! python3 -m venv --clear "$venv" >/dev/null 2>&1; then
+    step "usd-core: python3 -m venv failed, installing Debian's python3-venv"
+    apt_install python3-venv
+    python3 -m venv --clear "$venv" || die "python3 -m venv $venv failed"
+  fi
+  ok=0
+  for attempt in 1 2; do
+    if timeout 900 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "usd-core==$usd_core" </dev/null; then
+      ok=1; break
+    fi
+    step "usd-core: attempt $attempt failed"
+  done
+  [ "$ok" = 1 ] || die "pip install usd-core==$usd_core into $venv failed"
+  [ "$(usd_core_version)" = "$usd_core" ] || die "$venv/bin/python cannot import pxr after installing usd-core"
 fi
 
 # ---------------------------------------------------------------- node_modules

@@ -66,7 +66,8 @@ fi
 # K ignored") and of node's test runner ("# pass N" / "ℹ pass N", "# skipped N").
 # A Rust test that needs ../shared (POSEMFA_SHARED) and finds it absent returns early, so cargo counts it as
 # passed; it prints "SKIPPED(needs ../shared): NAME" (tests/common/mod.rs, shared_dir), and each such line moves
-# one test from passed to skipped. Under CI=true those tests fail instead.
+# one test from passed to skipped; so does "SKIPPED(needs usd-core): NAME" (tests/usd_real_size.rs, without a
+# Python with usd-core: scripts/setup.sh makes .venv-fixtures). Under CI=true those tests fail instead.
 count() {
   awk '
     match($0, /test result: [A-Za-z]+\. [0-9]+ passed; [0-9]+ failed; [0-9]+ ignored/) {
@@ -75,7 +76,7 @@ count() {
     /^(# |ℹ )pass [0-9]+/ { p += $3 }
     /^(# |ℹ )fail [0-9]+/ { f += $3 }
     /^(# |ℹ )skipped [0-9]+/ { i += $3 }
-    /SKIPPED\(needs \.\.\/shared\): / { s += 1 }
+    /SKIPPED\(needs (\.\.\/shared|usd-core)\): / { s += 1 }
     END { print p - s, f + 0, i + s, s + 0 }
   ' "$1"
 }
@@ -106,13 +107,13 @@ run_stage() {
     exit 1
   fi
   if [ "$s" != 0 ] && [ "${CI:-}" = true ]; then
-    summary+=("$(printf '%-14s FAILED after %4d s: %d tests skipped for want of ../shared, and CI=true' "$name" "$dt" "$s")")
+    summary+=("$(printf '%-14s FAILED after %4d s: %d tests skipped for want of ../shared or usd-core, and CI=true' "$name" "$dt" "$s")")
     print_summary
-    printf '\n[test] FAILED at stage %s: ../shared (POSEMFA_SHARED) is absent in CI\n' "$name"
+    printf '\n[test] FAILED at stage %s: ../shared (POSEMFA_SHARED) or usd-core (scripts/setup.sh) is absent in CI\n' "$name"
     exit 1
   fi
   local note=
-  [ "$s" = 0 ] || note=" ($s need ../shared, absent: SKIPPED lines above)"
+  [ "$s" = 0 ] || note=" ($s need ../shared or usd-core, absent: SKIPPED lines above)"
   summary+=("$(printf '%-14s ok     %4d s: %d passed, %d failed, %d skipped%s' "$name" "$dt" "$p" "$f" "$i" "$note")")
 }
 
