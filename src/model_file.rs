@@ -111,9 +111,11 @@ impl ModelFile {
     }
 
     /// Puts the data of `pop` under a model read without it (or replaces it), after checking that `pop` is the
-    /// population the model was fitted to: the same vertex count, pose count and triangles.
+    /// population the model was fitted to: the same vertex count, pose count and triangles. The figures are
+    /// measured again, on these poses.
     pub fn with_population(mut self, file: &str, pop: Population) -> Result<ModelFile> {
         check_same_mesh(file, &self.population, &pop)?;
+        self.summary = Summary::measure(&pop, &self.result);
         self.population = pop;
         self.has_data = true;
         Ok(self)

@@ -412,7 +412,7 @@ impl Fitter {
 
     /// The result so far (final model when done; otherwise the best available).
     pub fn result(&self) -> FitModel {
-        let about = Rc::new(About { params: (*self.params).clone(), saved: None });
+        let about = Rc::new(About { params: (*self.params).clone(), saved: None, has_data: true });
         FitModel { result: Rc::new(self.pipe.result()), pop: self.pop.clone(), about }
     }
 }
@@ -425,11 +425,13 @@ pub struct FitModel {
     about: Rc<About>,
 }
 
-/// What a model was fitted with, and for one opened from a model file saved without its poses, the figures
-/// measured on them when it was saved (its population's poses are then the model's reconstructions).
+/// What a model was fitted with; for one opened from a model file, the figures measured on its poses when it was
+/// saved (shown as they are: the same numbers, not measured again), and whether the file held the poses (else
+/// its population's poses are the model's reconstructions).
 struct About {
     params: Params,
     saved: Option<crate::model_file::Summary>,
+    has_data: bool,
 }
 
 impl FitModel {
@@ -439,7 +441,7 @@ impl FitModel {
 
     /// Refuses `what` (a view of the data) for a model opened without its poses.
     fn needs_data(&self, what: &str) -> Result<(), JsValue> {
-        if self.about.saved.is_none() {
+        if self.about.has_data {
             return Ok(());
         }
         Err(js_err(format!(
@@ -558,7 +560,7 @@ impl FitModel {
         };
         let rmse = figures.rmse;
         let v = serde_json::json!({
-            "hasData": self.about.saved.is_none(),
+            "hasData": self.about.has_data,
             "shapes": m.n_shapes, "vertices": m.n_vertices, "parts": m.n_parts(),
             "partsFrom": if self.result.from_merge_tree { "merge tree" } else { "Algorithm 1" },
             "coarseParts": s.coarse_parts, "refinedParts": s.refined_parts,
@@ -611,7 +613,7 @@ impl FitModel {
             population: &self.pop,
             summary,
         };
-        Uint8Array::from(fit.to_bytes(with_poses && self.about.saved.is_none()).as_slice())
+        Uint8Array::from(fit.to_bytes(with_poses && self.about.has_data).as_slice())
     }
 
     /// The parameters of the fit, as a plain object (camelCase, as the Fitter takes them).
@@ -764,7 +766,7 @@ pub fn open_model(names: Vec<String>, files: Vec<Uint8Array>, animation: Option<
     }
     let has_data = saved.has_data;
     let pop = Rc::new(saved.population);
-    let about = Rc::new(About { params: saved.params, saved: (!has_data).then_some(saved.summary) });
+    let about = Rc::new(About { params: saved.params, saved: Some(saved.summary), has_data });
     let params = to_js(&about.params)?;
     let model = FitModel { result: Rc::new(saved.result), pop: pop.clone(), about };
     let obj = js_sys::Object::new();

@@ -26,12 +26,12 @@ pub fn run(o: Args) -> Result<(), String> {
         Some(_) => {
             let f = o.fit.fitted(o.run.quiet)?;
             let load_ms = posemfa::clock::now_ms() - t_load;
+            // the figures measured on the poses when it was saved (or now on the poses given with it)
             let saved = match f.saved_summary {
-                // the poses are the model's reconstructions: its figures are those measured when it was saved
-                Some(summary) if f.stand_in => {
-                    ModelFile { result: f.result, params: f.params, population: f.pop, has_data: false, summary }
+                Some(summary) => {
+                    ModelFile { result: f.result, params: f.params, population: f.pop, has_data: !f.stand_in, summary }
                 }
-                _ => ModelFile::new(f.pop, f.result, f.params),
+                None => ModelFile::new(f.pop, f.result, f.params),
             };
             (saved, f.truth, load_ms)
         }

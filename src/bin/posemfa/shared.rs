@@ -171,7 +171,7 @@ pub struct Fitted {
     /// The poses are the model's reconstructions, not data: a model file saved without its poses and no
     /// DIR_OR_FILES.
     pub stand_in: bool,
-    /// Read from --model: the figures measured on the poses when it was saved.
+    /// Read from --model: the figures measured on its poses (when it was saved, or now on DIR_OR_FILES).
     pub saved_summary: Option<posemfa::model_file::Summary>,
 }
 
