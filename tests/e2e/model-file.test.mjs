@@ -210,3 +210,29 @@ test('the example paper page shows its three views of one model file', async () 
   assert.deepEqual(log.errors, []);
   await context.close();
 });
+
+test('mount(element, { url }) opens a model file in an element of another page, and says why it cannot', async () => {
+  served.set('arm.posemfa', withPoses);
+  const base = `http://127.0.0.1:${other.address().port}`;
+  const { page, log, context } = await session.open('examples/paper-demo/index.html');
+  const result = await page.evaluate(async ([good, bad]) => {
+    const { mount } = await import('../../mount.js');
+    const a = document.createElement('div');
+    const b = document.createElement('div');
+    for (const d of [a, b]) { d.style.height = '240px'; document.body.append(d); }
+    const ok = mount(a, { url: good });
+    const summary = await ok.ready;
+    const refused = mount(b, { url: bad });
+    const error = await refused.ready.then(() => null, (e) => e.message);
+    return { opened: summary.opened, parts: summary.parts, state: a.dataset.state, caption: b.textContent, error, badState: b.dataset.state };
+  }, [`${base}/cors/arm.posemfa`, `${base}/plain/arm.posemfa`]);
+  assert.equal(result.opened, 'arm.posemfa');
+  assert.equal(result.parts, fitJson.parts.length);
+  assert.equal(result.state, 'fitted');
+  assert.equal(result.badState, 'error');
+  assert.match(result.error, /Access-Control-Allow-Origin/);
+  assert.match(result.caption, /Access-Control-Allow-Origin/);
+  // (the browser logs the refused fetch itself)
+  assert.deepEqual(log.errors.filter((e) => !/CORS policy|ERR_FAILED/.test(e)), []);
+  await context.close();
+});
