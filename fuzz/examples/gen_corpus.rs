@@ -239,7 +239,7 @@ fn format_seeds(root: &Path) {
         let spec = Spec { preset, vertices: 100, poses: 3, seed: 2, ..Spec::default() };
         let g = generate(&spec).expect("generate a small population").population;
         let shapes = g.shapes().map(|s| s.to_vec()).collect();
-        populations.push((format!("synth-{}", preset.name()), g.names, shapes, g.faces));
+        populations.push((format!("synth-{}", preset.name()), g.names, shapes, g.faces.to_vec()));
     }
     for (name, names, shapes, faces) in &populations {
         // ply: ASCII and binary little endian from posemfa's writer; big endian by hand below

@@ -19,7 +19,7 @@ pub fn check_population(pop: &Population) {
     let nv = pop.n_vertices();
     assert!(nv >= 1);
     assert!(!pop.faces.is_empty());
-    for f in &pop.faces {
+    for f in pop.faces.iter() {
         assert!(f.iter().all(|&v| (v as usize) < nv), "face {f:?} out of range for {nv} vertices");
     }
     let n = pop.normalization;
