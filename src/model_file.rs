@@ -865,6 +865,9 @@ fn decode(file: &str, h: Header, body: &[u8]) -> Result<ModelFile> {
     let decided_labels =
         a.has("decidedLabels").then(|| a.unsigned("decidedLabels", nv, nv, "the vertices")).transpose()?;
     let start_labels = a.has("startLabels").then(|| a.unsigned("startLabels", nv, nv, "the vertices")).transpose()?;
+    let latent_flat = a.f64s("latent", nv.checked_mul(3).unwrap_or(usize::MAX))?;
+    let latent: Vec<Vec3> = latent_flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    // (after the per-vertex arrays: they bound the vertex count by the body's bytes)
     let merge_tree = match h.fit.merge_tree {
         None if a.has("treeLeaves") => {
             return Err(field("fit.mergeTree", "null, yet the body has the tree's leaves".into()));
@@ -895,8 +898,6 @@ fn decode(file: &str, h: Header, body: &[u8]) -> Result<ModelFile> {
             Some(MergeTree::from_saved(leaves, t.n_leaves, merges, t.typical, t.middle))
         }
     };
-    let latent_flat = a.f64s("latent", nv.checked_mul(3).unwrap_or(usize::MAX))?;
-    let latent: Vec<Vec3> = latent_flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let per_part = ns * 13 + 4;
     let flat = a.f64s("parts", np.checked_mul(per_part).unwrap_or(usize::MAX))?;
     let mut parts = Vec::with_capacity(np);
