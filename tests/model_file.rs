@@ -186,6 +186,17 @@ dual_test! {
         let e = ModelFile::from_bytes("u.posemfa", &damaged).unwrap_err().to_string();
         assert!(e.contains("header field fit.colour: unknown field `colour`"), "{e}");
 
+        // counts far past what the body holds are refused before anything their size is made
+        let nv = pop.n_vertices();
+        let huge = with_header(&bytes, &text.replacen(&format!("\"vertices\":{nv},"), "\"vertices\":4000000000,", 1));
+        let e = ModelFile::from_bytes("h.posemfa", &huge).unwrap_err().to_string();
+        assert!(e.contains(&format!("array 'labels': {nv} elements where the header's counts call for 4000000000")), "{e}");
+        let at = text.find("\"nLeaves\":").expect("the header has the merge tree");
+        let end = at + 10 + text[at + 10..].find(',').unwrap();
+        let leaves = format!("{}\"nLeaves\":4000000000{}", &text[..at], &text[end..]);
+        let e = ModelFile::from_bytes("t.posemfa", &with_header(&bytes, &leaves)).unwrap_err().to_string();
+        assert!(e.contains("header field fit.mergeTree: 4000000000 leaves"), "{e}");
+
         // a label past the parts, in the body
         let saved = ModelFile::from_bytes("ok.posemfa", &bytes).unwrap();
         let mut bad = saved.clone();
