@@ -49,8 +49,13 @@ pub mod articulate;
 pub mod export;
 pub mod fuzzing;
 pub mod synth;
+pub mod trace;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
+
+/// The Python extension module (`pip install .`: pyproject.toml, python/posemfa/).
+#[cfg(feature = "python")]
+pub mod python;
 
 pub use error::{Error, Result};

@@ -657,3 +657,14 @@ fn fit_reads_a_zip_as_the_folder_and_refuses_a_bomb() {
     );
     let _ = std::fs::remove_dir_all(&root);
 }
+
+/// `--trace` prints what the fit's stages decided (the core's trace, `posemfa::trace`); without it, nothing.
+#[test]
+fn trace_prints_the_stages_decisions_only_when_asked() {
+    let out = posemfa(&["fit", "synth:arm:600:5", "--quiet", "--trace"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("trace: tree: ") && err.contains("patches, start at"), "{err}");
+    let quiet = posemfa(&["fit", "synth:arm:600:5", "--quiet"]);
+    assert!(!String::from_utf8_lossy(&quiet.stderr).contains("trace:"));
+}

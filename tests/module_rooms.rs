@@ -198,3 +198,27 @@ fn parts_modules_import_only_earlier_ones() {
         }
     }
 }
+
+/// The core never prints: what a fit has to say goes through its observer or the trace (`crate::trace`), which
+/// the CLI prints with `--trace`; a page has no stderr to read.
+#[test]
+fn the_model_and_the_part_rooms_do_not_print() {
+    for room in ["mfa", "parts"] {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(src().join(room))
+            .expect("the room exists")
+            .map(|e| e.expect("a directory entry").path())
+            .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+            .collect();
+        files.sort();
+        for f in files {
+            let code = code_only(&std::fs::read_to_string(&f).expect("readable"));
+            for word in ["eprintln!", "println!", "eprint!", "print!(", "dbg!"] {
+                assert!(
+                    !code.contains(word),
+                    "{} uses {word}: hand the line to crate::trace_line! instead",
+                    f.display()
+                );
+            }
+        }
+    }
+}

@@ -213,8 +213,8 @@ impl Fit {
         if ((ll - prev) / self.data.n_vertices as f64).abs() < self.tol && dropped == 0 {
             self.converged = true;
         }
-        if self.is_finished() && self.accelerate && std::env::var_os("POSEMFA_DEBUG").is_some() {
-            eprintln!(
+        if self.is_finished() && self.accelerate && crate::trace::enabled() {
+            crate::trace_line!(
                 "AECM finished after {} iterations; SQUAREM kept {} of {} extrapolations (step_max {})",
                 self.trace.len(),
                 self.extrapolations_kept,

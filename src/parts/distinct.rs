@@ -327,11 +327,11 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
             (f < 1.0).then_some(f)
         };
         let Some((k, f)) = order.clone().into_iter().find_map(|k| flesh(k).map(|x| (k, x))) else {
-            if std::env::var_os("POSEMFA_DEBUG").is_some() {
+            if crate::trace::enabled() {
                 for k in (0..model.n_parts()).filter(|&k| members[k].len() < 60) {
                     let r = blend_ratio(model, k, &sides[k], &refs);
                     let f = blend_fit_ratio(model, pop, k, &members[k], &sides[k]);
-                    eprintln!(
+                    crate::trace_line!(
                         "kept: part {k} ({} vertices) adjacent {:?} sides {:?} blend {r:.3} fit {f:.3}",
                         members[k].len(),
                         adjacent[k],
@@ -341,9 +341,9 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
             }
             return dissolved;
         };
-        if std::env::var_os("POSEMFA_DEBUG").is_some() {
+        if crate::trace::enabled() {
             let r = blend_ratio(model, k, &sides[k], &refs);
-            eprintln!(
+            crate::trace_line!(
                 "flesh: part {k} ({} vertices) dissolved, blend ratio {r:.3}, blend fit {f:.3}",
                 members[k].len()
             );

@@ -456,9 +456,13 @@ impl Pipeline {
             crate::mfa::aecm::check_population(data, 1, 1)?;
         }
         let coarse = on_coarse.then(|| super::coarse_mesh::CoarseMesh::build(pop, target));
-        if let Some(c) = coarse.as_ref().filter(|_| std::env::var_os("POSEMFA_DEBUG").is_some()) {
+        if let Some(c) = coarse.as_ref().filter(|_| crate::trace::enabled()) {
             let ms = crate::clock::now_ms() - t0;
-            eprintln!("coarse mesh: {} vertices, {} triangles ({ms:.1} ms)", c.pop.n_vertices(), c.pop.faces.len());
+            crate::trace_line!(
+                "coarse mesh: {} vertices, {} triangles ({ms:.1} ms)",
+                c.pop.n_vertices(),
+                c.pop.faces.len()
+            );
         }
         let work = coarse.as_ref().map_or_else(|| pop.clone(), |c| c.pop.clone());
         let data = Data::from_population(&work);
@@ -775,8 +779,8 @@ impl Pipeline {
             }
             let after = merged.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
             self.part_rounds.push(PartRound { parts: before + dissolved, dissolved, after });
-            if std::env::var_os("POSEMFA_DEBUG").is_some() {
-                eprintln!(
+            if crate::trace::enabled() {
+                crate::trace_line!(
                     "part rule, round {}: {dissolved} parts dissolved as flesh, merges {before} -> {after} parts",
                     self.decide_rounds
                 );
@@ -1037,8 +1041,8 @@ impl Pipeline {
             let before: f64 = b.worst.1.iter().map(|x| x * x).sum();
             before / residual_ss(&done, &b.worst.0).max(f64::MIN_POSITIVE)
         });
-        if std::env::var_os("POSEMFA_DEBUG").is_some() {
-            eprintln!(
+        if crate::trace::enabled() {
+            crate::trace_line!(
                 "refine part {} ({} vertices) m_k={} err={:.3e} split_gain={split_gain:.2} died={died} iterations={} retry={}",
                 r.part,
                 r.members[r.part].len(),
@@ -1240,8 +1244,8 @@ fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32
     // and the floor as the yardstick merged the generated hand's fingertips before the AECM
     let t0 = crate::clock::now_ms();
     let mut tree = super::merge_tree::MergeTree::build(pop, PATCH_VARIANCE_FLOOR);
-    if std::env::var_os("POSEMFA_DEBUG").is_some() {
-        eprintln!("tree built ({:.1} ms)", crate::clock::now_ms() - t0);
+    if crate::trace::enabled() {
+        crate::trace_line!("tree built ({:.1} ms)", crate::clock::now_ms() - t0);
     }
     let exact = params.target_parts.is_some();
     let ratio = if exact { TREE_COUNT_START_RATIO } else { TREE_START_RATIO };
@@ -1254,8 +1258,8 @@ fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32
     let cut = tree.labels_at(start);
     let most = start.max(params.target_parts.unwrap_or(0));
     crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
-    if std::env::var_os("POSEMFA_DEBUG").is_some() {
-        eprintln!("tree: {} patches, start at {start} parts", tree.n_leaves);
+    if crate::trace::enabled() {
+        crate::trace_line!("tree: {} patches, start at {start} parts", tree.n_leaves);
     }
     // (uncut, the start's parts are single patches of about 6 vertices, too few to tell a slice of a band from a
     // part of its own: on the skinned characters the flesh rule there moved the parts' agreement with the
@@ -1280,8 +1284,8 @@ fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &
     if dissolved > 0 {
         super::islands::connect_parts(&mut model, pop, false, params.min_part_vertices);
     }
-    if std::env::var_os("POSEMFA_DEBUG").is_some() {
-        eprintln!(
+    if crate::trace::enabled() {
+        crate::trace_line!(
             "start: {dissolved} parts dissolved as flesh before the first AECM ({:.1} ms)",
             crate::clock::now_ms() - t0
         );

@@ -222,8 +222,8 @@ pub fn connect_parts(model: &mut Model, pop: &Population, new_parts: bool, min_v
         model.parts[from as usize].weight = w * a / (a + b);
         model.parts.push(c);
     }
-    if std::env::var_os("POSEMFA_DEBUG").is_some() {
-        eprintln!(
+    if crate::trace::enabled() {
+        crate::trace_line!(
             "islands: {} before, {} after, {} vertices moved, {} new parts",
             repair.before,
             repair.after,

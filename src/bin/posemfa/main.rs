@@ -72,6 +72,10 @@ fn about() -> String {
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print the fit's trace to stderr: what each stage decided (the coarse mesh, the merge tree's patches, each
+    /// round of the part rule, each refinement trial, SQUAREM's extrapolations)
+    #[arg(long, global = true)]
+    trace: bool,
 }
 
 /// Every subcommand, in the order `posemfa help` lists them.
@@ -103,6 +107,9 @@ fn main() -> ExitCode {
             return if e.use_stderr() { ExitCode::FAILURE } else { ExitCode::SUCCESS };
         }
     };
+    if cli.trace {
+        posemfa::trace::set_sink(Some(Box::new(|line: &str| eprintln!("trace: {line}"))));
+    }
     let res = match cli.command {
         Command::Inspect(a) => inspect::run(a),
         Command::Fit(a) => fit::run(a),
