@@ -6,6 +6,8 @@
 #       (cargo install, 2 minutes on a quiet 2-core machine, 11 under load; only when `wasm-bindgen --version` differs)
 #   Debian chromium + chromium-driver (headless browser tests; skipped with --no-browser)
 #   node_modules from package-lock.json (npm ci, only when missing or when package*.json changed)
+#   .venv-python: a Python venv with maturin, numpy, pytest and trimesh (the Python package's test stage), and
+#       Debian's blender + python3-numpy (the Blender add-on's test), each only when missing
 #   .venv-fixtures: a Python venv with Pixar's usd-core (PyPI, pinned), with which tests/usd_real_size.rs writes
 #       real-sized USD files when it runs (only when missing or of another version; Debian's python3-venv first
 #       if `python3 -m venv` cannot make one)
@@ -138,6 +140,43 @@ else
   done
   [ "$ok" = 1 ] || die "pip install usd-core==$usd_core into $venv failed"
   [ "$(usd_core_version)" = "$usd_core" ] || die "$venv/bin/python cannot import pxr after installing usd-core"
+fi
+
+# ---------------------------------------------------------------- the Python package and Blender (test stage python)
+# .venv-python: maturin (builds the wheel from pyproject.toml), numpy, pytest, trimesh (docs/python.md's example);
+# scripts/test.sh python installs the package into it. Debian's blender + python3-numpy for the add-on's test
+# (tests/python/test_blender.py; about 3 minutes to install, only when missing).
+pyvenv=.venv-python
+py_tools_ok() {
+  "$pyvenv/bin/python" -c 'import maturin, numpy, pytest, trimesh' 2>/dev/null
+}
+if py_tools_ok; then
+  step "python tools in $pyvenv (maturin, numpy, pytest, trimesh): present"
+else
+  step "python tools in $pyvenv: installing (python3 -m venv, pip install maturin numpy pytest trimesh, ~1 min)"
+  if ! python3 -m venv --clear "$pyvenv" >/dev/null 2>&1; then
+    step "python: python3 -m venv failed, installing Debian's python3-venv"
+    apt_install python3-venv
+    python3 -m venv --clear "$pyvenv" || die "python3 -m venv $pyvenv failed"
+  fi
+  ok=0
+  for attempt in 1 2; do
+    if timeout 900 "$pyvenv/bin/python" -m pip install --quiet --disable-pip-version-check \
+      maturin numpy pytest trimesh </dev/null; then
+      ok=1; break
+    fi
+    step "python tools: attempt $attempt failed"
+  done
+  [ "$ok" = 1 ] || die "pip install maturin numpy pytest trimesh into $pyvenv failed"
+  py_tools_ok || die "$pyvenv/bin/python cannot import maturin, numpy, pytest and trimesh after installing them"
+fi
+
+if command -v blender >/dev/null && dpkg -s python3-numpy >/dev/null 2>&1; then
+  step "blender + python3-numpy: present"
+else
+  step "blender + python3-numpy: installing (apt-get install blender python3-numpy, ~3 min)"
+  apt_install blender python3-numpy
+  command -v blender >/dev/null || die "blender not on PATH after apt"
 fi
 
 # ---------------------------------------------------------------- node_modules

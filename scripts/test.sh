@@ -4,11 +4,13 @@
 #   2. wasm-node     cargo test --target wasm32-unknown-unknown --lib --test '*'   (wasm-bindgen-test-runner, Node)
 #   3. wasm-chromium the same in headless Chromium (WASM_BINDGEN_USE_BROWSER=1, /usr/bin/chromedriver)
 #   4. page          build:wasm + vite build into dist/ + the debug CLI, then `node --test tests/e2e/*.test.mjs`
+#   5. python        the release CLI + `pip install .` (the wheel, into .venv-python), then pytest tests/python:
+#                    the Python package against the CLI, and the Blender add-on in headless Blender
 # Needs what scripts/setup.sh installs.
 # Every stage has a time limit of about 3-4x what it takes on a quiet 2-core machine (native 6 min, wasm-node
-# 9, wasm-chromium 3, page build 3, page tests 7.5; each page test at most 4 min), so that a hang fails that
+# 9, wasm-chromium 3, page build 3, page tests 7.5, python build 25 and tests 25; each page test at most 4 min), so that a hang fails that
 # stage with its name well inside CI's 90 minutes instead of running out the clock.
-# Usage: scripts/test.sh [STAGE...]   (default: all four; e.g. `npm test -- wasm-chromium page` for a subset)
+# Usage: scripts/test.sh [STAGE...]   (default: all five; e.g. `npm test -- wasm-chromium page` for a subset)
 #
 # For the page tests (stage 4) this script serves dist/ with `vite preview` and exports:
 #   POSEMFA_URL              http://127.0.0.1:PORT/ (the built page)
@@ -26,7 +28,7 @@ export NO_COLOR=1
 # (580 MB of target/debug/incremental).
 export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 
-all_stages=(native wasm-node wasm-chromium page)
+all_stages=(native wasm-node wasm-chromium page python)
 stages=("$@")
 [ "${#stages[@]}" -gt 0 ] || stages=("${all_stages[@]}")
 for s in "${stages[@]}"; do
@@ -77,6 +79,15 @@ count() {
     /^(# |ℹ )fail [0-9]+/ { f += $3 }
     /^(# |ℹ )skipped [0-9]+/ { i += $3 }
     /SKIPPED\(needs (\.\.\/shared|usd-core)\): / { s += 1 }
+    # pytest (stage python): "==== 31 passed, 2 skipped in 95.1s ===="
+    /^=+ .*[0-9]+ (passed|failed|skipped|error).* in [0-9.]+s/ {
+      n = split($0, w, /[ ,]+/)
+      for (k = 2; k <= n; k++) {
+        if (w[k] == "passed") p += w[k - 1]
+        if (w[k] == "failed" || w[k] == "error" || w[k] == "errors") f += w[k - 1]
+        if (w[k] == "skipped") i += w[k - 1]
+      }
+    }
     END { print p - s, f + 0, i + s, s + 0 }
   ' "$1"
 }
@@ -207,6 +218,28 @@ if want page; then
       timeout 1200 node --test --test-concurrency=1 --test-timeout=240000 "${e2e[@]}"
     kill "$server_pid" 2>/dev/null || true; wait "$server_pid" 2>/dev/null || true; server_pid=
   fi
+fi
+
+# ------------------------------------------------------------------ 5. python
+# The release CLI (the tests compare with it), the package built by maturin from pyproject.toml (profile python,
+# target/python/) and installed into .venv-python (scripts/setup.sh), then pytest: tests/python/ (the API, bad
+# input, horse-poses against the CLI, trimesh, the Blender add-on in headless Blender).
+if want python; then
+  banner python "release CLI + pip install . (.venv-python), then pytest tests/python"
+  t0=$(date +%s)
+  [ -x .venv-python/bin/python ] || { echo "[test] .venv-python missing: run npm run setup"; exit 1; }
+  if ! { timeout 1500 cargo build --quiet --release --bin posemfa \
+    && timeout 1500 env PATH="$root/.venv-python/bin:$PATH" .venv-python/bin/python -m pip install --quiet \
+      --disable-pip-version-check --no-build-isolation --force-reinstall --no-deps . </dev/null; }; then
+    summary+=("$(printf '%-14s FAILED after %4d s: the release CLI or pip install .' python-build "$(( $(date +%s) - t0 ))")")
+    print_summary
+    printf '\n[test] FAILED at stage python: cargo build --release --bin posemfa or pip install .\n'
+    exit 1
+  fi
+  summary+=("$(printf '%-14s ok     %4d s: release CLI + wheel installed' python-build "$(( $(date +%s) - t0 ))")")
+  run_stage python "pytest tests/python (the package, the Blender add-on)" \
+    timeout 1500 env POSEMFA_CLI="$root/target/release/posemfa" \
+    .venv-python/bin/python -m pytest -p no:cacheprovider -ra -v tests/python
 fi
 
 print_summary
