@@ -3,7 +3,8 @@
 #
 #   blender -b --factory-startup [--python scripts/fixtures/skinned_character.py] \
 #       --python tests/python/blender_check.py -- [OUT_FOR_SKINNED] --zip ADDON.zip --out DIR \
-#       --scene shapekeys:POSES_DIR | skinned | still  [--bones N] [--influences K] [--render PNG]
+#       --scene shapekeys:POSES_DIR | skinned | still  [--bones N] [--influences K] [--joints fixed|free]
+#       [--residual] [--render PNG]
 #
 # DIR/frames/frame-NNN.obj  the frames the add-on read (exact: float32 written shortest-exact), for rig-report
 # DIR/result.json           e_rms_blender (the armature's playback with the original deformation muted, against
@@ -26,6 +27,7 @@ def opt(name, default=None):
 
 zip_path, out, scene_arg = opt("--zip"), opt("--out"), opt("--scene")
 bones, influences, render = int(opt("--bones", "0")), int(opt("--influences", "4")), opt("--render")
+joints, residual = opt("--joints", "fixed"), "--residual" in args
 os.makedirs(os.path.join(out, "frames"), exist_ok=True)
 
 
@@ -114,7 +116,8 @@ for k, f in enumerate(frames):
         fh.write("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in points[k].tolist()))
         fh.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in tris.tolist()))
 
-ret = bpy.ops.posemfa.learn_rig(bones=bones, influences=influences, weights="fitted")
+ret = bpy.ops.posemfa.learn_rig(bones=bones, influences=influences, weights="fitted", joints=joints,
+                                residual=residual)
 assert ret == {"FINISHED"}, ret
 arm = next(o for o in bpy.data.objects if o.name.endswith("posemfa rig"))
 e_blender, played = addon.play_error(bpy.context, ob, frames, points)

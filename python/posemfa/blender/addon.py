@@ -240,6 +240,7 @@ class Job:
             for i, f in enumerate(frames):
                 kb = obj.shape_key_add(name=f"posemfa residual {f}", from_mix=False)
                 kb.data.foreach_set("co", (rest + rig.morphs[i]).astype(np.float32).ravel())
+                kb.relative_key = bind_key  # adds the displacement to the bind positions, not to the basis
                 fc = kact.fcurves.new(f'key_blocks["{kb.name}"].value')
                 fc.keyframe_points.add(len(x))
                 fc.keyframe_points.foreach_set("co", np.column_stack([x, rig.morph_weights[:, i]]).ravel())
