@@ -802,6 +802,27 @@ pub fn form_params(base: JsValue, fields: JsValue, vertices: Option<u32>) -> Res
     to_js(&v)
 }
 
+/// The rig panel's fields as typed (an object of text values: influences), each checked by the core
+/// (`RigRequest::with_fields`): {problems: []} or {problems: [{field, message}]}, one per field that cannot be
+/// used, naming what was typed and what is allowed.
+#[wasm_bindgen(js_name = rigFields)]
+pub fn rig_fields(fields: JsValue) -> Result<JsValue, JsValue> {
+    let fields: std::collections::BTreeMap<String, String> = descriptor(fields, "rig fields")?;
+    let pairs: Vec<(&str, &str)> = fields.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+    let v = match crate::export::rig_report::RigRequest::default().with_fields(&pairs) {
+        Ok(_) => serde_json::json!({ "problems": [] }),
+        Err(problems) => serde_json::json!({ "problems": problems }),
+    };
+    to_js(&v)
+}
+
+/// The verdict's threshold (`parts::diagnosis::MIN_EXPLAINED`): the least fraction of the motion that rigid
+/// parts explain for "articulated", which the page and the article print.
+#[wasm_bindgen(js_name = minExplained)]
+pub fn min_explained() -> f64 {
+    crate::parts::diagnosis::MIN_EXPLAINED
+}
+
 /// The default fit parameters as a plain object (camelCase fields of `Params`), for the page's form.
 #[wasm_bindgen(js_name = defaultParams)]
 pub fn default_params() -> Result<JsValue, JsValue> {
@@ -980,7 +1001,8 @@ impl FitModel {
     /// `posemfa rig-report` measures it (`export::rig_report::export_rig`). `opts`: {weights: "rigid" | "smooth" |
     /// "fitted", influences: 1..8, joints: "free" | "fixed", morphs: "none" | "residual", bindPose}; missing fields
     /// take defaults (bindPose: the pose named reference, else the first). Returns {glb: Uint8Array, bones, eRms,
-    /// maxError, maxErrorOverDiagonal, diagonal, poseErms: Float64Array, rigMs, writeMs, evaluateMs}.
+    /// maxError, maxErrorOverDiagonal, diagonal, poseErms: Float64Array, clips: [names of the file's animation clips],
+    /// rigMs, writeMs, evaluateMs}.
     pub fn rig(&self, opts: JsValue) -> Result<JsValue, JsValue> {
         self.needs_data("the rig (its weights are fitted and its error measured on the poses)")?;
         let req: crate::export::rig_report::RigRequest = from_js(opts, "rig options")?;
@@ -992,6 +1014,7 @@ impl FitModel {
         let per_pose: Vec<f64> = r.error.poses.iter().map(|p| p.e_rms).collect();
         set("glb", &Uint8Array::from(r.glb.as_slice()).into())?;
         set("bones", &JsValue::from(r.bones as u32))?;
+        set("clips", &to_js(&r.clips)?)?;
         set("eRms", &JsValue::from(r.error.e_rms))?;
         set("maxError", &JsValue::from(r.error.max_error))?;
         set("maxErrorOverDiagonal", &JsValue::from(r.error.max_error_over_diagonal))?;
@@ -1169,6 +1192,19 @@ impl WasmPoser {
     #[wasm_bindgen(js_name = trainingAngles)]
     pub fn training_angles(&self) -> Float64Array {
         Float64Array::from(self.inner.training_angles().as_slice())
+    }
+
+    /// Bone k in every training pose, degrees from the rest pose: {joint: at its joint, relative to its parent
+    /// (as `angles`), whole: the bone's own rotation, the turns of the bones carrying it included}.
+    #[wasm_bindgen(js_name = trainingAnglesOf)]
+    pub fn training_angles_of(&self, k: usize) -> Result<JsValue, JsValue> {
+        let (joint, whole) = self.inner.training_angles_of(k)?;
+        let obj = js_sys::Object::new();
+        js_sys::Reflect::set(&obj, &"joint".into(), &Float64Array::from(joint.as_slice()).into())
+            .map_err(|_| js_err("reflect"))?;
+        js_sys::Reflect::set(&obj, &"whole".into(), &Float64Array::from(whole.as_slice()).into())
+            .map_err(|_| js_err("reflect"))?;
+        Ok(obj.into())
     }
 
     /// Bone k's joint in the current pose (3 numbers, unit box).

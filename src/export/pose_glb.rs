@@ -512,6 +512,19 @@ impl Poser {
         most
     }
 
+    /// Bone k in every training pose, degrees from the rest pose: at its joint (its rotation relative to its
+    /// parent's, what [`Poser::angles`] and [`Poser::training_angles`] give; the root's own) and as a whole (its
+    /// own rotation, which includes every turn of the bones that carry it, the whole body's too).
+    pub fn training_angles_of(&self, k: usize) -> Result<(Vec<f64>, Vec<f64>)> {
+        if k >= self.rig.rig.n_bones() {
+            return Err(Error::Request(format!("no bone {k} ({} bones)", self.rig.rig.n_bones())));
+        }
+        let joint = self.training.iter().map(|pose| self.angles_of(pose)[k]).collect();
+        let whole =
+            self.training.iter().map(|pose| crate::geometry::rotation::angle(&pose[k].rotation).to_degrees()).collect();
+        Ok((joint, whole))
+    }
+
     /// Where bone k's joint is in the current pose (its parent carries it; the root's: itself).
     pub fn joint_position(&self, k: usize) -> Result<Vec3> {
         let r = &self.rig.rig;

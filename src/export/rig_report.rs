@@ -158,7 +158,36 @@ pub struct RigRequest {
     pub bind_pose: Option<usize>,
 }
 
+/// What the rig panel's Influences field allows, in its messages.
+pub const INFLUENCES_ALLOWED: &str = "a whole number from 1 to 8 (the most bones that move one vertex)";
+
 impl RigRequest {
+    /// The rig panel's fields as typed (`influences`: text), each checked against what it allows: the request,
+    /// or one problem per field that cannot be used (its name, what was typed, what is allowed: no parser's
+    /// words). An empty field is "empty", not 0.
+    pub fn with_fields(
+        &self,
+        fields: &[(&str, &str)],
+    ) -> std::result::Result<RigRequest, Vec<crate::mfa::params::FieldProblem>> {
+        let mut r = self.clone();
+        let mut problems = Vec::new();
+        for &(name, text) in fields {
+            let got = match name {
+                "influences" => influences_field(text).map(|n| r.influences = Some(n)),
+                _ => Err(format!("is not a field of the rig panel (influences is)")),
+            };
+            if let Err(message) = got {
+                let field = if name == "influences" { "influences" } else { "unknown" };
+                problems.push(crate::mfa::params::FieldProblem { field, message });
+            }
+        }
+        if problems.is_empty() {
+            Ok(r)
+        } else {
+            Err(problems)
+        }
+    }
+
     /// The export options for `pop`, validated.
     pub fn options(&self, pop: &Population) -> Result<GltfOptions> {
         let d = GltfOptions::default();
@@ -175,6 +204,23 @@ impl RigRequest {
     }
 }
 
+/// The Influences field's text as a count: 1 to 8 ([`INFLUENCES_ALLOWED`]), or why not, naming what was typed.
+pub fn influences_field(text: &str) -> std::result::Result<usize, String> {
+    let t = text.trim();
+    let allowed = INFLUENCES_ALLOWED;
+    if t.is_empty() {
+        return Err(format!("is empty: it must be {allowed}"));
+    }
+    match t.parse::<f64>() {
+        Ok(x) if x.is_finite() && x.fract() == 0.0 && (1.0..=8.0).contains(&x) => Ok(x as usize),
+        Ok(x) if x.is_finite() && x.fract() == 0.0 && x < 1.0 => {
+            Err(format!("'{t}' is less than 1: it must be {allowed}"))
+        }
+        Ok(x) if x.is_finite() && x.fract() == 0.0 => Err(format!("'{t}' is more than 8: it must be {allowed}")),
+        _ => Err(format!("'{t}' is not a whole number: it must be {allowed}")),
+    }
+}
+
 /// A written rig and its error measured on the file.
 #[derive(Debug, Clone)]
 pub struct RigExport {
@@ -182,6 +228,9 @@ pub struct RigExport {
     pub error: RigError,
     /// Joints of the file's skin.
     pub bones: usize,
+    /// The file's animation clips by name: `training poses`, and `interpolated` when the rig moves its parts
+    /// by the fit's own motions (rigid or smooth weights with free joints: [`super::gltf`]).
+    pub clips: Vec<String>,
     /// Milliseconds: building the rig (weights, bones), writing the .glb, playing and measuring it.
     pub rig_ms: f64,
     pub write_ms: f64,
@@ -206,8 +255,36 @@ pub fn export_rig(art: &Articulation, pop: &Population, opts: &GltfOptions) -> R
         glb,
         error,
         bones: played.joint_parent.len(),
+        clips: played.clips,
         rig_ms: t1 - t,
         write_ms: t2 - t1,
         evaluate_ms: t3 - t2,
     })
+}
+
+#[cfg(test)]
+mod field_tests {
+    use super::*;
+
+    #[test]
+    fn influences_field_names_what_was_typed_and_what_is_allowed() {
+        assert_eq!(influences_field(" 3 "), Ok(3));
+        assert_eq!(influences_field("8"), Ok(8));
+        for (text, says) in [
+            ("", "is empty"),
+            ("0", "less than 1"),
+            ("-3", "less than 1"),
+            ("99", "more than 8"),
+            ("2.5", "not a whole number"),
+            ("x", "not a whole number"),
+        ] {
+            let m = influences_field(text).unwrap_err();
+            assert!(m.contains(says) && m.contains("1 to 8"), "{text:?}: {m}");
+            assert!(!m.contains("usize") && !m.contains("column"), "{m}");
+        }
+        let bad = RigRequest::default().with_fields(&[("influences", "")]).unwrap_err();
+        assert_eq!(bad[0].field, "influences");
+        assert!(!bad[0].message.contains("= 0"), "{}", bad[0].message);
+        assert_eq!(RigRequest::default().with_fields(&[("influences", "2")]).unwrap().influences, Some(2));
+    }
 }

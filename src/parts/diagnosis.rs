@@ -5,9 +5,10 @@
 //! The figure is how much of the motion the rigid parts explain: with RMSE_1 the error of the best single rigid
 //! motion of the whole shape (generalised Procrustes) and RMSE_K the fitted model's, the explained fraction of
 //! the non-rigid motion is 1 - (RMSE_K / RMSE_1)². Articulated shapes, whose parts move rigidly up to a little
-//! flesh at the joints, measure 0.99 and above (generated creatures 0.999, horse-poses 0.996, horse-gallop 0.990);
-//! a smoothly bending blob 0.9 or less, however many parts it is cut into. The verdict is "articulated" from
-//! [`MIN_EXPLAINED`] up, with at least two parts.
+//! flesh at the joints, measure 0.99 and above at the part rule's count (generated creatures 0.999, horse-poses
+//! 0.996, horse-gallop 0.990); a smoothly bending blob 0.9 or less, however many parts it is cut into. The verdict
+//! is "articulated" from [`MIN_EXPLAINED`] (97.5 %) up, with at least two parts: the one threshold the page, the
+//! article and the CLI print (the page and the article read it from the core, wasm `minExplained`).
 
 use super::hierarchy::FitResult;
 use crate::mesh::Population;
@@ -17,6 +18,22 @@ use serde::Serialize;
 
 /// Least explained fraction of the motion for "articulated".
 pub const MIN_EXPLAINED: f64 = 0.975;
+
+/// `x` (a fraction) as a percentage beside the threshold [`MIN_EXPLAINED`]: one decimal, or as many more (up to
+/// four) as it takes for a figure below the threshold not to print as the threshold or above ("97.46 %", not
+/// "97.5 %" beside "articulated shapes measure 97.5 % and more").
+pub fn percent_against_threshold(x: f64) -> String {
+    let x = x.max(0.0);
+    let limit = 100.0 * MIN_EXPLAINED;
+    for digits in 1..=4 {
+        let shown = format!("{:.*}", digits, 100.0 * x);
+        if x >= MIN_EXPLAINED || shown.parse::<f64>().is_ok_and(|v| v < limit) {
+            return format!("{shown} %");
+        }
+    }
+    // closer than 0.00005 % below: shown truncated, so that it still reads below
+    format!("{:.4} %", (1e6 * x).floor() / 1e4)
+}
 
 /// Below this single-body RMSE (unit-box units) the poses differ by one rigid motion only.
 pub const RIGID_RMSE: f64 = 1e-4;
@@ -79,16 +96,16 @@ pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     let asked = diagnose(pop, &result.model);
     if result.count_unjudged && !asked.articulated && asked.single_body_rmse >= RIGID_RMSE {
         let reason = format!(
-            "{} rigid part{} (a count the part rule did not judge) explain {:.1} % of the motion that one rigid \
-             body leaves (RMSE {:.2e} down to {:.2e}; articulated shapes measure {:.1} % and more): too few parts may \
-             be all that is wrong. Fit with the part rule on (\"Refine the parts\" on and \"Parts in the end\" auto, the \
-             defaults) for a verdict",
+            "{} rigid part{} (a count the part rule did not judge) explain {} of the motion that one rigid \
+             body leaves (RMSE {:.2e} down to {:.2e}), less than the {} that articulated shapes measure: too few \
+             parts may be all that is wrong. Fit with the part rule on (\"Refine the parts\" on and \"Parts in the \
+             end\" auto, the defaults) for a verdict",
             asked.parts,
             if asked.parts == 1 { "" } else { "s" },
-            100.0 * asked.explained.max(0.0),
+            percent_against_threshold(asked.explained),
             asked.single_body_rmse,
             asked.parts_rmse,
-            100.0 * MIN_EXPLAINED
+            percent_against_threshold(MIN_EXPLAINED)
         );
         return Diagnosis { undecided: true, reason, ..asked };
     }
@@ -104,15 +121,17 @@ pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     if asked.articulated || n < 2 || explained < MIN_EXPLAINED {
         return asked;
     }
+    // (the count shown leads: the headline reads "Articulated: the 12 parts shown ...", never another count)
     let reason = format!(
-        "{n} rigid parts (what the part rule decided in this fit, before the count was made exact: with a count \
-         asked for, the fit starts from another cut of the merge tree and the rule decides once, so auto can \
-         decide another count) explain {:.1} % of the motion that one rigid body leaves (RMSE \
-         {single:.2e} down to {rmse:.2e}); the {} parts asked for explain {:.1} % (RMSE {:.2e})",
-        100.0 * explained,
+        "the {} parts shown (the count asked for) explain {} of the motion that one rigid body leaves (RMSE \
+         {single:.2e} down to {:.2e}); the population is articulated all the same: the {n} rigid parts the part \
+         rule decided in this fit, before the count was made exact, explain {} (RMSE {rmse:.2e}; articulated \
+         shapes measure {} and more)",
         asked.parts,
-        100.0 * asked.explained.max(0.0),
-        asked.parts_rmse
+        percent_against_threshold(asked.explained),
+        asked.parts_rmse,
+        percent_against_threshold(explained),
+        percent_against_threshold(MIN_EXPLAINED)
     );
     Diagnosis { articulated: true, reason, ..asked }
 }
@@ -133,15 +152,17 @@ pub fn diagnose(pop: &Population, model: &Model) -> Diagnosis {
     let parts_rmse = model.rmse(pop);
     let parts = model.n_parts();
     let explained = if single > 0.0 { 1.0 - (parts_rmse / single).powi(2) } else { 1.0 };
-    let pct = |x: f64| format!("{:.1} %", 100.0 * x);
+    let pct = percent_against_threshold;
     let (articulated, reason) = if single < RIGID_RMSE {
         (false, format!("the poses differ by one rigid motion only (RMSE {single:.1e} of the unit box): there is nothing to articulate"))
     } else if parts >= 2 && explained >= MIN_EXPLAINED {
         (
             true,
             format!(
-                "{parts} rigid parts explain {} of the motion that one rigid body leaves (RMSE {single:.2e} down to {parts_rmse:.2e})",
-                pct(explained)
+                "{parts} rigid parts explain {} of the motion that one rigid body leaves (RMSE {single:.2e} down to {parts_rmse:.2e}; \
+                 articulated shapes measure {} and more)",
+                pct(explained),
+                pct(MIN_EXPLAINED)
             ),
         )
     } else {
@@ -152,7 +173,7 @@ pub fn diagnose(pop: &Population, model: &Model) -> Diagnosis {
                  {parts_rmse:.2e}; articulated shapes measure {} and more): this population deforms smoothly rather than moving \
                  part by part. Use a deformation model instead (e.g. PCA of the vertex positions, or linear blend skinning with \
                  many bones)",
-                pct(explained.max(0.0)),
+                pct(explained),
                 if parts == 1 { "" } else { "s" },
                 pct(MIN_EXPLAINED)
             ),
@@ -273,5 +294,17 @@ mod tests {
         let d = diagnose(&pop, &r.model);
         assert!(!d.articulated && d.single_body_rmse < RIGID_RMSE, "{d:?}");
         assert!(d.reason.contains("one rigid motion"), "{}", d.reason);
+    }
+
+    #[test]
+    fn a_figure_below_the_threshold_never_prints_as_the_threshold() {
+        assert_eq!(percent_against_threshold(MIN_EXPLAINED), "97.5 %");
+        assert_eq!(percent_against_threshold(0.97496), "97.496 %");
+        assert_eq!(percent_against_threshold(0.9749), "97.49 %");
+        assert_eq!(percent_against_threshold(0.9712), "97.1 %");
+        assert_eq!(percent_against_threshold(0.99951), "100.0 %");
+        assert_eq!(percent_against_threshold(-0.3), "0.0 %");
+        let close = percent_against_threshold(MIN_EXPLAINED - 1e-9);
+        assert!(close.trim_end_matches(" %").parse::<f64>().unwrap() < 97.5, "{close}");
     }
 }
