@@ -8,6 +8,7 @@
 import katex from 'katex';
 import 'katex/dist/katex.min.css';
 import { FIGURES } from './figures.js';
+import { thresholdText } from './article-threshold.js';
 
 // In slices of a few equations, so that the figures' first messages are not held up behind all of them.
 async function typeset() {
@@ -34,7 +35,37 @@ async function typeset() {
     }
     if (i % 8 === 7) await new Promise((r) => setTimeout(r, 0));
   }
+  fitEquations();
+  window.addEventListener('resize', () => fitEquations());
   document.body.dataset.typeset = 'done';
+}
+
+// A displayed equation wider than the column (a phone): set a little smaller, down to 72 % of its size; one
+// still too wide is set at 90 % and scrolls sideways, and says so: a fade at the edge it continues past and a "scroll" hint under
+// it, gone once it is scrolled to its end (data-fit: "fits", "smaller", "scrolls").
+const SIZES = [1, 0.9, 0.8, 0.72];
+function fitEquations() {
+  for (const block of document.querySelectorAll('.tex-block')) {
+    const eq = block.querySelector('.eq');
+    if (!eq) continue;
+    let size = SIZES[0];
+    for (size of SIZES) {
+      eq.style.fontSize = size === 1 ? '' : `${size}em`;
+      if (eq.scrollWidth <= eq.clientWidth + 1) break;
+    }
+    const scrolls = eq.scrollWidth > eq.clientWidth + 1;
+    // one that scrolls anyway is not also made hard to read: a little smaller only
+    if (scrolls) eq.style.fontSize = `${SIZES[1]}em`;
+    block.dataset.fit = scrolls ? 'scrolls' : size === 1 ? 'fits' : 'smaller';
+    block.classList.toggle('scrolls', scrolls);
+    let hint = block.querySelector('.eq-hint');
+    if (scrolls && !hint) {
+      hint = Object.assign(document.createElement('span'), { className: 'eq-hint', textContent: 'scroll sideways for the rest →' });
+      block.append(hint);
+      eq.addEventListener('scroll', () => block.classList.toggle('at-end', eq.scrollLeft + eq.clientWidth >= eq.scrollWidth - 2), { passive: true });
+    }
+    if (!scrolls) hint?.remove();
+  }
 }
 
 /** Builds the article's figures on `pool` (www/explain/pool.js). */
@@ -50,6 +81,10 @@ export function start(pool) {
     figures.push(make({ el, index, pool }));
   });
   for (const out of document.querySelectorAll('[data-out=pool]')) out.textContent = String(pool.size);
+  // the verdict's threshold as the core has it (src/parts/diagnosis.rs MIN_EXPLAINED), the app's figure too
+  pool.ready.then((info) => {
+    for (const out of document.querySelectorAll('[data-out=min-explained]')) out.textContent = thresholdText(info.minExplained);
+  });
   typeset();
 
   // Scrolling a figure into view starts its live part (a run, an animation); scrolling away pauses it. A

@@ -5,6 +5,7 @@ import { Figure, Ticker, ARM, SYNTH, EXACT, LITERAL } from './figure.js';
 import { Chart } from './chart.js';
 import { paletteColours } from '../colors.js';
 import { tiedText } from '../ground-truth.js';
+import { thresholdText } from './article-threshold.js';
 
 // ------------------------------------------------------------------ 8. interpolation against linear blending
 
@@ -137,7 +138,7 @@ export class Limit extends Figure {
     const s = this.v.model.summary;
     if (this.name === 'blob') {
       const d = s.diagnosis;
-      return `${s.parts} part${s.parts === 1 ? '' : 's'}, RMSE ${s.rmse.toExponential(2)} (unit box): ${d.undecided ? 'too few parts for a verdict' : d.articulated ? 'articulated' : 'not articulated'}, rigid parts explain ${(100 * Math.max(d.explained, 0)).toFixed(1)} % of the motion (articulated shapes: 99 % and more).`;
+      return `${s.parts} part${s.parts === 1 ? '' : 's'}, RMSE ${s.rmse.toExponential(2)} (unit box): ${d.undecided ? 'too few parts for a verdict' : d.articulated ? 'articulated' : 'not articulated'}, rigid parts explain ${(100 * Math.max(d.explained, 0)).toFixed(1)} % of the motion (articulated shapes: ${thresholdText(this.pool.info?.minExplained)} and more, the verdict's threshold).`;
     }
     const { partNames } = this.v.pop.truth;
     // the tied legs as the core measured them (posemfa::metrics::TiedParts), in the app's words

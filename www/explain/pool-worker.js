@@ -222,7 +222,7 @@ class Session {
 const sessions = new Map();
 
 const ready = init({ module_or_path: wasmUrl }).then(
-  () => self.postMessage({ type: 'pool-ready', defaults: wasm.defaultParams(), examples: wasm.examples() }),
+  () => self.postMessage({ type: 'pool-ready', defaults: wasm.defaultParams(), examples: wasm.examples(), minExplained: wasm.minExplained() }),
   (e) => self.postMessage({ type: 'pool-fatal', message: `the wasm module failed to load: ${e.message ?? e}` }),
 );
 

@@ -40,7 +40,7 @@ export class Pool {
         entry.up = true;
         entry.upAt = performance.now();
         if (!this.info) {
-          this.info = { defaults: data.defaults, examples: data.examples };
+          this.info = { defaults: data.defaults, examples: data.examples, minExplained: data.minExplained };
           this.resolveReady(this.info);
         }
         this.schedule();

@@ -39,13 +39,15 @@ export function drawPartCurve(canvas, curve, { ratio = null, applied = true } = 
     ? `part rule, last round: ${merges} merge${merges === 1 ? '' : 's'}, ${curve[0].parts} → ${kept} part${kept === 1 ? '' : 's'}`
     : `part rule on the refined parts, not applied: ${merges} merge${merges === 1 ? '' : 's'} would make ${curve[0].parts} → ${kept}`;
   canvas.dataset.title = title;
-  let top = 20;
-  if (g.measureText(`${title} (${next})`).width + 4 <= w) label(`${title} (${next})`, 4, 12);
-  else {
-    label(title, 4, 12);
-    label(`(${next})`, 4, 25);
-    top = 33;
+  // the title and what the next pair scored, on as many lines as the width takes (words kept whole)
+  const lines = [];
+  for (const word of `${title} (${next})`.split(' ')) {
+    const last = lines.length ? `${lines[lines.length - 1]} ${word}` : word;
+    if (lines.length && g.measureText(last).width + 4 <= w) lines[lines.length - 1] = last;
+    else lines.push(word);
   }
+  lines.forEach((t, i) => label(t, 4, 12 + 13 * i));
+  let top = 20 + 13 * (lines.length - 1);
   canvas.dataset.clipped = String(clipped);
   const pts = curve.filter((p) => Number.isFinite(p.score) && p.score > 0);
   Object.assign(canvas.dataset, { points: String(pts.length), axisLo: '', axisHi: '', ratio: '', note: '' });
@@ -60,9 +62,17 @@ export function drawPartCurve(canvas, curve, { ratio = null, applied = true } = 
   const x1 = Math.max(...xs) + 0.5;
   const loText = decade(lo);
   const hiText = decade(hi);
-  const left = Math.max(g.measureText(loText).width, g.measureText(hiText).width) + 6;
+  // the y axis's title: what the score is and its unit (a ratio: the rise in squared error a shared motion
+  // costs, in multiples of a typical part's own)
+  const yTitle = 'pair score (× part error)';
+  const titleRoom = 0;
+  // (the y axis's title over it, left, the x axis's under it, right)
+  label(`↑ ${yTitle}`, 2, top + 2);
+  top += 12;
+  const left = titleRoom + Math.max(g.measureText(loText).width, g.measureText(hiText).width) + 6;
   const right = w - 6;
-  const bottom = h - 14;
+  // (under the axis: the x axis's title, and under it a one-decision chart's note)
+  const bottom = pts.length === 1 ? h - 27 : h - 14;
   const x = (n) => left + ((right - left) * (n - x0)) / (x1 - x0);
   const y = (v) => bottom - ((bottom - top) * (v - lo)) / (hi - lo);
   g.strokeStyle = style.color;
@@ -72,10 +82,11 @@ export function drawPartCurve(canvas, curve, { ratio = null, applied = true } = 
   g.lineTo(right, bottom);
   g.stroke();
   g.globalAlpha = 1;
-  label(hiText, 2, top + 4);
-  label(loText, 2, bottom);
-  Object.assign(canvas.dataset, { axisLo: loText, axisHi: hiText, ratio: line === null ? '' : String(ratio) });
-  label('parts →', w - g.measureText('parts →').width - 2, h - 2);
+  label(hiText, titleRoom + 2, top + 4);
+  label(loText, titleRoom + 2, bottom);
+  const xTitle = 'parts before each merge →';
+  Object.assign(canvas.dataset, { axisLo: loText, axisHi: hiText, ratio: line === null ? '' : String(ratio), yTitle, xTitle });
+  label(xTitle, w - g.measureText(xTitle).width - 2, bottom + 12);
   if (line !== null) {
     // the distinct ratio: a pair scoring below it is merged
     g.save();

@@ -137,6 +137,7 @@ function showResult() {
   const curve = s?.partCurve ?? [];
   $('part-curve').hidden = curve.length === 0;
   $('part-curve-note').hidden = curve.length === 0;
+  $('part-curve-legend').hidden = curve.length === 0;
   $('part-curve-note').textContent = curve.length ? curveNote(s) : '';
   // the line the scores were compared with: the distinct ratio of the fit's parameters (the form never changes it)
   drawPartCurve($('part-curve'), curve, { ratio: state.baseParams?.distinctRatio ?? null, applied: !refinedParts(s) });
