@@ -377,6 +377,7 @@ const QUERIES = {
 // Questions that need no population: the fit form's fields checked by the core.
 const FREE_QUERIES = {
   formParams: (base, fields, vertices) => wasm.formParams(base, fields, vertices ?? undefined),
+  rigFields: (fields) => wasm.rigFields(fields),
 };
 
 function query({ id, method, args }) {

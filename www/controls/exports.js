@@ -34,18 +34,63 @@ function showButtons() {
   $('export-gltf').title = partial ? `the rig of ${PARTIAL}` : TITLES['export-gltf'];
 }
 
-/** The rig options of the export panel ({weights, influences, joints, morphs}: src/export/rig_report.rs). */
-export function rigOptions() {
-  const f = $('rig').elements;
-  return { weights: f.weights.value, influences: Number(f.influences.value), joints: f.joints.value, morphs: f.morphs.value };
+// What each weights choice means (the rig panel's note under its fields): rigid weights put every vertex on one
+// bone, so Influences does not apply to them (the field is greyed).
+const WEIGHTS_NOTE = {
+  rigid: 'Rigid: every vertex moves with one bone, its part\'s (Influences does not apply).',
+  smooth: 'Smooth: vertices near a joint blend its two bones, at most Influences bones per vertex.',
+  fitted: 'Fitted: weights fitted to the poses, at most Influences bones per vertex.',
+};
+function showWeights() {
+  const rigid = $('rig').elements.weights.value === 'rigid';
+  $('rig').elements.influences.disabled = rigid;
+  $('rig-weights-note').textContent = WEIGHTS_NOTE[$('rig').elements.weights.value] ?? '';
+  if (rigid) showFieldProblem(null);
 }
+
+// The Influences field's problem beside it (null: none), in the core's words (wasm rigFields).
+function showFieldProblem(message) {
+  const input = $('rig').elements.influences;
+  const box = $('rig-influences-problem');
+  box.hidden = !message;
+  box.textContent = message ? `Influences ${message}.` : '';
+  if (message) input.setAttribute('aria-invalid', 'true');
+  else input.removeAttribute('aria-invalid');
+}
+
+/** The rig options of the export panel ({weights, influences, joints, morphs}: src/export/rig_report.rs), the
+ * Influences field checked by the core as typed; null when it cannot be used (said beside the field, which gets
+ * the focus). Rigid weights leave it out (one bone per vertex). */
+export async function rigOptions({ show = true } = {}) {
+  const f = $('rig').elements;
+  const opts = { weights: f.weights.value, joints: f.joints.value, morphs: f.morphs.value };
+  if (opts.weights === 'rigid') return opts;
+  const { problems } = await query('rigFields', { influences: f.influences.value });
+  showFieldProblem(problems[0]?.message ?? null);
+  if (problems.length) {
+    if (!show) return null; // (checked as it is typed: said beside the field, where the person is)
+    f.influences.focus({ preventScroll: true });
+    $('rig-influences-problem').scrollIntoView({ block: 'center' });
+    return null;
+  }
+  return { ...opts, influences: Number(f.influences.value.trim()) };
+}
+
+// What the file's clips are (the core lists them: rig.clips), for the line beside its E_RMS.
+const CLIPS = {
+  'training poses': '“training poses”, one key per pose',
+  interpolated: '“interpolated”, the fit\'s own part-wise interpolation through the poses in order (written for rigid and smooth weights with free joints)',
+};
 
 function showRig(r, opts) {
   const out = $('rig-erms');
   // E_RMS (www/erms.js) beside the fit's own figure in the same measure (its rigid parts alone: what rigid weights play)
   const own = state.model?.summary?.eRms;
   const fit = Number.isFinite(own) ? `; the fit's rigid parts alone: ${eRmsText(own)}` : '';
-  out.textContent = `${eRmsText(r.eRms)} (${ERMS_UNIT}; ${r.bones} bones, ${opts.influences} influences; max error ${percentText(r.maxErrorOverDiagonal)} % of the diagonal${fit})`;
+  const per = opts.weights === 'rigid' ? 'one bone per vertex (rigid)' : `at most ${opts.influences} bone${opts.influences === 1 ? '' : 's'} per vertex`;
+  const clips = r.clips ? `; ${r.clips.length} clip${r.clips.length === 1 ? '' : 's'}: ${r.clips.map((c) => CLIPS[c] ?? `“${c}”`).join('; ')}` : '';
+  out.textContent = `${eRmsText(r.eRms)} (${ERMS_UNIT}; ${r.bones} bones, ${per}; max error ${percentText(r.maxErrorOverDiagonal)} % of the diagonal${fit}${clips})`;
+  out.dataset.clips = (r.clips ?? []).join('|');
   out.dataset.erms = String(r.eRms);
   out.dataset.bones = String(r.bones);
   out.dataset.ms = String(r.rigMs + r.writeMs + r.evaluateMs);
@@ -90,9 +135,21 @@ export function installExports() {
   // The rig as chosen in the panel, built, written and measured by the core (the same as `posemfa export-gltf` and
   // `posemfa rig-report`); its E_RMS is shown with the file.
   $('export-gltf').addEventListener('click', orReport(async () => {
-    const opts = rigOptions();
+    const opts = await rigOptions();
+    if (!opts) {
+      // refused at the field (said beside it): nothing is being made
+      $('rig-erms').textContent = '– (no file: see Influences above)';
+      delete $('rig-erms').dataset.erms;
+      return;
+    }
     $('rig-erms').textContent = '…';
-    const r = await query('rig', opts);
+    let r;
+    try {
+      r = await query('rig', opts);
+    } catch (e) {
+      $('rig-erms').textContent = '– (the export failed: see the message at the top of the panel)';
+      throw e;
+    }
     showRig(r, opts);
     const extras = `${opts.joints === 'fixed' ? '-fixed-joints' : ''}${opts.morphs !== 'none' ? `-${opts.morphs}-morphs` : ''}`;
     download(`posemfa-${populationStem()}-rig-${opts.weights}-${r.bones}bones${extras}.glb`, r.glb, 'model/gltf-binary');
@@ -106,7 +163,11 @@ export function installExports() {
   $('rig').addEventListener('change', () => {
     $('rig-erms').textContent = '–';
     delete $('rig-erms').dataset.erms;
+    showWeights();
   });
+  // a value typed is checked as it is typed, beside the field (the glTF button checks it again)
+  $('rig').elements.influences.addEventListener('input', () => { rigOptions({ show: false }).catch(() => {}); });
+  showWeights();
   subscribe((s, changed) => {
     if (changed.has('pop') || changed.has('model') || changed.has('phase') || changed.has('shown')) showButtons();
     if (changed.has('model')) {
