@@ -8,6 +8,7 @@ import { paletteColours } from './colors.js';
 import { checkedParams, fillParams, resetForNewPopulation } from './controls/form.js';
 import { showProblems, note } from './problems.js';
 import { fetchSource } from './fetch-source.js';
+import { ask } from './ask.js';
 
 const GREY = 0.78;
 const LIVE_MS = 250; // the mesh is recoloured at most this often while a fit runs
@@ -207,7 +208,14 @@ function onLoaded(pop, fitId) {
 export async function startFit({ startLabels = null } = {}) {
   if (!state.pop) return;
   const teaching = state.teach !== null && state.fitId === state.teach.id;
-  if (teaching && !window.confirm(`Fit starts a new fit and drops the step-by-step fit at iteration ${state.teach.iteration}. Drop it?`)) return;
+  // asked in the page, under the Fit button (teach.js asks the same way before a finished fit is dropped)
+  if (teaching) {
+    const at = state.teach.iteration;
+    const yes = await ask(document.getElementById('fit').parentElement, `Fit starts a new fit and drops the step-by-step fit at iteration ${at}. Drop it?`, {
+      yes: 'Drop it and fit', no: 'Keep the step-by-step fit', kept: `Kept the step-by-step fit at iteration ${at}: no new fit was started.`,
+    });
+    if (!yes || !(state.teach !== null && state.fitId === state.teach.id)) return;
+  }
   // the last fit's failure goes as a new one is asked for (a field refused now is said under the form)
   showProblems([]);
   const checked = await checkedParams({ vertices: state.pop.nVertices });

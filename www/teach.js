@@ -12,6 +12,7 @@ import { renderView } from './views/render.js';
 import { plot } from './views/viewer-instance.js';
 import { showStep, stageText, FINISHING } from './views/result.js';
 import { showProblems } from './problems.js';
+import { ask } from './ask.js';
 
 const OUTSIDE = [0.86, 0.87, 0.89]; // vertices outside the part being refined
 const STAGES = ['coarse', 'refine', 'final', 'done'];
@@ -41,8 +42,17 @@ export async function teach(type, { count = 1 } = {}) {
     return;
   }
   // (a finished model shown while a new Fit runs is dropped as well: asked too)
-  if (state.model && !active()
-    && !window.confirm(`${BUTTON[type]} starts a new step-by-step fit and drops the finished one (${state.model.summary.parts} parts, its exports and views). Drop it?`)) return;
+  // Asked in the page, under the buttons (never the browser's confirm box: a suppressed or unanswered one left
+  // Step and Run looking dead); No leaves a line saying the finished fit was kept.
+  if (state.model && !active()) {
+    const parts = state.model.summary.parts;
+    const yes = await ask($('teach-buttons'), `${BUTTON[type]} starts a new step-by-step fit and drops the finished one (${parts} parts, its exports and views). Drop it?`, {
+      yes: `Drop it and ${BUTTON[type].toLowerCase()}`,
+      no: 'Keep the finished fit',
+      kept: `Kept the finished fit (${parts} parts): no step-by-step fit was started. Press ${BUTTON[type]} again to start one.`,
+    });
+    if (!yes || !state.model || active()) return;
+  }
   // A new teaching fit: the current model (and any fit in progress) gives way to it.
   const params = await checkedParams();
   if (!params || !state.pop) return; // the form names the field it cannot use

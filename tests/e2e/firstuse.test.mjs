@@ -5,7 +5,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { pageSession, waitState, tubePopulation, asPayload, openCancelledFirstFit } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload, openCancelledFirstFit, answerQuestions, askedQuestions } from './helpers.mjs';
 
 const session = pageSession();
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
@@ -351,15 +351,16 @@ test('OBJ export: both meshes where two are shown, named for what they are; Stag
 test('step by step: Reset asks before it drops a finished fit; the state follows; the Stage field and the note say the same part', async () => {
   const { page, context, log } = await fitted('#ex=arm');
   const parts = await text(page, '[data-testid=parts-count]');
-  await page.click('#teach-reset'); // the test's dialog handler dismisses the question
+  await answerQuestions(page, false);
+  await page.click('#teach-reset'); // answered No in the page
   await page.waitForTimeout(300);
-  assert.equal(log.dialogs.length, 1, 'Reset asked');
-  assert.match(log.dialogs[0], /drops the finished one/);
+  assert.equal((await askedQuestions(page)).length, 1, 'Reset asked');
+  assert.match((await askedQuestions(page))[0], /drops the finished one/);
   assert.equal(await text(page, '[data-testid=parts-count]'), parts, 'dismissed: the fit is kept');
   assert.equal(await page.isDisabled('#export-json'), false);
   assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
   // accepted: a new step-by-step fit, paused at iteration 0, and the page says it is paused, not fitting
-  await page.evaluate(() => { window.confirm = () => true; });
+  await answerQuestions(page, true);
   await page.click('#teach-reset');
   await page.waitForFunction(() => window.posemfa.teaching().active);
   assert.equal(await page.evaluate(() => document.body.dataset.state), 'paused');

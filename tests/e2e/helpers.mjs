@@ -312,3 +312,25 @@ export function debugCli() {
   execFileSync('cargo', ['build', '--quiet', '--bin', 'posemfa'], { cwd: ROOT, stdio: 'inherit' });
   return join(ROOT, 'target', 'debug', 'posemfa');
 }
+
+/** From now on answers every question the page asks in itself (www/ask.js: Step / Run / Reset before they drop a
+ * finished fit, Fit before it drops a step-by-step one) yes or no, as openPage's dialog handler does for the
+ * browser's boxes; `askedQuestions(page)` lists the questions asked since. */
+export async function answerQuestions(page, yes) {
+  await page.evaluate((yes) => {
+    window.__asked ??= [];
+    window.__askObserver?.disconnect();
+    const answer = () => {
+      for (const box of document.querySelectorAll('[data-testid=ask][role=alertdialog]')) {
+        if (box.dataset.answered) continue;
+        box.dataset.answered = '1';
+        window.__asked.push(box.getAttribute('aria-label'));
+        box.querySelector(yes ? '[data-testid=ask-yes]' : '[data-testid=ask-no]').click();
+      }
+    };
+    window.__askObserver = new MutationObserver(answer);
+    window.__askObserver.observe(document.body, { childList: true, subtree: true });
+    answer();
+  }, yes);
+}
+export const askedQuestions = (page) => page.evaluate(() => window.__asked ?? []);

@@ -7,7 +7,7 @@ import assert from 'node:assert/strict';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
 import { readFile } from 'node:fs/promises';
-import { pageSession, waitState, canvasFingerprint, ROOT } from './helpers.mjs';
+import { pageSession, waitState, canvasFingerprint, ROOT, answerQuestions, askedQuestions } from './helpers.mjs';
 
 const session = pageSession();
 
@@ -108,7 +108,7 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
   const { page, context, log } = await fitted();
   const reference = coreSteps('quadruped', 5);
   assert.equal(await page.evaluate(() => window.posemfa.teaching().active), false);
-  log.acceptDialogs = true; // the first Step drops the fit the page opened with: yes
+  await answerQuestions(page, true); // the first Step drops the fit the page opened with: yes (asked in the page)
 
   const split = []; // vertices with no part above γ = 0.9 after each step, and how many are shown blended
   for (let k = 1; k <= 5; k++) {
@@ -117,7 +117,7 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
     const t = await teaching(page);
     split.push(t.soft);
     assert.equal(t.iteration, k, 'one Step, one iteration');
-    if (k === 1) assert.match(log.dialogs.join('\n'), /^Step starts a new step-by-step fit and drops the finished one/);
+    if (k === 1) assert.match((await askedQuestions(page)).join('\n'), /^Step starts a new step-by-step fit and drops the finished one/);
     assert.equal(await page.locator('[data-testid=teach-iteration]').innerText(), String(k));
     assert.equal(t.points, k);
     assert.equal(await page.evaluate(() => window.posemfa.plotPoints()), k);
@@ -130,7 +130,8 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
   assert.deepEqual(t.logLikelihood, reference.map((p) => p.logLikelihood));
   assert.deepEqual(reference.map((p) => p.totalIterations), [1, 2, 3, 4, 5]);
   for (let i = 1; i < 5; i++) assert.ok(t.logLikelihood[i] >= t.logLikelihood[i - 1], `exact AECM never lowers the log-likelihood: ${t.logLikelihood}`);
-  assert.equal(log.dialogs.length, 1, 'only the Step that dropped the finished fit asked: the next ones go on with the teaching fit');
+  assert.deepEqual(log.dialogs, [], 'no browser dialog');
+  assert.equal((await askedQuestions(page)).length, 1, 'only the Step that dropped the finished fit asked: the next ones go on with the teaching fit');
   assert.match(await page.locator('#teach-stages li.current').innerText(), /coarse/);
   assert.match(await page.locator('#teach-eq').innerText(), /eqs 13–14[\s\S]*eq 12[\s\S]*Λ[\s\S]*eq 19[\s\S]*eq 31[\s\S]*eq 16[\s\S]*eq 12/);
 
@@ -176,12 +177,15 @@ test('Step and Run after a finished fit ask before they drop it; dismissed, the 
   const { page, context, log } = await fitted('#ex=arm');
   const before = await summary(page);
   const fits = await page.evaluate(() => window.posemfa.fitCount());
+  await answerQuestions(page, false);
   for (const [sel, name] of [['[data-testid=teach-step]', 'Step'], ['#teach-run', 'Run']]) {
-    const asked = log.dialogs.length;
-    await page.click(sel); // the test's dialog handler dismisses the question
-    for (let i = 0; i < 100 && log.dialogs.length === asked; i++) await page.waitForTimeout(20);
-    assert.equal(log.dialogs.length, asked + 1, `${name} asked`);
-    assert.match(log.dialogs[asked], new RegExp(`^${name} starts a new step-by-step fit and drops the finished one \\(${before.parts} parts, its exports and views\\)`));
+    const asked = (await askedQuestions(page)).length;
+    await page.click(sel); // answered No in the page
+    for (let i = 0; i < 100 && (await askedQuestions(page)).length === asked; i++) await page.waitForTimeout(20);
+    assert.equal((await askedQuestions(page)).length, asked + 1, `${name} asked`);
+    // the No is seen: a line says the finished fit was kept
+    assert.match(await page.locator('[data-testid=ask].kept').innerText(), new RegExp(`^Kept the finished fit \\(${before.parts} parts\\): no step-by-step fit was started. Press ${name} again`));
+    assert.match((await askedQuestions(page))[asked], new RegExp(`^${name} starts a new step-by-step fit and drops the finished one \\(${before.parts} parts, its exports and views\\)`));
     await page.waitForTimeout(300);
     // nothing changed: the same model, its part count, its exports, no teaching fit
     assert.equal(await page.locator('[data-testid=parts-count]').innerText(), String(before.parts));
@@ -198,9 +202,10 @@ test('Step and Run after a finished fit ask before they drop it; dismissed, the 
   assert.equal(model.labels.length, before.vertices);
   assert.equal(new Set(model.labels).size, before.parts);
   // accepted, Step drops it: a teaching fit at iteration 1, no model
-  log.acceptDialogs = true;
+  await answerQuestions(page, true);
   await step(page);
-  assert.equal(log.dialogs.length, 3);
+  assert.equal((await askedQuestions(page)).length, 3);
+  assert.deepEqual(log.dialogs, [], 'no browser dialog');
   assert.equal((await teaching(page)).iteration, 1);
   assert.equal(await page.isDisabled('#export-json'), true, 'the dropped fit has no export');
   assert.deepEqual(log.errors, []);
@@ -218,7 +223,7 @@ test('Fit asks before it drops a paused step-by-step fit; accepted, or with a ne
   const { page, context, log } = await fitted('#ex=arm');
   const opened = await panel(page);
   assert.deepEqual(opened, { iteration: '0', current: [], note: '' }, 'no step-by-step fit yet: nothing marked');
-  log.acceptDialogs = true; // the first Step drops the finished fit
+  await answerQuestions(page, true); // the first Step drops the finished fit
   for (let k = 0; k < 3; k++) await step(page);
   await frames(page);
   const paused = await panel(page);
@@ -228,11 +233,11 @@ test('Fit asks before it drops a paused step-by-step fit; accepted, or with a ne
   assert.equal(await page.evaluate(() => document.body.dataset.state), 'paused');
   const fits = await page.evaluate(() => window.posemfa.fitCount());
   // dismissed: nothing changes, the step-by-step fit stays where it was
-  log.acceptDialogs = false;
-  const asked = log.dialogs.length;
+  await answerQuestions(page, false);
+  const asked = (await askedQuestions(page)).length;
   await page.click('#fit');
-  for (let i = 0; i < 100 && log.dialogs.length === asked; i++) await page.waitForTimeout(20);
-  assert.equal(log.dialogs[asked], 'Fit starts a new fit and drops the step-by-step fit at iteration 3. Drop it?');
+  for (let i = 0; i < 100 && (await askedQuestions(page)).length === asked; i++) await page.waitForTimeout(20);
+  assert.equal((await askedQuestions(page))[asked], 'Fit starts a new fit and drops the step-by-step fit at iteration 3. Drop it?');
   await page.waitForTimeout(300);
   assert.deepEqual(await panel(page), paused);
   const kept = await teaching(page);
@@ -242,13 +247,13 @@ test('Fit asks before it drops a paused step-by-step fit; accepted, or with a ne
   await step(page); // and it goes on
   assert.equal((await teaching(page)).iteration, 4);
   // accepted: the new fit runs, the panel is back to how it opened
-  log.acceptDialogs = true;
+  await answerQuestions(page, true);
   await page.click('#fit');
   await page.waitForFunction(() => !window.posemfa.teaching().active);
   assert.deepEqual(await panel(page), opened);
   assert.equal(await waitState(page, ['fitted', 'error'], 60000), 'fitted');
   assert.deepEqual(await panel(page), opened, 'the finished fit brings no step-by-step stage back');
-  assert.equal(log.dialogs.length, asked + 2);
+  assert.equal((await askedQuestions(page)).length, asked + 2);
   // a new population drops a paused step-by-step fit too (the worker lets it go with the population)
   await step(page);
   await step(page);
@@ -265,7 +270,7 @@ test('Fit asks before it drops a paused step-by-step fit; accepted, or with a ne
 
 test('the literal eq 18 preset shows the log-likelihood dropping while stepping', async () => {
   const { page, context, log } = await fitted('#ex=literal-eq18');
-  log.acceptDialogs = true; // Step drops the example's finished fit
+  await answerQuestions(page, true); // Step drops the example's finished fit
   assert.equal(await page.locator('#params [name=paperLambda]').isChecked(), true);
   assert.equal(await page.locator('#teach-eq-lambda-paper').isVisible(), true);
   assert.equal(await page.locator('#teach-eq-lambda-exact').isVisible(), false);
@@ -359,7 +364,7 @@ test('the state in the URL round-trips: a shared link restores the same view', a
 
 test('a shared teaching link opens on the same step and stage', async () => {
   const a = await fitted('#ex=arm');
-  a.log.acceptDialogs = true; // the first Step drops the finished fit
+  await answerQuestions(a.page, true); // the first Step drops the finished fit
   for (let k = 0; k < 7; k++) await step(a.page);
   await a.page.waitForFunction(() => /[#&]teach=7&stage=\w+/.test(location.hash), null, { timeout: 10000 });
   const ta = await teaching(a.page);
@@ -413,7 +418,7 @@ test('"Parts in the end" (targetParts) is in the link: bones=N restores it, auto
 
 test('the teaching panel never shows "undefined", through every stage of Algorithm 1', async () => {
   const { page, context, log } = await fitted('#ex=arm');
-  log.acceptDialogs = true; // Run drops the finished fit
+  await answerQuestions(page, true); // Run drops the finished fit
   // Every text the panel shows while a teaching run goes from the coarse stage to done.
   await page.evaluate(() => {
     const panel = document.getElementById('teach');
