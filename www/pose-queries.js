@@ -69,6 +69,11 @@ export function poseQueries(getModel, generation = getModel) {
     poseRandom: (seed) => current().randomCoords(seed),
     poseVector: () => current().poseVector(),
     poseJoint: (bone) => current().jointPosition(bone),
+    // bone's angles from the rest pose in every training pose: at its joint, and its own (the core's two measures)
+    poseTrainingAnglesOf: (bone) => {
+      const r = current().trainingAnglesOf(bone);
+      return { joint: r.joint, whole: r.whole };
+    },
     poseTouches: (bone) => current().touches(bone),
     poseObj: (header) => current().objText(header),
     poseGlb: () => current().poseGlb(),

@@ -4,6 +4,8 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { viewAxes } from './view-axes.js';
+import { flatFacesMaterial, orderFaces } from './flat-faces.js';
+import { outgrows } from './views/frame-reach.js';
 
 THREE.ColorManagement.enabled = false; // colours go to the screen as given: exact pixels for the tests
 
@@ -31,7 +33,7 @@ export class Viewer {
     this.scene.add(this.camera);
 
     this.lit = new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide });
-    this.flatMaterial = new THREE.MeshBasicMaterial({ vertexColors: true, side: THREE.DoubleSide });
+    this.flatMaterial = flatFacesMaterial(); // one colour per triangle (flat-faces.js)
     this.flat = false;
     this.faces = null;
     this.slots = [];
@@ -139,6 +141,7 @@ export class Viewer {
       } else {
         g.setAttribute('color', new THREE.BufferAttribute(Float32Array.from(item.colours), 3));
       }
+      if (this.flat) orderFaces(g, this.faces);
       g.computeVertexNormals();
       g.computeBoundingBox();
       g.computeBoundingSphere();
@@ -146,7 +149,7 @@ export class Viewer {
     this.setLabels(items.length > 1 ? items.map((item) => item.label ?? '') : []);
     if (frame) this.framed = false; // lay out for the framing direction, not for the camera being replaced
     this.layout();
-    if (frame) this.frame();
+    if (frame || (this.framed && !this.userMoved && outgrows(this))) this.frame(); // views/frame-reach.js
     this.requestRender();
   }
 
@@ -278,6 +281,8 @@ export class Viewer {
     if (box.isEmpty()) return;
     const centre = box.getCenter(new THREE.Vector3());
     const size = box.getSize(new THREE.Vector3());
+    if (this.minSize) size.max(this.minSize); // every training pose fits (views/frame-reach.js)
+    this.framedSize = size.clone();
     const { view, up, right } = this.axes;
     const halfW = size.getComponent(right) / 2;
     const halfH = size.getComponent(up) / 2;
@@ -317,7 +322,10 @@ export class Viewer {
 
   setFlat(flat) {
     this.flat = flat;
-    for (const s of this.slots) s.mesh.material = flat ? this.flatMaterial : this.lit;
+    for (const s of this.slots) {
+      s.mesh.material = flat ? this.flatMaterial : this.lit;
+      if (flat) orderFaces(s.mesh.geometry, this.faces);
+    }
     this.requestRender();
   }
 
@@ -326,12 +334,6 @@ export class Viewer {
     const r = this.renderer.domElement.getBoundingClientRect();
     const v = new THREE.Vector3(p[0], p[1], p[2]).add(this.slots[slot].mesh.position).project(this.camera);
     return { x: r.left + ((v.x + 1) / 2) * r.width, y: r.top + ((1 - v.y) / 2) * r.height };
-  }
-
-  /** The angle (radians, clockwise on the screen) of client point (x, y) around screen point `pivot`, or null
-   * within `near` pixels of it (where the angle jumps). */
-  angleAround(pivot, x, y, near) {
-    return Math.hypot(x - pivot.x, y - pivot.y) <= near ? null : Math.atan2(y - pivot.y, x - pivot.x);
   }
 
   /** The vertex under a screen point: { slot, vertex } or null (nearest corner of the hit triangle). */

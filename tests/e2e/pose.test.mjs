@@ -49,7 +49,9 @@ test('pose mode: a drag turns only the subtree about its joint; sliders give the
   let start = null;
   let before = null;
   let joint = null;
-  for (const [fx, fy] of [[0.5, 0.62], [0.4, 0.65], [0.6, 0.65], [0.35, 0.5], [0.65, 0.5], [0.5, 0.5], [0.45, 0.7], [0.55, 0.7]]) {
+  // (press points over the view's middle, row by row: issue 55 frames every training pose, so the mesh is where
+  // the poses' common frame puts it)
+  for (const [fx, fy] of Array.from({ length: 72 }, (_, i) => [0.3 + 0.05 * (i % 9), 0.35 + 0.05 * Math.floor(i / 9)])) {
     const x = box.x + fx * box.width;
     const y = box.y + fy * box.height;
     before = await page.evaluate(() => window.posemfa.pose.positions());
@@ -93,8 +95,9 @@ test('pose mode: a drag turns only the subtree about its joint; sliders give the
   const jointAfter = await page.evaluate((b) => window.posemfa.pose.joint(b), bone);
   assert.ok(Math.hypot(...jointAfter.map((c, i) => c - joint[i])) < 1e-4 * diag, `the joint moved: ${joint} -> ${jointAfter}`);
   const angle = await page.locator('[data-testid=pose-angle]').innerText();
-  // read against the training poses' largest turn of that part (pose-angle: "12.3° (training poses: up to 40.1°)")
-  const m = /^([0-9.]+)° \((?:training poses: up to|beyond the training poses, which turn it at most) ([0-9.]+)°\)$/.exec(angle);
+  // read against the training poses' largest turn of that part (pose-angle: "12.3° at its joint, relative to part 2
+  // (training poses: up to 40.1°)")
+  const m = /^([0-9.]+)°(?: at its joint, relative to part \d+| \(the root: its own turn\)) \((?:training poses: up to|beyond the training poses, which turn it at most) ([0-9.]+)°\)$/.exec(angle);
   assert.ok(m, angle);
   assert.ok(Number(m[1]) > 1, angle);
   assert.equal(Number(m[1]) > Number(m[2]) + 0.05, /beyond/.test(angle), angle);
@@ -178,11 +181,14 @@ test('pose mode says which pose its rest pose is (the rig\'s bind pose: the file
     info = (await page.locator("#info").innerText()).trim();
     if (info) break;
   }
-  assert.match(info, /^part \d+: rotation from the rest pose \(pose “reference\.obj”, the rig's bind pose\) in each training pose/);
-  // the angle of the rest pose's own row is 0
+  // (issue 55: in the two measures the core has, at its joint and the whole part's own rotation; the root's only)
+  assert.match(info, /^part \d+, from the rest pose “reference\.obj” \(the rig's bind pose\), in each training pose: /);
+  // the angles of the rest pose's own row are 0
   const rows = await page.$$eval('#info table tr', (tr) => tr.map((r) => [...r.children].map((c) => c.textContent)));
-  assert.equal(rows[ref][0], 'reference.obj');
-  assert.equal(rows[ref][2], '0.0°');
+  const own = rows.find((r) => r[0] === 'reference.obj');
+  assert.ok(own, JSON.stringify(rows));
+  assert.ok(own.filter((c) => c.endsWith('°')).every((c) => c === '0.0°'), JSON.stringify(own));
+  assert.equal(rows.indexOf(own) - (rows[0][0] === '' ? 1 : 0), ref);
 
   // out of pose mode: the pose shown is marked again
   await page.check('#modes input[value=parts]', { force: true });

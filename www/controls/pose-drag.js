@@ -1,21 +1,44 @@
 // Pose mode's drag (issue 28; www/controls/pose.js installs it): a part of the mesh turned about its joint by the
 // pointer. The core turns it (the poser's turn, through the worker's pose queries); this file reads the pointer.
-import { state } from '../state.js';
+import { state, update } from '../state.js';
 import { query } from '../session.js';
 import { viewer } from '../views/viewer-instance.js';
 
 const $ = (id) => document.getElementById(id);
 
 // Drag: pointer down on a part (capture phase, before the orbit controls) selects it; moving turns it about the
-// view direction through its joint, by the angle the pointer sweeps around the joint on the screen: the part
-// follows the pointer whichever way it goes. Within NEAR pixels of the joint the angle is not read (it jumps
-// there). The pose before the drag goes on the undo stack at its first turn (a click that turns nothing adds
-// no undo step).
+// view direction through its joint, by the angle the pointer sweeps around the joint on the screen, scaled by
+// how far out the pointer is against the reach of what turns (the part and the parts it carries, on the
+// screen): held at its far end or beyond, the part follows the pointer; held near its joint, a move turns it
+// by the distance moved over that reach (a trackball's gain), not by the large angle a short move sweeps there
+// (issue 55: 70 px near the horse's neck turned its head 138°). Within NEAR pixels of the joint the angle is
+// not read (it jumps there). The pose before the drag goes on the undo stack at its first turn (a click that
+// turns nothing adds no undo step). While dragging, the parts that turn are shown in their colours and the rest
+// greyed, and the joint is marked (pose.js poseView, views/joint-marker.js).
 const NEAR = 8;
 const SWEPT = 1e-6; // radians: less is rounding
+/** The angle (radians, clockwise on the screen) of client point (x, y) around screen point `pivot`, or null
+ * within `near` pixels of it (where the angle jumps). */
+const angleAround = (pivot, x, y, near) => (Math.hypot(x - pivot.x, y - pivot.y) <= near ? null : Math.atan2(y - pivot.y, x - pivot.x));
+const MIN_REACH = 60; // pixels: a part small on the screen still turns by at most 1 radian per 60 px
+
+// How far the vertices that `bone`'s turn moves reach from the joint on the screen (pixels): the largest
+// distance over (a sample of) them. `positions`: the pose shown (flat xyz), `moves(v)`: whether vertex v turns.
+function reachOnScreen(positions, moves, pivot) {
+  const n = positions.length / 3;
+  const step = Math.max(1, Math.floor(n / 4000));
+  let far = 0;
+  for (let v = 0; v < n; v += step) {
+    if (!moves(v)) continue;
+    const p = viewer.screenPoint(0, [positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]]);
+    far = Math.max(far, Math.hypot(p.x - pivot.x, p.y - pivot.y));
+  }
+  return Math.max(far, MIN_REACH);
+}
 /** Installs the drag on the view. `pose`: pose mode's state (pose.js: skeleton, bone, dragging); `remember`
- * puts the pose on the undo stack, `turn(bone, angle)` turns a part (queued), `showAngle` shows the part's angle. */
-export function installPoseDrag(pose, { remember, turn, showAngle }) {
+ * puts the pose on the undo stack, `turn(bone, angle)` turns a part (queued), `showAngle` shows the part's angle,
+ * `highlight(bone, joint)` shows what is dragged (bone -1: nothing). */
+export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) {
   const view = $('view');
   let drag = null;
   let busy = false;
@@ -27,7 +50,8 @@ export function installPoseDrag(pose, { remember, turn, showAngle }) {
     e.stopPropagation();
     e.preventDefault();
     const bone = pose.skeleton.boneOfVertex[hit.vertex];
-    const mine = { bone, pivot: null, last: null, remembered: false };
+    update({ hoverPart: null }); // the hover box goes while a part is dragged (it would cover what moves)
+    const mine = { bone, pivot: null, last: null, lastR: 0, reach: MIN_REACH, remembered: false };
     drag = mine;
     pose.dragging = bone;
     pose.bone = bone;
@@ -36,7 +60,14 @@ export function installPoseDrag(pose, { remember, turn, showAngle }) {
     query('poseJoint', bone).then((j) => {
       if (drag !== mine) return;
       mine.pivot = viewer.screenPoint(hit.slot, j);
-      mine.last = viewer.angleAround(mine.pivot, e.clientX, e.clientY, NEAR);
+      mine.last = angleAround(mine.pivot, e.clientX, e.clientY, NEAR);
+      mine.lastR = Math.hypot(e.clientX - mine.pivot.x, e.clientY - mine.pivot.y);
+      const sk = pose.skeleton;
+      const inTree = (b) => { for (; b >= 0; b = sk.parent[b]) if (b === bone) return true; return false; };
+      const turns = sk.order.map((_, b) => inTree(b));
+      mine.reach = reachOnScreen(pose.positions, (v) => turns[sk.boneOfVertex[v]], mine.pivot);
+      pose.dragReach = mine.reach;
+      highlight(bone, j);
     }, (err) => {
       // no joint to turn about (the model changed under the press): the drag turns nothing, and says why
       if (drag === mine) drag = null;
@@ -45,7 +76,8 @@ export function installPoseDrag(pose, { remember, turn, showAngle }) {
   }, { capture: true });
   window.addEventListener('pointermove', async (e) => {
     if (!drag?.pivot) return;
-    const now = viewer.angleAround(drag.pivot, e.clientX, e.clientY, NEAR);
+    const now = angleAround(drag.pivot, e.clientX, e.clientY, NEAR);
+    const r = Math.hypot(e.clientX - drag.pivot.x, e.clientY - drag.pivot.y);
     if (now === null) {
       drag.last = null;
       return;
@@ -54,9 +86,11 @@ export function installPoseDrag(pose, { remember, turn, showAngle }) {
       let d = now - drag.last;
       if (d > Math.PI) d -= 2 * Math.PI;
       if (d < -Math.PI) d += 2 * Math.PI;
-      pending += d;
+      // the gain: the angle swept, times how far out the pointer is against the reach of what turns (at most 1)
+      pending += d * Math.min(1, (r + drag.lastR) / 2 / drag.reach);
     }
     drag.last = now;
+    drag.lastR = r;
     // (a move straight at or away from the joint sweeps nothing but rounding)
     if (busy || Math.abs(pending) < SWEPT) return;
     busy = true;
@@ -77,6 +111,7 @@ export function installPoseDrag(pose, { remember, turn, showAngle }) {
     }
   });
   window.addEventListener('pointerup', () => {
+    if (drag) highlight(-1, null);
     drag = null;
     pose.dragging = -1;
   });

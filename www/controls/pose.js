@@ -15,6 +15,7 @@ import { eRmsText, ERMS_UNIT } from '../erms.js';
 import { download, populationStem } from '../download.js';
 import { describePoseShown, exportPoseObj, exportPoseGlb } from './pose-export.js';
 import { installPoseDrag } from './pose-drag.js';
+import { partLabel, partShort, draggedColours, markJoint, jointMark } from './pose-parts.js';
 
 const $ = (id) => document.getElementById(id);
 const STEP = (10 * Math.PI) / 180; // a button press: 10 degrees
@@ -22,7 +23,7 @@ const STEP = (10 * Math.PI) / 180; // a button press: 10 degrees
 // What pose mode shows: the skeleton of the poser, the current mesh and angles, the undo stack, added frames.
 // whole: what the last action made of the whole pose ('random', 'mean', 'modes', 'rest', 'training': training
 // pose `training` as the rig makes it), null after a part was turned (the caption then names that part)
-const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, dragging: -1, whole: null, training: 0, undo: [], frames: null, frame: 0, playing: false };
+const pose = { gen: -1, starting: null, skeleton: null, positions: null, angles: null, bone: -1, dragging: -1, highlight: -1, whole: null, training: 0, undo: [], frames: null, frame: 0, playing: false };
 
 // the pose space's modes come largest first (the core's PCA of the training poses); the first few get a slider
 const MODE_SLIDERS = 6;
@@ -45,8 +46,17 @@ export async function poseView() {
     : pose.whole || pose.bone >= 0
       ? `Pose mode: ${madeWords()} (drag a part to turn it about its joint)`
       : `Pose mode: ${madeWords()}; drag a part to turn it about its joint`;
-  return { slots: [{ positions, colours: state.colours.final.vertexColours, name }], caption };
+  // while a part is dragged, what turns keeps its colours and the rest is greyed (pose-parts.js)
+  const colours = !frames && pose.highlight >= 0
+    ? draggedColours(state.colours.final.vertexColours, pose.skeleton, pose.highlight)
+    : state.colours.final.vertexColours;
+  return { slots: [{ positions, colours, name }], caption };
 }
+
+/** The bone of part `part` (the rig's joint named after it: src/export/gltf.rs names it "part k+1"), or -1. */
+export const boneOfPart = (part) => pose.skeleton?.names.indexOf(`part ${part + 1}`) ?? -1;
+/** The skeleton of pose mode (null before it is ready). */
+export const poseSkeleton = () => (pose.skeleton && pose.gen === state.gen ? pose.skeleton : null);
 
 // The added frame the view shows (while frames play or are paused on one), else -1: the pose made is shown.
 const frameShown = () => (pose.frames && pose.showFrames ? pose.frame : -1);
@@ -115,7 +125,13 @@ function fillControls() {
   const sel = $('pose-part');
   // listed by name, numbers in order ("part 2" before "part 10"), not in the skeleton's parent-first order
   const byName = pose.skeleton.order.slice().sort((a, b) => pose.skeleton.names[a].localeCompare(pose.skeleton.names[b], undefined, { numeric: true }));
-  sel.replaceChildren(...byName.map((k) => Object.assign(document.createElement('option'), { value: String(k), textContent: pose.skeleton.names[k] })));
+  // each named where it is (on which part, what it carries, its share of the mesh) in its colour
+  const colour = (k) => state.colours.final?.partColour?.[Number(pose.skeleton.names[k].replace(/\D+/g, '')) - 1];
+  sel.replaceChildren(...byName.map((k) => {
+    const o = Object.assign(document.createElement('option'), { value: String(k), textContent: `■ ${partShort(pose.skeleton, k)}`, title: partLabel(pose.skeleton, k) });
+    if (colour(k)) o.style.color = colour(k);
+    return o;
+  }));
   const box = $('pose-modes');
   // The modes are the principal components of the training poses' joint rotations (src/articulate/pose.rs
   // PoseSpace: every non-root joint's rotation from the rest pose, relative to its parent, as axis x angle);
@@ -154,8 +170,12 @@ function showAngle() {
   const [a, most] = [pose.angles?.[k], pose.trainingAngles?.[k]];
   const beyond = a !== undefined && most !== undefined && a > most + 0.05;
   const against = most === undefined ? '' : beyond ? ` (beyond the training poses, which turn it at most ${most.toFixed(1)}°)` : ` (training poses: up to ${most.toFixed(1)}°)`;
-  $('pose-angle').textContent = a !== undefined && k >= 0 ? `${a.toFixed(1)}°${against}` : '–';
+  // what the angle is of: the turn at the part's joint, relative to the part that carries it (the root: its own)
+  const p = pose.skeleton?.parent[k];
+  const at = p === undefined ? '' : p < 0 ? ' (the root: its own turn)' : ` at its joint, relative to ${pose.skeleton.names[p]}`;
+  $('pose-angle').textContent = a !== undefined && k >= 0 ? `${a.toFixed(1)}°${at}${against}` : '–';
   $('pose-angle').classList.toggle('beyond', beyond);
+  $('pose-part-about').textContent = pose.skeleton && k >= 0 ? partLabel(pose.skeleton, k) : '';
   $('pose-undo').disabled = pose.undo.length === 0;
 }
 
@@ -263,7 +283,14 @@ function playFrames() {
 
 export function installPose() {
   registerView('pose', poseView, { pending: 'Pose mode: building the rig… (the mesh shown is still the last view\'s)' });
-  installPoseDrag(pose, { remember, turn, showAngle });
+  installPoseDrag(pose, {
+    remember, turn, showAngle,
+    highlight: (bone, joint) => {
+      pose.highlight = bone;
+      markJoint(bone >= 0 ? joint : null);
+      renderView();
+    },
+  });
   $('pose-part').addEventListener('change', () => {
     pose.bone = Number($('pose-part').value);
     pose.whole = null;
@@ -351,6 +378,11 @@ export function installPose() {
       selected: () => pose.bone,
       // the part a press on the mesh holds (-1: none; a press beside the mesh holds none)
       dragging: () => pose.dragging ?? -1,
+      // what a drag shows: the bone highlighted (-1: none), the joint's mark on the screen (null: none), and the
+      // reach on the screen (pixels) that the drag's gain is measured against
+      // where vertex v of the mesh shown is on the screen (client pixels)
+      screenOf: (v) => viewer.screenPoint(0, Array.from(state.shown[0].positions.slice(3 * v, 3 * v + 3))),
+      highlighted: () => ({ bone: pose.highlight ?? -1, mark: jointMark(), reach: pose.dragReach ?? null }),
       modes: (c) => query('poseModes', c).then((r) => { took(r); return Array.from(r.positions); }),
       training: (i) => query('poseTraining', i).then((r) => { took(r); return Array.from(r.positions); }),
       vector: () => query('poseVector'),

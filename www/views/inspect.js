@@ -4,7 +4,8 @@ import { state, update, subscribe } from '../state.js';
 import { query } from '../session.js';
 import { viewer } from './viewer-instance.js';
 import { poseName } from './render.js';
-import { restPose } from '../controls/pose.js';
+import { restPose, boneOfPart, poseSkeleton } from '../controls/pose.js';
+import { boundedRows, spread } from '../controls/pose-parts.js';
 
 const infoPick = document.createElement('div');
 const infoHover = document.createElement('div');
@@ -77,6 +78,21 @@ async function showPick() {
   infoPick.replaceChildren(head, err, table, why);
 }
 
+// The hover box's table: one row per pose, at most MAX_ROWS of them (a character's 399 frames would run off the
+// view and cover the mesh): past that a summary line and the largest few (pose-parts.js boundedRows).
+function anglesTable(n, columns, key) {
+  const table = document.createElement('table');
+  const { rows, more } = boundedRows(n, key);
+  if (columns.length > 1) table.append(row('', ...columns.map((c) => c.title)));
+  for (const i of rows) table.append(row(poseName(i), ...columns.flatMap((c) => (c.bar ? [bar(c.values[i] / 180), `${c.values[i].toFixed(1)}°`] : [`${c.values[i].toFixed(1)}°`]))));
+  if (!more) return [table];
+  const s = spread(columns[0].values);
+  const summary = document.createElement('div');
+  summary.dataset.testid = 'hover-summary';
+  summary.textContent = `${n} poses: median ${s.median.toFixed(1)}°, largest ${s.max.toFixed(1)}°${columns.length > 1 ? ` (${columns[0].title})` : ''}; the ${rows.length} largest, in pose order (${more} more not listed):`;
+  return [summary, table];
+}
+
 async function showHover() {
   const part = state.hoverPart;
   if (part === null || !state.model) {
@@ -84,25 +100,39 @@ async function showHover() {
     return;
   }
   // pose mode shows a pose made from the rig: the angles are from its rest pose (the rig's bind pose), as the
-  // caption's are; elsewhere from the pose shown
+  // readout's are, and in the same two measures the core has: at the part's joint, relative to the part carrying
+  // it (the readout's), and the whole part's own rotation (which includes the turns of the parts carrying it,
+  // the body's too); elsewhere the part's rotation from the pose shown
   const posing = state.mode === 'pose';
+  const sk = posing ? poseSkeleton() : null;
+  const bone = sk ? boneOfPart(part) : -1;
   const { gen } = state;
   const pose = posing ? restPose() : state.pose;
   let angles;
   try {
-    angles = await query('rotationAngles', part, pose);
+    angles = bone >= 0 ? await query('poseTrainingAnglesOf', bone) : await query('rotationAngles', part, pose);
   } catch (e) {
     infoHover.textContent = e.message;
     return;
   }
   if (gen !== state.gen || state.hoverPart !== part) return;
   const head = document.createElement('div');
+  if (bone >= 0) {
+    const p = sk.parent[bone];
+    head.append(swatch(part), ` part ${part + 1}, from the rest pose “${poseName(pose)}” (the rig's bind pose), in each training pose: `
+      + (p >= 0 ? `at its joint (its turn relative to ${sk.names[p]}, as the readout), and the whole part (its own rotation: the turns of the parts carrying it included)` : 'the root: its own rotation, the whole body\'s turn'));
+    const columns = p >= 0
+      ? [{ title: 'at its joint', values: angles.joint, bar: true }, { title: 'whole part', values: angles.whole }]
+      : [{ title: 'whole part', values: angles.whole, bar: true }];
+    infoHover.replaceChildren(head, ...anglesTable(columns[0].values.length, columns, (i) => columns[0].values[i]));
+    infoHover.dataset.measures = columns.map((c) => c.title).join('|');
+    return;
+  }
   head.append(swatch(part), posing
-    ? ` part ${part + 1}: rotation from the rest pose (pose “${poseName(pose)}”, the rig's bind pose) in each training pose`
+    ? ` part ${part + 1}: its own rotation from the rest pose (pose “${poseName(pose)}”, the rig's bind pose) in each training pose`
     : ` part ${part + 1}: rotation from pose “${poseName(pose)}”${ofFit()}`);
-  const table = document.createElement('table');
-  angles.forEach((a, i) => table.append(row(poseName(i), bar(a / 180), `${a.toFixed(1)}°`)));
-  infoHover.replaceChildren(head, table);
+  infoHover.replaceChildren(head, ...anglesTable(angles.length, [{ title: 'rotation', values: angles, bar: true }], (i) => angles[i]));
+  infoHover.dataset.measures = 'rotation';
 }
 
 /** Marks and inspects `hit` ({ slot, vertex }, or null: nothing); window.posemfa.inspect for the tests. */

@@ -7,6 +7,7 @@ import { query, isTreeFit } from '../session.js';
 import { errorColours, RAMP_CSS, PALETTE } from '../colors.js';
 import { viewer } from './viewer-instance.js';
 import { interpValues } from '../controls/interp-values.js';
+import { poseReach } from './frame-reach.js';
 
 const $ = (id) => document.getElementById(id);
 const nParts = (n) => `${n} part${n === 1 ? '' : 's'}`;
@@ -139,6 +140,11 @@ export function registerView(mode, build, { pending = null } = {}) {
 }
 
 let renderToken = 0;
+let reached = { pop: null, size: null };
+const reach = (pop) => {
+  if (reached.pop !== pop) reached = { pop, size: poseReach(pop.positions) };
+  return reached.size;
+};
 
 /** Builds the slots of the current mode (some need answers from the worker) and shows them. */
 export async function renderView({ frame = false } = {}) {
@@ -161,6 +167,9 @@ export async function renderView({ frame = false } = {}) {
   if (token !== renderToken) return;
   if (needModel) view.caption += ' (this view needs a fitted model)';
   const reframe = frame || view.slots.length !== state.shown.length;
+  // every training pose's extent fits in the frame, so that another pose is not cut off (frame-reach.js); the
+  // latent shape is no pose
+  viewer.minSize = mode === 'latent' ? null : reach(pop);
   update({ shown: view.slots });
   viewer.show(view.slots, { frame: reframe });
   $('caption').textContent = view.caption;
@@ -170,6 +179,23 @@ export async function renderView({ frame = false } = {}) {
 }
 
 export function installViews() {
+  // the test contract: how many of the shown meshes' vertices lie outside the view (the camera follows the poses)
+  window.posemfa = Object.assign(window.posemfa ?? {}, {
+    /** Where the camera is (to tell whether it moved). */
+    camera: () => viewer.camera.position.toArray(),
+    outOfView: () => {
+      const r = viewer.renderer.domElement.getBoundingClientRect();
+      let out = 0;
+      state.shown.forEach((slot, k) => {
+        const p = slot.positions;
+        for (let i = 0; i < p.length; i += 3) {
+          const q = viewer.screenPoint(k, [p[i], p[i + 1], p[i + 2]]);
+          if (q.x < r.left || q.x > r.right || q.y < r.top || q.y > r.bottom) out++;
+        }
+      });
+      return out;
+    },
+  });
   $('legend').querySelector('.ramp').style.background = RAMP_CSS;
   subscribe((s, changed) => {
     if (changed.has('pop')) {

@@ -1,0 +1,140 @@
+// Pose mode as a first-time user meets it (issue 55, findings 1 and 2): the readout and the hover box say what
+// their angles measure and agree where they measure the same thing (the turn at the part's joint, relative to
+// the part carrying it; the hover box adds the whole part's own rotation); a drag near a joint turns the part by
+// the distance moved over the part's reach on the screen, not by the large angle a short move sweeps there; the
+// part dragged is highlighted (the rest greyed) and its joint marked while dragging; the Part list names each
+// part by where it is.
+// Run: npm run build && node --test tests/e2e/pose-drag.test.mjs
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { pageSession, waitState, enterPoseMode, paletteCounts } from './helpers.mjs';
+
+const session = pageSession();
+const inSubtree = (sk, bone, b) => { for (; b >= 0; b = sk.parent[b]) if (b === bone) return true; return false; };
+
+// The bone (not the root) carrying the most vertices below it (a neck with its head, a leg).
+function biggestLimb(sk) {
+  let best = -1;
+  let most = 0;
+  for (const k of sk.order) {
+    if (sk.parent[k] < 0) continue;
+    const n = Array.from(sk.boneOfVertex).filter((b) => inSubtree(sk, k, b)).length;
+    if (n > most) [best, most] = [k, n];
+  }
+  return best;
+}
+
+test('pose mode: the readout and the hover box say what they measure, and agree at the joint', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await enterPoseMode(page);
+  const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
+  const canvas = await page.locator('#view canvas').boundingBox();
+  // hover a vertex of a non-root part until the hover box names a part with a parent
+  let named = null;
+  for (const v of Array.from(sk.boneOfVertex.keys()).filter((i) => i % 7 === 0)) {
+    const b = sk.boneOfVertex[v];
+    if (sk.parent[b] < 0) continue;
+    const p = await page.evaluate((i) => window.posemfa.pose.screenOf(i), v);
+    if (p.x < canvas.x + 5 || p.x > canvas.x + canvas.width - 5 || p.y < canvas.y + 5 || p.y > canvas.y + canvas.height - 5) continue;
+    await page.mouse.move(p.x, p.y);
+    const ok = await page.waitForFunction(() => document.querySelector('#info [data-measures]')?.dataset.measures === 'at its joint|whole part' || null, null, { timeout: 1500 }).then(() => true, () => false);
+    if (!ok) continue;
+    named = /part (\d+), from the rest pose/.exec(await page.locator('#info').innerText());
+    if (named) break;
+  }
+  assert.ok(named, 'the hover box of a part that has a joint');
+  const bone = sk.names.indexOf(`part ${named[1]}`);
+  const parent = sk.names[sk.parent[bone]];
+  const head = await page.locator('#info').innerText();
+  assert.match(head, new RegExp(`at its joint \\(its turn relative to ${parent}, as the readout\\), and the whole part \\(its own rotation: the turns of the parts carrying it included\\)`));
+  // the columns: at its joint, whole part; one row per training pose (or the largest few)
+  const rows = await page.$$eval('#info table tr', (trs) => trs.map((tr) => [...tr.cells].map((c) => c.textContent)));
+  assert.deepEqual(rows[0].slice(1), ['at its joint', 'whole part']);
+  const joint = rows.slice(1).map((r) => Number(r[2].replace('°', '')));
+  // the readout of the same part: its angle at its joint, relative to its parent, and the training poses' largest
+  await page.selectOption('#pose-part', String(bone));
+  const readout = await page.locator('[data-testid=pose-angle]').innerText();
+  const m = new RegExp(`^0\\.0° at its joint, relative to ${parent} \\(training poses: up to ([0-9.]+)°\\)$`).exec(readout);
+  assert.ok(m, `the readout says what it measures: ${readout}`);
+  assert.ok(Math.abs(Math.max(...joint) - Number(m[1])) <= 0.051, `the hover box's largest turn at the joint ${Math.max(...joint)}° is the readout's ${m[1]}°`);
+  // the root's readout says it is its own turn
+  const root = sk.order.find((k) => sk.parent[k] < 0);
+  await page.selectOption('#pose-part', String(root));
+  assert.match(await page.locator('[data-testid=pose-angle]').innerText(), /^0\.0° \(the root: its own turn\) \(training poses: up to [0-9.]+°\)$/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('pose mode: a 70 px drag near a joint turns the part by the distance over its reach; the part and its joint are shown', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await enterPoseMode(page);
+  const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
+  // the Part list names parts by where they are
+  const options = await page.$$eval('#pose-part option', (os) => os.map((o) => o.textContent));
+  for (const o of options) assert.match(o, /^■ part \d+ · (root|on part \d+) · (<1|\d+) %$/);
+  // and the line under it says the part picked in full
+  await page.selectOption('#pose-part', String(sk.order.find((k) => sk.parent[k] >= 0)));
+  assert.match(await page.locator('[data-testid=pose-part-about]').innerText(), /^part \d+: on part \d+, (carries \d+ parts?|an end part), (<1|\d+) % of the mesh$/);
+  await page.check('#flat');
+  const bone = biggestLimb(sk);
+  const pivot = await page.evaluate((b) => window.posemfa.pose.jointOnScreen(b), bone);
+  // a vertex of the part itself, 12 to 30 px from its joint on the screen, that a press picks
+  const mine = Array.from(sk.boneOfVertex.keys()).filter((v) => sk.boneOfVertex[v] === bone);
+  let start = null;
+  for (const v of mine) {
+    const p = await page.evaluate((i) => window.posemfa.pose.screenOf(i), v);
+    const d = Math.hypot(p.x - pivot.x, p.y - pivot.y);
+    if (d < 12 || d > 30) continue;
+    await page.mouse.move(p.x, p.y);
+    await page.mouse.down();
+    await page.waitForTimeout(150);
+    if (await page.evaluate(() => window.posemfa.pose.dragging()) === bone) {
+      start = p;
+      break;
+    }
+    await page.mouse.up();
+  }
+  assert.ok(start, `a press on ${sk.names[bone]} near its joint`);
+  await page.waitForFunction(() => window.posemfa.pose.highlighted().mark !== null, null, { timeout: 10000 });
+  const shown = await page.evaluate(() => window.posemfa.pose.highlighted());
+  assert.equal(shown.bone, bone, 'the part dragged is highlighted');
+  assert.ok(Math.hypot(shown.mark.x - pivot.x, shown.mark.y - pivot.y) < 2, `its joint is marked: ${JSON.stringify(shown.mark)} for ${JSON.stringify(pivot)}`);
+  assert.ok(shown.reach >= 100, `the reach of ${sk.names[bone]} and what it carries on the screen: ${shown.reach} px`);
+  // the parts that do not turn are greyed: the colours only they have leave the view while the drag lasts
+  const partOf = (k) => Number(sk.names[k].replace(/\D+/g, '')) - 1;
+  const colours = await page.evaluate(() => window.posemfa.partColours());
+  const turning = new Set(sk.order.filter((k) => inSubtree(sk, bone, k)).map((k) => colours[partOf(k)]));
+  const still = [...new Set(sk.order.filter((k) => !inSubtree(sk, bone, k)).map((k) => colours[partOf(k)]))].filter((c) => !turning.has(c));
+  assert.ok(still.length >= 2, `colours of parts that do not turn: ${still}`);
+  const pixels = async () => { const c = await paletteCounts(page); return still.reduce((n, h) => n + c[h], 0); };
+  await page.waitForTimeout(200);
+  const during = await pixels();
+  assert.ok(during < 50, `the parts that do not turn are greyed while ${sk.names[bone]} is dragged: ${during} px in their colours`);
+  // 70 px across the line from the joint, in 10 moves
+  const before = (await page.evaluate(() => window.posemfa.pose.angles()))[bone];
+  const r = Math.hypot(start.x - pivot.x, start.y - pivot.y);
+  const across = [-(start.y - pivot.y) / r, (start.x - pivot.x) / r];
+  for (let s = 1; s <= 10; s++) {
+    await page.mouse.move(start.x + 7 * s * across[0], start.y + 7 * s * across[1]);
+    await page.waitForTimeout(40);
+  }
+  await page.waitForTimeout(500);
+  await page.mouse.up();
+  await page.waitForTimeout(300);
+  const turned = Math.abs((await page.evaluate(() => window.posemfa.pose.angles()))[bone] - before);
+  const most = (70 / shown.reach) * (180 / Math.PI);
+  assert.ok(turned > 3, `the drag turned ${sk.names[bone]} (${turned}°)`);
+  assert.ok(turned <= most * 1.05 + 0.5, `a 70 px drag turned ${sk.names[bone]} by ${turned.toFixed(1)}°, more than 70 px over its reach of ${shown.reach.toFixed(0)} px (${most.toFixed(1)}°)`);
+  // released: the highlight and the mark go, the colours are back
+  assert.deepEqual(await page.evaluate(() => { const h = window.posemfa.pose.highlighted(); return [h.bone, h.mark]; }), [-1, null]);
+  await page.waitForTimeout(200);
+  assert.ok((await pixels()) > 500, 'the parts that did not turn in their colours again');
+  // a random pose stays in the view
+  await page.click('[data-testid=pose-random]');
+  await page.waitForTimeout(800);
+  assert.equal(await page.evaluate(() => window.posemfa.outOfView()), 0, 'a random pose is in the view');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
