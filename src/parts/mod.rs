@@ -14,7 +14,10 @@
 //! - [`part_count`]: an exact part count asked for (`--bones N`).
 //! - [`label_fit`]: the mixture fitted to given labels.
 //! - [`multires`]: the coarse and refinement stages on a well-spread vertex subset, labels carried to all.
-//! - [`hierarchy`]: Algorithm 1 (coarse, refinement, final) and the tree pipeline, every stage kept.
+//! - [`hierarchy`]: the driver (`Pipeline`: runs the AECM, keeps its statistics, lifts results from a coarse mesh to
+//!   every vertex, reports progress), with its rules in child modules: `tree_rule` (the default: the merge tree's
+//!   start and count), `algorithm1` (the paper's coarse and refinement stages), `rounds` (the part rule's rounds
+//!   after each final AECM), and what a fit reports (`result`).
 //! - [`diagnosis`]: whether the population looks articulated (how much of the motion rigid parts explain).
 //! - [`robustness`]: fits over seeds and nuisance variants, and how much they agree.
 

@@ -1,0 +1,104 @@
+//! What a fit reports: where the pipeline is ([`Stage`], [`Progress`]), the stages' part counts, the part rule's
+//! rounds, and everything the fit produced ([`FitResult`]).
+
+use crate::mfa::aecm::StageStats;
+use crate::mfa::result::Model;
+use serde::Serialize;
+
+/// Where the pipeline is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", rename_all = "camelCase", rename_all_fields = "camelCase")]
+pub enum Stage {
+    Coarse,
+    /// Refining coarse part `part` (0-based) of `of`, trying `sub_parts` components.
+    Refine {
+        part: usize,
+        of: usize,
+        sub_parts: usize,
+    },
+    Final,
+    Done,
+}
+
+/// Reported after every AECM iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Progress {
+    pub stage: Stage,
+    /// Iteration within the current AECM run.
+    pub iteration: usize,
+    /// Iterations over all runs so far.
+    pub total_iterations: usize,
+    pub log_likelihood: f64,
+    /// Components of the current AECM run.
+    pub parts: usize,
+    /// The current run's iteration was its last (converged or capped).
+    pub run_finished: bool,
+}
+
+/// Part counts of the three stages.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StageParts {
+    pub coarse_parts: usize,
+    pub refined_parts: usize,
+    pub final_parts: usize,
+}
+
+/// One decision round of the part rule ([`PartRule::Distinct`] or [`PartRule::Tree`], after a final AECM): the
+/// parts it judged (the AECM's, each made one connected piece), how many of them it dissolved as flesh, and how
+/// many were left after its merges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+pub struct PartRound {
+    pub parts: usize,
+    pub dissolved: usize,
+    pub after: usize,
+}
+
+/// Everything Algorithm 1 produced.
+#[derive(Debug, Clone)]
+pub struct FitResult {
+    /// The final model (or the best available if the fit was stopped early).
+    pub model: Model,
+    pub coarse_labels: Vec<u32>,
+    pub refined_labels: Vec<u32>,
+    pub stages: StageParts,
+    pub stats: Vec<StageStats>,
+    /// False if the fit was stopped before the final stage converged or hit its cap.
+    pub complete: bool,
+    /// [`PartRule::Distinct`]: the merge decisions, from the most parts down to the count kept (empty otherwise).
+    pub part_curve: Vec<crate::parts::distinct::CurvePoint>,
+    /// Every round of the part rule, in order (`part_curve` is the last one's merges; empty without the rule).
+    pub part_rounds: Vec<PartRound>,
+    /// [`PartRule::Tree`]: the start's parts once its flesh was dissolved, before the first AECM (the cut's own
+    /// count is `stages.coarse_parts`).
+    pub start_parts: Option<usize>,
+    /// With `target_parts` and [`PartRule::Distinct`]: the labels the part rule decided, before the count was made
+    /// exact (what auto would have kept), for the diagnosis ([`crate::parts::diagnosis::diagnose_fit`]).
+    pub decided_labels: Option<Vec<u32>>,
+    /// [`PartRule::Tree`]: the merge tree of the fitted parts the part rule read its count from (its leaves are
+    /// the parts of the first final AECM, its merges go down to one part): a partition for every count.
+    pub merge_tree: Option<crate::parts::merge_tree::MergeTree>,
+    /// [`PartRule::Tree`]: the count the part rule read off `merge_tree`.
+    pub tree_count: Option<usize>,
+    /// The parts came from the merge tree ([`PartRule::Tree`] with the refinement on), not from Algorithm 1 (the
+    /// other part rules, `refine` off, and a step-by-step lesson): what the page names the stages after.
+    pub from_merge_tree: bool,
+    /// The part count is the user's own, with no rule behind it (`refine` off: Algorithm 1's coarse stage alone,
+    /// m = `parts`; or a partition given to start from, [`Params::start_labels`]), so too few parts cannot be
+    /// told from a shape that is no articulated one ([`crate::parts::diagnosis::diagnose_fit`]).
+    pub count_unjudged: bool,
+    /// The refinement ran (`refine` on): Algorithm 1's refined stage is its own, not the coarse one again.
+    pub refined: bool,
+    /// The exact part count asked for (`target_parts`), if one was.
+    pub parts_asked: Option<usize>,
+}
+
+impl FitResult {
+    /// The partitions of the merge tree ([`PartRule::Tree`]; none with Algorithm 1's rules).
+    pub fn tree_cuts(&self) -> Option<crate::parts::merge_tree::TreeCuts> {
+        let tree = self.merge_tree.clone()?;
+        Some(crate::parts::merge_tree::TreeCuts::new(tree, self.tree_count, &self.model.labels))
+    }
+}

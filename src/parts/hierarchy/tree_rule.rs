@@ -1,0 +1,235 @@
+//! The merge tree's part rule ([`PartRule::Tree`], the default): the start is the patches' merge tree cut
+//! generously ([`tree_start`]: no random draw), its flesh dissolved before the first AECM; after each final AECM
+//! the rule reads the count off a merge tree of the fitted parts ([`Pipeline::decide_on_tree`]). The driver
+//! ([`super::Pipeline`]) runs the AECM and the rounds; this says where the runs start and which count the tree
+//! gives.
+
+use super::{coarse_target, lay_out, Fine, Pipeline, State, COARSE_FACTOR};
+use crate::error::{Error, Result};
+use crate::mesh::Population;
+use crate::mfa::aecm::{Fit, StageStats};
+use crate::mfa::data::Data;
+use crate::mfa::params::{Params, PartRule};
+use crate::parts::labels::compact;
+
+/// [`PartRule::Tree`]'s start when the part rule chooses the count: the patches' tree is cut where a merge first
+/// costs the smaller side, per vertex, this many times what merging two pieces of one part typically costs
+/// ([`MergeTree::merge_yardstick`]). A generous over-segmentation: the part rule decides after the first AECM.
+/// With every pose dropped in turn, the lion's start then moves by 4 parts where the patches' typical variance
+/// as the yardstick (the median of 400 tiny fits, [`TREE_COUNT_START_RATIO`]) moved it by 22; 16, 24, 32 and 40
+/// were measured too (docs/decisions.md, nineteenth session).
+pub const TREE_START_RATIO: f64 = 28.0;
+
+/// [`PartRule::Tree`]'s start with an exact part count (`target_parts`): the cut where a merge first costs 64
+/// times the patches' typical variance ([`MergeTree::typical`]), and no flesh dissolved before the first AECM.
+/// The count's steadiness does not matter there, and this start rigs better: horse-gallop at 10 bones E_RMS
+/// 3.13 against 3.91 from the part rule's start (20 bones 1.035 and 1.036, 30 bones 0.613 and 0.556).
+pub const TREE_COUNT_START_RATIO: f64 = 64.0;
+
+/// A patch tree with fewer leaves than this (a mesh of under about 384 vertices) starts from every patch, uncut.
+/// There a patch of about 6 vertices spans much of a part, so most patches straddle a joint and their typical
+/// variance is not a rigid patch's: on Blender's 174-vertex skinned character (18 parts) it was 24 times the
+/// 692-vertex one's, the cut at [`TREE_START_RATIO`] kept 6 of its 29 patches and the fit ended at 5 parts
+/// (adjusted Rand 0.447 against the skeleton); from all 29 it ends at 18 (0.856). The AECM from at most 63 parts
+/// on so few vertices is cheap.
+pub const TREE_CUT_LEAVES: usize = 64;
+
+/// The least typical variance of the patches (unit-box units²; the data are in the unit box), against 0 on
+/// exactly rigid data.
+const PATCH_VARIANCE_FLOOR: f64 = 1e-14;
+
+impl Pipeline {
+    /// [`PartRule::Tree`]: the patches' merge tree gives the start ([`super::merge_tree`]: no random draw), cut
+    /// where a merge first costs the smaller side [`TREE_START_RATIO`] times the tree's typical merge within a
+    /// part; the start's flesh goes ([`dissolve_start_flesh`]) and the final AECM runs from what is left. With
+    /// an exact part count, the cut at [`TREE_COUNT_START_RATIO`] instead, flesh and all.
+    pub(super) fn from_tree(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
+        // (an exact count the coarse mesh cannot hold is made on all vertices)
+        let target = coarse_target(params.coarse_vertices, pop.n_shapes());
+        let on_coarse = params.coarse_vertices > 0
+            && pop.n_vertices() >= COARSE_FACTOR * target
+            && params
+                .target_parts
+                .is_none_or(|n| crate::parts::part_count::check_target(n, target, params.min_part_vertices).is_ok());
+        // (the last run's data first: see [`Fine::full`]); the data are judged on every vertex (a motion of a few
+        // vertices no seed holds is still motion)
+        let full = on_coarse.then(|| lay_out(Data::from_population(pop)));
+        if let Some((data, _)) = &full {
+            crate::mfa::aecm::check_population(data, 1, 1)?;
+        }
+        let coarse = on_coarse.then(|| crate::parts::coarse_mesh::CoarseMesh::build(pop, target));
+        if let Some(c) = coarse.as_ref().filter(|_| crate::trace::enabled()) {
+            let ms = crate::clock::now_ms() - t0;
+            crate::trace_line!(
+                "coarse mesh: {} vertices, {} triangles ({ms:.1} ms)",
+                c.pop.n_vertices(),
+                c.pop.faces.len()
+            );
+        }
+        let work = coarse.as_ref().map_or_else(|| pop.clone(), |c| c.pop.clone());
+        let data = Data::from_population(&work);
+        // (the memory for the start's count is checked once the tree gives it)
+        if full.is_none() {
+            crate::mfa::aecm::check_population(&data, 1, 1)?;
+        }
+        let (cut, labels) = match &params.start_labels {
+            // on the coarse mesh each coarse vertex takes its seed's part (a part no seed holds is made again by
+            // the exact count's split)
+            Some(start) => {
+                let on_work = match &coarse {
+                    Some(c) => compact(&c.seeds.iter().map(|&v| start[v]).collect::<Vec<_>>()),
+                    None => compact(start),
+                };
+                let most = on_work.iter().max().map_or(1, |&l| l as usize + 1).max(params.target_parts.unwrap_or(0));
+                crate::memory::check(work.n_vertices(), work.n_shapes(), most, crate::memory::budget_bytes()?)?;
+                (on_work.clone(), on_work)
+            }
+            None => tree_start(&work, &data, params)?,
+        };
+        let start_parts = (cut != labels).then(|| labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0));
+        if coarse.is_some() {
+            // the last run is on every vertex: its memory, for at most the cut's count, before any run
+            let most = cut.iter().max().map_or(1, |&l| l as usize + 1).max(params.target_parts.unwrap_or(0));
+            crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
+        }
+        let mut p = Pipeline {
+            pop: work,
+            params: params.clone(),
+            state: State::Done,
+            coarse: None,
+            coarse_labels: cut,
+            refined_labels: labels.clone(),
+            final_model: None,
+            stats: vec![StageStats { name: "tree".into(), ..Default::default() }],
+            stage_started_ms: t0,
+            total_iterations: 0,
+            subset: None,
+            count_rounds: 0,
+            decide_rounds: 0,
+            part_curve: Vec::new(),
+            part_rounds: Vec::new(),
+            start_parts,
+            decided_labels: None,
+            merge_tree: None,
+            tree_count: None,
+            loose_start: true,
+            loose_components: None,
+            full: None,
+            fine: coarse.zip(full).map(|(mesh, full)| Box::new(Fine { pop: pop.clone(), mesh, full })),
+            last_run: None,
+        };
+        p.close_stage(Some("final"));
+        // the first run only feeds the part rule's decisions: at the refinement's loose tolerance (from a
+        // generous over-segmentation a converged run took 64 iterations on the 12 k hand, the loose one 10)
+        let loose = params.at_loose_tolerance();
+        let (data, layout) = lay_out(data);
+        p.state = State::Final(Fit::from_labels_laid_out(data, layout, &labels, &loose)?);
+        Ok(p)
+    }
+
+    /// [`PartRule::Tree`]'s rule 2: the merge tree of the fitted parts ([`crate::parts::merge_tree::MergeTree::from_leaves`],
+    /// every merge down to one part), cut where a merge first scores `distinct_ratio`. The first round's tree is
+    /// the one kept in the result (its leaves are the parts of the first final AECM). Returns the labels at the
+    /// count read off the tree and the curve of decisions (as [`crate::parts::distinct::merge_indistinct`]'s).
+    pub(super) fn decide_on_tree(&mut self, labels: &[u32]) -> (Vec<u32>, Vec<crate::parts::distinct::CurvePoint>) {
+        let leaves = compact(labels);
+        let mut tree = crate::parts::merge_tree::MergeTree::from_leaves(&self.pop, leaves, self.params.floor());
+        // the first round's typical variance stays the yardstick: a refit's larger parts have larger variances,
+        // and with its own yardstick every round would merge a few more (lion-poses: 43 -> 40 -> 36 -> 34)
+        let yardstick = self.merge_tree.as_ref().map_or_else(|| tree.middle_typical(), |first| first.typical);
+        tree.rescore(yardstick);
+        let count = tree.decided_count(self.params.distinct_ratio);
+        let merged = tree.labels_at(count);
+        let curve = tree.curve(count);
+        if self.merge_tree.is_none() {
+            self.merge_tree = Some(tree);
+            self.tree_count = Some(count);
+        }
+        (merged, curve)
+    }
+
+    /// [`PartRule::Tree`] with `target_parts`: the merge tree's partition with `n` parts, when the tree holds that
+    /// count (the fitted parts' tree: from the first final AECM's parts down to one).
+    pub(super) fn tree_partition(&self, n: usize) -> Option<Vec<u32>> {
+        let t = self.merge_tree.as_ref()?;
+        let (most, fewest) = t.counts();
+        (fewest..=most).contains(&n).then(|| t.labels_at(n))
+    }
+}
+
+/// The number of parts of [`Params::start_labels`], once they are found to be a start for `pop`: one label per
+/// vertex, with the merge tree's part rule.
+pub(super) fn check_start_labels(start: &[u32], pop: &Population, params: &Params) -> Result<usize> {
+    if start.len() != pop.n_vertices() {
+        return Err(Error::Params(format!(
+            "startLabels has {} labels for a population of {} vertices: give one label per vertex",
+            start.len(),
+            pop.n_vertices()
+        )));
+    }
+    if params.part_rule != PartRule::Tree || !params.refine {
+        return Err(Error::Params(
+            "startLabels needs the merge tree's part rule (partRule \"tree\", refine on): Algorithm 1 starts from its own k-means++ draw".into(),
+        ));
+    }
+    // (the count is checked against the population with any count asked for, in Pipeline::new)
+    Ok(compact(start).iter().max().map_or(0, |&l| l as usize + 1))
+}
+
+/// [`PartRule::Tree`]'s start ([`Pipeline::from_tree`]): the patches' tree cut at [`TREE_START_RATIO`] times its
+/// [`MergeTree::merge_yardstick`] (with `target_parts`: at [`TREE_COUNT_START_RATIO`] times its typical variance),
+/// not cut when it has fewer than [`TREE_CUT_LEAVES`] patches; then, when the part rule decides the count, the
+/// start's flesh dissolved ([`dissolve_start_flesh`]). Returns the cut and the start (compact labels).
+pub(super) fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32>, Vec<u32>)> {
+    // the patches' own yardstick, not the variance floor: on clean data the patches fit far below the floor,
+    // and the floor as the yardstick merged the generated hand's fingertips before the AECM
+    let t0 = crate::clock::now_ms();
+    let mut tree = crate::parts::merge_tree::MergeTree::build(pop, PATCH_VARIANCE_FLOOR);
+    if crate::trace::enabled() {
+        crate::trace_line!("tree built ({:.1} ms)", crate::clock::now_ms() - t0);
+    }
+    let exact = params.target_parts.is_some();
+    let ratio = if exact { TREE_COUNT_START_RATIO } else { TREE_START_RATIO };
+    if !exact {
+        tree.rescore(tree.merge_yardstick().max(PATCH_VARIANCE_FLOOR));
+    }
+    let uncut = tree.n_leaves < TREE_CUT_LEAVES;
+    let count = if uncut { tree.n_leaves } else { tree.decided_count(ratio) };
+    let start = count.max(params.target_parts.unwrap_or(1));
+    let cut = tree.labels_at(start);
+    let most = start.max(params.target_parts.unwrap_or(0));
+    crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
+    if crate::trace::enabled() {
+        crate::trace_line!("tree: {} patches, start at {start} parts", tree.n_leaves);
+    }
+    // (uncut, the start's parts are single patches of about 6 vertices, too few to tell a slice of a band from a
+    // part of its own: on the skinned characters the flesh rule there moved the parts' agreement with the
+    // skeleton by -0.05 to +0.04)
+    let labels =
+        if params.refine && !uncut && !exact { dissolve_start_flesh(pop, data, &cut, params) } else { cut.clone() };
+    Ok((cut, labels))
+}
+
+/// [`PartRule::Tree`]: the part rule's first rule ([`crate::parts::distinct::dissolve_flesh`]) on the start, before any
+/// AECM: each start part's component in closed form ([`crate::mfa::init::components_from_labels`]), and a part
+/// whose motion is a blend of two neighbours' goes to them. A start cut from the patches has slices of the
+/// skinning bands between bones; left in, the first AECM makes each a band part of its own, how many depending on
+/// small changes of the data (horse-gallop with one of 49 frames dropped: 7-15 dissolved after the AECM), and
+/// the decided count with them (23-29 parts). Dissolved on the start, 11-13 go on the horses and the lion, the
+/// AECM starts with fewer components and the rounds after it find next to no flesh. Compact labels.
+pub(super) fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &Params) -> Vec<u32> {
+    let t0 = crate::clock::now_ms();
+    let comps = crate::mfa::init::components_from_labels(data, labels, params.floor());
+    let mut model = crate::mfa::aecm::model_of(data, &comps, compact(labels));
+    let dissolved = crate::parts::distinct::dissolve_flesh(&mut model, pop, params.blend_ratio);
+    if dissolved > 0 {
+        crate::parts::islands::connect_parts(&mut model, pop, false, params.min_part_vertices);
+    }
+    if crate::trace::enabled() {
+        crate::trace_line!(
+            "start: {dissolved} parts dissolved as flesh before the first AECM ({:.1} ms)",
+            crate::clock::now_ms() - t0
+        );
+    }
+    compact(&model.labels)
+}
