@@ -6,6 +6,7 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { viewAxes } from './view-axes.js';
 import { flatFacesMaterial, orderFaces } from './flat-faces.js';
 import { outgrows } from './views/frame-reach.js';
+import { setLabels, placeLabels } from './view-labels.js';
 
 THREE.ColorManagement.enabled = false; // colours go to the screen as given: exact pixels for the tests
 
@@ -153,41 +154,9 @@ export class Viewer {
     this.requestRender();
   }
 
-  // One label per mesh shown side by side (HTML over the canvas, .pane-label), placed over its mesh at every
-  // frame (placeLabels): the panes say what they are where they are, also after the camera moved.
-  setLabels(texts) {
-    this.labels ??= [];
-    while (this.labels.length > texts.length) this.labels.pop().remove();
-    while (this.labels.length < texts.length) {
-      const el = document.createElement('div');
-      el.className = 'pane-label';
-      this.container.appendChild(el);
-      this.labels.push(el);
-    }
-    texts.forEach((t, k) => {
-      this.labels[k].textContent = t;
-      this.labels[k].hidden = !t;
-    });
-  }
-
-  // Each label centred over the top of its mesh's box on the screen, kept inside the view.
-  placeLabels() {
-    if (!this.labels?.length) return;
-    const w = this.container.clientWidth;
-    const h = this.container.clientHeight;
-    const { up } = this.axes;
-    this.labels.forEach((el, k) => {
-      const s = this.slots[k];
-      if (!s || el.hidden) return;
-      const box = new THREE.Box3().setFromObject(s.mesh);
-      const top = box.getCenter(new THREE.Vector3()).setComponent(up, box.max.getComponent(up)).project(this.camera);
-      const half = el.offsetWidth / 2;
-      const x = Math.min(Math.max(((top.x + 1) / 2) * w, half + 2), w - half - 2);
-      const y = Math.min(Math.max(((1 - top.y) / 2) * h, el.offsetHeight + 2), h - 2);
-      el.style.left = `${x}px`;
-      el.style.top = `${y}px`;
-    });
-  }
+  // the panes' labels (view-labels.js)
+  setLabels(texts) { setLabels(this, texts); }
+  placeLabels() { placeLabels(this); }
 
   // Direction from the target to the camera when framing: across the view axis, a little from above.
   frameDirection() {
@@ -334,6 +303,17 @@ export class Viewer {
     const r = this.renderer.domElement.getBoundingClientRect();
     const v = new THREE.Vector3(p[0], p[1], p[2]).add(this.slots[slot].mesh.position).project(this.camera);
     return { x: r.left + ((v.x + 1) / 2) * r.width, y: r.top + ((1 - v.y) / 2) * r.height };
+  }
+
+  /** The angle (radians, clockwise on the screen) of client point (x, y) around screen point `pivot`, or null
+   * within `near` pixels of it (where the angle jumps). */
+  angleAround(pivot, x, y, near) {
+    return this.screenDistance(pivot, { x, y }) <= near ? null : Math.atan2(y - pivot.y, x - pivot.x);
+  }
+
+  /** Pixels between screen points a and b ({ x, y }). */
+  screenDistance(a, b) {
+    return Math.hypot(a.x - b.x, a.y - b.y);
   }
 
   /** The vertex under a screen point: { slot, vertex } or null (nearest corner of the hit triangle). */

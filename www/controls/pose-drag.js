@@ -17,9 +17,6 @@ const $ = (id) => document.getElementById(id);
 // greyed, and the joint is marked (pose.js poseView, views/joint-marker.js).
 const NEAR = 8;
 const SWEPT = 1e-6; // radians: less is rounding
-/** The angle (radians, clockwise on the screen) of client point (x, y) around screen point `pivot`, or null
- * within `near` pixels of it (where the angle jumps). */
-const angleAround = (pivot, x, y, near) => (Math.hypot(x - pivot.x, y - pivot.y) <= near ? null : Math.atan2(y - pivot.y, x - pivot.x));
 const MIN_REACH = 60; // pixels: a part small on the screen still turns by at most 1 radian per 60 px
 
 // How far the vertices that `bone`'s turn moves reach from the joint on the screen (pixels): the largest
@@ -31,7 +28,7 @@ function reachOnScreen(positions, moves, pivot) {
   for (let v = 0; v < n; v += step) {
     if (!moves(v)) continue;
     const p = viewer.screenPoint(0, [positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]]);
-    far = Math.max(far, Math.hypot(p.x - pivot.x, p.y - pivot.y));
+    far = Math.max(far, viewer.screenDistance(p, pivot));
   }
   return Math.max(far, MIN_REACH);
 }
@@ -60,8 +57,8 @@ export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) 
     query('poseJoint', bone).then((j) => {
       if (drag !== mine) return;
       mine.pivot = viewer.screenPoint(hit.slot, j);
-      mine.last = angleAround(mine.pivot, e.clientX, e.clientY, NEAR);
-      mine.lastR = Math.hypot(e.clientX - mine.pivot.x, e.clientY - mine.pivot.y);
+      mine.last = viewer.angleAround(mine.pivot, e.clientX, e.clientY, NEAR);
+      mine.lastR = viewer.screenDistance({ x: e.clientX, y: e.clientY }, mine.pivot);
       const sk = pose.skeleton;
       const inTree = (b) => { for (; b >= 0; b = sk.parent[b]) if (b === bone) return true; return false; };
       const turns = sk.order.map((_, b) => inTree(b));
@@ -76,8 +73,8 @@ export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) 
   }, { capture: true });
   window.addEventListener('pointermove', async (e) => {
     if (!drag?.pivot) return;
-    const now = angleAround(drag.pivot, e.clientX, e.clientY, NEAR);
-    const r = Math.hypot(e.clientX - drag.pivot.x, e.clientY - drag.pivot.y);
+    const now = viewer.angleAround(drag.pivot, e.clientX, e.clientY, NEAR);
+    const r = viewer.screenDistance({ x: e.clientX, y: e.clientY }, drag.pivot);
     if (now === null) {
       drag.last = null;
       return;
