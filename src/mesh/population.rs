@@ -330,7 +330,7 @@ impl Population {
     }
 
     /// An order of the poses that depends on the coordinates alone (the part rule's farthest-first order,
-    /// [`crate::parts::merge_tree::spread_poses`]): `compute` runs the first time it is asked for, and the
+    /// [`crate::parts::patches::spread_poses`]): `compute` runs the first time it is asked for, and the
     /// population and its clones keep the answer until their shapes are replaced.
     pub fn pose_order(&self, compute: impl FnOnce() -> Vec<usize>) -> &[usize] {
         self.derived.0.pose_order.get_or_init(compute)

@@ -1,5 +1,5 @@
 //! A registered coarse mesh of a large population, on which the parts are decided ([`super::hierarchy`]):
-//! the patches of [`super::merge_tree::seeded_patches`] at about `target` vertices (farthest-point seeds by
+//! the patches of [`super::patches::seeded_patches`] at about `target` vertices (farthest-point seeds by
 //! edge hops, every vertex to its nearest seed), each patch one coarse vertex. Hops, not the poses' edge
 //! lengths: the coarse mesh is then the same whichever poses are given, and the decisions on it move less
 //! with one pose dropped (the subdivided horse-gallop with each of its 49 poses dropped in turn: 23-25 parts,
@@ -11,7 +11,7 @@
 //!
 //! A part is a union of patches there; [`CoarseMesh::to_fine`] gives every vertex its patch's label.
 
-use super::merge_tree::seeded_patches;
+use super::patches::seeded_patches;
 use crate::mesh::Population;
 
 /// A population's coarse mesh (module doc).

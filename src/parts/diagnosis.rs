@@ -220,7 +220,8 @@ mod tests {
         let d = diagnose_fit(&g.population, &r);
         assert!(d.articulated, "{d:?}");
         assert!(
-            d.reason.contains("what the part rule decided in this fit") && d.reason.contains("the 3 parts asked for"),
+            d.reason.contains("the part rule decided in this fit")
+                && d.reason.contains("the 3 parts shown (the count asked for)"),
             "{}",
             d.reason
         );

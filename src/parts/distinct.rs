@@ -36,9 +36,9 @@ fn relative_motion(rotations: &[Mat3], r: usize) -> Vec<Mat3> {
 pub const BLEND_REFERENCES: usize = 24;
 
 /// The poses [`blend_ratio`] takes as the bind pose in turn: every pose, or up to [`BLEND_REFERENCES`] spread
-/// ones ([`super::merge_tree::spread_poses`]). Independent of the poses' order.
+/// ones ([`super::patches::spread_poses`]). Independent of the poses' order.
 pub fn blend_references(pop: &Population) -> Vec<usize> {
-    super::merge_tree::spread_poses(pop, BLEND_REFERENCES)
+    super::patches::spread_poses(pop, BLEND_REFERENCES)
 }
 
 /// How far part k's motion is from a fixed in-between of two of its neighbours' motions, as a fraction of how far

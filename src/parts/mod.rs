@@ -6,6 +6,7 @@
 //! - [`labels`]: small operations on part labels (renumbering, which parts touch).
 //! - [`motion_labels`]: final labels by least-squares rigid motion (boundaries on the joints).
 //! - [`islands`]: every part one connected piece of the mesh (islands moved to the best adjacent part).
+//! - [`patches`]: the mesh cut into small compact pieces (farthest-point seeds, geodesic), and well-spread poses.
 //! - [`merge_tree`]: patches merged greedily by the part rule's score, every merge recorded (the default start
 //!   and the count read off the tree).
 //! - [`coarse_mesh`]: a registered coarse mesh of a large population (the patches' seeds), to decide on.
@@ -24,6 +25,7 @@
 pub mod labels;
 pub mod motion_labels;
 pub mod islands;
+pub mod patches;
 pub mod merge_tree;
 pub mod coarse_mesh;
 pub mod distinct;
