@@ -50,7 +50,7 @@
 import init, * as wasm from './pkg/posemfa.js';
 import wasmUrl from './pkg/posemfa_bg.wasm?url';
 import { Teacher } from './teach-worker.js';
-import { poseQueries } from './pose-queries.js';
+import { workerQueries } from './worker-queries.js';
 import { FitMemory } from './fit-memory.js';
 
 const SLICE_MS = 40; // one fitter.run(budget) call; the worker reads its messages between slices
@@ -350,35 +350,10 @@ async function teach(data) {
   }
 }
 
-// Questions about the model or the population; each returns plain data or typed arrays. `shown`: a mesh
-// descriptor ({kind: 'pose' | 'linear' | ..., see Shown in src/export/shown.rs}).
-const POPULATION_QUERIES = {
-  linearInterpolate: (i, j, t) => (model ?? population).linearInterpolate(i, j, t),
-  objText: (shown, header) => (model ?? population).objText(shown, header),
-  objScene: (meshes, header) => (model ?? population).objScene(meshes, header),
-  originalLengths: (values) => population.originalLengths(Float64Array.from(values)),
-};
-const QUERIES = {
-  reconstruct: (i) => model.reconstruct(i),
-  latentPlaced: (i) => model.latentPlaced(i),
-  vertexErrors: (i) => model.vertexErrors(i),
-  responsibilities: (v) => model.responsibilities(v),
-  rotationAngles: (part, ref) => model.rotationAngles(part, ref),
-  toJson: () => model.toJson(),
-  save: (withPoses) => model.save(!!withPoses), // the model file (.posemfa)
-  interpolate: (i, j, t, opts) => model.interpolate(i, j, t, opts ?? {}),
-  rig: (opts) => model.rig(opts ?? {}),
-  articulationReport: (i, j, t) => model.articulationReport(i, j, t),
-  // the merge tree's partition with n parts, coloured like the fitted parts where a part is the same
-  treePartition: (n) => memory.treePartition(population, n),
-  ...poseQueries(() => model, () => modelGeneration), // pose mode (issue 28): www/pose-queries.js
-};
-
-// Questions that need no population: the fit form's fields checked by the core.
-const FREE_QUERIES = {
-  formParams: (base, fields, vertices) => wasm.formParams(base, fields, vertices ?? undefined),
-  rigFields: (fields) => wasm.rigFields(fields),
-};
+// The questions (www/worker-queries.js): about the model, the population, or neither.
+const { POPULATION_QUERIES, QUERIES, FREE_QUERIES } = workerQueries({
+  wasm, model: () => model, population: () => population, memory, generation: () => modelGeneration,
+});
 
 function query({ id, method, args }) {
   try {
