@@ -238,3 +238,15 @@ fn usd_read_survives_mutated_usdc() {
         "usd_read_survives_mutated_usdc: {n} mutations, {loaded} loaded, {refused} refused, none aborted or panicked"
     );
 }
+
+dual_test! {
+    /// model_file target: a model file whose header names two poses alike (a mutated byte of "pose02.obj").
+    /// The population's check of repeated names answered with the pose's name, not the model file's; now the
+    /// model file is refused by its own name, and the fuzz target's whole check passes on it.
+    fn model_file_with_a_repeated_pose_name_is_refused_by_its_name() {
+        let data = include_bytes!("fuzz_regressions/model_file-repeated-pose-name.posemfa");
+        let e = posemfa::model_file::ModelFile::from_bytes("fuzz.posemfa", data).unwrap_err().to_string();
+        assert!(e.starts_with("model file fuzz.posemfa: two poses are named 'pose01.obj'"), "{e}");
+        posemfa::fuzzing::check_model_file(data);
+    }
+}

@@ -403,8 +403,13 @@ impl Population {
                 ),
             });
         }
-        if let Some(e) = repeated_name(names.iter().map(|n| n.as_str())) {
-            return Err(e);
+        let mut sorted: Vec<&str> = names.iter().map(|n| n.as_str()).collect();
+        sorted.sort_unstable();
+        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+            return Err(Error::ModelFile {
+                file: file.into(),
+                message: format!("two poses are named '{}'; the file is damaged: save the model again", w[0]),
+            });
         }
         Ok(Population::assembled(names, faces, points, n_vertices, normalization, source))
     }
