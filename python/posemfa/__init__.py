@@ -86,9 +86,9 @@ def fit(points, faces=None, *, names=None, progress=None, **params):
     points: a :class:`Poses` (from :func:`read`: the CLI's population bit for bit) or an array (n_poses,
     n_vertices, 3) with ``faces`` (n_faces, 3). params: the CLI's fit options with ``_`` for ``-`` (defaults as
     ``posemfa fit --help`` prints them): parts=11, seed=0, tol=1e-3, max_iter=300, floor=1e-7,
-    literal_eq18=False, no_px=False, no_accel=False, part_rule='tree', distinct_ratio, blend_ratio,
-    refine_threshold=None, max_subparts, refine_tol, no_refine=False, subset=2000, coarse=8000, bones=None
-    (auto) or N, start_labels=None.
+    literal_eq18=False, no_px=False, no_accel=False, part_rule='tree', distinct_ratio=4.0, blend_ratio=0.1,
+    refine_threshold=None, max_subparts=6, refine_tol=1e-2, no_refine=False, subset=2000, coarse=8000,
+    bones=None (auto) or N, start_labels=None.
 
     progress(step) -> bool is called between AECM iterations with a dict (stage 'coarse' | 'refine' | 'final',
     part, of, sub_parts, iteration, total_iterations, log_likelihood, parts, run_finished); returning False stops

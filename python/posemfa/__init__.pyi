@@ -146,12 +146,13 @@ def fit(points: Union[Poses, npt.ArrayLike], faces: Optional[npt.ArrayLike] = No
         names: Optional[Sequence[str]] = None, progress: Optional[Callable[[Step], bool]] = None,
         parts: int = 11, seed: int = 0, tol: float = 1e-3, max_iter: int = 300, floor: float = 1e-7,
         literal_eq18: bool = False, no_px: bool = False, no_accel: bool = False, part_rule: str = "tree",
-        distinct_ratio: Optional[float] = None, blend_ratio: Optional[float] = None,
-        refine_threshold: Optional[float] = None, max_subparts: Optional[int] = None,
-        refine_tol: Optional[float] = None, no_refine: bool = False, subset: int = 2000, coarse: int = 8000,
-        bones: Optional[int] = None, start_labels: Optional[Sequence[int]] = None) -> Model:
-    """Fits (the GIL released). progress(step) -> bool between iterations; False raises Cancelled (with
-    .partial). None for distinct_ratio, blend_ratio, max_subparts, refine_tol: the CLI's defaults."""
+        distinct_ratio: float = 4.0, blend_ratio: float = 0.1, refine_threshold: Optional[float] = None,
+        max_subparts: int = 6, refine_tol: float = 1e-2, no_refine: bool = False, subset: int = 2000,
+        coarse: int = 8000, bones: Optional[int] = None, start_labels: Optional[Sequence[int]] = None) -> Model:
+    """Fits (the GIL released); the parameters are `posemfa fit`'s options with `_` for `-`, with its defaults
+    (refine_threshold None: the tree rule; a value implies part_rule='threshold'; bones None: auto).
+    progress(step) -> bool between iterations; False raises Cancelled (with .partial), an exception in it is
+    raised."""
 
 def load(path: PathLike, poses: Optional[Poses] = None) -> Model:
     """Reads a model file; poses: those it was fitted to, for a file saved without them."""

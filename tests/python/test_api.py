@@ -158,3 +158,17 @@ def test_arrays_in_keep_the_given_order_and_units():
     assert m.poses.names == [f"pose {i}" for i in range(1, 7)]
     assert np.abs(m.poses.points - pts).max() < 1e-5 * np.ptp(pts)
     assert m.rmse == pytest.approx(posemfa.fit(g).rmse * 100.0, rel=1e-3)
+
+
+def test_the_stubs_defaults_are_the_fits(model):
+    """__init__.pyi states the defaults of fit: they are the parameters a fit without options used."""
+    import ast
+    stub = ast.parse(open(os.path.join(os.path.dirname(posemfa.__file__), "__init__.pyi")).read())
+    fit = next(f for f in stub.body if isinstance(f, ast.FunctionDef) and f.name == "fit")
+    defaults = {a.arg: ast.literal_eval(d) for a, d in zip(fit.args.kwonlyargs, fit.args.kw_defaults) if d is not None}
+    names = {"parts": "parts", "seed": "seed", "tol": "tol", "max_iter": "maxIter", "floor": "varianceFloor",
+             "distinct_ratio": "distinctRatio", "blend_ratio": "blendRatio", "max_subparts": "maxSubparts",
+             "refine_tol": "refineTol", "subset": "subsetVertices", "coarse": "coarseVertices"}
+    used = model.params
+    for py, field in names.items():
+        assert defaults[py] == used[field], (py, defaults[py], used[field])
