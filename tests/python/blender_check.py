@@ -116,6 +116,18 @@ for k, f in enumerate(frames):
         fh.write("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in points[k].tolist()))
         fh.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in tris.tolist()))
 
+# what the modal operator does with Esc: the fit in a thread, its progress callback answering False
+import threading  # noqa: E402
+job = addon.Job(bpy.context, ob, bones, influences, "fitted", joints, residual)
+seen = []
+job_progress = job.progress
+job.progress = lambda step: (seen.append(step["stage"]), job_progress(step))[1]
+job.cancel = True
+worker = threading.Thread(target=job.run_in_thread)
+worker.start()
+worker.join()
+cancelled = {"error": type(job.error).__name__, "steps": len(seen), "built": job.rig is not None}
+
 ret = bpy.ops.posemfa.learn_rig(bones=bones, influences=influences, weights="fitted", joints=joints,
                                 residual=residual)
 assert ret == {"FINISHED"}, ret
@@ -132,7 +144,7 @@ result = {
     "vertex_groups": len(ob.vertex_groups),
     "colour_attribute": ob.data.color_attributes.active_color.name,
     "action_frames": list(arm.animation_data.action.frame_range),
-    "bone_lengths_constant": True,
+    "cancelled_in_thread": cancelled,
 }
 # fixed-length joints: every bone's head keeps its distance to its parent's head over the frames
 dist = []

@@ -71,6 +71,8 @@ def check(result, report, joints="fixed", residual=False):
     assert result["vertex_groups"] >= result["bones"] and result["colour_attribute"] == "posemfa parts"
     if joints == "fixed":
         assert result["bone_length_spread"] < 1e-4
+    # Esc in the modal operator: the threaded fit stops at its first progress call, raising Cancelled, no rig
+    assert result["cancelled_in_thread"] == {"error": "Cancelled", "steps": 1, "built": False}
 
 
 @pytest.mark.parametrize("joints,residual", [("fixed", False), ("free", False), ("fixed", True)])
