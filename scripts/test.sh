@@ -4,7 +4,7 @@
 #   2. wasm-node     cargo test --target wasm32-unknown-unknown --lib --test '*'   (wasm-bindgen-test-runner, Node)
 #   3. wasm-chromium the same in headless Chromium (WASM_BINDGEN_USE_BROWSER=1, /usr/bin/chromedriver)
 #   4. page          build:wasm + vite build into dist/ + the debug CLI, then `node --test tests/e2e/*.test.mjs`
-#   5. python        the release CLI + `pip install .` (the wheel, into .venv-python), then pytest tests/python:
+#   5. python        the CLI + `pip install .` (the wheel, into .venv-python), then pytest tests/python:
 #                    the Python package against the CLI, and the Blender add-on in headless Blender
 # Needs what scripts/setup.sh installs.
 # Every stage has a time limit of about 3-4x what it takes on a quiet 2-core machine (native 6 min, wasm-node
@@ -221,24 +221,26 @@ if want page; then
 fi
 
 # ------------------------------------------------------------------ 5. python
-# The release CLI (the tests compare with it), the package built by maturin from pyproject.toml (profile python,
-# target/python/) and installed into .venv-python (scripts/setup.sh), then pytest: tests/python/ (the API, bad
-# input, horse-poses against the CLI, trimesh, the Blender add-on in headless Blender).
+# The CLI the tests compare with (the dev build the other stages made: its fits are the release build's, number
+# for number, and a release build with LTO would add minutes to CI), the package built by maturin from
+# pyproject.toml (profile python, target/python/) and installed into .venv-python (scripts/setup.sh), then
+# pytest: tests/python/ (the API, bad input, horse-poses against the CLI, trimesh, the Blender add-on in
+# headless Blender).
 if want python; then
-  banner python "release CLI + pip install . (.venv-python), then pytest tests/python"
+  banner python "CLI + pip install . (.venv-python), then pytest tests/python"
   t0=$(date +%s)
   [ -x .venv-python/bin/python ] || { echo "[test] .venv-python missing: run npm run setup"; exit 1; }
-  if ! { timeout 1500 cargo build --quiet --release --bin posemfa \
+  if ! { timeout 1500 cargo build --quiet --bin posemfa \
     && timeout 1500 env PATH="$root/.venv-python/bin:$PATH" .venv-python/bin/python -m pip install --quiet \
       --disable-pip-version-check --no-build-isolation --force-reinstall --no-deps . </dev/null; }; then
-    summary+=("$(printf '%-14s FAILED after %4d s: the release CLI or pip install .' python-build "$(( $(date +%s) - t0 ))")")
+    summary+=("$(printf '%-14s FAILED after %4d s: the CLI or pip install .' python-build "$(( $(date +%s) - t0 ))")")
     print_summary
-    printf '\n[test] FAILED at stage python: cargo build --release --bin posemfa or pip install .\n'
+    printf '\n[test] FAILED at stage python: cargo build --bin posemfa or pip install .\n'
     exit 1
   fi
-  summary+=("$(printf '%-14s ok     %4d s: release CLI + wheel installed' python-build "$(( $(date +%s) - t0 ))")")
+  summary+=("$(printf '%-14s ok     %4d s: CLI + wheel installed' python-build "$(( $(date +%s) - t0 ))")")
   run_stage python "pytest tests/python (the package, the Blender add-on)" \
-    timeout 1500 env POSEMFA_CLI="$root/target/release/posemfa" \
+    timeout 1500 env POSEMFA_CLI="$root/target/debug/posemfa" \
     .venv-python/bin/python -m pytest -p no:cacheprovider -ra -v tests/python
 fi
 

@@ -24,6 +24,9 @@ async function fromFile(file, name, out) {
       out.problems.push({ file: name, line: null, message: `cannot open the zip archive (${e.message || e})` });
       return;
     }
+    if (!Object.keys(entries).length) {
+      out.problems.push({ file: name, line: null, message: 'the zip archive holds no mesh or model file (.obj, .ply, .glb, .gltf, .pc2 / .mdd, .fbx, .usd*, .posemfa): zip the pose files themselves' });
+    }
     for (const [inner, bytes] of Object.entries(entries)) out.files.push({ name: `${name}/${inner}`, bytes });
   } else if (isMeshFile(name)) {
     out.files.push({ name, bytes: new Uint8Array(await file.arrayBuffer()) });

@@ -155,7 +155,7 @@ test('pose mode says which pose its rest pose is (the rig\'s bind pose: the file
 
   await enterPoseMode(page);
   await page.waitForFunction(() => /^Pose mode/.test(document.getElementById('caption').textContent));
-  assert.equal(await page.locator('#caption').innerText(), 'Pose mode: the rest pose, the rig\'s bind pose (“reference.obj” rebuilt from its parts); drag a part to turn it about its joint');
+  assert.equal(await page.locator('#caption').innerText(), 'Pose mode: the rest pose, the rig\'s bind pose (“reference.obj” rebuilt from its parts); drag a part to turn it about its joint (one too thin to grab: choose it in the Part list, then ↺ / ↻)');
   assert.deepEqual(await pressed(), [], 'a made pose is none of the training poses');
   // the rest pose is that training pose (as solved onto the rig), not another one
   const rest = await page.evaluate(() => window.posemfa.pose.positions());

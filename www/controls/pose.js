@@ -45,7 +45,7 @@ export async function poseView() {
     ? `Added ${frameWords()} (${pose.frame + 1} of ${pose.frames.names.length}) solved onto the rig: E_RMS ${eRmsText(pose.frames.eRms[pose.frame])} (${ERMS_UNIT})`
     : pose.whole || pose.bone >= 0
       ? `Pose mode: ${madeWords()} (drag a part to turn it about its joint)`
-      : `Pose mode: ${madeWords()}; drag a part to turn it about its joint`;
+      : `Pose mode: ${madeWords()}; drag a part to turn it about its joint (one too thin to grab: choose it in the Part list, then ↺ / ↻)`;
   // while a part is dragged, what turns keeps its colours and the rest is greyed (pose-parts.js)
   const colours = !frames && pose.highlight >= 0
     ? draggedColours(state.colours.final.vertexColours, pose.skeleton, pose.highlight)

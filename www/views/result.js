@@ -124,7 +124,9 @@ function showResult() {
   // a cancelled fit's iterations are those of the run it stopped in, which need not be the final stage's
   const where = s?.cancelled ? 'in the run where the fit was cancelled' : 'in the final stage';
   $('iterations').textContent = s ? `${s.iterations} ${where}${s.cancelled ? '' : how}` : '–';
-  $('fit-time').textContent = s ? `${Math.round(s.fitMs)} ms` : '–';
+  // a model file opened: no fit ran here; its fit's time is the one it was saved with
+  const savedMs = (s?.stageStats ?? []).reduce((t, x) => t + (x.ms ?? 0), 0);
+  $('fit-time').textContent = !s ? '–' : s.opened ? `none: opened from ${s.opened} (its fit took ${Math.round(savedMs)} ms)` : `${Math.round(s.fitMs)} ms`;
   $('truth-acc').textContent = accuracyText(s?.groundTruth);
   $('truth-acc').classList.toggle('good', s?.groundTruth?.ari >= 0.95);
   // the core's verdict (model::diagnosis), in its own words, next to the result
@@ -201,10 +203,11 @@ function fitStarted() {
 function fitEnded(model, { kept = null, runs = null } = {}) {
   const { cancelled, fitMs, logLikelihood, iterations } = model.summary;
   // a cancelled first fit shows where it stopped: not "best", it may be below what a finished fit reaches
-  $('stage').textContent = kept ? `new fit ${kept === 'cancel' ? 'cancelled' : 'failed'}: the finished fit before it is kept` : cancelled ? 'cancelled: where the fit stopped' : 'done';
-  if (kept) $('iteration').textContent = `${iterations} in the final stage`;
+  const opened = model.summary.opened;
+  $('stage').textContent = kept ? `new fit ${kept === 'cancel' ? 'cancelled' : 'failed'}: the finished fit before it is kept` : cancelled ? 'cancelled: where the fit stopped' : opened ? `opened from ${opened}: not fitted here` : 'done';
+  if (kept || opened) $('iteration').textContent = `${iterations} in the final stage`;
   else if (state.lastStep) $('iteration').textContent = `${state.lastStep.iteration} (total ${state.lastStep.totalIterations})`;
-  $('elapsed').textContent = `${(fitMs / 1000).toFixed(2)} s`;
+  $('elapsed').textContent = opened ? '– (opened, not fitted)' : `${(fitMs / 1000).toFixed(2)} s`;
   // the model's own final value (the plot's last point), not the last progress message seen
   $('loglik').textContent = logLikelihood?.length ? natsText(logLikelihood[logLikelihood.length - 1]) : '–';
   const final = logLikelihood ?? [];
