@@ -48,7 +48,7 @@ export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) 
     e.preventDefault();
     const bone = pose.skeleton.boneOfVertex[hit.vertex];
     update({ hoverPart: null }); // the hover box goes while a part is dragged (it would cover what moves)
-    const mine = { bone, pivot: null, last: null, lastR: 0, reach: MIN_REACH, remembered: false };
+    const mine = { bone, slot: hit.slot, joint: null, pivot: null, last: null, lastR: 0, x: e.clientX, y: e.clientY, reach: MIN_REACH, remembered: false };
     drag = mine;
     pose.dragging = bone;
     pose.bone = bone;
@@ -56,6 +56,7 @@ export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) 
     showAngle();
     query('poseJoint', bone).then((j) => {
       if (drag !== mine) return;
+      mine.joint = j;
       mine.pivot = viewer.screenPoint(hit.slot, j);
       mine.last = viewer.angleAround(mine.pivot, e.clientX, e.clientY, NEAR);
       mine.lastR = viewer.screenDistance({ x: e.clientX, y: e.clientY }, mine.pivot);
@@ -73,6 +74,16 @@ export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) 
   }, { capture: true });
   window.addEventListener('pointermove', async (e) => {
     if (!drag?.pivot) return;
+    // the joint where the view shows it now: the camera may have moved since the press (a glide of the orbit
+    // controls, a new frame), and an angle swept around where the joint was is not one swept around the joint
+    const pivot = viewer.screenPoint(drag.slot, drag.joint);
+    if (viewer.screenDistance(pivot, drag.pivot) > 1e-3) {
+      drag.pivot = pivot;
+      drag.last = viewer.angleAround(pivot, drag.x, drag.y, NEAR);
+      drag.lastR = viewer.screenDistance({ x: drag.x, y: drag.y }, pivot);
+    }
+    drag.x = e.clientX;
+    drag.y = e.clientY;
     const now = viewer.angleAround(drag.pivot, e.clientX, e.clientY, NEAR);
     const r = viewer.screenDistance({ x: e.clientX, y: e.clientY }, drag.pivot);
     if (now === null) {
