@@ -439,6 +439,14 @@ impl FitModel {
         &self.result.model
     }
 
+    /// The figures of the fit: those a model file was saved with, else measured on the poses now.
+    fn figures(&self) -> std::borrow::Cow<'_, crate::model_file::Summary> {
+        match &self.about.saved {
+            Some(saved) => std::borrow::Cow::Borrowed(saved),
+            None => std::borrow::Cow::Owned(crate::model_file::Summary::measure(&self.pop, &self.result)),
+        }
+    }
+
     /// Refuses `what` (a view of the data) for a model opened without its poses.
     fn needs_data(&self, what: &str) -> Result<(), JsValue> {
         if self.about.has_data {
@@ -550,14 +558,8 @@ impl FitModel {
     pub fn summary(&self) -> Result<JsValue, JsValue> {
         let m = self.model();
         let s = &self.result.stages;
-        let measured;
-        let figures = match &self.about.saved {
-            Some(saved) => saved,
-            None => {
-                measured = crate::model_file::Summary::measure(&self.pop, &self.result);
-                &measured
-            }
-        };
+        let figures = self.figures();
+        let figures = &*figures;
         let rmse = figures.rmse;
         let v = serde_json::json!({
             "hasData": self.about.has_data,
@@ -599,14 +601,8 @@ impl FitModel {
     /// The model file (.posemfa) of this fit ([`crate::model_file`]); with `with_poses`, the population's
     /// points too (a model opened without them is saved without them).
     pub fn save(&self, with_poses: bool) -> Uint8Array {
-        let measured;
-        let summary = match &self.about.saved {
-            Some(s) => s,
-            None => {
-                measured = crate::model_file::Summary::measure(&self.pop, &self.result);
-                &measured
-            }
-        };
+        let summary = self.figures();
+        let summary = &*summary;
         let fit = crate::model_file::Borrowed {
             result: &self.result,
             params: &self.about.params,
