@@ -286,3 +286,69 @@ pub fn model_file_seeds() -> Vec<(String, Vec<u8>)> {
     }
     out
 }
+
+// ------------------------------------------------------------------------------------- zip archives
+
+/// The `zip_open` target's check of one input: opening `data` as a .zip never panics nor unpacks past its
+/// budget (1 MiB here); an error names the archive; what it gives is named inside it and in natural order.
+pub fn check_zip_open(data: &[u8]) {
+    const BUDGET: u64 = 1 << 20;
+    let name = "fuzz.zip";
+    match crate::mesh::zip_archive::open(name, data, BUDGET) {
+        Err(e) => assert!(e.to_string().contains(name), "an error that does not name the archive: {e}"),
+        Ok(a) => {
+            let total: u64 = a.files.iter().map(|(_, b)| b.len() as u64).sum();
+            assert!(total <= BUDGET && total == a.unpacked, "{total} bytes unpacked, budget {BUDGET}");
+            assert!(a.files.iter().all(|(n, _)| n.starts_with("fuzz.zip/")));
+            assert!(a.files.windows(2).all(|w| crate::mesh::population::natural_cmp(&w[0].0, &w[1].0).is_le()));
+        }
+    }
+}
+
+/// Small archives for the `zip_open` target's seed corpus: pose files of a generated population, stored and
+/// deflated, with a folder, a README and a resource fork beside them.
+pub fn zip_seeds() -> Vec<(String, Vec<u8>)> {
+    use std::io::Write;
+    let Ok(g) = crate::synth::generate(&crate::synth::Spec {
+        preset: crate::synth::Preset::Snake,
+        vertices: 120,
+        poses: 3,
+        ..Default::default()
+    }) else {
+        return Vec::new();
+    };
+    let pop = g.population;
+    let mut out = Vec::new();
+    for (k, method) in [zip::CompressionMethod::Stored, zip::CompressionMethod::Deflated].into_iter().enumerate() {
+        let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let opts = zip::write::SimpleFileOptions::default().compression_method(method);
+        let mut ok = true;
+        for i in 0..pop.n_shapes() {
+            let text = crate::export::obj::write_obj(&pop.shape(i).to_vec(), &pop.faces, "seed");
+            ok &= w.start_file(format!("poses/{}", pop.names[i]), opts).is_ok() && w.write_all(text.as_bytes()).is_ok();
+        }
+        ok &= w.start_file("README.txt", opts).is_ok() && w.write_all(b"poses of a snake").is_ok();
+        ok &= w.start_file("__MACOSX/._pose01.obj", opts).is_ok() && w.write_all(b"fork").is_ok();
+        if let (true, Ok(c)) = (ok, w.finish()) {
+            out.push((format!("snake-{k}.zip"), c.into_inner()));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod zip_seed_tests {
+    /// The zip target's seeds open (their three poses, the README and the fork skipped) and pass its check.
+    #[test]
+    fn the_zip_seeds_open_and_pass_the_target_check() {
+        let seeds = super::zip_seeds();
+        assert_eq!(seeds.len(), 2);
+        for (name, bytes) in &seeds {
+            let a = crate::mesh::zip_archive::open("fuzz.zip", bytes, 1 << 20).expect("a seed opens");
+            assert_eq!(a.files.len(), 3, "{name}");
+            assert_eq!(a.skipped.len(), 2, "{name}: {:?}", a.skipped);
+            super::check_zip_open(bytes);
+            super::check_zip_open(&bytes[..bytes.len() / 2]);
+        }
+    }
+}

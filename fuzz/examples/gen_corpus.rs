@@ -355,4 +355,10 @@ fn format_seeds(root: &Path) {
         write(&model_dir, name, bytes);
     }
     println!("gen_corpus: {} model_file seeds in {}", seeds.len(), root.display());
+    let zip_dir = dir("zip_open");
+    let zips = posemfa::fuzzing::zip_seeds();
+    for (name, bytes) in &zips {
+        write(&zip_dir, name, bytes);
+    }
+    println!("gen_corpus: {} zip_open seeds in {}", zips.len(), root.display());
 }
