@@ -118,6 +118,24 @@ fi
 # reads them; scripts/fixtures/make-usd-real-size.sh does the same by hand.
 usd_core=26.11
 venv=.venv-fixtures
+# venv_with DIR LABEL PACKAGE...: a fresh venv in DIR (Debian's python3-venv installed when missing) with the
+# packages pip-installed into it, tried twice.
+venv_with() {
+  local dir=$1 label=$2 ok=0
+  shift 2
+  if ! python3 -m venv --clear "$dir" >/dev/null 2>&1; then
+    step "$label: python3 -m venv failed, installing Debian's python3-venv"
+    apt_install python3-venv
+    python3 -m venv --clear "$dir" || die "python3 -m venv $dir failed"
+  fi
+  for attempt in 1 2; do
+    if timeout 900 "$dir/bin/python" -m pip install --quiet --disable-pip-version-check "$@" </dev/null; then
+      ok=1; break
+    fi
+    step "$label: attempt $attempt failed"
+  done
+  [ "$ok" = 1 ] || die "pip install $* into $dir failed"
+}
 usd_core_version() {
   "$venv/bin/python" -c 'import pxr, importlib.metadata as m; print(m.version("usd-core"))' 2>/dev/null || true
 }
@@ -126,19 +144,7 @@ if [ "$(usd_core_version)" = "$usd_core" ]; then
 else
   step "usd-core $usd_core in $venv: installing (python3 -m venv, pip install usd-core==$usd_core, ~1 min)"
   command -v python3 >/dev/null || apt_install python3 python3-venv
-  if ! python3 -m venv --clear "$venv" >/dev/null 2>&1; then
-    step "usd-core: python3 -m venv failed, installing Debian's python3-venv"
-    apt_install python3-venv
-    python3 -m venv --clear "$venv" || die "python3 -m venv $venv failed"
-  fi
-  ok=0
-  for attempt in 1 2; do
-    if timeout 900 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "usd-core==$usd_core" </dev/null; then
-      ok=1; break
-    fi
-    step "usd-core: attempt $attempt failed"
-  done
-  [ "$ok" = 1 ] || die "pip install usd-core==$usd_core into $venv failed"
+  venv_with "$venv" "usd-core" "usd-core==$usd_core"
   [ "$(usd_core_version)" = "$usd_core" ] || die "$venv/bin/python cannot import pxr after installing usd-core"
 fi
 
@@ -154,20 +160,7 @@ if py_tools_ok; then
   step "python tools in $pyvenv (maturin, numpy, pytest, trimesh): present"
 else
   step "python tools in $pyvenv: installing (python3 -m venv, pip install maturin numpy pytest trimesh, ~1 min)"
-  if ! python3 -m venv --clear "$pyvenv" >/dev/null 2>&1; then
-    step "python: python3 -m venv failed, installing Debian's python3-venv"
-    apt_install python3-venv
-    python3 -m venv --clear "$pyvenv" || die "python3 -m venv $pyvenv failed"
-  fi
-  ok=0
-  for attempt in 1 2; do
-    if timeout 900 "$pyvenv/bin/python" -m pip install --quiet --disable-pip-version-check \
-      maturin numpy pytest trimesh </dev/null; then
-      ok=1; break
-    fi
-    step "python tools: attempt $attempt failed"
-  done
-  [ "$ok" = 1 ] || die "pip install maturin numpy pytest trimesh into $pyvenv failed"
+  venv_with "$pyvenv" "python tools" maturin numpy pytest trimesh
   py_tools_ok || die "$pyvenv/bin/python cannot import maturin, numpy, pytest and trimesh after installing them"
 fi
 
