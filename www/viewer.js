@@ -116,8 +116,11 @@ export class Viewer {
   }
 
   /** Shows the given meshes side by side: [{ positions, colours, label? }] (label: words over that mesh, when
-   * several are shown). Frames the camera when asked. */
-  show(items, { frame = false } = {}) {
+   * several are shown). Frames the camera when asked. `stay`: the same meshes changed shape (a part turned in pose
+   * mode): each keeps its place instead of being centred on its new box, so what did not move stays under the
+   * pointer. */
+  show(items, { frame = false, stay = false } = {}) {
+    stay = stay && !frame && items.length === this.slots.length;
     while (this.slots.length > items.length) this.removeSlot(this.slots.pop());
     while (this.slots.length < items.length) {
       const geometry = new THREE.BufferGeometry();
@@ -149,7 +152,7 @@ export class Viewer {
     });
     this.setLabels(items.length > 1 ? items.map((item) => item.label ?? '') : []);
     if (frame) this.framed = false; // lay out for the framing direction, not for the camera being replaced
-    this.layout();
+    if (!stay) this.layout();
     if (frame || (this.framed && !this.userMoved && outgrows(this))) this.frame(); // views/frame-reach.js
     this.requestRender();
   }

@@ -257,6 +257,15 @@ export async function canvasFingerprint(page) {
 export async function enterPoseMode(page) {
   await page.click('[data-testid=mode-pose]');
   await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
+  // the view framed for pose mode: a place on the screen measured now (a joint, a vertex) is where a press lands
+  let last = null;
+  for (let i = 0; i < 100; i++) {
+    const now = await page.evaluate(async () => JSON.stringify([window.posemfa.camera(), await window.posemfa.pose.jointOnScreen(0), window.posemfa.pose.screenOf(0)]));
+    if (now === last) return;
+    last = now;
+    await page.waitForTimeout(150);
+  }
+  throw new Error('pose mode: the view kept moving for 15 s');
 }
 
 // Moves the merge tree's parts slider to `n` as an input event does, waits until the page shows that count and

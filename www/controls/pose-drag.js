@@ -41,6 +41,7 @@ export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) 
   let busy = false;
   let pending = 0;
   view.addEventListener('pointerdown', (e) => {
+    console.log('PD', state.mode, !!pose.skeleton, e.button, JSON.stringify(viewer.pick(e.clientX, e.clientY)));
     if (state.mode !== 'pose' || !pose.skeleton || e.button !== 0) return;
     const hit = viewer.pick(e.clientX, e.clientY);
     if (!hit) return;
@@ -48,14 +49,18 @@ export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) 
     e.preventDefault();
     const bone = pose.skeleton.boneOfVertex[hit.vertex];
     update({ hoverPart: null }); // the hover box goes while a part is dragged (it would cover what moves)
-    const mine = { bone, slot: hit.slot, joint: null, pivot: null, last: null, lastR: 0, x: e.clientX, y: e.clientY, reach: MIN_REACH, remembered: false };
+    // x, y: the pointer's last place measured against the joint. The moves that come before the worker has said
+    // where the joint is wait in `early` and are measured when it has, also after a release: a quick drag on a
+    // busy machine is not lost.
+    const mine = { bone, slot: hit.slot, joint: null, pivot: null, last: null, lastR: 0, x: e.clientX, y: e.clientY,
+      early: [], released: false, reach: MIN_REACH, remembered: false };
     drag = mine;
     pose.dragging = bone;
     pose.bone = bone;
     $('pose-part').value = String(bone);
     showAngle();
     query('poseJoint', bone).then((j) => {
-      if (drag !== mine) return;
+      if (drag !== mine && !mine.released) return;
       mine.joint = j;
       mine.pivot = viewer.screenPoint(hit.slot, j);
       mine.last = viewer.angleAround(mine.pivot, e.clientX, e.clientY, NEAR);
@@ -65,61 +70,71 @@ export function installPoseDrag(pose, { remember, turn, showAngle, highlight }) 
       const turns = sk.order.map((_, b) => inTree(b));
       mine.reach = reachOnScreen(pose.positions, (v) => turns[sk.boneOfVertex[v]], mine.pivot);
       pose.dragReach = mine.reach;
-      highlight(bone, j);
+      if (!mine.released) highlight(bone, j);
+      for (const [x, y] of mine.early) moveTo(mine, x, y);
+      mine.early = [];
     }, (err) => {
       // no joint to turn about (the model changed under the press): the drag turns nothing, and says why
       if (drag === mine) drag = null;
       $('pose-status').textContent = err.message ?? String(err);
     });
   }, { capture: true });
-  window.addEventListener('pointermove', async (e) => {
-    if (!drag?.pivot) return;
+  window.addEventListener('pointermove', (e) => {
+    if (!drag) return;
+    if (drag.pivot) moveTo(drag, e.clientX, e.clientY);
+    else drag.early.push([e.clientX, e.clientY]);
+  });
+  // The pointer of the drag `g` at (x, y) on the screen: the angle swept around the joint since its last place
+  // is turned.
+  async function moveTo(g, x, y) {
     // the joint where the view shows it now: the camera may have moved since the press (a glide of the orbit
     // controls, a new frame), and an angle swept around where the joint was is not one swept around the joint
-    const pivot = viewer.screenPoint(drag.slot, drag.joint);
-    if (viewer.screenDistance(pivot, drag.pivot) > 1e-3) {
-      drag.pivot = pivot;
-      drag.last = viewer.angleAround(pivot, drag.x, drag.y, NEAR);
-      drag.lastR = viewer.screenDistance({ x: drag.x, y: drag.y }, pivot);
+    const pivot = viewer.screenPoint(g.slot, g.joint);
+    if (viewer.screenDistance(pivot, g.pivot) > 1e-3) {
+      g.pivot = pivot;
+      g.last = viewer.angleAround(pivot, g.x, g.y, NEAR);
+      g.lastR = viewer.screenDistance({ x: g.x, y: g.y }, pivot);
     }
-    drag.x = e.clientX;
-    drag.y = e.clientY;
-    const now = viewer.angleAround(drag.pivot, e.clientX, e.clientY, NEAR);
-    const r = viewer.screenDistance({ x: e.clientX, y: e.clientY }, drag.pivot);
+    g.x = x;
+    g.y = y;
+    const now = viewer.angleAround(g.pivot, x, y, NEAR);
+    const r = viewer.screenDistance({ x, y }, g.pivot);
     if (now === null) {
-      drag.last = null;
+      g.last = null;
       return;
     }
-    if (drag.last !== null) {
-      let d = now - drag.last;
+    if (g.last !== null) {
+      let d = now - g.last;
       if (d > Math.PI) d -= 2 * Math.PI;
       if (d < -Math.PI) d += 2 * Math.PI;
       // the gain: the angle swept, times how far out the pointer is against the reach of what turns (at most 1)
-      pending += d * Math.min(1, (r + drag.lastR) / 2 / drag.reach);
+      pending += d * Math.min(1, (r + g.lastR) / 2 / g.reach);
     }
-    drag.last = now;
-    drag.lastR = r;
+    g.last = now;
+    g.lastR = r;
     // (a move straight at or away from the joint sweeps nothing but rounding)
     if (busy || Math.abs(pending) < SWEPT) return;
     busy = true;
-    const mine = drag;
     try {
-      if (!mine.remembered) {
-        mine.remembered = true;
+      if (!g.remembered) {
+        g.remembered = true;
         await remember();
       }
       // what the pointer swept while a turn was on its way is turned next, also after the pointer stops
       while (Math.abs(pending) >= SWEPT) {
         const angle = pending;
         pending = 0;
-        await turn(mine.bone, angle);
+        await turn(g.bone, angle);
       }
     } finally {
       busy = false;
     }
-  });
+  }
   window.addEventListener('pointerup', () => {
-    if (drag) highlight(-1, null);
+    if (drag) {
+      drag.released = true;
+      highlight(-1, null);
+    }
     drag = null;
     pose.dragging = -1;
   });

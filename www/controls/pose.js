@@ -50,7 +50,8 @@ export async function poseView() {
   const colours = !frames && pose.highlight >= 0
     ? draggedColours(state.colours.final.vertexColours, pose.skeleton, pose.highlight)
     : state.colours.final.vertexColours;
-  return { slots: [{ positions, colours, name }], caption };
+  // stay: a part turned, the rest of the mesh stays where it is on the screen (not centred on the new box)
+  return { slots: [{ positions, colours, name }], caption, stay: true };
 }
 
 /** The bone of part `part` (the rig's joint named after it: src/export/gltf.rs names it "part k+1"), or -1. */

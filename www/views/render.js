@@ -171,7 +171,7 @@ export async function renderView({ frame = false } = {}) {
   // latent shape is no pose
   viewer.minSize = mode === 'latent' ? null : reach(pop);
   update({ shown: view.slots });
-  viewer.show(view.slots, { frame: reframe });
+  viewer.show(view.slots, { frame: reframe, stay: !!view.stay });
   $('caption').textContent = view.caption;
   $('legend').hidden = !view.legend;
   if (view.legend) $('legend-hi').textContent = view.legend;
