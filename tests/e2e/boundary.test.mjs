@@ -218,7 +218,7 @@ test('what comes out is camelCase: summary, examples, articulation report, groun
   assert.deepEqual(notCamel(f.result().kernelLimit(1)), []);
   assert.deepEqual(Object.keys(g).sort(), ['ari', 'rotationErrorDeg', 'rotationErrorDegMax', 'rotationErrorsDeg', 'tied', 'trueParts']);
   assert.equal(g.trueParts, 3);
-  assert.deepEqual(g.tied, []); // the arm ties no parts (the limit example's pairs: firstuse.test.mjs)
+  assert.deepEqual(g.tied, []); // the arm ties no parts (the limit example's pairs: examples.test.mjs)
 });
 
 test('the OBJ of a shown mesh is in the original units; neighbouring parts get different colours', () => {

@@ -2,7 +2,7 @@
 // and what to use instead) and the part rule's curve, on the built-in examples at their (default) parameters.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, moveTreeSlider } from './helpers.mjs';
 
 const session = pageSession();
 
@@ -54,6 +54,20 @@ test('a few parts the user fixed with the part rule off get no verdict, not "Not
   assert.match(text, new RegExp(`^No verdict: ${s.parts} rigid parts \\(a count the part rule did not judge\\) explain`));
   assert.doesNotMatch(text, /deformation model/);
   assert.equal(await page.locator('[data-testid=diagnosis].fails').count(), 0);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('Refine of a few parts: no verdict, not "Not articulated"', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  assert.match(await page.locator('[data-testid=diagnosis]').innerText(), /^Articulated/);
+  const c = await page.evaluate(() => window.posemfa.fitCount());
+  await moveTreeSlider(page, 2);
+  await page.click('[data-testid=tree-refine]');
+  await page.waitForFunction((x) => window.posemfa.fitCount() > x && document.body.dataset.state === 'fitted', c, { timeout: 120000 });
+  assert.equal((await page.evaluate(() => window.posemfa.summary())).parts, 2);
+  assert.match(await page.locator('[data-testid=diagnosis]').innerText(), /^No verdict: 2 rigid parts \(a count the part rule did not judge\) explain/);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

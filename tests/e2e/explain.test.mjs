@@ -196,3 +196,52 @@ test('the article is linked from the app and back, keyboard reachable, and reada
     await phone.context.close();
   }
 });
+
+test('article: the model figure\'s status names the part shown, its bars are on one stated scale; the responsibilities label follows the run', async () => {
+  const { page, context, log } = await session.open('explain.html');
+  const fig = page.locator('[data-figure=model]');
+  await fig.scrollIntoViewIfNeeded();
+  await page.waitForFunction(() => document.querySelector('[data-figure=model]').dataset.state === 'fitted' && document.querySelectorAll('[data-figure=model] .bar').length > 0, null, { timeout: 60000 });
+  const options = await fig.locator('[data-ctl=part] option').count();
+  for (const k of [1, options - 1]) {
+    await fig.locator('[data-ctl=part]').selectOption(String(k));
+    await page.waitForFunction((p) => document.querySelector('[data-figure=model] .fig-status').textContent.includes(`showing part ${p}.`)
+      && document.querySelector('[data-figure=model] .bars-title')?.textContent.includes(`part ${p} `), k + 1, { timeout: 10000 });
+    assert.match(await fig.locator('.bars-title').innerText(), /full width = 180°/);
+    const bars = await fig.locator('.bar').evaluateAll((els) => els.map((e) => ({
+      angle: parseFloat(e.querySelector('.val').textContent), width: parseFloat(e.querySelector('.fill').style.width),
+    })));
+    for (const b of bars) assert.ok(Math.abs(b.width - (100 * b.angle) / 180) < 0.1, `bar ${JSON.stringify(b)} is not on the 180° scale`);
+  }
+  // responsibilities: the view's label and the status give the same iteration, after a Reset too
+  const resp = page.locator('[data-figure=responsibilities]');
+  await resp.scrollIntoViewIfNeeded();
+  await page.waitForFunction(() => window.explain.detail('responsibilities').steps >= 2, null, { timeout: 60000 });
+  await resp.locator('[data-act=reset]').click();
+  await page.waitForFunction(() => window.explain.detail('responsibilities').steps >= 3, null, { timeout: 60000 });
+  await resp.locator('[data-act=pause]').click();
+  await page.waitForTimeout(800);
+  const label = await resp.locator('.posemfa-caption').innerText();
+  const status = await resp.locator('.fig-status').innerText();
+  const it = (await page.evaluate(() => window.explain.detail('responsibilities'))).iteration;
+  assert.match(status, new RegExp(`Iteration ${it}\\b`));
+  assert.match(label, new RegExp(`^Iteration ${it}\\b`), `label "${label}" beside status "${status}"`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('article: the sticky header is opaque, so the text scrolling under it does not show through', async () => {
+  const { page, context, log } = await session.open('explain.html');
+  await page.evaluate(() => window.scrollTo(0, 1500));
+  await page.waitForFunction(() => window.scrollY > 1000);
+  const h = await page.$eval('header.top', (e) => {
+    const r = e.getBoundingClientRect();
+    return { top: r.top, bottom: r.bottom, background: getComputedStyle(e).backgroundColor };
+  });
+  assert.equal(h.top, 0, 'the header stays at the top');
+  const m = h.background.match(/^rgba?\(([\d.]+),\s*([\d.]+),\s*([\d.]+)(?:,\s*([\d.]+))?\)$/);
+  assert.ok(m, h.background);
+  assert.equal(m[4] === undefined ? 1 : Number(m[4]), 1, `header background ${h.background} is not opaque`);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});

@@ -8,7 +8,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { pageSession, waitState, tubePopulation, ROOT } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, dropAndFit, afterNextFit, ROOT } from './helpers.mjs';
 
 const session = pageSession();
 const fixture = (name) => ({ name, buffer: readFileSync(join(ROOT, 'tests/fixtures/blender', name)) });
@@ -212,6 +212,25 @@ test('a refused drop keeps the fit settings as they were (form and hidden ones);
   assert.equal(await page.inputValue('#params [name=tol]'), '0.01');
   await page.click('#reset-params');
   assert.equal(await page.isChecked('#params [name=paperLambda]'), false, 'Defaults: the core\'s defaults now');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('a glTF with two animations that move the mesh offers the other one, and reads it when chosen', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  assert.equal(await page.locator('#clip-row').isVisible(), false, 'no list for OBJ poses');
+  const buffer = readFileSync(join(ROOT, 'tests/fixtures/blender/quadruped-skinned-seams.glb'));
+  await dropAndFit(page, [{ name: 'quadruped-skinned-seams.glb', mimeType: 'model/gltf-binary', buffer }]);
+  assert.equal(await page.locator('#clip-row').isVisible(), true);
+  const options = await page.locator('#clip option').allTextContents();
+  assert.deepEqual(options, ['interpolated', 'training poses']);
+  assert.equal(await page.inputValue('#clip'), 'interpolated');
+  assert.match(await page.textContent('#pop-source'), /frames of animation 'interpolated' .*of the 2 animations that move it/);
+  await afterNextFit(page, () => page.selectOption('#clip', 'training poses'), { fitted: true });
+  assert.match(await page.textContent('#pop-source'), /frames of animation 'training poses' /);
+  assert.doesNotMatch(await page.textContent('#pop-source'), /animations that move it/);
+  assert.equal(await page.inputValue('#clip'), 'training poses');
   assert.deepEqual(log.errors, []);
   await context.close();
 });

@@ -10,6 +10,8 @@ import assert from 'node:assert/strict';
 import { pageSession, waitState, enterPoseMode, paletteCounts } from './helpers.mjs';
 
 const session = pageSession();
+// press points over the middle of the view, row by row
+const grid = () => Array.from({ length: 72 }, (_, i) => [0.3 + 0.05 * (i % 9), 0.35 + 0.05 * Math.floor(i / 9)]);
 const inSubtree = (sk, bone, b) => { for (; b >= 0; b = sk.parent[b]) if (b === bone) return true; return false; };
 
 // The bone (not the root) carrying the most vertices below it (a neck with its head, a leg).
@@ -195,6 +197,90 @@ test('pose mode: a drag made and released before the page knows where the joint 
   if (JSON.stringify(camera1) === JSON.stringify(camera0)) {
     assert.ok(Math.hypot(root1.x - root0.x, root1.y - root0.y) < 0.5, `the root stays where it was on the screen: ${JSON.stringify(root0)} -> ${JSON.stringify(root1)}`);
   }
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('pose mode: a drag turns the part by the angle swept around its joint (scaled by how far out against the part\'s reach); a press that turns nothing adds no Undo', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await enterPoseMode(page);
+  const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
+  const box = await page.locator('#view canvas').boundingBox();
+  let found = null;
+  for (const [fx, fy] of grid()) {
+    const start = { x: box.x + fx * box.width, y: box.y + fy * box.height };
+    await page.mouse.move(start.x, start.y);
+    await page.mouse.down();
+    await page.waitForTimeout(100);
+    const bone = await page.evaluate(() => window.posemfa.pose.dragging());
+    if (bone >= 0 && sk.parent[bone] >= 0) {
+      const pivot = await page.evaluate((b) => window.posemfa.pose.jointOnScreen(b), bone);
+      if (Math.hypot(start.x - pivot.x, start.y - pivot.y) > 25) {
+        found = { bone, start, pivot };
+        break;
+      }
+    }
+    await page.mouse.up();
+  }
+  assert.ok(found, 'a press on a non-root part, more than 25 px from its joint on the screen');
+  const { bone, start, pivot } = found;
+  const angle = () => page.evaluate((b) => window.posemfa.pose.angles()[b], bone);
+  const before = await angle();
+  // straight away from the joint: no angle swept, nothing turns, no Undo step
+  const r = Math.hypot(start.x - pivot.x, start.y - pivot.y);
+  const out = [(start.x - pivot.x) / r, (start.y - pivot.y) / r];
+  for (let s = 1; s <= 6; s++) {
+    await page.mouse.move(start.x + 5 * s * out[0], start.y + 5 * s * out[1]);
+    await page.waitForTimeout(40);
+  }
+  await page.mouse.up();
+  await page.waitForTimeout(300);
+  assert.ok(Math.abs((await angle()) - before) < 1e-6, `a radial drag turned the part by ${(await angle()) - before}°`);
+  assert.equal(await page.locator('#pose-undo').isDisabled(), true, 'a drag that turned nothing adds no Undo step');
+  // a quarter turn around the joint, a vertical move among them: the part turns by a quarter turn
+  await page.mouse.move(start.x, start.y);
+  await page.mouse.down();
+  await page.waitForTimeout(300); // the joint's place on the screen arrives
+  const a0 = Math.atan2(start.y - pivot.y, start.x - pivot.x);
+  for (let s = 1; s <= 12; s++) {
+    const a = a0 + (s / 12) * (Math.PI / 2);
+    await page.mouse.move(pivot.x + r * Math.cos(a), pivot.y + r * Math.sin(a));
+    await page.waitForTimeout(40);
+  }
+  await page.mouse.up();
+  await page.waitForFunction(([b, a]) => Math.abs(window.posemfa.pose.angles()[b] - a) > 5, [bone, before], { timeout: 20000, polling: 50 });
+  await page.waitForTimeout(500);
+  await page.waitForTimeout(300);
+  const turned = (await angle()) - before;
+  // (issue 55: the sweep is scaled by how far out the pointer is against the reach on the screen of what turns,
+  // at most 1: held at the part's far end or beyond, a quarter turn turns it a quarter; nearer its joint, less)
+  const { reach } = await page.evaluate(() => window.posemfa.pose.highlighted());
+  const want = 90 * Math.min(1, r / reach);
+  assert.ok(Math.abs(turned - want) < 1.5, `a quarter turn of the pointer around the joint ${r.toFixed(0)} px out (reach ${reach.toFixed(0)} px) turned ${sk.names[bone]} by ${turned}°, not ${want.toFixed(1)}°`);
+  assert.equal(await page.locator('#pose-undo').isDisabled(), false);
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('a part turned past what the training poses do is said to be beyond them', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await enterPoseMode(page);
+  const angle = () => page.locator('[data-testid=pose-angle]').innerText();
+  assert.match(await angle(), /^0\.0°(?: at its joint, relative to part \d+| \(the root: its own turn\)) \(training poses: up to [0-9.]+°\)$/);
+  const most = Number(/up to ([0-9.]+)°/.exec(await angle())[1]);
+  // 10° a press, until past the training poses' largest turn of this part
+  for (let k = 0; k < Math.ceil(most / 10) + 1; k++) {
+    const before = await angle();
+    await page.click('#pose-plus');
+    await page.waitForFunction((b) => document.querySelector('[data-testid=pose-angle]').innerText !== b, before, { timeout: 20000 });
+  }
+  assert.match(await angle(), new RegExp(`^[0-9.]+°(?: at its joint, relative to part \\d+| \\(the root: its own turn\\)) \\(beyond the training poses, which turn it at most ${most.toFixed(1).replace('.', '\\.')}°\\)$`));
+  assert.equal(await page.locator('[data-testid=pose-angle].beyond').count(), 1);
+  await page.click('#pose-reset');
+  await page.waitForFunction(() => /^0\.0° /.test(document.querySelector('[data-testid=pose-angle]').innerText), null, { timeout: 20000 });
+  assert.equal(await page.locator('[data-testid=pose-angle].beyond').count(), 0);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

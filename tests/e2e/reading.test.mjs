@@ -74,7 +74,7 @@ test('the Stages view: a part that is the same in two neighbouring stages keeps 
 });
 
 test('a cancelled first fit leads with being a partial model, and its exports say they write it; a finished fit does not', async () => {
-  // large enough that Cancel lands in the fit's first run (as firstuse.test.mjs's cancelled merge-tree fit)
+  // large enough that Cancel lands in the fit's first run (as stages.test.mjs's cancelled merge-tree fit)
   const { page, context, log } = await openCancelledFirstFit(session, '?preset=quadruped&vertices=20000&poses=10');
   await frames(page);
   const s = await summary(page);

@@ -35,7 +35,7 @@ test('the export panel writes the rig the CLI writes: same part count, same E_RM
   const files = names.map((name) => ({ name, text: readFileSync(path.join(pop, name), 'utf8') }));
   const { page, context, log } = await session.open();
   await waitState(page, ['fitted', 'idle', 'error'], 60000);
-  // new files start from "Parts in the end" on auto (fresh.test.mjs): the count is asked for once they are in
+  // new files start from "Parts in the end" on auto (fit-lifecycle.test.mjs): the count is asked for once they are in
   let fits = await page.evaluate(() => window.posemfa.fitCount());
   await page.setInputFiles('[data-testid=file-input]', asPayload(files));
   await page.waitForFunction((f) => window.posemfa.fitCount() > f, fits, { timeout: 120000, polling: 20 });

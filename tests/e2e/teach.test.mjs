@@ -15,6 +15,7 @@ const core = () => createRequire(import.meta.url)(join(ROOT, 'pkg-node', 'posemf
 const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const teaching = (page) => page.evaluate(() => window.posemfa.teaching());
 const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+const text = (page, sel) => page.locator(sel).innerText();
 
 // Opens `hash` (or the default) and waits until the page is fitted and any view in the link is applied.
 async function fitted(hash = '', opts) {
@@ -504,5 +505,51 @@ test('the embed page shows a fitted model in an iframe and through mount()', asy
   await page.waitForFunction(() => document.querySelector('[data-testid=embed-mount]').dataset.state === 'fitted', null, { timeout: 90000 });
   assert.deepEqual(log.errors, []);
   assert.deepEqual(log.external, []);
+  await context.close();
+});
+
+test('step by step: Reset asks before it drops a finished fit; the state follows; the Stage field and the note say the same part', async () => {
+  const { page, context, log } = await fitted('#ex=arm');
+  const parts = await text(page, '[data-testid=parts-count]');
+  await answerQuestions(page, false);
+  await page.click('#teach-reset'); // answered No in the page
+  await page.waitForTimeout(300);
+  assert.equal((await askedQuestions(page)).length, 1, 'Reset asked');
+  assert.match((await askedQuestions(page))[0], /drops the finished one/);
+  assert.equal(await text(page, '[data-testid=parts-count]'), parts, 'dismissed: the fit is kept');
+  assert.equal(await page.isDisabled('#export-json'), false);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
+  // accepted: a new step-by-step fit, paused at iteration 0, and the page says it is paused, not fitting
+  await answerQuestions(page, true);
+  await page.click('#teach-reset');
+  await page.waitForFunction(() => window.posemfa.teaching().active);
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'paused');
+  assert.equal(await page.evaluate(() => document.body.dataset.teaching), '1');
+  // run into the refinement, then step through it: after every step the Stage field and the note name the
+  // same coarse part, including at the steps that move from one part to the next
+  await page.click('#teach-run');
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitting');
+  await page.waitForFunction(() => window.posemfa.teaching().stage?.kind === 'refine', null, { timeout: 60000, polling: 5 });
+  await page.click('#teach-pause');
+  await page.waitForFunction(() => !window.posemfa.teaching().running);
+  await page.waitForFunction(() => document.body.dataset.state === 'paused');
+  const seen = new Set();
+  for (let k = 0; k < 160 && seen.size < 3; k++) {
+    const before = (await page.evaluate(() => window.posemfa.teaching())).iteration;
+    await page.click('[data-testid=teach-step]');
+    await page.waitForFunction((b) => window.posemfa.teaching().iteration > b, before, { timeout: 10000 });
+    await frames(page);
+    const t = await page.evaluate(() => window.posemfa.teaching());
+    if (t.stage?.kind !== 'refine') break;
+    const field = await text(page, '#stage');
+    const note = await text(page, '#teach-stage-note');
+    const a = field.match(/part (\d+) of (\d+)/);
+    const b = note.match(/part (\d+) of (\d+)/);
+    assert.ok(a && b, `${field} | ${note}`);
+    assert.deepEqual(a.slice(1), b.slice(1), `Stage field "${field}" and note "${note}"`);
+    seen.add(a[1]);
+  }
+  assert.ok(seen.size >= 2, `stepped through the refinement of ${seen.size} part(s) only`);
+  assert.deepEqual(log.errors, []);
   await context.close();
 });

@@ -6,9 +6,10 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { existsSync, readdirSync } from 'node:fs';
 import path from 'node:path';
-import { pageSession, waitState, moveTreeSlider, ROOT } from './helpers.mjs';
+import { pageSession, waitState, moveTreeSlider, afterNextFit, ROOT } from './helpers.mjs';
 
 const session = pageSession();
+const text = (page, sel) => page.locator(sel).innerText();
 
 async function fitted(page) {
   assert.equal(await waitState(page, ['fitted', 'error'], 90000), 'fitted');
@@ -231,6 +232,52 @@ test('the vertex box goes when the slider shows another partition; asked again, 
   // back at the fit's count: the box goes again, and a click names the part plainly
   await moveTreeSlider(page, fit);
   assert.equal(await info(), '');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('the merge tree\'s slider stays put under a real mouse drag, and its value follows the mouse', async () => {
+  const { page, context, log } = await session.open();
+  await fitted(page);
+  const tree = await page.evaluate(() => window.posemfa.tree());
+  assert.ok(tree.most - tree.fewest >= 10, JSON.stringify(tree));
+  const slider = page.locator('#tree-slider');
+  await slider.scrollIntoViewIfNeeded();
+  const box = await slider.boundingBox();
+  const span = tree.most - tree.fewest;
+  // x of value v on the track (the thumb's centre runs over the track less one thumb width; about 16 px)
+  const thumb = 16;
+  const xOf = (v) => box.x + thumb / 2 + ((v - tree.fewest) / span) * (box.width - thumb);
+  const y = box.y + box.height / 2;
+  const start = Number(await slider.inputValue());
+  await page.mouse.move(xOf(start), y);
+  await page.mouse.down();
+  const seen = [];
+  for (let v = start - 1; v >= tree.fewest + 2; v -= 1) {
+    await page.mouse.move(xOf(v), y, { steps: 2 });
+    await page.waitForTimeout(60); // the count's words change under the mouse meanwhile
+    const now = await slider.boundingBox();
+    assert.ok(Math.abs(now.x - box.x) < 0.5 && Math.abs(now.y - box.y) < 0.5 && Math.abs(now.width - box.width) < 0.5,
+      `the slider moved from ${JSON.stringify(box)} to ${JSON.stringify(now)} at value ${v}`);
+    const value = Number(await slider.inputValue());
+    seen.push(value);
+    assert.ok(Math.abs(value - v) <= 1, `the mouse is at ${v}, the slider says ${value}`);
+  }
+  await page.mouse.up();
+  await page.waitForFunction((v) => document.getElementById('tree-slider').dataset.count === String(v), seen.at(-1));
+  assert.match(await text(page, '#tree-count'), new RegExp(`^${seen.at(-1)} parts `));
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('after Refine N the Fit button says the N parts later fits will keep', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  const parts = (await page.evaluate(() => window.posemfa.summary())).parts;
+  await moveTreeSlider(page, parts - 2);
+  await afterNextFit(page, () => page.click('[data-testid=tree-refine]'), { timeout: 90000 });
+  assert.equal(await page.textContent('#fit'), `Fit ${parts - 2} parts`);
+  assert.match(await page.getAttribute('#fit', 'title'), /empty it \(auto\) for the part rule's own count/);
   assert.deepEqual(log.errors, []);
   await context.close();
 });

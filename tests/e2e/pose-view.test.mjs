@@ -1,9 +1,11 @@
-// Pose view, review 9 (a first-time user's bugs): the toolbar's "OBJ of the shown mesh" writes the posed mesh
-// (B1); "Posed mesh (OBJ)" and "Pose (.glb)" write the added frame on screen, not the pose made under it (B2);
-// the pose-space sliders show the shown pose's coordinates on entry and follow the frames (B3); a thumbnail
-// click shows that training pose as the rig makes it (B5); frames of another vertex count are refused naming
-// the file, and a later good "Add frames" clears the error (B6). One fitted page, the tests in order.
-// Run: npm run build && node --test tests/e2e/pose-review9.test.mjs
+// The Pose view's sliders, thumbnails, exports and added frames: on entering it the pose-space sliders show the
+// rest pose's coordinates and follow the pose shown (a turn, the mean pose at 0, the added frames as they play);
+// a thumbnail click shows that training pose as the rig makes it; the toolbar's "OBJ of the shown mesh" writes
+// the posed mesh, and "Posed mesh (OBJ)" and "Pose (.glb)" the added frame on screen rather than the pose made
+// under it; frames of another vertex count are refused naming the file, and a later good "Add frames" clears the
+// error; after Random pose the caption describes the whole pose, and the Part list is in number order. The tests
+// on the fitted page of `posePage()` go on from each other, in order.
+// Run: npm run build && node --test tests/e2e/pose-view.test.mjs
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
@@ -13,12 +15,13 @@ import path from 'node:path';
 import { pageSession, asPayload, ROOT, enterPoseMode, waitState, objFiles, debugCli } from './helpers.mjs';
 
 const session = pageSession();
+const text = (page, sel) => page.locator(sel).innerText();
 let dir;
 let opened = null;
 
 before(() => {
   const bin = debugCli();
-  dir = mkdtempSync(path.join(tmpdir(), 'posemfa-pose-review9-'));
+  dir = mkdtempSync(path.join(tmpdir(), 'posemfa-pose-view-'));
   // the training poses; new frames of the same mesh (another seed); frames of another mesh (fewer vertices)
   execFileSync(bin, ['generate', 'quadruped', '--vertices', '1500', '--poses', '6', '--seed', '4', '--out', path.join(dir, 'pop')]);
   execFileSync(bin, ['generate', 'quadruped', '--vertices', '1500', '--poses', '4', '--seed', '11', '--out', path.join(dir, 'new')]);
@@ -58,9 +61,21 @@ async function downloaded(page, selector, { binary = false } = {}) {
 const vertices = (obj) => obj.split('\n').filter((l) => l.startsWith('v ')).map((l) => l.slice(2).split(' ').map(Number));
 const headerOf = (obj) => obj.split('\n').filter((l) => l.startsWith('#')).join('\n');
 const rms = (a, b) => Math.sqrt(a.reduce((s, p, i) => s + (p[0] - b[i][0]) ** 2 + (p[1] - b[i][1]) ** 2 + (p[2] - b[i][2]) ** 2, 0) / a.length);
+async function fitted(path = '', opts) {
+  const p = await session.open(path, opts);
+  const state = await waitState(p.page, ['fitted', 'error'], 90000);
+  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
+  return p;
+}
+
+async function mode(page, m) {
+  await page.check(`#modes input[value=${m}]`, { force: true });
+  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
+}
+
 const errorsText = (page) => page.locator('[data-testid=errors]').innerText();
 
-test('B3: on entering the Pose view the pose-space sliders show the rest pose\'s coordinates, not 0', async () => {
+test('on entering the Pose view the pose-space sliders show the rest pose\'s coordinates, not 0', async () => {
   const { page } = await posePage();
   const v = await page.evaluate(() => window.posemfa.pose.vector());
   const got = await sliders(page);
@@ -70,7 +85,7 @@ test('B3: on entering the Pose view the pose-space sliders show the rest pose\'s
   assert.ok(slidersAt(got, v.coords), `on entry: ${slidersText(got, v.coords)}`);
 });
 
-test('B5: a thumbnail clicked in the Pose view shows that training pose as the rig makes it, names it, and the sliders follow', async () => {
+test('a thumbnail clicked in the Pose view shows that training pose as the rig makes it, names it, and the sliders follow', async () => {
   const { page } = await posePage();
   const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
   const k = sk.bindPose === 3 ? 2 : 3;
@@ -90,7 +105,7 @@ test('B5: a thumbnail clicked in the Pose view shows that training pose as the r
   await page.waitForFunction((c) => [...document.querySelectorAll('#pose-modes input')].every((s, m) => Math.abs(Number(s.value) - c[m]) <= Number(s.step) / 2 + 1e-9), sk.coords[k], { timeout: 10000 });
 });
 
-test('B1: the toolbar\'s "OBJ of the shown mesh" in the Pose view writes the posed mesh shown', async () => {
+test('the toolbar\'s "OBJ of the shown mesh" in the Pose view writes the posed mesh shown', async () => {
   const { page } = await posePage();
   await page.click('#pose-plus'); // a made pose: the selected part turned 10°
   await page.waitForFunction(() => /turned/.test(document.getElementById('caption').textContent), null, { timeout: 20000 });
@@ -104,7 +119,7 @@ test('B1: the toolbar\'s "OBJ of the shown mesh" in the Pose view writes the pos
   assert.equal(vertices(bar.body).length, nv);
 });
 
-test('B2: with an added frame on screen, "Posed mesh (OBJ)" and "Pose (.glb)" hold that frame; the made pose otherwise', async () => {
+test('with an added frame on screen, "Posed mesh (OBJ)" and "Pose (.glb)" hold that frame; the made pose otherwise', async () => {
   const { page } = await posePage();
   await page.click('#pose-reset');
   await page.waitForFunction(() => /the rest pose/.test(document.getElementById('caption').textContent), null, { timeout: 20000 });
@@ -145,7 +160,7 @@ test('B2: with an added frame on screen, "Posed mesh (OBJ)" and "Pose (.glb)" ho
   assert.deepEqual(vertices(back.body), vertices(rest.body));
 });
 
-test('B3: while added frames play the sliders follow the frame shown; paused, they hold its coordinates', async () => {
+test('while added frames play the sliders follow the frame shown; paused, they hold its coordinates', async () => {
   const { page } = await posePage();
   await page.click('#pose-play'); // play the frames added by the test before
   const seen = new Set();
@@ -162,7 +177,7 @@ test('B3: while added frames play the sliders follow the frame shown; paused, th
   assert.ok(slidersAt(got, v.coords), `paused on frame ${frame}: ${slidersText(got, v.coords)}`);
 });
 
-test('B6: frames of another vertex count are refused naming the file; a later good "Add frames" clears the error', async () => {
+test('frames of another vertex count are refused naming the file; a later good "Add frames" clears the error', async () => {
   const { page, log } = await posePage();
   const good = objFiles(path.join(dir, 'new'));
   const small = objFiles(path.join(dir, 'small'));
@@ -180,4 +195,67 @@ test('B6: frames of another vertex count are refused naming the file; a later go
   await page.waitForFunction(() => document.body.dataset.poseFrames === '2', null, { timeout: 60000, polling: 50 });
   assert.equal(await errorsText(page), '', 'the old error is gone');
   assert.deepEqual(log.errors, []);
+});
+
+test('pose mode: the pose-space sliders follow the pose shown (rest pose, a turn), 0 at the mean pose', async () => {
+  const { page, context, log } = await session.open();
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted');
+  await enterPoseMode(page);
+  const sliders = () => page.$$eval('#pose-modes input', (xs) => xs.map((x) => Number(x.value)));
+  // each slider's value as the range and step put the pose's coordinate
+  const placed = (coords) => page.$$eval('#pose-modes input', (xs, c) => xs.map((x) => {
+    const probe = x.cloneNode();
+    probe.value = String(c[Number(x.dataset.mode)]);
+    return Number(probe.value);
+  }), coords);
+  // the sliders at the pose's coordinates, once the actions asked for have all been made (the pose is read
+  // again until the two agree: a click's turn can still be on its way when the pose is first read)
+  const settled = async (what) => {
+    let want = null;
+    for (let tries = 0; tries < 100; tries++) {
+      want = await placed((await page.evaluate(() => window.posemfa.pose.vector())).coords);
+      const now = await sliders();
+      if (now.every((x, k) => x === want[k])) return want;
+      await page.waitForTimeout(100);
+    }
+    return assert.fail(`${what}: sliders ${await sliders()} for the pose's ${want}`);
+  };
+  await page.click('#pose-reset');
+  const rest = await settled('rest pose');
+  await page.click('#pose-mean');
+  const zero = await placed(new Array(rest.length).fill(0));
+  await page.waitForFunction((w) => [...document.querySelectorAll('#pose-modes input')].every((x, k) => Number(x.value) === w[k]), zero, { timeout: 10000 });
+  assert.notDeepEqual(rest, zero, 'the rest pose is not the mean pose, and its sliders say so');
+  await page.click('#pose-plus');
+  await page.click('#pose-plus');
+  const turned = await settled('after a turn');
+  assert.notDeepEqual(turned, zero, 'a turned part moves the pose off the mean');
+  assert.deepEqual(log.errors, []);
+  await context.close();
+});
+
+test('pose mode: after Random pose the caption describes the whole pose until a part is turned; the Part list is in number order', async () => {
+  const { page, context, log } = await fitted(); // the quadruped: 18 bones, whose parent-first order is not by number
+  await mode(page, 'pose');
+  await page.waitForFunction(() => window.posemfa.pose.ready(), null, { timeout: 60000 });
+  const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
+  const options = await page.$$eval('#pose-part option', (os) => os.map((o) => ({ value: Number(o.value), name: o.textContent })));
+  assert.deepEqual(options.map((o) => o.value).sort((a, b) => a - b), sk.order.slice().sort((a, b) => a - b), 'every bone listed once');
+  const numbers = options.map((o) => Number(o.name.match(/\d+/)?.[0]));
+  assert.deepEqual(numbers, numbers.slice().sort((a, b) => a - b), `in number order: ${options.map((o) => o.name)}`);
+  const caption = (re) => page.waitForFunction((r) => new RegExp(r).test(document.getElementById('caption').textContent), re.source, { timeout: 15000 })
+    .catch(async () => assert.fail(`caption "${await text(page, '#caption')}" does not match ${re}`));
+  await page.click('#pose-plus');
+  await caption(/^Pose mode: .+ turned 10\.0° from the rest pose/);
+  await page.click('[data-testid=pose-random]');
+  const n = sk.order.length;
+  await caption(new RegExp(`^Pose mode: a random pose of all ${n} parts, within the training poses' range \\(drag a part`));
+  await page.click('#pose-mean');
+  await caption(/^Pose mode: the mean pose of the training poses/);
+  await page.click('#pose-undo'); // back to the random pose, and its caption
+  await caption(/^Pose mode: a random pose of all/);
+  await page.click('#pose-plus'); // a part turned: the caption names it again
+  await caption(/^Pose mode: .+ turned -?\d+\.\d° from the rest pose/);
+  assert.deepEqual(log.errors, []);
+  await context.close();
 });
