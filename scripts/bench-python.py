@@ -1,4 +1,5 @@
-"""Times a fit from Python against the CLI's on the same files (issue 56: within 10 %). Prints figures; asserts
+"""Times a fit from Python against the CLI's on the same files (the binding's overhead is meant to stay
+within 10 %). Prints figures; asserts
 nothing (CONTRIBUTING.md: timing goals are benchmarks).
 
   .venv-python/bin/python scripts/bench-python.py [DIR] [--runs N] [--cli target/release/posemfa]

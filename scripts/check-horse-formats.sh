@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Issue 12's must-shows on the real horses, with files written by Blender (into a temporary folder, removed at
-# the end: nothing from ../shared is kept or committed), at each seed given:
+# The readers' checks on the real horses (each format fits as the OBJ poses do), with files written by Blender
+# (into a temporary folder, removed at the end: nothing from ../shared is kept or committed), at each seed given:
 #   1. horse-gallop's 48 frames as Blender shape keys (one .glb, animated one key per frame) fit like the OBJ
 #      folder at the same seed: part count within +-3 and RMSE within 10 % of the OBJ fit's; the poses read from
 #      the animation (49 frames) and from the morph targets (`--poses-from morph-targets`: 48 targets + base).

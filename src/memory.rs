@@ -10,7 +10,7 @@
 //!   and goes around them: a part's data in the refinement, the f32 points of a Procrustes start or of the
 //!   diagnosis, the readers' f64 poses while a population is assembled (24 bytes, freed pose by pose), and the
 //!   allocator's slack (wasm's linear memory never shrinks, so a large block freed where a larger one is
-//!   needed stays unused). Measured in wasm (`node scripts/bench-wasm.mjs INPUT --node`, issue 27, see
+//!   needed stays unused). Measured in wasm (`node scripts/bench-wasm.mjs INPUT --node`, see
 //!   docs/speed.md): 49.6 bytes per (vertex, shape) at 20 k x 200 (where the terms below vanish), 59.1 at
 //!   42 k x 11; 7 copies of 24 bytes (168) before. Deciding the parts on a coarse mesh
 //!   ([`crate::parts::coarse_mesh`]) adds its own copy of 8 000 vertices' coordinates and data (24 bytes per

@@ -480,7 +480,7 @@ fn robustness_drops_each_pose_in_turn() {
     assert!(!text(&plain.stdout).contains("each pose dropped"));
 }
 
-/// `posemfa inspect` reads what `fit` reads (issue 58: it read every file as OBJ, so an .fbx or .usdc gave "a NUL
+/// `posemfa inspect` reads what `fit` reads (read as OBJ, an .fbx or .usdc would give "a NUL
 /// byte ... not an OBJ text file"): each format posemfa generates, Blender's and usd-core's fixtures, a .zip and
 /// one pose file alone, with their pose, vertex and triangle counts and what the reader welded.
 #[test]

@@ -1,4 +1,4 @@
-//! Degenerate populations get a clear answer, never NaN, a panic or a hang (issue 6). One test per case; each
+//! Degenerate populations get a clear answer, never NaN, a panic or a hang. One test per case; each
 //! asserts either an error of the right kind whose message names the problem and what to do, or a sane model
 //! (finite log-likelihood, every number finite, every rotation proper). Every test runs natively and in wasm
 //! (Node and headless Chromium, see scripts/test.sh) and takes well under a second.

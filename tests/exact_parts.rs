@@ -1,4 +1,4 @@
-//! An exact part count (issue 11: `--bones N`, `Params::target_parts`): Algorithm 1 then splits or merges
+//! An exact part count (`--bones N`, `Params::target_parts`: a rig of N bones): Algorithm 1 then splits or merges
 //! until it has exactly N parts, every one a connected piece of the mesh; N that cannot be met is a clear
 //! error. Natively and in wasm.
 

@@ -1,4 +1,4 @@
-//! FBX and USD files as characters leave Maya, 3ds Max, Blender, MotionBuilder and USD pipelines (issue 29):
+//! FBX and USD files as characters leave Maya, 3ds Max, Blender, MotionBuilder and USD pipelines:
 //! fixtures written by Blender (FBX) and Pixar's usd-core (USD) from generated populations, read through the
 //! same readers natively and in wasm; hostile files refused with their exact messages.
 

@@ -1,4 +1,4 @@
-//! Mesh files as people have them (issue 12): fixtures written by other tools, read through the same
+//! Mesh files as people have them: fixtures written by other tools, read through the same
 //! readers natively and in wasm.
 
 #[macro_use]

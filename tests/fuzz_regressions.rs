@@ -2,8 +2,8 @@
 //! exactly as its target decodes it (`posemfa::fuzzing`, which the targets use) and must now give the
 //! answer written beside it. Native and wasm.
 //!
-//! Where they came from: the targets were first run against the code as it was before the hardening of
-//! issue 6 (commit 96d236b), each fix applied in turn, until a run found nothing more; the inputs below are
+//! Where they came from: the targets were first run against the code as it was before the hardening against
+//! bad input (commit 96d236b), each fix applied in turn, until a run found nothing more; the inputs below are
 //! libFuzzer's crash files of those runs.
 
 #[macro_use]

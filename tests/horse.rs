@@ -1,4 +1,4 @@
-//! Issue 2's figures on the real horse population (data/horse-poses in ../shared or POSEMFA_SHARED).
+//! The figures of the method on the real horse population (data/horse-poses in ../shared or POSEMFA_SHARED).
 //! Skipped, counted as skipped, when the data is absent (a failure under CI=true: `common::shared_dir`). The JSON is checked the way a user would: eq 22 recomputed
 //! from the written file gives the reported RMSE.
 
@@ -81,7 +81,7 @@ fn horse_part_count_is_stable_over_seeds_0_to_4() {
     let counts: Vec<usize> = (0..5)
         .map(|seed| fit(&pop, &Params { seed, ..Params::default() }, &mut |_| true).unwrap().model.n_parts())
         .collect();
-    // issue 15: within +-2 over the seeds, i.e. all in one window of 5 counts (20..=34 at defaults)
+    // a steady count: within +-2 over the seeds, i.e. all in one window of 5 counts (20..=34 at defaults)
     let (lo, hi) = (*counts.iter().min().unwrap(), *counts.iter().max().unwrap());
     assert!(hi - lo <= 4, "part counts over seeds 0-4: {counts:?}");
     assert!(lo >= 20 && hi <= 34, "part counts over seeds 0-4: {counts:?}");

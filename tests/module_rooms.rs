@@ -1,4 +1,4 @@
-//! The two rooms (issue 26): `src/mfa/` (the constrained mixture and its fit) never names `crate::parts`;
+//! The two rooms: `src/mfa/` (the constrained mixture and its fit) never names `crate::parts`;
 //! `src/parts/` (how the partition is decided) calls into `mfa`; `src/mesh/`, `src/geometry/` and
 //! `src/memory.rs` name neither; and inside `parts/` every module uses only the modules listed before it in
 //! `parts/mod.rs`, so there is no import circle. Comments and `#[cfg(test)]` modules are not looked at: a unit

@@ -1,4 +1,4 @@
-//! The default part rule (issue 15, `parts::distinct`) against generated ground truth, at default parameters:
+//! The default part rule (`parts::distinct`) against generated ground truth, at default parameters:
 //! the right part count, the right parts (adjusted Rand index) and the right motions (rotation error), and the
 //! diagnosis: every creature articulated, the blob not. Natively and in wasm. The wider table (3 k to 50 k
 //! vertices, 10 and 20 poses, seeds 0-4) is `cargo run --release --example part_table`.

@@ -1,4 +1,4 @@
-//! Posing what was learned (issue 28, [`posemfa::articulate::pose`]): new frames solved onto a rig with the
+//! Posing what was learned ([`posemfa::articulate::pose`]): new frames solved onto a rig with the
 //! weights fixed recover a generated creature's own bone motions; the pose space reproduces its training poses
 //! and its mean; a turn moves only the turned part's subtree and keeps its joint; a rig .glb read back and written
 //! with a `frames` clip plays (from the file's own numbers) what the solve found.

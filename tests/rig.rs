@@ -1,4 +1,4 @@
-//! The rig as exported (issue 11), read back from the .glb bytes and played the way a glTF viewer plays it
+//! The rig as exported, read back from the .glb bytes and played the way a glTF viewer plays it
 //! ([`play_glb`]): fitted weights (at most K per vertex, non-negative, summing to 1, JOINTS_1 past 4) beat
 //! rigid ones; with fixed joints every bone keeps its length over the clip; with residual morph targets the
 //! clip reproduces every training pose within 1e-5 of the diagonal. On a generated quadruped (native and

@@ -9,7 +9,7 @@ use posemfa::synth::{generate, obj_files, part_index, Generated, Preset, Spec};
 use std::collections::HashMap;
 
 const PRESETS: [Preset; 7] = Preset::ALL;
-/// The creatures of other proportions (issue 15), made for 3 000 vertices and more.
+/// The creatures of other proportions (beyond the quadruped, for the part rule), made for 3 000 vertices and more.
 const NEW: [Preset; 3] = [Preset::Spider, Preset::Giraffe, Preset::Hand];
 
 /// Checks that the triangles form a closed, consistently oriented 2-manifold of sphere topology with no

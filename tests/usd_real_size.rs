@@ -1,4 +1,4 @@
-//! USD point caches at a real size, written by the real writer (issue 58): Pixar's usd-core writes a generated
+//! USD point caches at a real size, written by the real writer: Pixar's usd-core writes a generated
 //! quadruped of 30 930 vertices and 61 856 triangles in 8 poses as .usda, .usdc and .usdz
 //! (`scripts/fixtures/make-usd-real-size.sh`: time-sampled points under a transformed parent, Z up,
 //! centimetres, two compressed float primvars; usd-core compresses `faceVertexCounts`, 61 856 threes, to a few

@@ -1,4 +1,4 @@
-// "Flat colours" with one colour per triangle (issue 55): with colours blended across a triangle, a low-poly
+// "Flat colours" with one colour per triangle: with colours blended across a triangle, a low-poly
 // character's large triangles that span two parts show a rainbow, and where a part ends can only be found by
 // clicking. The flat material reads the colour of one vertex per triangle (GLSL `flat`: the provoking vertex,
 // the first or the last by the GL implementation's convention), and each triangle's corners are put in an

@@ -1,4 +1,4 @@
-// Pose mode's questions to the worker (issue 28), merged into the worker's QUERIES: each asks the Rust core's
+// Pose mode's questions to the worker, merged into the worker's QUERIES: each asks the Rust core's
 // Poser (src/export/pose_glb.rs, through src/wasm.rs) and returns plain data or typed arrays. The poser belongs
 // to the model it was made from: a new model (or population) needs a new poseStart. getModel(): the worker's
 // model; generation(): what changes whenever that model is replaced (by default the model object itself; the

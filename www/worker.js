@@ -60,8 +60,8 @@ let population = null; // wasm Population
 let fitter = null; // wasm Fitter of the fit in progress
 let model = null; // wasm FitModel of the last fit (final, or where a cancelled first fit stopped)
 // While a new fit runs, the last model is parked (wasm ParkedModel: its per-vertex arrays wait in JS, so the new
-// fit does not grow the instance around them; issue 27) and `model` is null. liveModel() brings it back: when
-// the new fit is cancelled and the model stays, or when the page asks it something meanwhile.
+// fit does not grow the instance around them, as wasm memory never shrinks) and `model` is null. liveModel()
+// brings it back: when the new fit is cancelled and the model stays, or when the page asks it something meanwhile.
 let parked = null;
 let modelGeneration = 0; // bumped whenever the model is replaced (not when it is parked and restored)
 let modelComplete = false; // `model` is a finished fit's: a cancelled new fit keeps it

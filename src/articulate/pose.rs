@@ -1,4 +1,4 @@
-//! Posing what was learned (issue 28): new frames onto a finished rig, poses of one's own (a part turned about
+//! Posing what was learned: new frames onto a finished rig, poses of one's own (a part turned about
 //! its joint, its subtree following), and the space of poses the population spans.
 //!
 //! - [`SkinnedRig`]: what posing needs of a rig: bind positions u_j, per-vertex bone weights, the skeleton (a

@@ -1,5 +1,5 @@
 //! Midpoint subdivision of a registered population: every triangle split in four at its edge midpoints, the same
-//! split in every pose, so the finer population stays registered (issue 27's high-resolution test data: horse-gallop
+//! split in every pose, so the finer population stays registered (high-resolution test data: horse-gallop
 //! once subdivided is about 34 k vertices x 49 poses).
 //!
 //! Triangle (a, b, c) with edge midpoints m_ab, m_bc, m_ca becomes (a, m_ab, m_ca), (m_ab, b, m_bc),

@@ -33,7 +33,8 @@ fn quadruped_spec() -> Spec {
     }
 }
 
-/// The creatures of other proportions (issue 15) at the generator's defaults, 3 000 vertices and 10 poses.
+/// The creatures of other proportions (tests of the part rule beyond the quadruped) at the generator's defaults,
+/// 3 000 vertices and 10 poses.
 fn new_creature(preset: Preset) -> Spec {
     Spec { preset, vertices: 3000, poses: 10, ..Spec::default() }
 }

@@ -1,4 +1,4 @@
-// The article's equations on a phone (issue 55, finding 9): at 390x844 every displayed equation either fits the
+// The article's equations on a phone: at 390x844 every displayed equation either fits the
 // column (set smaller if need be, not below 72 % of its size) or shows that it scrolls sideways (a fade at its
 // edge and a hint under it); none runs under its equation number.
 // Run: npm run build && node --test tests/e2e/article-phone.test.mjs

@@ -225,7 +225,7 @@ test('the OBJ of a shown mesh is in the original units; neighbouring parts get d
   const { files, pop, model } = fitted();
   const verts = (t) => [...t.matchAll(/^v (\S+) (\S+) (\S+)$/gm)].map((m) => m.slice(1, 4).map(Number));
   const want = verts(files[2].text);
-  // the population stores unit-box coordinates in f32 (issue 27): back in original units a point is within half
+  // the population stores unit-box coordinates in f32 (half the memory of f64): back in original units a point is within half
   // an f32 step of the unit box (2^-25) times the population box's side, with a 2x margin
   const all = files.flatMap((f) => verts(f.text));
   const side = Math.max(...[0, 1, 2].map((k) => {

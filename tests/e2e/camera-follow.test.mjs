@@ -1,4 +1,4 @@
-// The camera follows the poses (issue 55, finding 5): the view is framed for every training pose's extent, so that
+// The camera follows the poses: the view is framed for every training pose's extent, so that
 // picking another pose, interpolating or making a pose never cuts the mesh off, and picking poses that fit does
 // not move the camera.
 // Run: npm run build && node --test tests/e2e/camera-follow.test.mjs

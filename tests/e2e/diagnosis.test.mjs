@@ -1,5 +1,7 @@
-// Issue 15 in the page: the core's diagnosis next to the result ("Articulated" / "Not articulated" with its reason
-// and what to use instead) and the part rule's curve, on the built-in examples at their (default) parameters.
+// The diagnosis in the page: the core's verdict next to the result ("Articulated" / "Not articulated" with its
+// reason and what to use instead) and the part rule's curve, on the built-in examples at their (default)
+// parameters; a count too few to judge (the part rule off, or a Refine to 2 parts) gets no verdict.
+// Run: npm run build && node --test tests/e2e/diagnosis.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { pageSession, waitState, moveTreeSlider } from './helpers.mjs';

@@ -1,6 +1,7 @@
-// Issue 13 on the built page (dist/explain.html): the explorable explanation. Its test contract: every figure
+// The article on the built page (dist/explain.html): the explorable explanation. Its test contract: every figure
 // element has data-figure and data-state; window.explain.figures() gives [{name, state, logLikelihood}] and, for
-// the eq 18 figure, {name, state, literal, exact}.
+// the eq 18 figure, {name, state, literal, exact}. Also what the figures' captions say (the model figure's part
+// and scale, the responsibilities' iteration) and the sticky header's opaque background.
 // Run: npm run build && node --test tests/e2e/explain.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -154,7 +155,7 @@ test('once fitted, every figure\'s status line says something, and never "undefi
         throw new Error(`${e.message}: ${JSON.stringify(await statuses())}`);
       });
     const all = await statuses();
-    assert.equal(all.length, 12); // 12 with the pose-space figure (issue 28)
+    assert.equal(all.length, 12); // 12 with the pose-space figure
     assert.deepEqual(all.filter((f) => /undefined|NaN/.test(f.status)), []);
     assert.deepEqual(log.errors, []);
   } finally {

@@ -1,4 +1,4 @@
-// A low-poly character in flat colours (issue 55, finding 4): each triangle shows one part's colour (colours no
+// A low-poly character in flat colours: each triangle shows one part's colour (colours no
 // longer blend across a large triangle that spans two parts: "a rainbow"), and the hover box of a population
 // with many poses lists a bounded number of them (a summary and the largest few), inside the view.
 // Run: npm run build && node --test tests/e2e/flat-colours.test.mjs

@@ -2,7 +2,8 @@
 // split at every face corner, FBX with shape-key animation and with an armature), USD point caches written by
 // usd-core (tests/fixtures/usd), PLY (ASCII and binary) and a .pc2 point cache with its base mesh, picked through
 // the file input, are read by the core (mesh::load), fitted, and the population panel says where the poses came
-// from; a damaged .glb is refused with its name and what to do, and the population and model shown are kept.
+// from; a damaged .glb is refused with its name and what to do, and the population and model shown are kept; a
+// glTF with two animations that move the mesh offers the other one.
 // Run: npm run build && node --test tests/e2e/formats.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';

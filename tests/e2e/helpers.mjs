@@ -253,7 +253,7 @@ export async function canvasFingerprint(page) {
   });
 }
 
-/** Opens the Pose view and waits until its rig is ready (pose mode, issue 28). */
+/** Opens the Pose view and waits until its rig is ready (pose mode). */
 export async function enterPoseMode(page) {
   await page.click('[data-testid=mode-pose]');
   await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });

@@ -53,7 +53,8 @@ test('no geometry in www/: no trigonometry or vector lengths outside the camera 
   assert.deepEqual(found, []);
 });
 
-// Issue 25: imports in www/ go one way. Every static `import ... from './x.js'` (and `import './x.js'`) of a
+// Imports in www/ go one way (a cycle makes the load order, and so what is defined when, depend on which file
+// is imported first). Every static `import ... from './x.js'` (and `import './x.js'`) of a
 // www/ JS file to another www/ file is an edge; a cycle (a module that, through its imports, imports itself)
 // fails with the cycle's files in order.
 export function importGraph(files = sources().filter((f) => /\.(js|mjs)$/.test(f))) {
@@ -96,7 +97,7 @@ export function findCycle(graph) {
   return null;
 }
 
-test('www/ has no import cycle (issue 25)', () => {
+test('www/ has no import cycle', () => {
   const graph = importGraph();
   const edges = [...graph.values()].reduce((a, d) => a + d.length, 0);
   assert.ok(graph.size >= 20 && edges >= 40, `read ${graph.size} files, ${edges} imports`);

@@ -184,7 +184,7 @@ test('the parameters show their defaults, and an invalid one is reported with th
   assert.equal(await form('paperLambda').isChecked(), false);
   const before = await summary(page);
   const n = await counters(page);
-  // issue 30: the core checks the form before a fit: the field is named with what it allows, no fit starts
+  // the core checks the form before a fit: the field is named with what it allows, no fit starts
   await form('tol').fill('-1');
   await page.click('#fit');
   await page.waitForFunction(() => /Tolerance \(nats \/ vertex\): -1 must be a positive number/.test(document.querySelector('[data-testid=param-errors]').textContent));
@@ -381,12 +381,12 @@ test('the OBJ export writes the shown pose in the original units; the JSON expor
   assert.equal(got.length, want.length);
   let worst = 0;
   got.forEach((v, i) => v.forEach((c, k) => { worst = Math.max(worst, Math.abs(c - want[i][k])); }));
-  // the population keeps unit-box coordinates in f32 (issue 27): in original units within half an f32 step of
+  // the population keeps unit-box coordinates in f32 (half the memory of f64): in original units within half an f32 step of
   // the unit box (2^-25) times the population box's side, with a 2x margin
   const all = moved.flatMap((f) => verts(f.text));
   const side = Math.max(...[0, 1, 2].map((k) => Math.max(...all.map((v) => v[k])) - Math.min(...all.map((v) => v[k]))));
   assert.ok(worst <= 2 ** -24 * side, `largest coordinate difference ${worst}: more than f32 rounding in a box of side ${side}`);
-  // issue 30: the header is the view's caption and the objects written (here one: the pose)
+  // the header says what was exported: the view's caption and the objects written (here one: the pose)
   assert.match(text, /^# Pose “tube3\.obj”, coloured by part \(\d+ parts\)\n# objects: pose tube3\.obj\n# posemfa, \d+ vertices and \d+ triangles per object\no pose_tube3\.obj\n/);
   assert.equal([...text.matchAll(/^f /gm)].length, [...moved[2].text.matchAll(/^f /gm)].length);
 

@@ -1,5 +1,7 @@
-// The part rule's chart reads on its own (issue 55, finding 8): axis titles with the unit, a legend of its marks,
-// and one sentence on what to read from it; every label drawn whole, at 1280x800 and 390x844.
+// The part rule's chart reads on its own: axis titles with the unit (powers of ten written as numbers), a legend
+// of its marks, and one sentence on what to read from it; every label drawn whole, at 1280x800 and 390x844. Its
+// note says what became of the rule's last decision when a count was asked for, and that after Refine it judged
+// the refined parts and changed nothing.
 // Run: npm run build && node --test tests/e2e/part-curve-chart.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';

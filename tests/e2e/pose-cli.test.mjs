@@ -1,4 +1,4 @@
-// `posemfa pose RIG.glb FRAMES... --out OUT.glb` (issue 28): a fitted rig made from a population's odd poses,
+// `posemfa pose RIG.glb FRAMES... --out OUT.glb`: a fitted rig made from a population's odd poses,
 // applied to its even poses. The written .glb passes the Khronos validator with 0 errors; three.js's GLTFLoader
 // loads it and its AnimationMixer plays the clip "frames" (keyframe k at k s), and the mesh three.js skins
 // reproduces each even pose with the E_RMS the CLI printed, at most 1.3x the rig's own E_RMS on the odd poses

@@ -1,9 +1,10 @@
-// Pose mode as a first-time user meets it (issue 55, findings 1 and 2): the readout and the hover box say what
-// their angles measure and agree where they measure the same thing (the turn at the part's joint, relative to
-// the part carrying it; the hover box adds the whole part's own rotation); a drag near a joint turns the part by
-// the distance moved over the part's reach on the screen, not by the large angle a short move sweeps there; the
-// part dragged is highlighted (the rest greyed) and its joint marked while dragging; the Part list names each
-// part by where it is.
+// Pose mode's drag and readout: the readout and the hover box say what their angles measure and agree where they
+// measure the same thing (the turn at the part's joint, relative to the part carrying it; the hover box adds the
+// whole part's own rotation), and a part turned past what the training poses do is said to be beyond them; a
+// drag turns the part by the angle swept around its joint, scaled by how far out the pointer is against the
+// part's reach on the screen (near a joint a short move sweeps a large angle), and a press that turns nothing
+// adds no Undo step; the part dragged is highlighted (the rest greyed) and its joint marked while dragging; the
+// Part list names each part by where it is.
 // Run: npm run build && node --test tests/e2e/pose-drag.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -253,7 +254,7 @@ test('pose mode: a drag turns the part by the angle swept around its joint (scal
   await page.waitForTimeout(500);
   await page.waitForTimeout(300);
   const turned = (await angle()) - before;
-  // (issue 55: the sweep is scaled by how far out the pointer is against the reach on the screen of what turns,
+  // (the sweep is scaled by how far out the pointer is against the reach on the screen of what turns,
   // at most 1: held at the part's far end or beyond, a quarter turn turns it a quarter; nearer its joint, less)
   const { reach } = await page.evaluate(() => window.posemfa.pose.highlighted());
   const want = 90 * Math.min(1, r / reach);

@@ -1,4 +1,4 @@
-// Pose mode (issue 28) on the built page: a generated quadruped dropped and fitted, then the Pose view. A mouse drag
+// Pose mode on the built page: a generated quadruped dropped and fitted, then the Pose view. A mouse drag
 // on the mesh turns the part under the pointer and only its subtree: every vertex with no weight on that subtree
 // moves by less than 1e-6 of the bounding-box diagonal, and the part's joint stays in place (1e-4); the angle from
 // the rest pose is shown and Undo brings the mesh back. The pose-space sliders at 0 give the mean pose vector, and
@@ -49,7 +49,7 @@ test('pose mode: a drag turns only the subtree about its joint; sliders give the
   let start = null;
   let before = null;
   let joint = null;
-  // (press points over the view's middle, row by row: issue 55 frames every training pose, so the mesh is where
+  // (press points over the view's middle, row by row: the view frames every training pose, so the mesh is where
   // the poses' common frame puts it)
   for (const [fx, fy] of Array.from({ length: 72 }, (_, i) => [0.3 + 0.05 * (i % 9), 0.35 + 0.05 * Math.floor(i / 9)])) {
     const x = box.x + fx * box.width;
@@ -181,7 +181,7 @@ test('pose mode says which pose its rest pose is (the rig\'s bind pose: the file
     info = (await page.locator("#info").innerText()).trim();
     if (info) break;
   }
-  // (issue 55: in the two measures the core has, at its joint and the whole part's own rotation; the root's only)
+  // (in the two measures the core has, at its joint and the whole part's own rotation; the root's only)
   assert.match(info, /^part \d+, from the rest pose “reference\.obj” \(the rig's bind pose\), in each training pose: /);
   // the angles of the rest pose's own row are 0
   const rows = await page.$$eval('#info table tr', (tr) => tr.map((r) => [...r.children].map((c) => c.textContent)));

@@ -1,4 +1,4 @@
-// The result read as what it is (a newcomer's fifth review): the part rule's chart says it is the last round's
+// The result read as what it is: the part rule's chart says it is the last round's
 // merges, the Stages view's panels keep a part's colour from one stage to the next, a cancelled first fit leads
 // with being a partial model (its exports too), Refine says it set "Parts in the end", the RMSE is one figure
 // when both units print the same, the log-likelihood plot shows the whole fit's runs with a min and a max that

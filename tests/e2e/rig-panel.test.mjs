@@ -1,4 +1,4 @@
-// The rig panel's fields and captions (issue 55, findings 3 and 7): a bad Influences value is refused at the
+// The rig panel's fields and captions: a bad Influences value is refused at the
 // field, in view, saying what is allowed (1 to 8) in words a person reads (no parser's), an empty field is
 // "empty"; no file is made and the E_RMS line does not stay "…". Rigid weights say one bone per vertex (not "4
 // influences"), and the caption lists the file's clips (the rigid rig's extra "interpolated" clip is named).

@@ -1,4 +1,4 @@
-// The rig from the page is the CLI's rig (issue 11): a generated quadruped dropped on the built page and fitted
+// The rig from the page is the CLI's rig: a generated quadruped dropped on the built page and fitted
 // with "Parts in the end" = 9, exported from the export panel (fitted weights, 4 influences); the E_RMS the page
 // shows equals (within 1 %) what `posemfa rig-report --bones 9 --weights fitted` computes natively for the same files (the
 // same fit and rig, in wasm and natively), and the downloaded .glb, measured by `posemfa rig-report --glb`, gives

@@ -1,4 +1,4 @@
-// Step by step never looks dead (issue 55, finding 10): before it drops a finished fit it asks in the page, not
+// Step by step never looks dead: before it drops a finished fit it asks in the page, not
 // with the browser's confirm box (which a browser may suppress and a script may never answer: Step and Run then
 // did nothing and said nothing). No keeps the fit and says so; Yes starts the step-by-step fit.
 // Run: npm run build && node --test tests/e2e/step-question.test.mjs

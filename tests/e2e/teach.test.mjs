@@ -1,5 +1,6 @@
-// Issue 5 on the built page (dist/): presets and ground-truth accuracy, the teaching mode (Step / Run / Pause /
-// Reset on the core's single-step API), the state in location.hash, and embedding (embed=1, mount()).
+// The teaching side of the built page (dist/): presets and ground-truth accuracy, the teaching mode (Step / Run /
+// Pause / Reset on the core's single-step API; Reset asks before it drops a finished fit), the state in
+// location.hash, and embedding (embed=1, mount()).
 // The step-by-step values are checked against the same core run in Node (pkg-node/, built with the page).
 // Run: npm run build && node --test tests/e2e/teach.test.mjs
 import { test } from 'node:test';
@@ -89,7 +90,7 @@ test('the page opens on the quadruped, fitted, with its ground-truth accuracy, a
     assert.equal(items[i].note, e.note);
     assert.equal(items[i].fails, e.failsOnPurpose);
   }
-  // issue 30: the tied legs are a limit shown, not a failure (connectivity keeps them two parts)
+  // the tied legs are a limit shown, not a failure (connectivity keeps them two parts)
   assert.deepEqual(items.filter((i) => i.fails).map((i) => i.id).sort(), ['blob', 'literal-eq18']);
   assert.equal(items[0].current, 'true');
 
@@ -122,7 +123,7 @@ test('Step advances exactly one AECM iteration: counter +1, plot +1 point, the c
     assert.equal(await page.locator('[data-testid=teach-iteration]').innerText(), String(k));
     assert.equal(t.points, k);
     assert.equal(await page.evaluate(() => window.posemfa.plotPoints()), k);
-    // issue 30: between steps nothing runs, and the page says so
+    // between steps nothing runs, and the page says so
     assert.equal(await page.evaluate(() => document.body.dataset.state), 'paused');
     assert.equal(await page.evaluate(() => document.body.dataset.teaching), '1');
   }

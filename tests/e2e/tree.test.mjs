@@ -1,6 +1,7 @@
-// Issue 26 on the built page (dist/): the merge tree's slider shows every part count of the tree, each from the
-// core at once (no fit), and a new fit of the same population keeps the colour of every part that stayed the
-// same. Prints the time of the slowest move (a figure, not a bar: speed goals are benchmarks).
+// The merge tree on the built page (dist/): its slider shows every part count of the tree, each from the
+// core at once (no fit), and stays put under a real mouse drag; a new fit of the same population keeps the
+// colour of every part that stayed the same; after Refine N the Fit button says the N parts later fits keep.
+// Prints the time of the slowest move (a figure, not a bar: speed goals are benchmarks).
 // Run: npm run build && node --test tests/e2e/tree.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';

@@ -1,4 +1,4 @@
-// The verdict says one thing (issue 55, finding 6): one threshold everywhere (the core's MIN_EXPLAINED in
+// The verdict says one thing: one threshold everywhere (the core's MIN_EXPLAINED in
 // src/parts/diagnosis.rs: the app's verdict and the article print it), a "No verdict" never prints a figure that
 // reads as passing it, and the headline's count is the count the view shows.
 // Run: npm run build && node --test tests/e2e/verdict.test.mjs

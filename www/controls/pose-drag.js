@@ -1,4 +1,4 @@
-// Pose mode's drag (issue 28; www/controls/pose.js installs it): a part of the mesh turned about its joint by the
+// Pose mode's drag (www/controls/pose.js installs it): a part of the mesh turned about its joint by the
 // pointer. The core turns it (the poser's turn, through the worker's pose queries); this file reads the pointer.
 import { state, update } from '../state.js';
 import { query } from '../session.js';
@@ -11,7 +11,7 @@ const $ = (id) => document.getElementById(id);
 // how far out the pointer is against the reach of what turns (the part and the parts it carries, on the
 // screen): held at its far end or beyond, the part follows the pointer; held near its joint, a move turns it
 // by the distance moved over that reach (a trackball's gain), not by the large angle a short move sweeps there
-// (issue 55: 70 px near the horse's neck turned its head 138°). Within NEAR pixels of the joint the angle is
+// (read as a swept angle, 70 px near the horse's neck turned its head 138°). Within NEAR pixels of the joint the angle is
 // not read (it jumps there). The pose before the drag goes on the undo stack at its first turn (a click that
 // turns nothing adds no undo step). While dragging, the parts that turn are shown in their colours and the rest
 // greyed, and the joint is marked (pose.js poseView, views/joint-marker.js).

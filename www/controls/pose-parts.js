@@ -1,4 +1,4 @@
-// Pose mode's parts as a person reads them (issue 55): the Part list's names (where a part is in the skeleton,
+// Pose mode's parts as a person reads them: the Part list's names (where a part is in the skeleton,
 // how much of the mesh it is, its colour), what a drag shows (the parts that turn in their colours, the rest
 // greyed, the joint marked), and the rows of the hover box (a bounded list: a character's 399 frames would run
 // off the view). Nothing here is computed but colours and counts of the core's skeleton.

@@ -1,4 +1,4 @@
-// Pose mode (issue 28): make a pose of one's own from the fitted rig. Click a part and drag to turn it (and the
+// Pose mode: make a pose of one's own from the fitted rig. Click a part and drag to turn it (and the
 // parts it carries) about its joint, around the view direction; or pick the part in the list and turn it with the
 // buttons (keyboard). The angle from the rest pose is shown; Undo and Reset. The pose space: sliders along the
 // principal modes of the training poses' joint rotations (0 = the mean pose), "Random pose" within the training

@@ -1,4 +1,4 @@
-// The merge tree's slider (issue 26): the default part rule records every merge of the fitted parts
+// The merge tree's slider: the default part rule records every merge of the fitted parts
 // (posemfa::parts::merge_tree), so every part count has its partition at once. Moving the slider shows that
 // count's parts (asked of the core: labels and colours, the fitted parts' colours kept where a part is the same);
 // "Refine N parts" fits from that partition with exactly N parts (the form's "Parts in the end"); the slider

@@ -1,4 +1,4 @@
-// The article's figure of what the fit is for (issue 28): the poses the population spans. The fitted rig's
+// The article's figure of what the fit is for: the poses the population spans. The fitted rig's
 // training poses, as every joint's rotation relative to the bind pose (log map), give principal modes; two
 // sliders move along the first two (0 = the mean pose), "Random pose" draws within the training range. Every pose
 // comes from the core (src/export/pose_glb.rs, the worker's pose queries).

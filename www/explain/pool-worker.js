@@ -181,7 +181,7 @@ class Session {
       distancesToLinear: (i, j, t, opts) => this.model.distancesToLinear(i, j, t, opts ?? {}),
       latentPlaced: (i) => this.model.latentPlaced(i),
       alongLongestAxis: (i) => this.population.alongLongestAxis(i),
-      ...(this.poseQ ??= poseQueries(() => this.model)), // the pose-space figure (issue 28)
+      ...(this.poseQ ??= poseQueries(() => this.model)), // the pose-space figure (fig-pose.js)
     };
     try {
       if (!Q[method]) throw new Error(`unknown query ${method}`);

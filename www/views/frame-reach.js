@@ -1,4 +1,4 @@
-// The camera follows the poses (issue 55): a standing pose of a crouching animal had its head and feet cut off
+// The camera follows the poses: framed on one pose, a standing pose of a crouching animal had its head and feet cut off
 // until "Reset camera", and an interpolation 3 -> 8 a hoof. The view frames (viewer.frame) at least the largest
 // extent of any training pose along each axis (each mesh shown is centred on its own box, so a box that holds
 // every pose's extent holds every pose), computed once per population; a mesh shown that still outgrows the

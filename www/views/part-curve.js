@@ -1,4 +1,4 @@
-// The part-count curve (issue 15): the core's part rule (model::distinct) merges the cheapest pair of adjacent
+// The part-count curve: the core's part rule (model::distinct) merges the cheapest pair of adjacent
 // parts while its score is below the distinct ratio; each decision is one point {parts, score, variance, merged}.
 // Drawn as score (log scale, whole decades) against the part count: filled dots were merged, the hollow one is
 // the pair that was not, which is why the fit stopped where it did; the dashed line is the distinct ratio the

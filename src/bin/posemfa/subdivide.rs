@@ -4,7 +4,7 @@ use crate::shared::InputArgs;
 use clap::ValueHint;
 
 /// Split every triangle in four at its edge midpoints, the same in every pose (the population stays registered),
-/// and write one OBJ file per pose, in the input's units and with its names (issue 27's high-resolution data:
+/// and write one OBJ file per pose, in the input's units and with its names (high-resolution test data:
 /// horse-gallop once gives about 34 k vertices x 49 poses)
 #[derive(clap::Args)]
 #[command(next_help_heading = "Subdivide options")]
