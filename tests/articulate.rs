@@ -1,4 +1,4 @@
-//! Articulation (issue 4) on generated creatures (posemfa::synth) and, natively, on the horse when
+//! Articulation (Algorithm 2, interpolation, skinning) on generated creatures (posemfa::synth) and, natively, on the horse when
 //! ../shared/data/horse-poses exists. Most tests run natively and in wasm (scripts/test.sh).
 //!
 //! Two kinds of model: the generator's ground truth turned into a [`Model`] (exact rigid parts, no fit:
@@ -95,7 +95,7 @@ dual_test! {
                 assert!(e0 <= 1e-6 && e1 <= 1e-6, "{i}->{j} {o:?}: {e0:e} {e1:e}");
             }
         }
-        // Algorithm 2 as printed misses its own end poses on a fitted model (METHOD_NOTES item 9)
+        // Algorithm 2 as printed misses its own end poses on a fitted model (docs/method.md, item 9)
         let plain = Options { residual: false, ..Options::paper() };
         let miss = max_distance(&art.interpolate(0, 4, 1.0, &plain).unwrap(), &art.rigid(4));
         assert!(miss > 1e-4, "{miss}");
@@ -284,7 +284,7 @@ dual_test! {
     }
 }
 
-/// The horse, poses 3 -> 8 (when ../shared/data/horse-poses exists): the figures issue 4 asks for.
+/// The horse, poses 3 -> 8 (when ../shared/data/horse-poses exists): the figures docs/method.md quotes.
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn horse_poses_3_to_8() {

@@ -1,11 +1,11 @@
 //! The part graph: which rigid parts touch, where, and the tree the interpolation walks.
 //!
 //! Two parts are adjacent when a mesh edge joins a vertex of one to a vertex of the other. The contact
-//! region of a pair is the set of triangles that have vertices in both parts (METHOD_NOTES item 10); when it
+//! region of a pair is the set of triangles that have vertices in both parts (docs/method.md, item 10); when it
 //! falls into several patches (a label island inside another part adds a small second patch) the patch with
 //! the largest area is kept, so that a stray island does not pull the joint away from the real contact.
 //!
-//! Labels are not guaranteed to be spatially coherent (item 7), so a part can touch another through a small
+//! Labels are not guaranteed to be spatially coherent (docs/method.md, item 7), so a part can touch another through a small
 //! island as well as through its real joint. The default tree is therefore grown from the root by always
 //! taking the strongest remaining contact (the most mesh edges crossing: Prim's maximum spanning tree); the
 //! paper's plain breadth-first tree is [`TreeRule::BreadthFirst`]. On a clean segmentation whose part graph

@@ -1,7 +1,7 @@
 //! Algorithm 2, corrected: interpolation between two training poses, and along a sequence of poses.
 //!
 //! For poses i -> j and t in [0, 1]:
-//! 1. every part's rotation: R_k^t = slerp(R_k^i, R_k^j, t) along the shorter arc (item 10);
+//! 1. every part's rotation: R_k^t = slerp(R_k^i, R_k^j, t) along the shorter arc (docs/method.md, item 10);
 //! 2. the root's translation: with exact ends its latent centroid c moves on a straight line,
 //!    b_r^t = (1-t)(R_r^i c + b_r^i) + t(R_r^j c + b_r^j) - R_r^t c; as printed, b_r^t = (1-t) b_r^i + t b_r^j;
 //! 3. walking the tree from the root, every child c of p is pinned at their joint (eq 23 with Λ and the

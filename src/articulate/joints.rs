@@ -2,7 +2,7 @@
 //! latent frame.
 //!
 //! J_pc^i: the area-weighted centroid of the contact triangles (those with vertices in both p and c) in
-//! shape i (METHOD_NOTES item 10). Its latent image in part k is Λ_k E_k[z | J_pc] (eq 23 mapped through Λ,
+//! shape i (docs/method.md, item 10). Its latent image in part k is Λ_k E_k[z | J_pc] (eq 23 mapped through Λ,
 //! item 4): the point of part k's latent shape that part k's rigid motions send closest to J_pc^i, all
 //! shapes together. For a virtual contact (disconnected mesh pieces) J^i is the midpoint of its two vertices.
 //!

@@ -1,5 +1,5 @@
 //! Turning a fit into an articulated model: part graph, joints, pose interpolation (Algorithm 2 with the
-//! corrections of METHOD_NOTES items 4, 9 and 10), skinning weights, a skeleton.
+//! corrections of docs/method.md, items 4, 9 and 10), skinning weights, a skeleton.
 //!
 //! - [`graph`]: part adjacency from mesh edges, contact triangles, the part tree (strongest-contact or BFS).
 //! - [`joints`]: J_pc per training shape and its latent image in each part (eq 23 through Λ).
@@ -18,7 +18,7 @@
 //!   shapes). On an animal that is the trunk: the body then moves on a straight line and every limb swings
 //!   from it, whatever the two poses are. The paper's rule ([`RootRule::Paper`], smallest rotation between
 //!   the two poses) changes with the pair of poses and often picks a small leg piece, so the whole body
-//!   swings about a hoof (METHOD_NOTES item 9). Both give exact ends with [`Options::exact_ends`].
+//!   swings about a hoof (docs/method.md, item 9). Both give exact ends with [`Options::exact_ends`].
 //! - **Exact ends** ([`Options::exact_ends`], default on): the joint mismatch of each training shape
 //!   ([`joints::Joint::offset`]) is blended in t, and the root's centroid (not its b, which depends on the
 //!   arbitrary latent origin) moves on a straight line. Off: Algorithm 2 as printed (b_root linear, the child
@@ -172,7 +172,7 @@ pub struct Articulation {
     /// shape and its rigid reconstruction are made when asked for ([`Articulation::shape`],
     /// [`Articulation::rigid`]). Held in f64, the shapes and their reconstructions took 48 bytes per vertex-pose
     /// for as long as the page's interpolation view was open, and raised a 42 k x 11 population's peak from 57
-    /// to 96 bytes per vertex-pose (issue 27).
+    /// to 96 bytes per vertex-pose.
     pub population: Population,
     pub normalization: Normalization,
     pub graph: PartGraph,

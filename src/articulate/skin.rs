@@ -1,6 +1,6 @@
 //! Skinning weights and blending of part motions per vertex.
 //!
-//! Rigid parts crease and stretch at joints (METHOD_NOTES item 9). The smooth weights spread each part
+//! Rigid parts crease and stretch at joints (docs/method.md, item 9). The smooth weights spread each part
 //! boundary over a band: for a vertex j of part p and another part k at mesh distance d (Dijkstra over the
 //! edges, each edge as long as its mean length over the training shapes), k gets the raw weight
 //! φ(d / h_k) with φ(x) = 1 - 3x² + 2x³ on [0, 1) and 0 beyond, and p itself gets φ(0) = 1; the raw weights
