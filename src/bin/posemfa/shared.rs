@@ -220,10 +220,11 @@ impl FitArgs {
 #[derive(clap::Args)]
 #[command(next_help_heading = "Fit options")]
 pub struct FitArgs {
-    /// Coarse parts
+    /// Algorithm 1's coarse parts (--part-rule distinct or threshold, --no-refine); the default merge tree
+    /// ignores it
     #[arg(long, value_name = "M", default_value_t = Params::default().parts, value_parser = parts_value)]
     parts: usize,
-    /// Random seed
+    /// Algorithm 1's k-means++ seed; the default merge tree draws nothing at random and ignores it
     #[arg(long, value_name = "S", default_value_t = Params::default().seed, value_parser = seed_value)]
     seed: u64,
     /// Convergence tolerance on |dL|/n_v
@@ -248,10 +249,10 @@ pub struct FitArgs {
     /// (Algorithm 1 from k-means++ with the scale-free rule) or threshold (Algorithm 1 with the paper's rule)
     #[arg(long, value_name = "RULE", value_parser = choice(PART_RULES))]
     part_rule: Option<PartRule>,
-    /// Part rule distinct: a joint must explain K times a typical part's variance to keep two parts
+    /// Part rules tree and distinct: a joint must explain K times a typical part's variance to keep two parts
     #[arg(long, value_name = "K", default_value_t = Params::default().distinct_ratio)]
     pub distinct_ratio: f64,
-    /// Part rule distinct: a part moving as a fixed blend of two neighbours to within B is flesh
+    /// Part rules tree and distinct: a part moving as a fixed blend of two neighbours to within B is flesh
     #[arg(long, value_name = "B", default_value_t = Params::default().blend_ratio)]
     blend_ratio: f64,
     /// The paper's part rule: stop splitting a part below this mean variance [default: 1e-5] (implies
@@ -264,7 +265,8 @@ pub struct FitArgs {
     /// Tolerance of the coarse and refinement AECM runs
     #[arg(long, value_name = "T", default_value_t = Params::default().refine_tol)]
     refine_tol: f64,
-    /// Stop after the coarse AECM
+    /// Stop after Algorithm 1's coarse AECM (--parts parts from k-means++), whatever --part-rule says: no part
+    /// rule decides the count
     #[arg(long)]
     no_refine: bool,
     /// With at least 5N vertices: coarse and refinement stages on about N well-spread vertices, final AECM on
@@ -275,7 +277,7 @@ pub struct FitArgs {
     /// (N x 20 / poses with fewer than 20 poses; 0 = decide on all vertices)
     #[arg(long, value_name = "N", default_value_t = Params::default().coarse_vertices)]
     coarse: usize,
-    /// Exact part count: auto (Algorithm 1's own) or N (split / merge until N)
+    /// Exact part count: auto (the part rule's own count) or N (split / merge until N)
     #[arg(long, value_name = "N", default_value = "auto", value_parser = bones)]
     bones: Bones,
     /// Fit from this partition, with exactly its count (the page's Refine): a JSON array of one part per vertex,
