@@ -607,47 +607,19 @@ pub fn parse_glb(glb: &[u8]) -> Result<(json::Root, Vec<u8>)> {
     if word(16)? != CHUNK_JSON {
         return Err(bad("first chunk is not JSON"));
     }
-    let text = glb.get(20..20 + jlen).ok_or_else(|| bad("JSON chunk"))?;
+    let o = 20usize.checked_add(jlen).filter(|&o| o <= glb.len()).ok_or_else(|| bad("JSON chunk"))?;
+    let text = &glb[20..o];
     let root: json::Root = json::deserialize::from_slice(text).map_err(|e| bad(&e.to_string()))?;
     let mut bin = Vec::new();
-    let o = 20 + jlen;
     if o < glb.len() {
         let blen = word(o)? as usize;
         if word(o + 4)? != CHUNK_BIN {
             return Err(bad("second chunk is not BIN"));
         }
-        bin = glb.get(o + 8..o + 8 + blen).ok_or_else(|| bad("BIN chunk"))?.to_vec();
+        bin =
+            o.checked_add(8).and_then(|start| glb.get(start..)?.get(..blen)).ok_or_else(|| bad("BIN chunk"))?.to_vec();
     }
     Ok((root, bin))
-}
-
-pub(crate) fn read_floats(root: &json::Root, bin: &[u8], acc: json::Index<json::Accessor>) -> Result<Vec<f64>> {
-    let a = root.get(acc).ok_or_else(|| Error::Data("accessor out of range".into()))?;
-    let view = root
-        .get(a.buffer_view.ok_or_else(|| Error::Data("accessor without view".into()))?)
-        .ok_or_else(|| Error::Data("view".into()))?;
-    let start = view.byte_offset.map_or(0, |o| o.0 as usize) + a.byte_offset.map_or(0, |o| o.0 as usize);
-    let per = match a.type_ {
-        Valid(t) => t.multiplicity(),
-        _ => return Err(Error::Data("accessor type".into())),
-    };
-    let n = a.count.0 as usize * per;
-    let comp = match a.component_type {
-        Valid(json::accessor::GenericComponentType(c)) => c,
-        _ => return Err(Error::Data("component type".into())),
-    };
-    let size = comp.size();
-    let bytes = bin.get(start..start + n * size).ok_or_else(|| Error::Data("accessor past the buffer".into()))?;
-    Ok(bytes
-        .chunks(size)
-        .map(|b| match comp {
-            json::accessor::ComponentType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            json::accessor::ComponentType::U8 => b[0] as f64,
-            json::accessor::ComponentType::U16 => u16::from_le_bytes([b[0], b[1]]) as f64,
-            json::accessor::ComponentType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            _ => f64::NAN,
-        })
-        .collect())
 }
 
 /// What [`check_glb`] found.
@@ -725,159 +697,119 @@ pub fn play_glb_clip_each(
     clip: &str,
     mut each: impl FnMut(usize, Vec<Vec3>, Vec<Vec3>) -> Result<()>,
 ) -> Result<GlbRig> {
-    let (root, bin) = parse_glb(glb)?;
-    let err = |m: &str| Error::Data(format!("glb playback: {m}"));
-    let skin = root.skins.first().ok_or_else(|| err("no skin"))?;
-    let mesh = root.meshes.first().ok_or_else(|| err("no mesh"))?;
-    let prim = mesh.primitives.first().ok_or_else(|| err("no primitive"))?;
-    let attr = |s: json::mesh::Semantic| prim.attributes.get(&Valid(s)).copied();
-    let pos = read_floats(&root, &bin, attr(json::mesh::Semantic::Positions).ok_or_else(|| err("no POSITION"))?)?;
-    let nv = pos.len() / 3;
-    let mut sets = Vec::new();
-    for set in 0.. {
-        match (attr(json::mesh::Semantic::Joints(set)), attr(json::mesh::Semantic::Weights(set))) {
-            (Some(j), Some(w)) => sets.push((read_floats(&root, &bin, j)?, read_floats(&root, &bin, w)?)),
-            _ => break,
-        }
+    use crate::mesh::gltf::{Local, Path};
+    const FILE: &str = "the .glb";
+    let s = crate::mesh::gltf::read_skinned(FILE, glb, &[])?;
+    let err = |m: String| crate::mesh::gltf::error(FILE, format!("glb playback: {m}"));
+    let joint_parent: Vec<Option<usize>> = {
+        let slot_of_node: std::collections::HashMap<usize, usize> =
+            s.joints.iter().enumerate().map(|(k, &n)| (n, k)).collect();
+        s.joints.iter().map(|&n| s.parent[n].and_then(|p| slot_of_node.get(&p).copied())).collect()
+    };
+    let channels = s.clip(clip)?;
+    let n_keys = channels.first().map_or(0, |c| c.times.len());
+    if let Some(c) = channels.iter().find(|c| c.times.len() != n_keys) {
+        return Err(err(format!(
+            "channels with different keyframe counts ({} and {n_keys}, node {}): played at its keyframes, a clip's \
+             channels share them",
+            c.times.len(),
+            c.node
+        )));
     }
-    if sets.is_empty() {
-        return Err(err("no JOINTS_0 / WEIGHTS_0"));
+    let n_targets = s.targets.len();
+    if let Some(c) = channels.iter().find(|c| c.path == Path::Weights && (c.node != s.mesh_node || n_targets == 0)) {
+        return Err(err(format!("a morph weights channel moves node {}, not the skinned mesh's node", c.node)));
     }
-    let morphs: Vec<Vec<f64>> = prim
-        .targets
+    let rest_local: Vec<(Vec3, [f64; 4], Vec3)> = s
+        .local
         .iter()
-        .flatten()
-        .map(|t| read_floats(&root, &bin, t.positions.ok_or_else(|| err("morph target without POSITION"))?))
+        .map(|l| match *l {
+            Local::Trs(t, r, sc) => Ok((t, r, sc)),
+            Local::Matrix(m) => {
+                let (t, r, sc) = decompose(&m).ok_or_else(|| {
+                    err("a node's matrix is not translation, rotation \
+                     and scale"
+                        .into())
+                })?;
+                Ok((t, r, sc))
+            }
+        })
         .collect::<Result<_>>()?;
-    let default_weights: Vec<f64> = mesh.weights.clone().unwrap_or_default().iter().map(|&w| w as f64).collect();
-    let ibm = read_floats(&root, &bin, skin.inverse_bind_matrices.ok_or_else(|| err("no IBM"))?)?;
-    let n_nodes = root.nodes.len();
-    let mut parent = vec![None; n_nodes];
-    for (i, n) in root.nodes.iter().enumerate() {
-        for c in n.children.iter().flatten() {
-            parent[c.value()] = Some(i);
-        }
-    }
-    let slot_of_node: std::collections::HashMap<usize, usize> =
-        skin.joints.iter().enumerate().map(|(s, j)| (j.value(), s)).collect();
-    let joint_parent: Vec<Option<usize>> =
-        skin.joints.iter().map(|j| parent[j.value()].and_then(|p| slot_of_node.get(&p).copied())).collect();
-    let anim = root
-        .animations
-        .iter()
-        .find(|a| a.name.as_deref() == Some(clip))
-        .ok_or_else(|| err(&format!("no clip '{clip}'")))?;
-    let first_times = read_floats(&root, &bin, anim.samplers.first().ok_or_else(|| err("empty clip"))?.input)?;
-    let n_keys = first_times.len();
-    let mut channels = Vec::new();
-    for ch in &anim.channels {
-        let smp = &anim.samplers[ch.sampler.value()];
-        let times = read_floats(&root, &bin, smp.input)?;
-        if times.len() != n_keys {
-            return Err(err("channels with different keyframe counts"));
-        }
-        channels.push((ch.target.node.value(), ch.target.path, read_floats(&root, &bin, smp.output)?));
-    }
-    let rest: Vec<Vec3> = (0..nv).map(|v| [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]]).collect();
     for key in 0..n_keys {
-        let mut local: Vec<(Vec3, [f64; 4], Vec3)> = root
-            .nodes
-            .iter()
-            .map(|n| {
-                let t = n.translation.map_or([0.0; 3], |t| t.map(|c| c as f64));
-                let q = n.rotation.map_or([0.0, 0.0, 0.0, 1.0], |q| q.0.map(|c| c as f64));
-                let s = n.scale.map_or([1.0; 3], |s| s.map(|c| c as f64));
-                (t, q, s)
-            })
-            .collect();
-        let mut morph_w = default_weights.clone();
-        morph_w.resize(morphs.len(), 0.0);
-        for (node, path, out) in &channels {
-            let k = key;
-            match path {
-                Valid(json::animation::Property::Translation) => {
-                    local[*node].0 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]]
-                }
-                Valid(json::animation::Property::Rotation) => {
-                    local[*node].1 = [out[4 * k], out[4 * k + 1], out[4 * k + 2], out[4 * k + 3]]
-                }
-                Valid(json::animation::Property::Scale) => {
-                    local[*node].2 = [out[3 * k], out[3 * k + 1], out[3 * k + 2]]
-                }
-                Valid(json::animation::Property::MorphTargetWeights) => {
-                    let n = morphs.len();
-                    morph_w.copy_from_slice(&out[n * k..n * k + n]);
-                }
-                _ => return Err(err("unexpected channel")),
+        let mut local = rest_local.clone();
+        let mut morph_w = s.default_weights.clone();
+        for c in &channels {
+            let v = &c.values[key];
+            match c.path {
+                Path::Translation => local[c.node].0 = [v[0], v[1], v[2]],
+                Path::Rotation => local[c.node].1 = [v[0], v[1], v[2], v[3]],
+                Path::Scale => local[c.node].2 = [v[0], v[1], v[2]],
+                Path::Weights => morph_w.copy_from_slice(&v[..n_targets]),
             }
         }
-        let mut world: Vec<Option<Affine>> = vec![None; n_nodes];
-        fn world_of(
-            n: usize,
-            parent: &[Option<usize>],
-            local: &[(Vec3, [f64; 4], Vec3)],
-            world: &mut Vec<Option<Affine>>,
-        ) -> Affine {
-            if let Some(w) = world[n] {
-                return w;
-            }
+        let mut world: Vec<Affine> = vec![(Mat3::identity(), [0.0; 3]); local.len()];
+        for &n in &s.order {
             let l = trs(local[n].0, local[n].1, local[n].2);
-            let w = match parent[n] {
-                Some(p) => affine_mul(&world_of(p, parent, local, world), &l),
+            world[n] = match s.parent[n] {
+                Some(p) => affine_mul(&world[p], &l),
                 None => l,
             };
-            world[n] = Some(w);
-            w
         }
-        let mut jpos = Vec::with_capacity(skin.joints.len());
-        let joint_mats: Vec<Affine> = skin
+        let mut jpos = Vec::with_capacity(s.joints.len());
+        let joint_mats: Vec<Affine> = s
             .joints
             .iter()
-            .enumerate()
-            .map(|(s, j)| {
-                let w = world_of(j.value(), &parent, &local, &mut world);
+            .zip(&s.inverse_bind)
+            .map(|(&n, m)| {
+                let w = world[n];
                 jpos.push(w.1);
-                let m = &ibm[16 * s..16 * s + 16];
                 // glTF matrices are column-major, like nalgebra's storage
                 let b: Affine =
                     (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]]);
                 affine_mul(&w, &b)
             })
             .collect();
-        let mut out = Vec::with_capacity(nv);
-        for v in 0..nv {
-            let mut p = rest[v];
-            for (t, w) in morphs.iter().zip(&morph_w) {
+        let mut out = Vec::with_capacity(s.positions.len());
+        for (v, (&rest, infl)) in s.positions.iter().zip(&s.influences).enumerate() {
+            let mut p = rest;
+            for (t, w) in s.targets.iter().zip(&morph_w) {
                 if *w != 0.0 {
                     for d in 0..3 {
-                        p[d] += w * t[3 * v + d];
+                        p[d] += w * t[v][d];
                     }
                 }
             }
             let mut x = [0.0; 3];
-            for (jts, wts) in &sets {
-                for s in 0..4 {
-                    let w = wts[4 * v + s];
-                    if w == 0.0 {
-                        continue;
-                    }
-                    let m = joint_mats.get(jts[4 * v + s] as usize).ok_or_else(|| err("joint index out of range"))?;
-                    let y = crate::geometry::add(mat_vec(&m.0, p), m.1);
-                    for d in 0..3 {
-                        x[d] += w * y[d];
-                    }
+            for &(k, w) in infl {
+                let m = &joint_mats[k];
+                let y = crate::geometry::add(mat_vec(&m.0, p), m.1);
+                for d in 0..3 {
+                    x[d] += w * y[d];
                 }
             }
             out.push(x);
         }
         each(key, out, jpos)?;
     }
-    Ok(GlbRig {
-        rest,
-        joint_parent,
-        clips: root.animations.iter().filter_map(|a| a.name.clone()).collect(),
-        keys: n_keys,
-    })
+    Ok(GlbRig { rest: s.positions, joint_parent, clips: s.clips.into_iter().flatten().collect(), keys: n_keys })
+}
+
+/// Translation, rotation (x, y, z, w) and scale of a column-major 4x4 matrix without shear or projection.
+fn decompose(m: &[f64; 16]) -> Option<(Vec3, [f64; 4], Vec3)> {
+    let a = Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]);
+    let sc = [a.column(0).norm(), a.column(1).norm(), a.column(2).norm()];
+    if sc.iter().any(|x| !(*x > 0.0)) || m[3] != 0.0 || m[7] != 0.0 || m[11] != 0.0 || m[15] != 1.0 {
+        return None;
+    }
+    let mut r = a;
+    for (c, s) in sc.iter().enumerate() {
+        r.set_column(c, &(a.column(c) / *s));
+    }
+    if (r.transpose() * r - Mat3::identity()).norm() > 1e-4 || r.determinant() < 0.0 {
+        return None;
+    }
+    let q = crate::geometry::rotation::to_quat(&r);
+    Some(([m[12], m[13], m[14]], [q.i, q.j, q.k, q.w], sc))
 }
 
 /// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe ([`play_glb`]) and

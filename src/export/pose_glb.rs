@@ -1,8 +1,9 @@
 //! A rig .glb this project wrote ([`super::gltf::write_glb`]), read back for posing, and written again with a
 //! clip of new poses (issue 28: `posemfa pose`, the page's pose export).
 //!
-//! Reading ([`read_rig`]): the first mesh's first primitive (POSITION, JOINTS_n / WEIGHTS_n), the first skin
-//! (joints, inverse bind matrices) and the node tree. Bone k is skin joint k; its motion in a pose is its skin
+//! Reading ([`read_rig`], through the checked reader [`crate::mesh::gltf::read_skinned`]: strides, sparse
+//! accessors and every bound): the mesh of the first node with a mesh and a skin (its triangle primitives;
+//! POSITION, all JOINTS_n / WEIGHTS_n), that skin (joints, inverse bind matrices) and the node tree. Bone k is skin joint k; its motion in a pose is its skin
 //! matrix S_k = W_k · IBM_k (W_k the joint node's world matrix), the map from the bind positions (POSITION) to the
 //! posed mesh in scene coordinates, so the rig's skinning is v = Σ_k w_k S_k u exactly as a glTF player does it.
 //! Bone k's parent is the nearest ancestor node that is a joint; its joint point is the joint node's origin in
@@ -14,7 +15,7 @@
 //! is not a joint); morph weights 0 when the mesh has morph targets (no residual for a new pose).
 //! Everything is in scene coordinates (the population's original units for this project's rigs).
 
-use super::gltf::{glb_container, parse_glb, read_floats, Bin, Channels};
+use super::gltf::{glb_container, Bin, Channels};
 use crate::articulate::pose::{PoseSpace, SkinnedRig};
 use crate::articulate::skin::SkinWeights;
 use crate::articulate::RigidMotion;
@@ -23,7 +24,7 @@ use crate::geometry::procrustes::best_rotation;
 use crate::geometry::rotation::{from_quat, to_quat};
 use crate::geometry::{add, mat_mul, mat_vec, sub, Mat3, Vec3};
 use gltf_json as json;
-use json::validation::{Checked::Valid, USize64};
+use json::validation::USize64;
 
 /// x -> A x + c.
 type Affine = (Mat3, Vec3);
@@ -42,6 +43,8 @@ fn invert(a: &Affine) -> Option<Affine> {
 pub struct GlbRig {
     root: json::Root,
     bin: Vec<u8>,
+    /// The skinned mesh (index in the document).
+    mesh: usize,
     /// Bind positions, weights, skeleton, joint points: scene coordinates.
     pub rig: SkinnedRig,
     /// Node of every bone (skin joint).
@@ -58,155 +61,77 @@ pub struct GlbRig {
     rest_world: Vec<Affine>,
 }
 
-/// Reads a rig .glb (module doc); `file` names it in errors ("file F: what is wrong").
+/// Reads a rig .glb (module doc) with the checked glTF reader ([`crate::mesh::gltf::read_skinned`]: every
+/// accessor's bounds, strides and sparse values); `file` names it in errors ("file F: what is wrong").
 pub fn read_rig(file: &str, glb: &[u8]) -> Result<GlbRig> {
-    read_rig_bytes(glb).map_err(|e| Error::Population {
-        file: file.to_string(),
-        message: match e {
-            Error::Data(m) | Error::Request(m) | Error::Io(m) => m,
-            other => other.to_string(),
-        },
-    })
-}
-
-fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
-    let bad = Error::Data;
-    let (root, bin) = parse_glb(glb).map_err(|e| {
-        let m = match e {
-            Error::Data(m) => m,
-            other => other.to_string(),
-        };
-        bad(format!("{m} (posemfa pose reads the binary .glb rigs posemfa writes)"))
-    })?;
-    let skin = root
-        .skins
-        .first()
-        .ok_or_else(|| bad("no skin: this is not a rig (write one with `posemfa export-gltf`)".into()))?;
-    let mesh = root.meshes.first().ok_or_else(|| bad("no mesh".into()))?;
-    if mesh.primitives.len() != 1 {
-        return Err(bad(format!("mesh 0 has {} primitives; a posemfa rig has one", mesh.primitives.len())));
+    let s = crate::mesh::gltf::read_skinned(file, glb, &[])?;
+    let bad = |m: String| crate::mesh::gltf::error(file, m);
+    let bin = s
+        .glb_bin()
+        .ok_or_else(|| {
+            bad("its first buffer is not a .glb's binary chunk: posemfa poses binary .glb rigs (export the rig as \
+                 .glb)"
+                .into())
+        })?
+        .to_vec();
+    let root = s.json().clone();
+    let nv = s.positions.len();
+    let rest: Vec<Vec3> = s.positions.clone();
+    let faces = s.faces.clone();
+    let n_joints = s.joints.len();
+    if s.influences.iter().all(Vec::is_empty) {
+        return Err(bad(format!(
+            "mesh {} has no JOINTS_0 / WEIGHTS_0: it is not skinned, so it is no rig; weight the mesh to the \
+             armature and export it again",
+            s.mesh
+        )));
     }
-    let prim = &mesh.primitives[0];
-    let attr = |s: json::mesh::Semantic| prim.attributes.get(&Valid(s)).copied();
-    let pos = read_floats(
-        &root,
-        &bin,
-        attr(json::mesh::Semantic::Positions).ok_or_else(|| bad("the mesh has no POSITION".into()))?,
-    )?;
-    let nv = pos.len() / 3;
-    let rest: Vec<Vec3> = (0..nv).map(|v| [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]]).collect();
-    let idx = read_floats(&root, &bin, prim.indices.ok_or_else(|| bad("the mesh has no indices".into()))?)?;
-    if idx.len() % 3 != 0 || idx.iter().any(|&i| !(i >= 0.0 && (i as usize) < nv)) {
-        return Err(bad(format!("the mesh's indices are not triangles of its {nv} vertices")));
-    }
-    let faces: Vec<[u32; 3]> = idx.chunks_exact(3).map(|t| [t[0] as u32, t[1] as u32, t[2] as u32]).collect();
-    let n_joints = skin.joints.len();
-    let mut influences: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nv];
-    let mut sets = 0;
-    for set in 0.. {
-        let (Some(j), Some(w)) = (attr(json::mesh::Semantic::Joints(set)), attr(json::mesh::Semantic::Weights(set)))
-        else {
-            break;
-        };
-        let (j, w) = (read_floats(&root, &bin, j)?, read_floats(&root, &bin, w)?);
-        if j.len() != 4 * nv || w.len() != 4 * nv {
-            return Err(bad(format!("JOINTS_{set} / WEIGHTS_{set} do not have one VEC4 per vertex ({nv})")));
-        }
-        for v in 0..nv {
-            for s in 0..4 {
-                let (k, x) = (j[4 * v + s], w[4 * v + s]);
-                if x == 0.0 {
-                    continue;
-                }
-                if !(x > 0.0 && x.is_finite()) || !(k >= 0.0 && (k as usize) < n_joints) {
-                    return Err(bad(format!(
-                        "vertex {v}: joint {k} weight {x} in JOINTS_{set} / WEIGHTS_{set} ({n_joints} joints)"
-                    )));
-                }
-                influences[v].push((k as u32, x));
-            }
-        }
-        sets += 1;
-    }
-    if sets == 0 {
-        return Err(bad("the mesh has no JOINTS_0 / WEIGHTS_0: it is not skinned".into()));
-    }
+    let mut influences: Vec<Vec<(u32, f64)>> =
+        s.influences.iter().map(|inf| inf.iter().map(|&(k, w)| (k as u32, w)).collect()).collect();
     for (v, inf) in influences.iter_mut().enumerate() {
         let sum: f64 = inf.iter().map(|x| x.1).sum();
-        if !(sum > 0.0) {
-            return Err(bad(format!("vertex {v} has no joint weight")));
+        if !(sum > 0.0 && sum.is_finite()) {
+            return Err(bad(format!(
+                "vertex {v} of its {nv} has no joint weight (JOINTS_n / WEIGHTS_n): every vertex of a rig follows \
+                 a joint; weight the mesh to the armature and export it again"
+            )));
         }
         inf.iter_mut().for_each(|x| x.1 /= sum);
         inf.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     }
-    let ibm_values = read_floats(
-        &root,
-        &bin,
-        skin.inverse_bind_matrices.ok_or_else(|| bad("the skin has no inverse bind matrices".into()))?,
-    )?;
-    if ibm_values.len() != 16 * n_joints {
-        return Err(bad(format!("{} inverse bind matrices for {n_joints} joints", ibm_values.len() / 16)));
-    }
-    let ibm: Vec<Affine> = (0..n_joints)
-        .map(|s| {
-            let m = &ibm_values[16 * s..16 * s + 16];
-            (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]])
-        })
+    let ibm: Vec<Affine> = s
+        .inverse_bind
+        .iter()
+        .map(|m| (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]]))
         .collect();
-    let n_nodes = root.nodes.len();
-    let mut node_parent = vec![None; n_nodes];
-    for (i, n) in root.nodes.iter().enumerate() {
-        for c in n.children.iter().flatten() {
-            if c.value() >= n_nodes {
-                return Err(bad(format!("node {i} has child {} but there are {n_nodes} nodes", c.value())));
+    let n_nodes = s.local.len();
+    let node_parent = s.parent.clone();
+    let local_of = |l: &crate::mesh::gltf::Local| -> Affine {
+        match *l {
+            crate::mesh::gltf::Local::Matrix(m) => {
+                (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]])
             }
-            node_parent[c.value()] = Some(i);
+            crate::mesh::gltf::Local::Trs(t, q, sc) => {
+                let r = from_quat(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]));
+                (Mat3::from_fn(|a, b| r[(a, b)] * sc[b]), t)
+            }
         }
-    }
-    let local_of = |n: &json::Node| -> Affine {
-        if let Some(m) = n.matrix {
-            let m = m.map(|x| x as f64);
-            return (Mat3::new(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]), [m[12], m[13], m[14]]);
-        }
-        let t = n.translation.map_or([0.0; 3], |t| t.map(|c| c as f64));
-        let q = n.rotation.map_or([0.0, 0.0, 0.0, 1.0], |q| q.0.map(|c| c as f64));
-        let s = n.scale.map_or([1.0; 3], |s| s.map(|c| c as f64));
-        let r = from_quat(nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]));
-        (Mat3::from_fn(|a, b| r[(a, b)] * s[b]), t)
     };
-    let mut rest_world: Vec<Option<Affine>> = vec![None; n_nodes];
-    for start in 0..n_nodes {
-        // walk up to a known ancestor, then down (no recursion: deep skeletons)
-        let mut chain = vec![start];
-        let mut guard = 0;
-        while let Some(p) = node_parent[*chain.last().expect("non-empty")] {
-            if rest_world[p].is_some() {
-                break;
-            }
-            chain.push(p);
-            guard += 1;
-            if guard > n_nodes {
-                return Err(bad("the node hierarchy has a cycle".into()));
-            }
-        }
-        for &n in chain.iter().rev() {
-            if rest_world[n].is_some() {
-                continue;
-            }
-            let l = local_of(&root.nodes[n]);
-            rest_world[n] = Some(match node_parent[n] {
-                Some(p) => compose(&rest_world[p].expect("parents first"), &l),
-                None => l,
-            });
-        }
+    // parents before children (the reader's order)
+    let mut rest_world: Vec<Affine> = vec![(Mat3::identity(), [0.0; 3]); n_nodes];
+    for &n in &s.order {
+        let l = local_of(&s.local[n]);
+        rest_world[n] = match node_parent[n] {
+            Some(p) => compose(&rest_world[p], &l),
+            None => l,
+        };
     }
-    let rest_world: Vec<Affine> = rest_world.into_iter().map(|w| w.expect("every node visited")).collect();
-    let joint_nodes: Vec<usize> = skin.joints.iter().map(|j| j.value()).collect();
-    if let Some(&n) = joint_nodes.iter().find(|&&n| n >= n_nodes) {
-        return Err(bad(format!("the skin lists node {n} but there are {n_nodes} nodes")));
-    }
-    if let Some(&n) = joint_nodes.iter().find(|&&n| root.nodes[n].matrix.is_some()) {
-        return Err(bad(format!("joint node {n} has a matrix: animated nodes need translation / rotation / scale")));
+    let joint_nodes: Vec<usize> = s.joints.clone();
+    if let Some(&n) = joint_nodes.iter().find(|&&n| matches!(s.local[n], crate::mesh::gltf::Local::Matrix(_))) {
+        return Err(bad(format!(
+            "joint node {n} has a matrix: a joint a clip moves needs translation / rotation / scale; export the rig \
+             again"
+        )));
     }
     let slot_of_node: std::collections::HashMap<usize, usize> =
         joint_nodes.iter().enumerate().map(|(s, &n)| (n, s)).collect();
@@ -244,12 +169,11 @@ fn read_rig_bytes(glb: &[u8]) -> Result<GlbRig> {
             invert(&s).map_or(w.1, |si| add(mat_vec(&si.0, w.1), si.1))
         })
         .collect();
-    let names =
-        joint_nodes.iter().map(|&n| root.nodes[n].name.clone().unwrap_or_else(|| format!("node {n}"))).collect();
-    let clips = root.animations.iter().map(|a| a.name.clone().unwrap_or_default()).collect();
+    let names = joint_nodes.iter().map(|&n| s.node_names[n].clone().unwrap_or_else(|| format!("node {n}"))).collect();
+    let clips = s.clips.iter().map(|c| c.clone().unwrap_or_default()).collect();
     let rig = SkinnedRig { rest, weights: SkinWeights { influences }, parent, order, joint_points };
-    rig.validate()?;
-    Ok(GlbRig { root, bin, rig, joint_nodes, names, clips, faces, ibm, node_parent, rest_world })
+    rig.validate().map_err(|e| bad(format!("its skin is not a rig posemfa can pose: {e}")))?;
+    Ok(GlbRig { root, bin, mesh: s.mesh, rig, joint_nodes, names, clips, faces, ibm, node_parent, rest_world })
 }
 
 impl GlbRig {
@@ -364,10 +288,8 @@ impl GlbRig {
         // morph targets: weights 0 (a new pose has no residual); on every node that shows the mesh
         let n_targets = root
             .meshes
-            .first()
-            .and_then(|m| m.primitives.first())
-            .and_then(|p| p.targets.as_ref())
-            .map_or(0, |t| t.len());
+            .get(self.mesh)
+            .map_or(0, |m| m.primitives.iter().map(|p| p.targets.as_ref().map_or(0, |t| t.len())).max().unwrap_or(0));
         if n_targets > 0 {
             let zeros = vec![0f32; n_targets * n];
             let w = bin.floats(&zeros, json::accessor::Type::Scalar, 1, false, None, &format!("{name}: morph weights"));
@@ -375,7 +297,7 @@ impl GlbRig {
                 .nodes
                 .iter()
                 .enumerate()
-                .filter(|(_, nd)| nd.mesh.map(|m| m.value()) == Some(0))
+                .filter(|(_, nd)| nd.mesh.map(|m| m.value()) == Some(self.mesh))
                 .map(|(i, _)| i)
                 .collect();
             for node in mesh_nodes {

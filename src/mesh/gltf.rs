@@ -21,9 +21,16 @@
 //! (the first), so that the part graph sees the real surface. [`Gltf::source`] says which mesh, which poses
 //! and both vertex counts.
 //!
+//! Accessors are read as the spec lays them out: interleaved (a buffer view's byteStride), normalised
+//! integers, and sparse (substitutions over a buffer view, or over zeros when there is none).
+//!
 //! Errors name the file and the accessor / buffer view / animation at fault and say what to do: an index
-//! out of range, an accessor past its buffer, a sparse accessor, a skin without inverse bind matrices, an
-//! animation without keyframes, a missing `.bin`.
+//! out of range, an accessor (or its sparse indices and values) past its buffer view, a view past its buffer,
+//! a stride shorter than an element, a skin without inverse bind matrices, an animation without keyframes, a
+//! missing `.bin`.
+//!
+//! [`read_skinned`] reads a skinned mesh with its skin, node tree and clips through the same checked
+//! accessors: the one glTF reader of a user's rig (`posemfa pose`, the rig checks).
 
 use super::Mesh;
 use crate::error::{Error, Result};
@@ -126,6 +133,11 @@ pub fn load_files(files: &[(String, Vec<u8>)], options: &Options) -> std::result
     read(name, bytes, &resources, options).map_err(|e| vec![e])
 }
 
+/// An error in glTF file `file` (what is wrong and what to do).
+pub(crate) fn error(file: &str, message: String) -> Error {
+    err(file, message)
+}
+
 fn err(file: &str, message: String) -> Error {
     Error::Obj { file: file.to_string(), line: 0, message }
 }
@@ -180,6 +192,17 @@ fn check_sizes(file: &str, doc: &gltf::Document) -> Result<()> {
         }
         if let Some(o) = a.byte_offset.filter(|o| !fits(o.0)) {
             return Err(too_big(format!("the byte offset of accessor {i}"), o.0));
+        }
+        if let Some(s) = &a.sparse {
+            for (what, v) in [
+                ("sparse count", s.count.0),
+                ("sparse indices' byte offset", s.indices.byte_offset.0),
+                ("sparse values' byte offset", s.values.byte_offset.0),
+            ] {
+                if !fits(v) {
+                    return Err(too_big(format!("the {what} of accessor {i}"), v));
+                }
+            }
         }
     }
     for (i, v) in json.buffer_views.iter().enumerate() {
@@ -316,106 +339,140 @@ fn percent_decode(s: &str) -> String {
 /// Reads accessors with their bounds checked.
 struct Data<'a> {
     file: &'a str,
-    buffers: Vec<Vec<u8>>,
+    buffers: &'a [Vec<u8>],
 }
 
-impl Data<'_> {
+/// Where an accessor's values are: its dense part (bytes from its first element to the end of its buffer
+/// view, and the stride) if it has a buffer view, and its sparse part if it has one, all bounds checked.
+struct Located<'b> {
+    dense: Option<(&'b [u8], usize)>,
+    /// Sparse substitution: count, the index bytes and their size, the value bytes (tightly packed).
+    sparse: Option<(usize, &'b [u8], usize, &'b [u8])>,
+}
+
+/// `count` elements of `dims` components of type `data_type` from `bytes` (element i at `i * stride`), as f64,
+/// normalised integers mapped to [0, 1] / [-1, 1]. The caller checked that the bytes hold them.
+fn decode(
+    bytes: &[u8],
+    stride: usize,
+    count: usize,
+    dims: usize,
+    data_type: gltf::accessor::DataType,
+    norm: bool,
+    mut bad: impl FnMut(usize) -> Error,
+) -> Result<Vec<f64>> {
+    use gltf::accessor::DataType;
+    let comp = data_type.size();
+    let mut out = Vec::with_capacity(count.saturating_mul(dims));
+    for i in 0..count {
+        let base = i * stride;
+        for c in 0..dims {
+            let at = base + c * comp;
+            let s = bytes.get(at..at + comp).unwrap_or(&[]);
+            let v = match (data_type, s) {
+                (DataType::F32, &[a, b, c, d]) => f64::from(f32::from_le_bytes([a, b, c, d])),
+                (DataType::U32, &[a, b, c, d]) => f64::from(u32::from_le_bytes([a, b, c, d])),
+                (DataType::U16, &[a, b]) => {
+                    let v = f64::from(u16::from_le_bytes([a, b]));
+                    if norm {
+                        v / 65535.0
+                    } else {
+                        v
+                    }
+                }
+                (DataType::I16, &[a, b]) => {
+                    let v = f64::from(i16::from_le_bytes([a, b]));
+                    if norm {
+                        (v / 32767.0).max(-1.0)
+                    } else {
+                        v
+                    }
+                }
+                (DataType::U8, &[a]) => {
+                    let v = f64::from(a);
+                    if norm {
+                        v / 255.0
+                    } else {
+                        v
+                    }
+                }
+                (DataType::I8, &[a]) => {
+                    let v = f64::from(a as i8);
+                    if norm {
+                        (v / 127.0).max(-1.0)
+                    } else {
+                        v
+                    }
+                }
+                _ => f64::NAN, // not reached: the bounds were checked; refused below if it were
+            };
+            if !v.is_finite() {
+                return Err(bad(i));
+            }
+            out.push(v);
+        }
+    }
+    Ok(out)
+}
+
+impl<'a> Data<'a> {
     /// Every element of an accessor as f64 components (`dims` per element), normalised integers mapped to
-    /// [0, 1] / [-1, 1]. `what` says what the accessor is for, in messages.
+    /// [0, 1] / [-1, 1], sparse substitutions applied. `what` says what the accessor is for, in messages.
     fn read(&self, a: &gltf::Accessor, what: &str) -> Result<Vec<f64>> {
-        use gltf::accessor::DataType;
-        let (bytes, stride) = self.locate(a, what)?;
-        let (dims, comp, count, idx) = (a.dimensions().multiplicity(), a.data_type().size(), a.count(), a.index());
+        let located = self.locate(a, what)?;
+        let (dims, count, idx) = (a.dimensions().multiplicity(), a.count(), a.index());
         let file = self.file;
-        let norm = a.normalized();
-        let mut out = Vec::with_capacity(count * dims);
-        for i in 0..count {
-            let base = i * stride as usize;
-            for c in 0..dims {
-                let at = base + c * comp;
-                let s = bytes.get(at..at + comp).unwrap_or(&[]);
-                let v = match (a.data_type(), s) {
-                    (DataType::F32, &[a, b, c, d]) => f64::from(f32::from_le_bytes([a, b, c, d])),
-                    (DataType::U32, &[a, b, c, d]) => f64::from(u32::from_le_bytes([a, b, c, d])),
-                    (DataType::U16, &[a, b]) => {
-                        let v = f64::from(u16::from_le_bytes([a, b]));
-                        if norm {
-                            v / 65535.0
-                        } else {
-                            v
-                        }
-                    }
-                    (DataType::I16, &[a, b]) => {
-                        let v = f64::from(i16::from_le_bytes([a, b]));
-                        if norm {
-                            (v / 32767.0).max(-1.0)
-                        } else {
-                            v
-                        }
-                    }
-                    (DataType::U8, &[a]) => {
-                        let v = f64::from(a);
-                        if norm {
-                            v / 255.0
-                        } else {
-                            v
-                        }
-                    }
-                    (DataType::I8, &[a]) => {
-                        let v = f64::from(a as i8);
-                        if norm {
-                            (v / 127.0).max(-1.0)
-                        } else {
-                            v
-                        }
-                    }
-                    _ => 0.0, // not reached: the bounds were checked above
-                };
-                if !v.is_finite() {
+        let not_finite = |i: usize| {
+            err(file, format!("accessor {idx} ({what}): element {i} is not a finite number; export the file again"))
+        };
+        let mut out = match located.dense {
+            Some((bytes, stride)) => decode(bytes, stride, count, dims, a.data_type(), a.normalized(), not_finite)?,
+            // No buffer view: zeros, then the sparse values (`locate` bounded the count by the memory budget).
+            None => vec![0.0; count * dims],
+        };
+        if let Some((n, index_bytes, index_size, value_bytes)) = located.sparse {
+            use gltf::accessor::DataType;
+            let index_type = match index_size {
+                1 => DataType::U8,
+                2 => DataType::U16,
+                _ => DataType::U32,
+            };
+            let indices = decode(index_bytes, index_size, n, 1, index_type, false, not_finite)?;
+            let sparse_bad = |i: usize| {
+                err(
+                    file,
+                    format!("accessor {idx} ({what}): sparse value {i} is not a finite number; export the file again"),
+                )
+            };
+            let values =
+                decode(value_bytes, dims * a.data_type().size(), n, dims, a.data_type(), a.normalized(), sparse_bad)?;
+            let mut previous = None;
+            for (k, &i) in indices.iter().enumerate() {
+                let i = i as usize;
+                if i >= count || previous.is_some_and(|p| i <= p) {
                     return Err(err(
                         file,
-                        format!("accessor {idx} ({what}): element {i} is not a finite number; export the file again"),
+                        format!(
+                            "accessor {idx} ({what}): sparse index {k} is {i}, but the indices must increase and stay \
+                             below the accessor's {count} elements; the file is damaged: export it again"
+                        ),
                     ));
                 }
-                out.push(v);
+                previous = Some(i);
+                out[i * dims..(i + 1) * dims].copy_from_slice(&values[k * dims..(k + 1) * dims]);
             }
         }
         Ok(out)
     }
 
-    /// The bytes of an accessor (from its first element to the end of its buffer view) and its stride, after
-    /// checking that every element lies inside its buffer view and the view inside its buffer.
-    fn locate(&self, a: &gltf::Accessor, what: &str) -> Result<(&[u8], usize)> {
-        let file = self.file;
-        let idx = a.index();
-        if a.sparse().is_some() {
-            return Err(err(
-                file,
-                format!(
-                    "accessor {idx} ({what}) is sparse, which posemfa does not read; export without sparse accessors \
-                     (in Blender: uncheck 'Use Sparse Accessor')"
-                ),
-            ));
-        }
-        let dims = a.dimensions().multiplicity();
-        let comp = a.data_type().size();
-        let count = a.count();
-        let Some(view) = a.view() else {
-            // No buffer view and no sparse storage: every value is zero (glTF 2.0, 3.6.2.3). Bounded: the
-            // allocation must not come from an unchecked count.
-            return Err(err(
-                file,
-                format!("accessor {idx} ({what}) has no buffer view (all zeros by the spec); export the file again"),
-            ));
-        };
-        let elem = (dims * comp) as u64;
-        let stride = view.stride().map_or(elem, |s| s as u64);
+    /// The bytes of a buffer view, after checking that it lies inside its buffer.
+    fn view_bytes(&self, view: &gltf::buffer::View) -> Result<&'a [u8]> {
         let data = self.buffers.get(view.buffer().index()).map(Vec::as_slice).unwrap_or(&[]);
         // 64-bit sums of the document's numbers, saturating: a huge offset is refused, never wrapped.
         let view_end = (view.offset() as u64).saturating_add(view.length() as u64);
         if view_end > data.len() as u64 {
             return Err(err(
-                file,
+                self.file,
                 format!(
                     "buffer view {} (bytes {}..{view_end}) runs past the end of buffer {} ({} bytes); the file is \
                      damaged: export it again",
@@ -426,25 +483,112 @@ impl Data<'_> {
                 ),
             ));
         }
-        let need = if count == 0 {
-            0
-        } else {
-            (a.offset() as u64).saturating_add(stride.saturating_mul(count as u64 - 1)).saturating_add(elem)
+        Ok(data.get(view.offset()..view_end as usize).unwrap_or(&[]))
+    }
+
+    /// Where an accessor's values are ([`Located`]), after checking that every element (dense and sparse) lies
+    /// inside its buffer view and the view inside its buffer; an accessor of zeros (no buffer view) only when
+    /// its size fits the memory budget.
+    fn locate(&self, a: &gltf::Accessor, what: &str) -> Result<Located<'a>> {
+        let file = self.file;
+        let idx = a.index();
+        let dims = a.dimensions().multiplicity();
+        let comp = a.data_type().size();
+        let count = a.count();
+        let elem = (dims * comp) as u64;
+        let dense = match a.view() {
+            Some(view) => {
+                let stride = view.stride().map_or(elem, |s| s as u64);
+                let bytes = self.view_bytes(&view)?;
+                let need = if count == 0 {
+                    0
+                } else {
+                    (a.offset() as u64).saturating_add(stride.saturating_mul(count as u64 - 1)).saturating_add(elem)
+                };
+                if need > view.length() as u64 || stride < elem {
+                    return Err(err(
+                        file,
+                        format!(
+                            "accessor {idx} ({what}: {count} elements of {elem} bytes, stride {stride}, from byte {}) \
+                             reads past the end of its buffer view {} ({} bytes); the file is damaged or cut: export \
+                             it again",
+                            a.offset(),
+                            view.index(),
+                            view.length()
+                        ),
+                    ));
+                }
+                Some((bytes.get(a.offset()..).unwrap_or(&[]), stride as usize))
+            }
+            None if a.sparse().is_none() => {
+                return Err(err(
+                    file,
+                    format!(
+                        "accessor {idx} ({what}) has neither a buffer view nor sparse values; the file is damaged: \
+                         export it again"
+                    ),
+                ))
+            }
+            None => {
+                // All zeros but the sparse values (glTF 2.0, 3.6.2.3): the count has no bytes behind it, so
+                // the zeros are bounded by the memory budget before they are allocated.
+                let need = (count as u64).saturating_mul(dims as u64).saturating_mul(8);
+                let budget = crate::memory::budget_bytes()?;
+                if need > budget {
+                    return Err(err(
+                        file,
+                        format!(
+                            "accessor {idx} ({what}) has no buffer view and {count} elements, which take {} to hold, \
+                             more than the memory budget of {}; the file is damaged",
+                            crate::memory::show_bytes(need),
+                            crate::memory::show_bytes(budget)
+                        ),
+                    ));
+                }
+                None
+            }
         };
-        if need > view.length() as u64 || stride < elem {
-            return Err(err(
-                file,
-                format!(
-                    "accessor {idx} ({what}: {count} elements of {elem} bytes, stride {stride}, from byte {}) reads \
-                     past the end of its buffer view {} ({} bytes); the file is damaged or cut: export it again",
-                    a.offset(),
-                    view.index(),
-                    view.length()
-                ),
-            ));
-        }
-        let start = view.offset() + a.offset();
-        Ok((data.get(start..view_end as usize).unwrap_or(&[]), stride as usize))
+        let sparse = match a.sparse() {
+            None => None,
+            Some(s) => {
+                let n = s.count();
+                let index_size = match s.indices().index_type() {
+                    gltf::accessor::sparse::IndexType::U8 => 1usize,
+                    gltf::accessor::sparse::IndexType::U16 => 2,
+                    gltf::accessor::sparse::IndexType::U32 => 4,
+                };
+                let part = |view: gltf::buffer::View, offset: usize, size: u64, which: &str| -> Result<&'a [u8]> {
+                    let bytes = self.view_bytes(&view)?;
+                    let need = (offset as u64).saturating_add((n as u64).saturating_mul(size));
+                    if need > view.length() as u64 {
+                        return Err(err(
+                            file,
+                            format!(
+                                "accessor {idx} ({what}): its {n} sparse {which} of {size} bytes from byte {offset} \
+                                 run past the end of buffer view {} ({} bytes); the file is damaged or cut: export \
+                                 it again",
+                                view.index(),
+                                view.length()
+                            ),
+                        ));
+                    }
+                    Ok(bytes.get(offset..).unwrap_or(&[]))
+                };
+                if n as u64 > count as u64 {
+                    return Err(err(
+                        file,
+                        format!(
+                            "accessor {idx} ({what}) has {n} sparse values for {count} elements; the file is damaged: \
+                             export it again"
+                        ),
+                    ));
+                }
+                let indices = part(s.indices().view(), s.indices().offset(), index_size as u64, "indices")?;
+                let values = part(s.values().view(), s.values().offset(), elem, "values")?;
+                Some((n, indices, index_size, values))
+            }
+        };
+        Ok(Located { dense, sparse })
     }
 
     fn read_vec3(&self, a: &gltf::Accessor, what: &str) -> Result<Vec<DVec3>> {
@@ -475,6 +619,14 @@ struct MeshData {
     targets: Vec<Vec<DVec3>>,
     /// Up to 8 (joint, weight) per vertex.
     influences: Vec<Vec<(usize, f64)>>,
+}
+
+/// How many JOINTS_n / WEIGHTS_n sets a primitive has (n = 0, 1, ... while both are present): 4 influences
+/// per set.
+fn joint_sets(p: &gltf::Primitive) -> u32 {
+    (0..)
+        .find(|&n| p.get(&gltf::Semantic::Joints(n)).is_none() || p.get(&gltf::Semantic::Weights(n)).is_none())
+        .unwrap_or(0)
 }
 
 fn mesh_vertex_count(mesh: &gltf::Mesh) -> u64 {
@@ -527,10 +679,12 @@ fn check_read_size(data: &Data, mesh: &gltf::Mesh, mname: &str, budget: u64) -> 
         let count = p.indices().map(|a| a.count() as u64);
         n.saturating_add(count.or_else(|| p.get(&gltf::Semantic::Positions).map(|a| a.count() as u64)).unwrap_or(0))
     });
-    // Per vertex: position and one delta per target (24 bytes each), skin influences as read (two sets of
-    // 4 joints and 4 weights as f64) and kept (up to 8 pairs of 16 bytes plus the list): 24 + 128 + 152.
+    // Per vertex: position and one delta per target (24 bytes each), skin influences as read (per set of
+    // 4 joints and 4 weights, 64 bytes as f64) and kept (4 pairs of 16 bytes plus a share of the list's 24),
+    // 152 per set, counted for at least two sets.
     // Per index: the f64 read, the u64 kept and a third of a triangle (4 bytes).
-    let per_vertex = 24u64.saturating_mul(targets.saturating_add(1)).saturating_add(304);
+    let sets = mesh.primitives().map(|p| u64::from(joint_sets(&p))).max().unwrap_or(0).max(2);
+    let per_vertex = 24u64.saturating_mul(targets.saturating_add(1)).saturating_add(152 * sets);
     let need = vertices.saturating_mul(per_vertex).saturating_add(indices.saturating_mul(20));
     if need > budget {
         let show = crate::memory::show_bytes;
@@ -631,7 +785,7 @@ fn read_mesh(data: &Data, mesh: &gltf::Mesh) -> Result<MeshData> {
             }
         }
         let mut infl = vec![Vec::new(); n];
-        for set in 0..2u32 {
+        for set in 0..joint_sets(&p) {
             let (Some(j), Some(w)) = (p.get(&gltf::Semantic::Joints(set)), p.get(&gltf::Semantic::Weights(set))) else {
                 continue;
             };
@@ -854,8 +1008,9 @@ fn read_channels(data: &Data, anim: &gltf::Animation, aname: &str) -> Result<Vec
     Ok(out)
 }
 
-/// Reads the poses of one glTF file.
-pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Options) -> Result<Gltf> {
+/// The document of a `.glb` or `.gltf` file, validated by the `gltf` crate and [`check_sizes`], and the bytes
+/// of its buffers (checked by [`buffers`]).
+fn open(file: &str, bytes: &[u8], resources: &[(&str, &[u8])]) -> Result<(gltf::Document, Vec<Vec<u8>>)> {
     let (json, blob) = if bytes.starts_with(b"glTF") { split_glb(file, bytes)? } else { (bytes.to_vec(), None) };
     let invalid =
         |e: gltf::Error| err(file, format!("not a valid glTF 2.0 document: {e}; export the file again as glTF 2.0"));
@@ -882,7 +1037,13 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     let doc = gltf::Document::from_json(root).map_err(invalid)?;
     check_sizes(file, &doc)?;
     let buffers = buffers(file, &doc, blob, resources)?;
-    let data = Data { file, buffers };
+    Ok((doc, buffers))
+}
+
+/// Reads the poses of one glTF file.
+pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Options) -> Result<Gltf> {
+    let (doc, buffers) = open(file, bytes, resources)?;
+    let data = Data { file, buffers: &buffers };
 
     // The mesh, and the node that shows it (for its skin and morph weights).
     let meshes: Vec<gltf::Mesh> = doc.meshes().collect();
@@ -1211,6 +1372,284 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     })
 }
 
+/// A node's local transform as stored in the file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Local {
+    /// A 4x4 matrix, column-major (glTF's order).
+    Matrix([f64; 16]),
+    /// Translation, rotation (x, y, z, w) and scale.
+    Trs([f64; 3], [f64; 4], [f64; 3]),
+}
+
+/// What an animation channel moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Path {
+    Translation,
+    Rotation,
+    Scale,
+    /// The morph target weights of the node's mesh.
+    Weights,
+}
+
+/// One channel of a clip at its keyframes ([`Skinned::clip`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyChannel {
+    pub node: usize,
+    pub path: Path,
+    pub times: Vec<f64>,
+    /// The value at each keyframe (3 numbers for translation and scale, 4 for a rotation, one per morph target
+    /// for weights; of a CUBICSPLINE channel the value, without its tangents).
+    pub values: Vec<Vec<f64>>,
+}
+
+/// A skinned mesh, its skin and its node tree, read from a `.glb` / `.gltf` with every accessor checked as for
+/// [`read`]: what a rig is posed and played from (`posemfa pose`, the rig checks). The mesh is the one of the
+/// first node that has both a mesh and a skin (all its triangle primitives, in order; no welding: vertex j is
+/// the file's vertex j); the skin is that node's.
+#[derive(Debug, Clone)]
+pub struct Skinned {
+    file: String,
+    document: gltf::Document,
+    buffers: Vec<Vec<u8>>,
+    /// Index of the mesh, of the node that shows it and of its skin.
+    pub mesh: usize,
+    pub mesh_node: usize,
+    pub skin: usize,
+    /// Bind positions (POSITION).
+    pub positions: Vec<[f64; 3]>,
+    pub faces: Vec<[u32; 3]>,
+    /// Per morph target, the position delta of every vertex.
+    pub targets: Vec<Vec<[f64; 3]>>,
+    /// The morph weights of the node (else the mesh), one per target.
+    pub default_weights: Vec<f64>,
+    /// Per vertex: every (joint slot, weight) with a non-zero weight, from all JOINTS_n / WEIGHTS_n sets; every
+    /// slot is a joint of the skin and every weight finite and positive.
+    pub influences: Vec<Vec<(usize, f64)>>,
+    /// The node of every joint slot.
+    pub joints: Vec<usize>,
+    /// The inverse bind matrix of every joint slot, column-major (identity when the skin has none).
+    pub inverse_bind: Vec<[f64; 16]>,
+    /// Every node's parent: the node tree is checked (no node has two parents, no cycle).
+    pub parent: Vec<Option<usize>>,
+    /// Every node, parents before their children.
+    pub order: Vec<usize>,
+    /// Every node's local transform at rest.
+    pub local: Vec<Local>,
+    /// Every node's name, if it has one.
+    pub node_names: Vec<Option<String>>,
+    /// Every animation's name, if it has one.
+    pub clips: Vec<Option<String>>,
+}
+
+/// Reads a skinned mesh ([`Skinned`]) from a glTF file; `resources` are the files a `.gltf` names.
+pub fn read_skinned(file: &str, bytes: &[u8], resources: &[(&str, &[u8])]) -> Result<Skinned> {
+    let (doc, buffers) = open(file, bytes, resources)?;
+    let data = Data { file, buffers: &buffers };
+    let Some((node, mesh, skin)) = doc.nodes().find_map(|n| Some((n.index(), n.mesh()?, n.skin()?))) else {
+        return Err(err(
+            file,
+            "no node has both a mesh and a skin: the file holds no skinned mesh (a rig); export the mesh with its \
+             armature"
+                .into(),
+        ));
+    };
+    let mname = name_of(mesh.name(), "mesh", mesh.index());
+    check_read_size(&data, &mesh, &mname, crate::memory::budget_bytes()?)?;
+    let md = read_mesh(&data, &mesh)?;
+    let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+    if joints.is_empty() {
+        return Err(err(file, format!("skin {} has no joints; export the mesh with its armature", skin.index())));
+    }
+    let inverse_bind: Vec<[f64; 16]> = match skin.inverse_bind_matrices() {
+        Some(a) => {
+            data.expect(&a, "inverse bind matrices", 16)?;
+            let m = data.read(&a, &format!("inverse bind matrices of skin {}", skin.index()))?;
+            if m.len() != 16 * joints.len() {
+                return Err(err(
+                    file,
+                    format!(
+                        "skin {} has {} joints but {} inverse bind matrices (accessor {}); the file is damaged: \
+                         export it again",
+                        skin.index(),
+                        joints.len(),
+                        m.len() / 16,
+                        a.index()
+                    ),
+                ));
+            }
+            m.chunks_exact(16).map(|c| std::array::from_fn(|i| c[i])).collect()
+        }
+        None => vec![std::array::from_fn(|i| if i % 5 == 0 { 1.0 } else { 0.0 }); joints.len()],
+    };
+    for (v, infl) in md.influences.iter().enumerate() {
+        if let Some(&(j, w)) = infl.iter().find(|&&(j, w)| j >= joints.len() || !(w > 0.0)) {
+            return Err(err(
+                file,
+                format!(
+                    "vertex {v} of {mname} has joint {j} with weight {w}, but skin {} has {} joints and weights must \
+                     not be negative; the file is damaged: export it again",
+                    skin.index(),
+                    joints.len()
+                ),
+            ));
+        }
+    }
+    // The node tree: one parent per node, no cycle; parents ordered before their children.
+    let n_nodes = doc.nodes().len();
+    let mut parent = vec![None; n_nodes];
+    for n in doc.nodes() {
+        for c in n.children() {
+            match parent.get_mut(c.index()) {
+                Some(slot @ None) => *slot = Some(n.index()),
+                Some(Some(first)) => {
+                    return Err(err(
+                        file,
+                        format!(
+                            "node {} is a child of nodes {first} and {}; a node has one parent: the file is damaged",
+                            c.index(),
+                            n.index()
+                        ),
+                    ))
+                }
+                None => {}
+            }
+        }
+    }
+    let mut children = vec![Vec::new(); n_nodes];
+    for (c, p) in parent.iter().enumerate() {
+        if let Some(p) = *p {
+            children[p].push(c);
+        }
+    }
+    let mut order: Vec<usize> = (0..n_nodes).filter(|&n| parent[n].is_none()).collect();
+    let mut at = 0;
+    while let Some(&n) = order.get(at) {
+        order.extend(children[n].iter().copied());
+        at += 1;
+    }
+    if order.len() != n_nodes {
+        let stuck = (0..n_nodes).find(|n| !order.contains(n)).unwrap_or(0);
+        return Err(err(
+            file,
+            format!("node {stuck} is its own ancestor: the node hierarchy has a cycle; the file is damaged"),
+        ));
+    }
+    let local = doc
+        .nodes()
+        .map(|n| match n.transform() {
+            gltf::scene::Transform::Matrix { matrix } => {
+                Local::Matrix(std::array::from_fn(|i| f64::from(matrix[i / 4][i % 4])))
+            }
+            gltf::scene::Transform::Decomposed { translation: t, rotation: r, scale: s } => {
+                Local::Trs(t.map(f64::from), r.map(f64::from), s.map(f64::from))
+            }
+        })
+        .collect::<Vec<_>>();
+    if let Some(n) = local.iter().position(|l| match l {
+        Local::Matrix(m) => m.iter().any(|x| !x.is_finite()),
+        Local::Trs(t, r, s) => t.iter().chain(r).chain(s).any(|x| !x.is_finite()),
+    }) {
+        return Err(err(file, format!("node {n}'s transform has a number that is not finite; the file is damaged")));
+    }
+    let node_ref = doc.nodes().nth(node);
+    let default_weights: Vec<f64> = node_ref
+        .as_ref()
+        .and_then(|n| n.weights())
+        .or_else(|| mesh.weights())
+        .map(|w| w.iter().map(|&x| f64::from(x)).collect())
+        .unwrap_or_default();
+    let mut default_weights = default_weights;
+    default_weights.resize(md.targets.len(), 0.0);
+    let v3 = |p: &DVec3| [p.x, p.y, p.z];
+    Ok(Skinned {
+        file: file.to_string(),
+        mesh: mesh.index(),
+        mesh_node: node,
+        skin: skin.index(),
+        positions: md.positions.iter().map(v3).collect(),
+        faces: md.faces,
+        targets: md.targets.iter().map(|t| t.iter().map(v3).collect()).collect(),
+        default_weights,
+        influences: md.influences,
+        joints,
+        inverse_bind,
+        parent,
+        order,
+        local,
+        node_names: doc.nodes().map(|n| n.name().map(str::to_string)).collect(),
+        clips: doc.animations().map(|a| a.name().map(str::to_string)).collect(),
+        document: doc,
+        buffers,
+    })
+}
+
+impl Skinned {
+    /// The glTF document as read (to write it again with more in it).
+    pub fn json(&self) -> &gltf::json::Root {
+        self.document.as_json()
+    }
+
+    /// The GLB's binary chunk, when the first buffer is one (a `.glb`).
+    pub fn glb_bin(&self) -> Option<&[u8]> {
+        let first = self.document.buffers().next()?;
+        matches!(first.source(), gltf::buffer::Source::Bin).then(|| self.buffers[0].as_slice())
+    }
+
+    /// The channels of the animation called `name`, each at its keyframes, with every accessor checked and
+    /// every value's length checked against what it moves.
+    pub fn clip(&self, name: &str) -> Result<Vec<KeyChannel>> {
+        let file = self.file.as_str();
+        let data = Data { file, buffers: &self.buffers };
+        let Some(anim) = self.document.animations().find(|a| a.name() == Some(name)) else {
+            let names: Vec<String> =
+                self.document.animations().map(|a| name_of(a.name(), "animation", a.index())).collect();
+            return Err(err(
+                file,
+                format!(
+                    "no animation is called '{name}'; the file has {}",
+                    if names.is_empty() { "none".into() } else { names.join(", ") }
+                ),
+            ));
+        };
+        let aname = name_of(anim.name(), "animation", anim.index());
+        let channels = read_channels(&data, &anim, &aname)?;
+        let mut out = Vec::with_capacity(channels.len());
+        for (ci, c) in channels.into_iter().enumerate() {
+            use gltf::animation::Property;
+            let (path, dims) = match c.property {
+                Property::Translation => (Path::Translation, 3),
+                Property::Rotation => (Path::Rotation, 4),
+                Property::Scale => (Path::Scale, 3),
+                Property::MorphTargetWeights => (
+                    Path::Weights,
+                    self.document
+                        .nodes()
+                        .nth(c.node)
+                        .and_then(|n| n.mesh())
+                        .map_or(0, |m| m.primitives().map(|p| p.morph_targets().len()).max().unwrap_or(0)),
+                ),
+            };
+            let cubic = c.interpolation == gltf::animation::Interpolation::CubicSpline;
+            let parts = if cubic { 3 } else { 1 };
+            if c.values.first().map_or(0, Vec::len) != parts * dims || dims == 0 {
+                return Err(err(
+                    file,
+                    format!(
+                        "channel {ci} of {aname} moves {path:?} of node {} with {} numbers per keyframe, expected {}; \
+                         the file is damaged: export the animation again",
+                        c.node,
+                        c.values.first().map_or(0, Vec::len),
+                        parts * dims
+                    ),
+                ));
+            }
+            let values = c.values.into_iter().map(|v| if cubic { v[dims..2 * dims].to_vec() } else { v }).collect();
+            out.push(KeyChannel { node: c.node, path, times: c.times, values });
+        }
+        Ok(out)
+    }
+}
+
 fn morph(md: &MeshData, weights: &[f64]) -> Vec<DVec3> {
     let mut out = md.positions.clone();
     for (t, &w) in md.targets.iter().zip(weights) {
@@ -1472,10 +1911,9 @@ mod tests {
     #[test]
     fn errors_name_the_accessor_and_say_what_to_do() {
         let e = error(&quad(|v| {
-            v["accessors"][3]["sparse"] =
-                json!({"count": 1, "indices": {"bufferView": 3, "componentType": 5123}, "values": {"bufferView": 3}})
+            v["accessors"][1].as_object_mut().unwrap().remove("bufferView");
         }));
-        assert!(e.contains("accessor 3") && e.contains("sparse"), "{e}");
+        assert!(e.contains("accessors[1].bufferView: Missing data"), "{e}");
         let e = error(&quad(|v| v["accessors"][0]["count"] = json!(4_000_000_000u64)));
         assert!(e.contains("accessor 0") && e.contains("past the end of its buffer view 0"), "{e}");
         let e = error(&quad(|v| v["bufferViews"][0]["byteLength"] = json!(100_000)));
@@ -1504,6 +1942,50 @@ mod tests {
         assert!(e.contains("no morph targets and no animation"), "{e}");
         let e = error(&quad(|v| v["buffers"][0]["uri"] = json!("quad.bin")));
         assert!(e.contains("`quad.bin`, which was not given"), "{e}");
+    }
+
+    /// Sparse accessors (glTF 2.0, 3.6.2.3) are read with their substitutions: on a buffer view (POSITION's
+    /// vertex 1 moved to (0, 0, 1)) and without one (morph target 0 as zeros plus its one non-zero delta, which
+    /// reads as the dense target did). Sparse index 1 is the u16 at byte 2 of the index view, its value the
+    /// vec3 at byte 12 of target 0's view.
+    #[test]
+    fn sparse_accessors_are_read_with_their_substitutions() {
+        let one = json!({"count": 1, "indices": {"bufferView": 3, "byteOffset": 2, "componentType": 5123},
+                         "values": {"bufferView": 1, "byteOffset": 12}});
+        let dense = load(&quad(|_| {}), &Options::default()).unwrap();
+        let sparse_target = load(
+            &quad(|v| {
+                v["accessors"][1].as_object_mut().unwrap().remove("bufferView");
+                v["accessors"][1]["sparse"] = one.clone();
+            }),
+            &Options::default(),
+        )
+        .unwrap();
+        assert_eq!(sparse_target.poses.len(), dense.poses.len());
+        for ((_, a), (_, b)) in sparse_target.poses.iter().zip(&dense.poses) {
+            assert_eq!(a.positions, b.positions);
+        }
+        let moved = load(&quad(|v| v["accessors"][0]["sparse"] = one.clone()), &Options::default()).unwrap();
+        let base = &moved.poses[0].1.positions;
+        assert_eq!(base[1], [0.0, 0.0, 1.0]);
+        assert_eq!(base[2], dense.poses[0].1.positions[2]);
+        // indices that do not increase, or run past the accessor
+        let e = error(&quad(|v| {
+            v["accessors"][0]["sparse"] = json!({"count": 2, "indices": {"bufferView": 3, "byteOffset": 6,
+                "componentType": 5123}, "values": {"bufferView": 1}});
+        }));
+        assert!(e.contains("accessor 0") && e.contains("sparse index 1 is 2") && e.contains("must increase"), "{e}");
+        // byte 14 of the rotations' view is 0x80 (of 1.0f32): index 128 of 5 vertices
+        let e = error(&quad(|v| {
+            v["accessors"][0]["sparse"] = json!({"count": 1, "indices": {"bufferView": 8, "byteOffset": 14,
+                "componentType": 5121}, "values": {"bufferView": 1}});
+        }));
+        assert!(e.contains("sparse index 0 is 128") && e.contains("below the accessor's 5 elements"), "{e}");
+        let e = error(&quad(|v| {
+            v["accessors"][0]["sparse"] = json!({"count": 5, "indices": {"bufferView": 3, "byteOffset": 4,
+                "componentType": 5123}, "values": {"bufferView": 1}});
+        }));
+        assert!(e.contains("5 sparse indices of 2 bytes from byte 4 run past the end of buffer view 3"), "{e}");
     }
 
     #[test]
@@ -1543,7 +2025,8 @@ mod tests {
             v["meshes"][0]["primitives"] = json!(vec![p; 1000]);
         });
         let doc = gltf::Gltf::from_slice(&bytes).unwrap().document;
-        let data = Data { file: "t.gltf", buffers: buffers("t.gltf", &doc, None, &[]).unwrap() };
+        let bufs = buffers("t.gltf", &doc, None, &[]).unwrap();
+        let data = Data { file: "t.gltf", buffers: &bufs };
         let mesh = doc.meshes().next().unwrap();
         // 5000 vertices x (24 x 3 + 304) + 6000 indices x 20 = 1_880_000 + 120_000 bytes.
         assert!(check_read_size(&data, &mesh, "mesh 'quad'", 2_000_000).is_ok());
@@ -1555,7 +2038,8 @@ mod tests {
             v["accessors"][1]["count"] = json!(1_000_000);
         });
         let doc = gltf::Gltf::from_slice(&bytes).unwrap().document;
-        let data = Data { file: "t.gltf", buffers: buffers("t.gltf", &doc, None, &[]).unwrap() };
+        let bufs = buffers("t.gltf", &doc, None, &[]).unwrap();
+        let data = Data { file: "t.gltf", buffers: &bufs };
         let e = check_read_size(&data, &doc.meshes().next().unwrap(), "mesh 'quad'", 1).unwrap_err().to_string();
         assert!(
             e.contains("accessor 1 (morph target 0 of primitive 0 of mesh 'quad'") && e.contains("past the end"),

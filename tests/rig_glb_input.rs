@@ -1,0 +1,303 @@
+//! `posemfa pose RIG.glb FRAMES` reads the rig with the checked glTF reader (mesh::gltf::read_skinned), so a
+//! rig laid out as other writers lay it out poses the same: the .glb that `posemfa export-gltf` writes, its
+//! vertex attributes re-packed into one interleaved buffer view (byteStride), or its POSITION made a sparse
+//! accessor, gives the same "frames" clip as the original. A cut or hostile rig (truncated, offsets and counts
+//! past the buffer, strides that run past the end, sparse indices out of range, joints past the skin) is
+//! refused with an error that names the file, never a panic.
+#![cfg(not(target_arch = "wasm32"))]
+
+use posemfa::export::gltf::play_glb_clip;
+use posemfa::export::pose_glb::read_rig;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn posemfa(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_posemfa")).args(args).output().expect("posemfa runs")
+}
+
+fn ok(out: std::process::Output, what: &str) -> String {
+    assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// A generated quadruped's poses (OBJ) and the rig `posemfa export-gltf` writes from them (fitted weights,
+/// up to 8 influences: JOINTS_0/1 and WEIGHTS_0/1).
+fn rig_and_frames(dir: &Path) -> (PathBuf, PathBuf) {
+    let frames = dir.join("frames");
+    let f = frames.to_str().unwrap();
+    ok(
+        posemfa(&["generate", "quadruped", "--vertices", "1200", "--poses", "6", "--seed", "3", "--out", f]),
+        "generate",
+    );
+    let rig = dir.join("rig.glb");
+    ok(
+        posemfa(&["export-gltf", f, "--weights", "fitted", "--influences", "6", "--out", rig.to_str().unwrap()]),
+        "export-gltf",
+    );
+    (rig, frames)
+}
+
+/// The JSON document and BIN chunk of a .glb.
+fn split(glb: &[u8]) -> (Value, Vec<u8>) {
+    let jlen = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let doc: Value = serde_json::from_slice(&glb[20..20 + jlen]).unwrap();
+    let at = 20 + jlen;
+    let blen = u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+    (doc, glb[at + 8..at + 8 + blen].to_vec())
+}
+
+/// A .glb of a JSON document and a BIN chunk (lengths padded to 4, buffer 0's byteLength set).
+fn join(mut doc: Value, mut bin: Vec<u8>) -> Vec<u8> {
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    let mut text = serde_json::to_vec(&doc).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(text);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+fn component_size(c: u64) -> usize {
+    match c {
+        5120 | 5121 => 1,
+        5122 | 5123 => 2,
+        _ => 4,
+    }
+}
+
+fn type_size(t: &str) -> usize {
+    match t {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" | "MAT2" => 4,
+        "MAT3" => 9,
+        _ => 16,
+    }
+}
+
+/// The bytes of element `i` of a tightly packed accessor.
+fn element<'a>(doc: &Value, bin: &'a [u8], acc: usize, i: usize) -> &'a [u8] {
+    let a = &doc["accessors"][acc];
+    let v = &doc["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+    assert!(v.get("byteStride").is_none(), "the writer packs its accessors tightly");
+    let size = component_size(a["componentType"].as_u64().unwrap()) * type_size(a["type"].as_str().unwrap());
+    let start = v["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
+    &bin[start + i * size..start + (i + 1) * size]
+}
+
+/// The rig with every vertex attribute of its mesh re-packed into one interleaved buffer view: per vertex
+/// POSITION, then JOINTS_n / WEIGHTS_n (and anything else), each padded to 4 bytes, with one byteStride.
+fn interleaved(glb: &[u8]) -> (Vec<u8>, usize) {
+    let (mut doc, mut bin) = split(glb);
+    let attrs: Vec<(String, usize)> = doc["meshes"][0]["primitives"][0]["attributes"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(k, v)| (k.clone(), v.as_u64().unwrap() as usize))
+        .collect();
+    let nv = doc["accessors"][attrs[0].1]["count"].as_u64().unwrap() as usize;
+    let sizes: Vec<usize> = attrs.iter().map(|(_, a)| element(&doc, &bin, *a, 0).len()).collect();
+    let padded: Vec<usize> = sizes.iter().map(|s| s.div_ceil(4) * 4).collect();
+    let stride: usize = padded.iter().sum();
+    let mut packed = Vec::with_capacity(stride * nv);
+    for i in 0..nv {
+        for ((_, a), (&s, &p)) in attrs.iter().zip(sizes.iter().zip(&padded)) {
+            packed.extend_from_slice(element(&doc, &bin, *a, i));
+            packed.extend(std::iter::repeat(0u8).take(p - s));
+        }
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let view = doc["bufferViews"].as_array().unwrap().len();
+    doc["bufferViews"].as_array_mut().unwrap().push(json!({
+        "buffer": 0, "byteOffset": bin.len(), "byteLength": packed.len(), "byteStride": stride, "target": 34962
+    }));
+    bin.extend(packed);
+    let mut offset = 0;
+    for ((_, a), &p) in attrs.iter().zip(&padded) {
+        doc["accessors"][*a]["bufferView"] = json!(view);
+        doc["accessors"][*a]["byteOffset"] = json!(offset);
+        offset += p;
+    }
+    (join(doc, bin), stride)
+}
+
+/// The rig with its POSITION accessor made sparse: no buffer view (zeros), and every vertex substituted by
+/// the sparse values (the original positions), indexed by a u32 index view.
+fn sparse_positions(glb: &[u8]) -> Vec<u8> {
+    let (mut doc, mut bin) = split(glb);
+    let pos = doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize;
+    let nv = doc["accessors"][pos]["count"].as_u64().unwrap() as usize;
+    let view = doc["accessors"][pos]["bufferView"].clone();
+    let offset = doc["accessors"][pos]["byteOffset"].clone();
+    let n_views = doc["bufferViews"].as_array().unwrap().len();
+    let start = bin.len();
+    for i in 0..nv as u32 {
+        bin.extend(i.to_le_bytes());
+    }
+    doc["bufferViews"].as_array_mut().unwrap().push(json!({"buffer": 0, "byteOffset": start, "byteLength": 4 * nv}));
+    let a = doc["accessors"][pos].as_object_mut().unwrap();
+    a.remove("bufferView");
+    a.remove("byteOffset");
+    let mut values = json!({"bufferView": view});
+    if !offset.is_null() {
+        values["byteOffset"] = offset;
+    }
+    a.insert(
+        "sparse".into(),
+        json!({"count": nv, "indices": {"bufferView": n_views, "componentType": 5125}, "values": values}),
+    );
+    join(doc, bin)
+}
+
+fn frames_of(out: &Path) -> Vec<Vec<[f64; 3]>> {
+    play_glb_clip(&std::fs::read(out).unwrap(), "frames").unwrap().frames
+}
+
+#[test]
+fn interleaved_and_sparse_rigs_pose_as_the_original_and_hostile_ones_are_refused() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("rig-glb-input-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (rig, frames) = rig_and_frames(&dir);
+    let original = std::fs::read(&rig).unwrap();
+    let (inter, stride) = interleaved(&original);
+    // POSITION (12) + JOINTS_0/1 (4 or 8 each) + WEIGHTS_0/1 (16 each): one stride for all of them
+    assert!(stride >= 12 + 2 * 4 + 2 * 16, "stride {stride}");
+    let variants = [("rig-interleaved.glb", inter.clone()), ("rig-sparse.glb", sparse_positions(&original))];
+    let base_out = dir.join("out.glb");
+    let f = frames.to_str().unwrap();
+    let said = ok(posemfa(&["pose", rig.to_str().unwrap(), f, "--out", base_out.to_str().unwrap()]), "pose");
+    let base = frames_of(&base_out);
+    assert_eq!(base.len(), 6);
+    let overall = |s: &str| {
+        s.lines().find(|l| l.starts_with("overall")).unwrap_or("").split(" over ").next().unwrap().to_string()
+    };
+    for (name, bytes) in &variants {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let out = dir.join(format!("out-{name}"));
+        let s = ok(posemfa(&["pose", path.to_str().unwrap(), f, "--out", out.to_str().unwrap()]), name);
+        assert_eq!(overall(&s), overall(&said), "{name}: the same E_RMS as the original");
+        let got = frames_of(&out);
+        assert_eq!(got.len(), base.len());
+        let worst = got
+            .iter()
+            .zip(&base)
+            .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (0..3).map(|d| (p[d] - q[d]).abs()).fold(0.0, f64::max)))
+            .fold(0.0, f64::max);
+        assert!(worst == 0.0, "{name}: the clip differs from the original's by {worst}");
+        eprintln!("{name}: {} bytes, the same clip as the original ({} frames)", bytes.len(), got.len());
+    }
+
+    // Hostile rigs: each refused by name (the file's), never a panic.
+    let refused = |what: &str, bytes: &[u8], wanted: &[&str]| {
+        let e = read_rig("hostile.glb", bytes).expect_err(what).to_string();
+        assert!(e.contains("hostile.glb"), "{what}: {e}");
+        for w in wanted {
+            assert!(e.contains(w), "{what}: expected '{w}' in: {e}");
+        }
+    };
+    for cut in [0, 3, 11, 12, 19, 20, 100, inter.len() / 3, inter.len() / 2, inter.len() - 4, inter.len() - 1] {
+        refused(&format!("cut at {cut}"), &inter[..cut], &[]);
+    }
+    let (doc, bin) = split(&inter);
+    let pos = doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize;
+    let joints = doc["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"].as_u64().unwrap() as usize;
+    let inter_view = doc["accessors"][pos]["bufferView"].as_u64().unwrap() as usize;
+    let edit = |f: &dyn Fn(&mut Value)| {
+        let mut d = doc.clone();
+        f(&mut d);
+        join(d, bin.clone())
+    };
+    refused(
+        "huge count",
+        &edit(&|d| d["accessors"][pos]["count"] = json!(4_000_000_000u64)),
+        &[&format!("accessor {pos}"), "past the end of its buffer view"],
+    );
+    refused(
+        "accessor offset past the view",
+        &edit(&|d| d["accessors"][pos]["byteOffset"] = json!(u64::MAX - 3)),
+        &[&format!("accessor {pos}"), "past the end"],
+    );
+    refused(
+        "view offset past the buffer",
+        &edit(&|d| d["bufferViews"][inter_view]["byteOffset"] = json!(1u64 << 40)),
+        &[&format!("buffer view {inter_view}"), "past the end of buffer 0"],
+    );
+    refused(
+        "a stride that runs past the end",
+        &edit(&|d| d["bufferViews"][inter_view]["byteStride"] = json!(252)),
+        &[&format!("accessor {pos}"), "stride 252", "past the end of its buffer view"],
+    );
+    refused(
+        "a stride shorter than an element",
+        &edit(&|d| d["bufferViews"][inter_view]["byteStride"] = json!(8)),
+        &[&format!("accessor {pos}"), "stride 8"],
+    );
+    refused(
+        "a joint past the skin",
+        &edit(&|d| {
+            let n = d["skins"][0]["joints"].as_array().unwrap().len();
+            d["skins"][0]["joints"] = json!(d["skins"][0]["joints"].as_array().unwrap()[..1]);
+            d["skins"][0]["inverseBindMatrices"] = Value::Null;
+            assert!(n > 1);
+        }),
+        &["joint", "skin 0 has 1 joints"],
+    );
+    let _ = joints;
+    let sparse = sparse_positions(&original);
+    let (sdoc, sbin) = split(&sparse);
+    let spos = sdoc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize;
+    let sedit = |f: &dyn Fn(&mut Value)| {
+        let mut d = sdoc.clone();
+        f(&mut d);
+        join(d, sbin.clone())
+    };
+    refused(
+        "more sparse values than elements",
+        &sedit(&|d| {
+            let c = d["accessors"][spos]["count"].as_u64().unwrap();
+            d["accessors"][spos]["sparse"]["count"] = json!(c + 1)
+        }),
+        &[&format!("accessor {spos}"), "sparse values for"],
+    );
+    refused(
+        "sparse indices past their view",
+        &sedit(&|d| d["accessors"][spos]["sparse"]["indices"]["byteOffset"] = json!(64)),
+        &[&format!("accessor {spos}"), "sparse indices", "past the end of buffer view"],
+    );
+    refused(
+        "sparse indices out of order",
+        &sedit(&|d| d["accessors"][spos]["sparse"]["indices"]["componentType"] = json!(5123)),
+        &[&format!("accessor {spos}"), "sparse index", "must increase"],
+    );
+    refused(
+        "a viewless accessor of 2^40 elements",
+        &sedit(&|d| {
+            d["accessors"][spos]["count"] = json!(1u64 << 40);
+        }),
+        &[&format!("accessor {spos}")],
+    );
+
+    // The CLI says so and exits non-zero, no panic.
+    let cut = dir.join("cut.glb");
+    std::fs::write(&cut, &inter[..inter.len() / 2]).unwrap();
+    let out = posemfa(&["pose", cut.to_str().unwrap(), f, "--out", dir.join("x.glb").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("cut.glb") && !err.contains("panicked"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
