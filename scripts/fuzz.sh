@@ -14,6 +14,7 @@
 #               usd_read: byte 0 (options) + a .usda, .usdc or .usdz -> posemfa::mesh::usd::read
 #               model_file: a .posemfa model file -> posemfa::model_file::ModelFile::from_bytes, then used
 #               zip_open: a .zip of pose files -> posemfa::mesh::zip_archive::open
+#               pose_rig: a rig .glb -> posemfa::export::pose_glb::read_rig (posemfa pose), with_clip, play_glb_clip
 #               formats: ply_parse, point_cache, gltf_read, fbx_read and usd_read in turn
 #               all: each of them in turn, with the same limits
 #   --runs N    stop after N executions (default 10000000); --time S: stop after S seconds (default: none)
@@ -47,13 +48,13 @@ jobs=1
 extra=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    obj_parse|population|shapes|ply_parse|point_cache|gltf_read|fbx_read|usd_read|model_file|zip_open|formats|all) target=$1 ;;
+    obj_parse|population|shapes|ply_parse|point_cache|gltf_read|fbx_read|usd_read|model_file|zip_open|pose_rig|formats|all) target=$1 ;;
     --runs) runs=${2:?--runs needs a number}; shift ;;
     --time) time_limit=${2:?--time needs seconds}; shift ;;
     --sanitizer) sanitizer=${2:?--sanitizer needs address or none}; shift ;;
     --jobs) jobs=${2:?--jobs needs a number}; shift ;;
     --) shift; extra=("$@"); break ;;
-    *) echo "fuzz.sh: unknown argument '$1' (targets: obj_parse population shapes ply_parse point_cache gltf_read fbx_read usd_read model_file zip_open formats all; options: --runs N --time S --sanitizer address|none --jobs N)" >&2; exit 2 ;;
+    *) echo "fuzz.sh: unknown argument '$1' (targets: obj_parse population shapes ply_parse point_cache gltf_read fbx_read usd_read model_file zip_open pose_rig formats all; options: --runs N --time S --sanitizer address|none --jobs N)" >&2; exit 2 ;;
   esac
   shift
 done
@@ -111,6 +112,7 @@ max_len_of() {
     usd_read) echo 65536 ;;
     model_file) echo 65536 ;;
     zip_open) echo 65536 ;;
+    pose_rig) echo 65536 ;;
   esac
 }
 run_one() {
@@ -135,7 +137,7 @@ run_one() {
 }
 
 if [ "$target" = all ]; then
-  for t in obj_parse population shapes ply_parse point_cache gltf_read fbx_read usd_read model_file zip_open; do run_one "$t"; done
+  for t in obj_parse population shapes ply_parse point_cache gltf_read fbx_read usd_read model_file zip_open pose_rig; do run_one "$t"; done
 elif [ "$target" = formats ]; then
   for t in ply_parse point_cache gltf_read fbx_read usd_read; do run_one "$t"; done
 else

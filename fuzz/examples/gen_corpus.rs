@@ -311,6 +311,13 @@ fn format_seeds(root: &Path) {
         write(&ply_dir, &format!("blender-{name}"), &bytes);
         n_ply += 1;
     }
+    // pose_rig: the .glb files as they are (posemfa's rig, re-laid interleaved and sparse, Blender's)
+    let rig_dir = dir("pose_rig");
+    let rigs = files_in(&seeds, &[".glb"]);
+    for (name, bytes) in &rigs {
+        write(&rig_dir, name, bytes);
+    }
+    println!("gen_corpus: {} pose_rig seeds in {}", rigs.len(), root.display());
     for (name, bytes) in files_in(&seeds, &[".glb", ".gltf"]) {
         for cfg in [0u8, 0x02, 0x05] {
             let mut b = vec![cfg];

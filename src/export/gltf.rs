@@ -717,9 +717,8 @@ pub fn play_glb_clip_each(
         )));
     }
     let n_targets = s.targets.len();
-    if let Some(c) = channels.iter().find(|c| c.path == Path::Weights && (c.node != s.mesh_node || n_targets == 0)) {
-        return Err(err(format!("a morph weights channel moves node {}, not the skinned mesh's node", c.node)));
-    }
+    // morph weights of other nodes (another node showing the same mesh) do not move the skinned one
+    let channels: Vec<_> = channels.into_iter().filter(|c| c.path != Path::Weights || c.node == s.mesh_node).collect();
     let rest_local: Vec<(Vec3, [f64; 4], Vec3)> = s
         .local
         .iter()
