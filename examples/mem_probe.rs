@@ -108,10 +108,10 @@ fn main() {
         let name = match progress.stage {
             Stage::Coarse => "coarse".to_string(),
             Stage::Refine { .. } => "refine".to_string(),
-            Stage::Final => format!("final run {}", runs + 1),
+            Stage::Final { .. } => format!("final run {}", runs + 1),
             Stage::Done => "done".to_string(),
         };
-        if progress.stage == Stage::Final && progress.run_finished {
+        if matches!(progress.stage, Stage::Final { .. }) && progress.run_finished {
             runs += 1;
         }
         names += 1;

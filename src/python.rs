@@ -376,7 +376,7 @@ fn stage_dict<'py>(py: Python<'py>, p: &Progress) -> PyResult<Bound<'py, PyDict>
     let (name, part, of, sub_parts) = match p.stage {
         Stage::Coarse => ("coarse", None, None, None),
         Stage::Refine { part, of, sub_parts } => ("refine", Some(part), Some(of), Some(sub_parts)),
-        Stage::Final => ("final", None, None, None),
+        Stage::Final { .. } => ("final", None, None, None),
         Stage::Done => ("done", None, None, None),
     };
     d.set_item("stage", name)?;

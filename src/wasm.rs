@@ -317,18 +317,15 @@ impl Fitter {
     }
 
     /// Steps until `budget_ms` has passed, a run of the pipeline has finished or the fit is done; returns the
-    /// progress objects of every iteration made, each with the run it belongs to (`run`: {name, number,
-    /// fromTree} as `currentStage` gave it before the step). A slice never goes on past the end of a run, so a
-    /// page that shows the last step of every slice names every run, however fast it is.
+    /// progress objects of every iteration made (each `stage` names the run it belongs to). A slice never goes on
+    /// past the end of a run, so a page that shows the last step of every slice names every run, however fast it
+    /// is.
     pub fn run(&mut self, budget_ms: f64) -> Result<Array, JsValue> {
         let t0 = crate::clock::now_ms();
         let out = Array::new();
         while !self.pipe.is_done() {
-            let run = self.current_stage()?;
             let p = self.pipe.step()?;
-            let obj = to_js(&p)?;
-            js_sys::Reflect::set(&obj, &"run".into(), &run).map_err(|_| js_err("reflect"))?;
-            out.push(&obj);
+            out.push(&to_js(&p)?);
             if p.run_finished || crate::clock::now_ms() - t0 >= budget_ms {
                 break;
             }
@@ -341,19 +338,11 @@ impl Fitter {
         self.pipe.is_done()
     }
 
+    /// The run in progress (`Stage` in src/parts/hierarchy/result.rs): {kind: "coarse"} | {kind: "refine",
+    /// part, of, subParts} | {kind: "final", rule: "mergeTree" | "algorithm1", run: "first" | "settle" | "round"
+    /// | "count" | "allVertices", number, coarseVertices} | {kind: "done"}.
     pub fn stage(&self) -> Result<JsValue, JsValue> {
         to_js(&self.pipe.stage())
-    }
-
-    /// The pipeline's stage in progress by its StageStats name: {name: "coarse" | "refine" | "final" |
-    /// "distinct" | "parts" | "all vertices", number: how many stages of that name so far (1 for the first), fromTree: the fit
-    /// started from the merge tree's cut (the default part rule), not from Algorithm 1's coarse stage,
-    /// coarseVertices: the coarse mesh's vertex count while the parts are decided on one, else null}.
-    #[wasm_bindgen(js_name = currentStage)]
-    pub fn current_stage(&self) -> Result<JsValue, JsValue> {
-        let (name, number, from_tree) = self.pipe.current_stage_name();
-        let coarse = self.pipe.on_coarse_mesh().then(|| self.pipe.current_vertices().map_or(0, |v| v.len()));
-        to_js(&serde_json::json!({ "name": name, "number": number, "fromTree": from_tree, "coarseVertices": coarse }))
     }
 
     /// Labels of the AECM run in progress over ALL vertices (during the refinement: the coarse labels).

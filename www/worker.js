@@ -30,8 +30,8 @@
 //     { type: 'progress', id, steps, run, trace, labels, colours, elapsedMs }   after every slice: the AECM
 //                                                                   iterations made (one progress object each, with
 //                                                                   its run; a slice ends where a run ends), the run
-//                                                                   in progress ({name, number, fromTree, done},
-//                                                                   Fitter.currentStage), the run's log-likelihood
+//                                                                   in progress (Fitter.stage, with done), the
+//                                                                   run's log-likelihood
 //                                                                   trace, labels and their colours
 //     { type: 'fitted', id, cancelled, fitMs, model }               model: summary (with fitMs), labels,
 //                                                                   coarseLabels, refinedLabels, colours {final,
@@ -248,9 +248,9 @@ async function fit({ id, params, fault = null }) {
       const trace = f.currentTrace();
       const labels = f.currentLabels();
       const colours = coloursOf(labels);
-      // {name, number, fromTree, done}: which of the pipeline's runs is in progress (src/parts/hierarchy.rs);
-      // done: none any more, the last one finished
-      const run = { ...f.currentStage(), done: f.isDone() };
+      // which of the pipeline's runs is in progress (Stage, src/parts/hierarchy/result.rs); done: none any more,
+      // the last one finished
+      const run = { ...f.stage(), done: f.isDone() };
       post({ type: 'progress', id, steps, run, trace, labels, colours, elapsedMs: performance.now() - t0 }, [trace.buffer, labels.buffer, colours.buffer]);
       await yieldToEvents();
     }

@@ -39,7 +39,7 @@ mod rounds;
 mod tests;
 mod tree_rule;
 
-pub use result::{FitResult, PartRound, Progress, Stage, StageParts};
+pub use result::{FinalRun, FitResult, PartRound, Progress, Rule, Stage, StageParts};
 
 pub use algorithm1::merge_rigid_neighbours;
 use algorithm1::{placeholder_fit, Refinement};
@@ -147,6 +147,8 @@ pub struct Pipeline {
     /// [`PartRule::Tree`] on a large population: while the parts are decided, `pop` is the coarse mesh's
     /// population and this holds the whole one; the last AECM runs on all vertices ([`Pipeline::finish_on_all_vertices`]).
     fine: Option<Box<Fine>>,
+    /// The final stage's runs opened so far, in order (the last is the one in progress while in [`State::Final`]).
+    final_runs: Vec<FinalRun>,
     /// The model of the last final-stage AECM run (the run's components, in the unit box, and its labels): on a
     /// coarse mesh the next run goes on from it ([`Pipeline::refit_warm`], [`Pipeline::finish_on_all_vertices`]).
     last_run: Option<Model>,
@@ -228,6 +230,7 @@ impl Pipeline {
             loose_components: None,
             full: None,
             fine: None,
+            final_runs: Vec::new(),
             last_run: None,
         })
     }
@@ -247,11 +250,20 @@ impl Pipeline {
         &self.params
     }
 
+    /// Which run the pipeline is in: Algorithm 1's coarse or refinement runs, or which of the final stage's runs.
     pub fn stage(&self) -> Stage {
         match &self.state {
             State::Coarse(_) => Stage::Coarse,
             State::Refine(r) => Stage::Refine { part: r.part, of: r.members.len(), sub_parts: r.sub_parts },
-            State::Final(_) => Stage::Final,
+            State::Final(_) => {
+                let run = *self.final_runs.last().expect("a final run is opened before it runs");
+                Stage::Final {
+                    rule: self.rule(),
+                    run,
+                    number: self.final_runs.iter().filter(|&&r| r == run).count(),
+                    coarse_vertices: self.fine.as_ref().map(|f| f.mesh.seeds.len()),
+                }
+            }
             State::Done => Stage::Done,
         }
     }
@@ -260,14 +272,13 @@ impl Pipeline {
         matches!(self.state, State::Done)
     }
 
-    /// The stage of [`StageStats`] in progress (the last one opened: "coarse", "refine", "final", "distinct",
-    /// "parts"), how many stages of that name have been opened so far (1 for the first), and whether the fit
-    /// started from the merge tree's cut (stage "tree") rather than Algorithm 1's coarse stage, for a page to say
-    /// which run it is in.
-    pub fn current_stage_name(&self) -> (&str, usize, bool) {
-        let name = self.stats.last().map_or("", |s| s.name.as_str());
-        let from_tree = self.stats.first().is_some_and(|s| s.name == "tree");
-        (name, self.stats.iter().filter(|s| s.name == name).count(), from_tree)
+    /// The rule deciding the parts: the merge tree ([`PartRule::Tree`] with the refinement on), else Algorithm 1.
+    pub fn rule(&self) -> Rule {
+        if self.params.part_rule == PartRule::Tree && self.params.refine {
+            Rule::MergeTree
+        } else {
+            Rule::Algorithm1
+        }
     }
 
     /// The AECM run in progress (None when done).
@@ -440,9 +451,9 @@ impl Pipeline {
     fn go_on(&mut self, labels: &[u32]) -> Result<State> {
         let parts = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
         let Some(comps) = self.loose_components.take().filter(|c| c.len() == parts) else {
-            return self.refit("final", labels);
+            return self.refit(FinalRun::Settle, labels);
         };
-        self.open_run("final");
+        self.open_run(FinalRun::Settle);
         let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
         Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.params)))
     }
@@ -477,7 +488,7 @@ impl Pipeline {
         self.pop = fine.pop;
         self.full = None;
         self.decide_rounds = usize::MAX;
-        self.open_run("all vertices");
+        self.open_run(FinalRun::AllVertices);
         let (data, layout) = fine.full;
         let comps = crate::mfa::data::to_frame(&data, &comps);
         Ok(State::Final(Fit::from_components_laid_out(data, layout, comps, &self.params)))
@@ -491,9 +502,9 @@ impl Pipeline {
     /// 17-20 (0.949) from there. Not on all vertices: there it made horse-gallop's fit 341 -> 280 ms but moved the
     /// skinned characters' parts away from their skeletons (adjusted Rand 0.811 / 0.830 / 0.878 -> 0.779 / 0.785
     /// / 0.846).
-    fn refit_warm(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
+    fn refit_warm(&mut self, run: FinalRun, labels: &[u32]) -> Result<State> {
         let last = self.last_run_parts(labels);
-        self.open_run(stage);
+        self.open_run(run);
         let (data, layout) = self.full.take().unwrap_or_else(|| lay_out(Data::from_population(&self.pop)));
         let mut comps = crate::mfa::init::components_from_labels(&data, labels, self.params.floor());
         for (c, last) in comps.iter_mut().zip(last) {
@@ -519,17 +530,23 @@ impl Pipeline {
         }
     }
 
-    /// A new stage `stage`: the final AECM again on all vertices, from `labels`.
-    fn refit(&mut self, stage: &str, labels: &[u32]) -> Result<State> {
-        self.open_run(stage);
+    /// A new final-stage run `run`: the final AECM again on all vertices, from `labels`.
+    fn refit(&mut self, run: FinalRun, labels: &[u32]) -> Result<State> {
+        self.open_run(run);
         Ok(State::Final(self.fit_all(labels)?))
     }
 
-    /// The stage of a new run after the loose first one ([`Pipeline::go_on`], [`Pipeline::refit`]).
-    fn open_run(&mut self, stage: &str) {
+    /// A new run after the loose first one ([`Pipeline::go_on`], [`Pipeline::refit`]).
+    fn open_run(&mut self, run: FinalRun) {
         self.loose_start = false;
         self.loose_components = None;
-        self.stats.push(StageStats { name: stage.into(), ..Default::default() });
+        self.begin_final(run);
+    }
+
+    /// Records that the final-stage run `run` starts: its [`StageStats`] entry and its place among the runs.
+    fn begin_final(&mut self, run: FinalRun) {
+        self.final_runs.push(run);
+        self.stats.push(StageStats { name: run.stats_name().into(), ..Default::default() });
         self.stage_started_ms = crate::clock::now_ms();
     }
 

@@ -11,19 +11,20 @@ import { eRmsText, ERMS_UNIT } from '../erms.js';
 
 const $ = (id) => document.getElementById(id);
 
-/** Algorithm 1's stage as words; with `run` ({name, number, fromTree, coarseVertices}: the pipeline's stage by name, from the
- * worker, Fitter.currentStage), which of the final stage's runs it is: the merge tree's start, a round of the
- * part rule, the refit with the count asked for. */
-export function stageText(s, run = null) {
+/** The run a progress object's `stage` names, as words (`Stage` in src/parts/hierarchy/result.rs: {kind:
+ * "coarse" | "refine" | "final" | "done"}; a final-stage run also says which rule asked for it, which run it is
+ * and, while the parts are decided on a coarse mesh, its vertex count). */
+export function stageText(s) {
   if (!s) return '–';
   if (s.kind === 'refine') return `refining part ${s.part + 1} of ${s.of} (${s.subParts} sub-part${s.subParts === 1 ? '' : 's'})`;
-  if (s.kind === 'final' && run) {
+  if (s.kind === 'final' && s.run) {
     // a large mesh's parts are decided on a coarse mesh of its vertices, then fitted on all of them
-    const where = run.coarseVertices ? `, on a coarse mesh of ${run.coarseVertices} vertices` : '';
-    if (run.name === 'final') return (run.number > 1 ? 'the parts decided, refitted at the full tolerance' : run.fromTree ? "fit from the merge tree's start" : 'final AECM') + where;
-    if (run.name === 'distinct') return `part rule, round ${run.number}: refit of the parts left${where}`;
-    if (run.name === 'all vertices') return 'the parts decided on a coarse mesh, fitted on all vertices';
-    if (run.name === 'parts') return `refit with the part count asked for${run.number > 1 ? ` (try ${run.number})` : ''}${where}`;
+    const where = s.coarseVertices ? `, on a coarse mesh of ${s.coarseVertices} vertices` : '';
+    if (s.run === 'first') return (s.rule === 'mergeTree' ? "fit from the merge tree's start" : 'final AECM') + where;
+    if (s.run === 'settle') return 'the parts decided, refitted at the full tolerance' + where;
+    if (s.run === 'round') return `part rule, round ${s.number}: refit of the parts left${where}`;
+    if (s.run === 'allVertices') return 'the parts decided on a coarse mesh, fitted on all vertices';
+    if (s.run === 'count') return `refit with the part count asked for${s.number > 1 ? ` (try ${s.number})` : ''}${where}`;
   }
   return { coarse: 'coarse', final: 'final', done: 'done' }[s.kind] ?? s.kind;
 }
@@ -183,10 +184,10 @@ export function natsText(v) {
  * "done" once the model is in (fitEnded). */
 export const FINISHING = 'finishing: building the result (labels, latent shape, summary, verdict)';
 
-/** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since; run:
- * the pipeline's run by name, and its number among the fit's runs). */
-export function showStep(step, stage = step.stage, run = null, runNumber = null) {
-  $('stage').textContent = stageText(stage, run) + (runNumber ? ` (run ${runNumber})` : '');
+/** Shows one AECM iteration's progress object (stage: where the fit is now, when it has moved on since;
+ * runNumber: the run's number among the fit's runs). */
+export function showStep(step, stage = step.stage, runNumber = null) {
+  $('stage').textContent = stageText(stage) + (runNumber ? ` (run ${runNumber})` : '');
   $('iteration').textContent = `${step.iteration} (total ${step.totalIterations})`;
   $('loglik').textContent = natsText(step.logLikelihood);
 }
@@ -235,14 +236,14 @@ export function installResult() {
       fitRuns.values.push(s.logLikelihood);
     }
     const last = m.steps[m.steps.length - 1];
-    // the Stage field names the run of the slice's last step (step.run, Fitter.run: a slice never goes past the
+    // the Stage field names the run of the slice's last step (its stage; Fitter.run: a slice never goes past the
     // end of a run, so every run is named once at least) and its number: one more than the runs finished before
-    // it; the plot shows the run in progress now (m.run)
+    // it; the plot shows the run in progress now (m.run, the last step's run once the fit is done)
     const before = runsFinished + m.steps.slice(0, -1).filter((s) => s.runFinished).length;
     runsFinished += m.steps.filter((s) => s.runFinished).length;
     if (last) {
-      showStep(last, last.stage, last.run ?? m.run, before + 1);
-      plot.set(m.trace, `${stageText(last.stage, m.run)}: log-likelihood`);
+      showStep(last, last.stage, before + 1);
+      plot.set(m.trace, `${stageText(m.run?.kind && m.run.kind !== 'done' ? m.run : last.stage)}: log-likelihood`);
     }
     if (m.run?.done) $('stage').textContent = FINISHING;
     $('elapsed').textContent = `${(m.elapsedMs / 1000).toFixed(2)} s`;

@@ -423,7 +423,7 @@ fn stage_name(s: &Stage) -> String {
     match s {
         Stage::Coarse => "coarse".into(),
         Stage::Refine { part, of, sub_parts } => format!("refining part {} of {of} ({sub_parts} sub-parts)", part + 1),
-        Stage::Final => "final".into(),
+        Stage::Final { .. } => "final".into(),
         Stage::Done => "done".into(),
     }
 }

@@ -4,7 +4,7 @@
 //! paper's rule, adjacent parts that one rigid motion explains are merged before the final AECM
 //! ([`merge_rigid_neighbours`]). The driver ([`super::Pipeline`]) runs the AECM; this says which run comes next.
 
-use super::{lay_out, Pipeline, State};
+use super::{lay_out, FinalRun, Pipeline, State};
 use crate::error::Result;
 use crate::mesh::Population;
 use crate::mfa::aecm::Fit;
@@ -228,7 +228,8 @@ impl Pipeline {
             PartRule::Distinct | PartRule::Tree => compact(&refined),
             PartRule::Threshold => merge_rigid_neighbours(&self.pop, &refined, &self.params),
         };
-        self.close_stage(Some("final"));
+        self.close_stage(None);
+        self.begin_final(FinalRun::First);
         let labels = self.refined_labels.clone();
         Ok(State::Final(self.fit_all(&labels)?))
     }

@@ -1,22 +1,75 @@
-//! What a fit reports: where the pipeline is ([`Stage`], [`Progress`]), the stages' part counts, the part rule's
-//! rounds, and everything the fit produced ([`FitResult`]).
+//! What a fit reports: which run the pipeline is in ([`Stage`]: the [`Rule`] and its [`FinalRun`]),
+//! [`Progress`], the stages' part counts, the part rule's rounds, and everything the fit produced ([`FitResult`]).
 
 use crate::mfa::aecm::StageStats;
 use crate::mfa::result::Model;
 use serde::Serialize;
 
-/// Where the pipeline is.
+/// The rule that decides the parts of a fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub enum Rule {
+    /// The merge tree (the default, [`PartRule::Tree`](crate::mfa::params::PartRule::Tree) with `refine` on):
+    /// the start is the patches' merge tree cut, the count read off the tree of the fitted parts.
+    MergeTree,
+    /// The paper's Algorithm 1 (the other part rules, `refine` off, and a step-by-step lesson): a coarse AECM
+    /// from k-means++, each coarse part refined, then the final AECM.
+    Algorithm1,
+}
+
+/// Which of the final stage's AECM runs: why it runs and what it starts from. Each also names its
+/// [`StageStats`] entry ([`FinalRun::stats_name`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub enum FinalRun {
+    /// The first run on every part, from the rule's start (the merge tree's cut, at the refinement's loose
+    /// tolerance; Algorithm 1's refined labels).
+    First,
+    /// The parts the part rule left as they were after the first run, fitted on at the fit's own tolerance.
+    Settle,
+    /// A refit of the parts left after a round of the part rule removed some.
+    Round,
+    /// A refit with the part count asked for (`target_parts`).
+    Count,
+    /// The parts decided on a coarse mesh, fitted on all vertices (the fit's last run).
+    AllVertices,
+}
+
+impl FinalRun {
+    /// The name of the run's [`StageStats`] entry (the JSON's `stage_stats[].name`): "final" for the first run
+    /// and its settling, "distinct" after a round of the part rule, "parts" with the count asked for, "all
+    /// vertices" for the last run after a coarse mesh.
+    pub fn stats_name(self) -> &'static str {
+        match self {
+            FinalRun::First | FinalRun::Settle => "final",
+            FinalRun::Round => "distinct",
+            FinalRun::Count => "parts",
+            FinalRun::AllVertices => "all vertices",
+        }
+    }
+}
+
+/// Which run of the fit an AECM iteration belongs to (serialised with `kind`, as the progress's `stage`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(tag = "kind", rename_all = "camelCase", rename_all_fields = "camelCase")]
 pub enum Stage {
+    /// Algorithm 1's coarse AECM from k-means++.
     Coarse,
-    /// Refining coarse part `part` (0-based) of `of`, trying `sub_parts` components.
+    /// Algorithm 1's refinement: coarse part `part` (0-based) of `of`, trying `sub_parts` components.
     Refine {
         part: usize,
         of: usize,
         sub_parts: usize,
     },
-    Final,
+    /// A run of the final stage: which `rule` asked for it, which `run`, its `number` among the fit's runs of
+    /// that kind (1 for the first; a [`FinalRun::Round`]'s is the part rule's round), and the coarse mesh's
+    /// vertex count while the parts are decided on one (None on all vertices).
+    Final {
+        rule: Rule,
+        run: FinalRun,
+        number: usize,
+        coarse_vertices: Option<usize>,
+    },
     Done,
 }
 

@@ -4,7 +4,7 @@
 //! an exact count asked for, parts split or merged until it holds; each round that changed the parts asks the
 //! driver for another run.
 
-use super::{full_data, PartRound, Pipeline, State, COUNT_ROUNDS, DECIDE_ROUNDS};
+use super::{full_data, FinalRun, PartRound, Pipeline, State, COUNT_ROUNDS, DECIDE_ROUNDS};
 use crate::error::Result;
 use crate::mfa::params::PartRule;
 use crate::mfa::result::Model;
@@ -83,12 +83,12 @@ impl Pipeline {
                         Some(l) => l,
                         None => crate::parts::part_count::labels_with_count(&self.pop, &merged, n, &self.params)?.0,
                     };
-                    return self.refit("parts", &labels);
+                    return self.refit(FinalRun::Count, &labels);
                 }
                 if self.fine.is_some() {
-                    return self.refit_warm("distinct", &merged);
+                    return self.refit_warm(FinalRun::Round, &merged);
                 }
-                return self.refit("distinct", &merged);
+                return self.refit(FinalRun::Round, &merged);
             }
             if self.fine.is_some() && self.params.target_parts.is_none_or(|n| n == model.n_parts()) {
                 // nothing to remove, on a coarse mesh: the last run, on all vertices, goes on from these parts
@@ -134,6 +134,6 @@ impl Pipeline {
         }
         self.count_rounds += 1;
         let (labels, _) = crate::parts::part_count::labels_with_count(&self.pop, &model.labels, n, &self.params)?;
-        self.refit("parts", &labels)
+        self.refit(FinalRun::Count, &labels)
     }
 }

@@ -98,9 +98,9 @@ fn a_refit_after_a_merge_goes_on_from_the_parts_that_stayed() {
     let tree = done.merge_tree.as_ref().expect("the tree pipeline keeps its tree");
     let merged = tree.labels_at(done.model.n_parts() - 1);
     let mut cold = Pipeline::new(&g.population, &Params::default()).unwrap();
-    let state = cold.refit("distinct", &merged).unwrap();
+    let state = cold.refit(FinalRun::Round, &merged).unwrap();
     let State::Final(mut cold) = state else { panic!("a refit is a final-stage run") };
-    let State::Final(mut warm) = pipe.refit_warm("distinct", &merged).unwrap() else {
+    let State::Final(mut warm) = pipe.refit_warm(FinalRun::Round, &merged).unwrap() else {
         panic!("a refit is a final-stage run")
     };
     // every part that is one of the last run's (all but at most the union) starts from that run's component

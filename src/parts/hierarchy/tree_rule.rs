@@ -4,7 +4,7 @@
 //! ([`super::Pipeline`]) runs the AECM and the rounds; this says where the runs start and which count the tree
 //! gives.
 
-use super::{coarse_target, lay_out, Fine, Pipeline, State, COARSE_FACTOR};
+use super::{coarse_target, lay_out, FinalRun, Fine, Pipeline, State, COARSE_FACTOR};
 use crate::error::{Error, Result};
 use crate::mesh::Population;
 use crate::mfa::aecm::{Fit, StageStats};
@@ -115,10 +115,12 @@ impl Pipeline {
             loose_start: true,
             loose_components: None,
             full: None,
+            final_runs: Vec::new(),
             fine: coarse.zip(full).map(|(mesh, full)| Box::new(Fine { pop: pop.clone(), mesh, full })),
             last_run: None,
         };
-        p.close_stage(Some("final"));
+        p.close_stage(None);
+        p.begin_final(FinalRun::First);
         // the first run only feeds the part rule's decisions: at the refinement's loose tolerance (from a
         // generous over-segmentation a converged run took 64 iterations on the 12 k hand, the loose one 10)
         let loose = params.at_loose_tolerance();
