@@ -22,7 +22,8 @@
 //! Versions: a reader reads its own version and every older one; a file of a newer version is refused by name
 //! (which version, which this reader reads, what to do). A change that an older reader would misread raises the
 //! version; nothing is ever added to version 1's header without it (its fields are closed: an unknown field is
-//! refused as damage).
+//! refused as damage). Version 2 adds an optional rig ([`rig`]); a file without one is written as version 1, so
+//! that older readers still open it.
 
 use crate::error::{Error, Result};
 use crate::geometry::{from_rows, rows, Mat3, Vec3};
@@ -36,10 +37,13 @@ use crate::parts::merge_tree::{CurvePoint, Merge, MergeTree};
 use serde::{Deserialize, Serialize};
 use serde::{Deserializer, Serializer};
 
+mod rig;
+pub use rig::{poses_fingerprint, SavedRig};
+
 /// The first eight bytes of every model file.
 pub const MAGIC: &[u8; 8] = b"POSEMFA\0";
-/// The format version this posemfa writes, and the newest it reads.
-pub const VERSION: u32 = 1;
+/// The newest format version this posemfa writes and reads (a file without a rig is written as version 1).
+pub const VERSION: u32 = 2;
 /// The extension the CLI and the page give model files.
 pub const EXTENSION: &str = "posemfa";
 /// The `format` field of the header.
@@ -59,6 +63,8 @@ pub struct ModelFile {
     pub has_data: bool,
     /// Figures of the fit measured on the data when it was saved (what the views show without the data).
     pub summary: Summary,
+    /// A rig built from the fit, kept so that the commands that would build it take it ([`SavedRig`]).
+    pub rig: Option<SavedRig>,
 }
 
 /// Figures that need the data, measured when the model was saved.
@@ -91,7 +97,7 @@ impl ModelFile {
     /// A finished (or stopped) fit of `pop` with `params`, its summary measured on the data.
     pub fn new(population: Population, result: FitResult, params: Params) -> ModelFile {
         let summary = Summary::measure(&population, &result);
-        ModelFile { result, params, population, has_data: true, summary }
+        ModelFile { result, params, population, has_data: true, summary, rig: None }
     }
 
     /// The file's bytes; with `with_population` (and the data at hand) the population's points too.
@@ -102,7 +108,7 @@ impl ModelFile {
             population: &self.population,
             summary: &self.summary,
         };
-        write(&fit, with_population && self.has_data)
+        write(&fit, with_population && self.has_data, self.rig.as_ref())
     }
 
     /// Reads a model file (`file` names it in errors), checking every field.
@@ -133,7 +139,7 @@ pub struct Borrowed<'a> {
 impl Borrowed<'_> {
     /// The file's bytes; with `with_points` the population's points too (only when it holds the data).
     pub fn to_bytes(&self, with_points: bool) -> Vec<u8> {
-        write(self, with_points)
+        write(self, with_points, None)
     }
 }
 
@@ -322,6 +328,9 @@ struct Header {
     params: Params,
     fit: FitHeader,
     summary: Summary,
+    /// Version 2: a rig built from the fit ([`rig`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rig: Option<rig::RigHeader>,
     arrays: Vec<ArrayEntry>,
 }
 
@@ -463,7 +472,7 @@ fn delta_varint(v: &[u32]) -> Vec<u8> {
     out
 }
 
-fn write(m: &Borrowed, with_points: bool) -> Vec<u8> {
+fn write(m: &Borrowed, with_points: bool, saved_rig: Option<&SavedRig>) -> Vec<u8> {
     let r = m.result;
     let pop = m.population;
     let model = &r.model;
@@ -498,11 +507,13 @@ fn write(m: &Borrowed, with_points: bool) -> Vec<u8> {
             .collect();
         body.push("points", "f32", "raw", pop.n_shapes() * pop.n_vertices() * 3, &b);
     }
+    let rig = saved_rig.map(|r| rig::write(r, &mut body));
+    let version = if rig.is_some() { 2 } else { 1 };
     let mut params = m.params.clone();
     params.start_labels = None;
     let header = Header {
         format: FORMAT.into(),
-        version: VERSION,
+        version,
         writer: format!("posemfa {}", env!("CARGO_PKG_VERSION")),
         population: PopulationHeader {
             vertices: pop.n_vertices(),
@@ -539,12 +550,13 @@ fn write(m: &Borrowed, with_points: bool) -> Vec<u8> {
             }),
         },
         summary: m.summary.clone(),
+        rig,
         arrays: body.entries,
     };
     let json = serde_json::to_vec(&header).expect("the header is plain data");
     let mut out = Vec::with_capacity(PREFIX + json.len() + 8 + body.bytes.len());
     out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&version.to_le_bytes());
     out.extend_from_slice(&(json.len() as u32).to_le_bytes());
     out.extend_from_slice(&(body.bytes.len() as u64).to_le_bytes());
     out.extend_from_slice(&json);
@@ -630,6 +642,9 @@ fn read(file: &str, bytes: &[u8]) -> Result<ModelFile> {
             format!("header field version: {} but the file's start says {version}; {DAMAGED}", header.version),
         ));
     }
+    if header.version == 1 && header.rig.is_some() {
+        return Err(bad(file, format!("header field rig: a version 1 file has no rig; {DAMAGED}")));
+    }
     decode(file, header, body)
 }
 
@@ -653,6 +668,12 @@ impl<'a> Arrays<'a> {
             "latent",
             "parts",
             "points",
+            "rigRest",
+            "rigCounts",
+            "rigBones",
+            "rigWeights",
+            "rigMotions",
+            "rigJointPoints",
         ];
         for (k, e) in entries.iter().enumerate() {
             if !KNOWN.contains(&e.name.as_str()) {
@@ -970,7 +991,12 @@ fn decode(file: &str, h: Header, body: &[u8]) -> Result<ModelFile> {
         refined: h.fit.refined,
         parts_asked: h.fit.parts_asked,
     };
-    Ok(ModelFile { result, params, population, has_data: p.data, summary: h.summary })
+    let rig = match h.rig {
+        Some(r) => Some(rig::read(file, r, &a, nv, ns, np)?),
+        None if a.has("rigRest") => return Err(field("rig", "null, yet the body has a rig's arrays".into())),
+        None => None,
+    };
+    Ok(ModelFile { result, params, population, has_data: p.data, summary: h.summary, rig })
 }
 
 /// Whether `bytes` start like a model file (for readers that take any file by its content).

@@ -248,6 +248,62 @@ fn a_small_fit_on_the_arm_writes_its_json() {
 }
 
 #[test]
+fn a_model_saved_with_its_rig_gives_that_rig_without_solving_it_again() {
+    let dir = std::env::temp_dir().join(format!("posemfa-cli-rig-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |name: &str| dir.join(name).to_str().expect("utf-8 temp path").to_string();
+    let input = "synth:quadruped:900:5:2";
+    let r = posemfa(&["fit", input, "--quiet", "--save", &p("m.posemfa"), "--with-rig"]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    assert!(text(&r.stdout).contains("with the rig of --weights fitted"), "{}", text(&r.stdout));
+    // export-gltf: the kept rig, and the bytes of the command that fits and solves
+    let fitting = posemfa(&["export-gltf", input, "--weights", "fitted", "--out", &p("a.glb")]);
+    let kept = posemfa(&["export-gltf", "--model", &p("m.posemfa"), "--weights", "fitted", "--out", &p("b.glb")]);
+    assert!(fitting.status.success() && kept.status.success(), "{} {}", text(&fitting.stderr), text(&kept.stderr));
+    assert!(text(&kept.stdout).contains("the rig kept in the model file"), "{}", text(&kept.stdout));
+    assert!(std::fs::read(p("a.glb")).unwrap() == std::fs::read(p("b.glb")).unwrap(), "the same .glb");
+    // other options build their own rig
+    let other = posemfa(&[
+        "export-gltf",
+        "--model",
+        &p("m.posemfa"),
+        "--weights",
+        "fitted",
+        "--influences",
+        "2",
+        "--out",
+        &p("c.glb"),
+    ]);
+    assert!(
+        other.status.success() && !text(&other.stdout).contains("kept in the model file"),
+        "{}",
+        text(&other.stdout)
+    );
+    // rig-report says where its rig came from, and measures the same rig
+    let report = |args: &[&str]| -> serde_json::Value {
+        let r = posemfa(args);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        serde_json::from_str(&text(&r.stdout)).expect("rig-report prints JSON")
+    };
+    let a = report(&["rig-report", input, "--weights", "fitted"]);
+    let b = report(&["rig-report", "--model", &p("m.posemfa"), "--weights", "fitted"]);
+    assert_eq!(a["rig_source"], "built");
+    assert_eq!(b["rig_source"], "model file");
+    assert_eq!(a["e_rms"], b["e_rms"]);
+    assert_eq!(a["solver_trace"], b["solver_trace"]);
+    // a model without its poses cannot solve a rig
+    let r = posemfa(&["fit", "--model", &p("m.posemfa"), "--quiet", "--save", &p("bare.posemfa"), "--without-poses"]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let r = posemfa(&["fit", "--model", &p("bare.posemfa"), "--quiet", "--save", &p("x.posemfa"), "--with-rig"]);
+    assert!(
+        !r.status.success() && text(&r.stderr).contains("--with-rig: the model file holds no poses"),
+        "{}",
+        text(&r.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn bones_n_gives_exactly_n_parts() {
     let json = std::env::temp_dir().join(format!("posemfa-cli-bones-{}.json", std::process::id()));
     let json_arg = json.to_str().expect("utf-8 temp path");

@@ -205,6 +205,55 @@ dual_test! {
         assert!(e.contains("array 'labels', element 7"), "{e}");
     }
 
+    fn a_kept_rig_writes_the_rig_built_and_serves_only_that_rig() {
+        use posemfa::model_file::SavedRig;
+        let pop = generated(Preset::Quadruped, 1200, 5);
+        let result = fitted(&pop, &Params::default());
+        let mut file = ModelFile::new(pop.clone(), result.clone(), Params::default());
+        // without a rig the file is version 1, as before
+        assert_eq!(&file.to_bytes(true)[8..12], &1u32.to_le_bytes());
+        let g = GltfOptions { weights: Weights::Fitted, ..GltfOptions::default() };
+        let band = posemfa::articulate::skin::DEFAULT_BAND;
+        file.rig = Some(SavedRig::build(&result.model, &pop, band, g.rig_options()).unwrap());
+        let bytes = file.to_bytes(true);
+        assert_eq!(&bytes[8..12], &2u32.to_le_bytes(), "a file with a rig is version 2");
+        let read = ModelFile::from_bytes("rig.posemfa", &bytes).unwrap();
+        let saved = read.rig.as_ref().expect("the rig is read back");
+        // the kept rig writes the very .glb that building it writes
+        let art = Articulation::with_band(&read.result.model, &read.population, band).unwrap();
+        let kept = saved.for_request(&read.population, band, &g.rig_options()).expect("the rig asked for");
+        let glb = posemfa::export::gltf::write_glb(&art, kept, &g).unwrap();
+        assert!(glb == to_glb(&art, &g).unwrap(), "the kept rig's .glb is the built rig's, byte for byte");
+        // other options, another band or other poses: not that rig
+        let three = GltfOptions { influences: 3, ..g };
+        assert!(saved.for_request(&read.population, band, &three.rig_options()).is_none());
+        assert!(saved.for_request(&read.population, band * 2.0, &g.rig_options()).is_none());
+        let mut points: Vec<[f32; 3]> = (0..pop.n_shapes()).flat_map(|i| pop.shape(i).as_f32().to_vec()).collect();
+        let same = Population::from_saved("same", pop.names.clone(), pop.faces.to_vec(), points.clone(), pop.normalization, pop.source.clone()).unwrap();
+        assert!(saved.for_request(&same, band, &g.rig_options()).is_some(), "the same poses read again");
+        points[5][0] += 1e-3;
+        let moved = Population::from_saved("moved", pop.names.clone(), pop.faces.to_vec(), points, pop.normalization, pop.source.clone()).unwrap();
+        assert!(saved.for_request(&moved, band, &g.rig_options()).is_none(), "one point moved: other poses");
+
+        // damage in the rig's header is refused by name
+        let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let text = String::from_utf8(bytes[24..24 + n].to_vec()).unwrap();
+        let influences = saved.rig.weights.influences.iter().map(Vec::len).sum::<usize>();
+        let damaged = text.replacen(&format!("\"influences\":{influences}"), &format!("\"influences\":{}", influences + 1), 1);
+        let e = ModelFile::from_bytes("r.posemfa", &with_header(&bytes, &damaged)).unwrap_err().to_string();
+        assert!(e.contains("rigBones") || e.contains("rig.influences"), "{e}");
+        let at = text.find("\"order\":[").unwrap() + 9;
+        let first = &text[at..at + text[at..].find([',', ']']).unwrap()];
+        let damaged = format!("{}{first},{}", &text[..at], &text[at..]);
+        let e = ModelFile::from_bytes("o.posemfa", &with_header(&bytes, &damaged)).unwrap_err().to_string();
+        assert!(e.contains("header field rig.order: entry 1"), "{e}");
+        // a version 1 file has no rig
+        let mut v1 = with_header(&bytes, &text.replacen("\"version\":2", "\"version\":1", 1));
+        v1[8..12].copy_from_slice(&1u32.to_le_bytes());
+        let e = ModelFile::from_bytes("v1.posemfa", &v1).unwrap_err().to_string();
+        assert!(e.contains("a version 1 file has no rig"), "{e}");
+    }
+
     fn poses_of_another_mesh_are_refused_by_name() {
         let pop = generated(Preset::Snake, 300, 4);
         let bytes = ModelFile::new(pop.clone(), fitted(&pop, &Params::default()), Params::default()).to_bytes(false);

@@ -1,6 +1,6 @@
 //! `posemfa export-gltf DIR_OR_FILES... --out model.glb`: the fitted rig as binary glTF 2.0.
 
-use crate::shared::{articulate_fit, BandArgs, FitArgs, RigArgs};
+use crate::shared::{articulate_fit_rig, rig_of, BandArgs, FitArgs, RigArgs};
 use clap::ValueHint;
 
 /// Fit, then write binary glTF 2.0: mesh bound in one pose, skeleton, skin (rigid, smooth or fitted weights),
@@ -24,13 +24,21 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), String> {
     let out = &a.out;
-    let (pop, art) = articulate_fit("export-gltf", &a.fit, &a.band)?;
+    let (pop, art, saved_rig) = articulate_fit_rig("export-gltf", &a.fit, &a.band)?;
     let mut g = a.rig.options(&pop)?;
     if let Some(s) = a.samples {
         g.samples_per_second = s;
     }
-    let glb = posemfa::export::gltf::to_glb(&art, &g).map_err(|e| e.to_string())?;
+    // (a model file's own rig when it is this one: the same bytes as building it, without the weight solve)
+    let (rig, source) = rig_of(&pop, &art, saved_rig.as_ref(), &a.band, &g.rig_options())?;
+    let glb = posemfa::export::gltf::write_glb(&art, &rig, &g).map_err(|e| e.to_string())?;
     std::fs::write(out, &glb).map_err(|e| format!("cannot write {out}: {e}"))?;
-    out!("wrote {out} ({} bytes, {} parts, {} poses)", glb.len(), art.graph.used_parts().len(), pop.n_shapes());
+    out!(
+        "wrote {out} ({} bytes, {} parts, {} poses{})",
+        glb.len(),
+        art.graph.used_parts().len(),
+        pop.n_shapes(),
+        if source == crate::shared::RigSource::ModelFile { ", the rig kept in the model file" } else { "" }
+    );
     Ok(())
 }

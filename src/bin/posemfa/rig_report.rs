@@ -30,14 +30,14 @@ pub fn run(a: Args) -> Result<(), String> {
     let mut timings = serde_json::Map::new();
     let t = std::time::Instant::now();
     // the poses, and with --model the fit too (without it the fit is made below, unless --glb gives the rig)
-    let (params, pop, mut saved) = match &a.fit.input.model {
+    let (params, pop, mut saved, saved_rig) = match &a.fit.input.model {
         Some(_) => {
             let f = a.fit.fitted_with_data("rig-report")?;
-            (f.params, f.pop, Some(f.result))
+            (f.params, f.pop, Some(f.result), f.saved_rig)
         }
         None => {
             let (params, pop, _truth) = a.fit.load()?;
-            (params, pop, None)
+            (params, pop, None, None)
         }
     };
     timings.insert("read".into(), ms(t).into());
@@ -63,7 +63,8 @@ pub fn run(a: Args) -> Result<(), String> {
             timings.insert("articulate".into(), ms(t).into());
             let g = a.rig.options(&pop)?;
             let t = std::time::Instant::now();
-            let rig = posemfa::articulate::rig::build(&art, &g.rig_options()).map_err(|e| e.to_string())?;
+            let (rig, source) = crate::shared::rig_of(&pop, &art, saved_rig.as_ref(), &a.band, &g.rig_options())?;
+            info.insert("rig_source".into(), source.word().into());
             timings.insert("rig".into(), ms(t).into());
             let t = std::time::Instant::now();
             let glb = posemfa::export::gltf::write_glb(&art, &rig, &g).map_err(|e| e.to_string())?;

@@ -173,6 +173,8 @@ pub struct Fitted {
     pub stand_in: bool,
     /// Read from --model: the figures measured on its poses (when it was saved, or now on DIR_OR_FILES).
     pub saved_summary: Option<posemfa::model_file::Summary>,
+    /// Read from --model: the rig kept in the file, if any (used when a command asks for that very rig).
+    pub saved_rig: Option<posemfa::model_file::SavedRig>,
 }
 
 impl FitArgs {
@@ -181,7 +183,7 @@ impl FitArgs {
         let Some(path) = &self.input.model else {
             let (params, pop, truth) = self.load()?;
             let result = run_fit(&params, &pop, quiet)?;
-            return Ok(Fitted { params, pop, result, truth, stand_in: false, saved_summary: None });
+            return Ok(Fitted { params, pop, result, truth, stand_in: false, saved_summary: None, saved_rig: None });
         };
         let mut saved = read_model(path)?;
         let mut truth = None;
@@ -193,6 +195,7 @@ impl FitArgs {
         Ok(Fitted {
             stand_in: !saved.has_data,
             saved_summary: Some(saved.summary),
+            saved_rig: saved.rig,
             params: saved.params,
             pop: saved.population,
             result: saved.result,
@@ -483,9 +486,52 @@ pub fn articulate_fit(
     fit: &FitArgs,
     band: &BandArgs,
 ) -> Result<(Population, posemfa::articulate::Articulation), String> {
+    let (pop, art, _) = articulate_fit_rig(command, fit, band)?;
+    Ok((pop, art))
+}
+
+/// [`articulate_fit`], and the rig kept in the --model file if it has one.
+pub fn articulate_fit_rig(
+    command: &str,
+    fit: &FitArgs,
+    band: &BandArgs,
+) -> Result<(Population, posemfa::articulate::Articulation, Option<posemfa::model_file::SavedRig>), String> {
     let f = fit.fitted_with_data(command)?;
     let art = band.articulate(&f.result, &f.pop)?;
-    Ok((f.pop, art))
+    Ok((f.pop, art, f.saved_rig))
+}
+
+/// The rig of `art` (built from `pop` with `band`) with `options`: the one kept in the model file when it is that
+/// very rig ([`posemfa::model_file::SavedRig::for_request`]), else built now; and which of the two.
+pub fn rig_of(
+    pop: &Population,
+    art: &posemfa::articulate::Articulation,
+    saved: Option<&posemfa::model_file::SavedRig>,
+    band: &BandArgs,
+    options: &posemfa::articulate::rig::RigOptions,
+) -> Result<(posemfa::articulate::rig::Rig, RigSource), String> {
+    match saved.and_then(|s| s.for_request(pop, band.band, options)) {
+        Some(rig) => Ok((rig.clone(), RigSource::ModelFile)),
+        None => Ok((posemfa::articulate::rig::build(art, options).map_err(|e| e.to_string())?, RigSource::Built)),
+    }
+}
+
+/// Where a command's rig came from ([`rig_of`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum RigSource {
+    /// Kept in the --model file (`fit --save --with-rig`).
+    ModelFile,
+    /// Built now from the fit.
+    Built,
+}
+
+impl RigSource {
+    pub fn word(self) -> &'static str {
+        match self {
+            RigSource::ModelFile => "model file",
+            RigSource::Built => "built",
+        }
+    }
 }
 
 impl BandArgs {
