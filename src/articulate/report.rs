@@ -10,7 +10,6 @@
 //!   crossing a part boundary (endpoints with different labels). A perfect interpolation keeps every edge
 //!   at its mixed length (0 %); the rigid parts open or overlap at joints.
 
-use super::graph::mesh_edges;
 use super::{Articulation, Blend, Options, RootRule, Skin};
 use crate::error::Result;
 use crate::geometry::{cross, dot, norm, sub, Vec3};
@@ -39,9 +38,9 @@ pub fn percentile(values: &[f64], q: f64) -> f64 {
         return 0.0;
     }
     let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
     let rank = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len());
-    v[rank - 1]
+    // the rank-th smallest, without sorting the rest
+    *v.select_nth_unstable_by(rank - 1, f64::total_cmp).1
 }
 
 /// Edge stretch figures of one output shape.
@@ -60,10 +59,10 @@ pub struct Stretch {
 
 /// Edge stretch (module doc) of `positions` at t between training shapes i and j.
 pub fn edge_stretch(art: &Articulation, positions: &[Vec3], i: usize, j: usize, t: f64) -> Stretch {
-    let edges = mesh_edges(&art.faces);
+    let edges = &art.edges; // (the mesh's edges, made once with the articulation)
     let (mut all, mut boundary) = (Vec::with_capacity(edges.len()), Vec::new());
     let (yi, yj) = (art.shape(i), art.shape(j));
-    for e in &edges {
+    for e in edges {
         let (a, b) = (e[0] as usize, e[1] as usize);
         let li = norm(sub(yi[a], yi[b]));
         let lj = norm(sub(yj[a], yj[b]));

@@ -289,14 +289,16 @@ pub fn edge_blend(
         div[p] = crate::geometry::add(div[p], scale(g[k], w[k]));
         div[q] = sub(div[q], scale(g[k], w[k]));
     }
-    let apply = |x: &[Vec3]| -> Vec<Vec3> {
-        let mut y: Vec<Vec3> = (0..n).map(|v| scale(x[v], diag[v] + eps[v])).collect();
+    // y = A x, into a buffer kept across the iterations (a new one each time cost page faults)
+    let apply = |x: &[Vec3], y: &mut [Vec3]| {
+        for v in 0..n {
+            y[v] = scale(x[v], diag[v] + eps[v]);
+        }
         for (k, e) in edges.iter().enumerate() {
             let (p, q) = (e[0] as usize, e[1] as usize);
             y[p] = sub(y[p], scale(x[q], w[k]));
             y[q] = sub(y[q], scale(x[p], w[k]));
         }
-        y
     };
     let dot3 = |u: &[Vec3], v: &[Vec3]| {
         let mut s = [0.0; 3];
@@ -310,9 +312,11 @@ pub fn edge_blend(
     let pre: Vec<f64> = (0..n).map(|v| 1.0 / (diag[v] + eps[v])).collect();
     // Each pass anchors to the previous pass's result: the pull toward the (shrunken) average fades.
     let mut x = m;
+    let mut ap: Vec<Vec3> = vec![[0.0; 3]; n];
     for _ in 0..EDGE_BLEND_PASSES {
         let rhs: Vec<Vec3> = (0..n).map(|v| crate::geometry::add(div[v], scale(x[v], eps[v]))).collect();
-        let ax = apply(&x);
+        let mut ax: Vec<Vec3> = vec![[0.0; 3]; n];
+        apply(&x, &mut ax);
         let mut r: Vec<Vec3> = (0..n).map(|v| sub(rhs[v], ax[v])).collect();
         let scale_rhs = dot3(&rhs, &rhs).map(f64::sqrt);
         let mut z: Vec<Vec3> = (0..n).map(|v| scale(r[v], pre[v])).collect();
@@ -323,7 +327,7 @@ pub fn edge_blend(
             if (0..3).all(|d| rr[d].sqrt() <= 1e-8 * scale_rhs[d].max(1e-300)) {
                 break;
             }
-            let ap = apply(&p);
+            apply(&p, &mut ap);
             let pap = dot3(&p, &ap);
             let alpha = [0, 1, 2].map(|d| if pap[d] > 0.0 { rz[d] / pap[d] } else { 0.0 });
             for v in 0..n {
