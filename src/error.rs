@@ -6,8 +6,11 @@ use std::fmt;
 /// Everything that can go wrong in posemfa. Messages are meant to be shown to a person as they are.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Error {
-    /// A mesh file could not be read. `line` is 1-based; 0 when the problem is the whole file.
+    /// An OBJ file could not be read. `line` is 1-based; 0 when the problem is the whole file.
     Obj { file: String, line: usize, message: String },
+    /// A mesh file of another format (PLY, glTF, FBX, USD, point cache) could not be read: its reader's
+    /// message, naming the line (1-based; 0 when it has none) or the field / accessor / node at fault.
+    Mesh { format: Format, file: String, line: usize, message: String },
     /// The files do not form a population (different vertex counts, faces, too few shapes...).
     Population { file: String, message: String },
     /// A parameter is out of its valid range.
@@ -22,11 +25,37 @@ pub enum Error {
     ModelFile { file: String, message: String },
 }
 
+/// The format of a mesh file a reader refused ([`Error::Mesh`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Format {
+    Ply,
+    Gltf,
+    Fbx,
+    Usd,
+    /// `.pc2` / `.mdd` point caches.
+    PointCache,
+}
+
+impl Format {
+    /// The [`Problem::kind`] of its errors: "ply", "gltf", "fbx", "usd", "pointcache".
+    pub fn kind(self) -> &'static str {
+        match self {
+            Format::Ply => "ply",
+            Format::Gltf => "gltf",
+            Format::Fbx => "fbx",
+            Format::Usd => "usd",
+            Format::PointCache => "pointcache",
+        }
+    }
+}
+
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Error::Obj { file, line, message } if *line > 0 => write!(f, "file {file}, line {line}: {message}"),
             Error::Obj { file, message, .. } => write!(f, "file {file}: {message}"),
+            Error::Mesh { file, line, message, .. } if *line > 0 => write!(f, "file {file}, line {line}: {message}"),
+            Error::Mesh { file, message, .. } => write!(f, "file {file}: {message}"),
             Error::Population { file, message } => write!(f, "file {file}: {message}"),
             Error::Params(m) => write!(f, "invalid parameter: {m}"),
             Error::Data(m) => write!(f, "cannot fit this population: {m}"),
@@ -42,7 +71,8 @@ impl std::error::Error for Error {}
 pub type Result<T> = std::result::Result<T, Error>;
 
 /// One problem as plain data, for the wasm boundary and JSON: `kind` names the variant ("obj", "population",
-/// "params", "data", "request", "io"); `file` and `line` (1-based) when the problem has them; `message`
+/// "params", "data", "request", "io", "model") or, for a mesh file of another format, its format ("ply",
+/// "gltf", "fbx", "usd", "pointcache"); `file` and `line` (1-based) when the problem has them; `message`
 /// without the file and line (the whole text is the error's Display).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
@@ -59,6 +89,9 @@ impl Error {
         let (kind, file, line, message) = match self {
             Error::Obj { file, line, message } => {
                 ("obj", Some(file.clone()), (*line > 0).then_some(*line), message.clone())
+            }
+            Error::Mesh { format, file, line, message } => {
+                (format.kind(), Some(file.clone()), (*line > 0).then_some(*line), message.clone())
             }
             Error::Population { file, message } => ("population", Some(file.clone()), None, message.clone()),
             Error::Params(_) => ("params", None, None, self.to_string()),
@@ -98,5 +131,20 @@ mod tests {
         )
         .unwrap();
         assert_eq!(json, r#"{"kind":"population","file":"c.obj","line":null,"message":"8 vertices, not 9"}"#);
+    }
+
+    #[test]
+    fn mesh_errors_carry_their_format_as_kind() {
+        let e = Error::Mesh { format: Format::Ply, file: "a.ply".into(), line: 3, message: "bad count".into() };
+        assert_eq!(e.to_string(), "file a.ply, line 3: bad count");
+        let p = e.problem();
+        assert_eq!((p.kind, p.file.as_deref(), p.line), ("ply", Some("a.ply"), Some(3)));
+        for (format, kind) in
+            [(Format::Gltf, "gltf"), (Format::Fbx, "fbx"), (Format::Usd, "usd"), (Format::PointCache, "pointcache")]
+        {
+            let e = Error::Mesh { format, file: "f".into(), line: 0, message: "cut".into() };
+            assert_eq!(e.to_string(), "file f: cut");
+            assert_eq!((e.problem().kind, e.problem().line), (kind, None));
+        }
     }
 }

@@ -225,12 +225,12 @@ pub fn check_pose_read(
             }
             true
         }
-        Err(crate::Error::Obj { file, message, .. }) => {
+        Err(crate::Error::Obj { file, message, .. } | crate::Error::Mesh { file, message, .. }) => {
             assert_eq!(file, name);
             assert!(!message.is_empty());
             false
         }
-        Err(e) => panic!("the reader of {name} returned a non-Obj error: {e:?}"),
+        Err(e) => panic!("the reader of {name} returned an error that is not a file's (Obj / Mesh): {e:?}"),
     }
 }
 

@@ -42,7 +42,7 @@ impl PointCache {
 }
 
 fn err(file: &str, message: String) -> Error {
-    Error::Obj { file: file.to_string(), line: 0, message }
+    Error::Mesh { format: crate::error::Format::PointCache, file: file.to_string(), line: 0, message }
 }
 
 fn frames_from(file: &str, data: &[u8], frames: usize, points: usize, big: bool) -> Result<Vec<Vec<[f64; 3]>>> {

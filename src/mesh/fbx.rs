@@ -64,7 +64,7 @@ const UNUSED_ARRAYS: &[&str] = &[
 const KTIME_PER_SECOND: f64 = 46_186_158_000.0;
 
 fn err(file: &str, message: String) -> Error {
-    Error::Obj { file: file.to_string(), line: 0, message }
+    Error::Mesh { format: crate::error::Format::Fbx, file: file.to_string(), line: 0, message }
 }
 
 /// The object's name: the part of "Name\0\x01Class" before the separator.

@@ -115,7 +115,7 @@ impl Tree {
 }
 
 fn err(file: &str, message: String) -> Error {
-    Error::Obj { file: file.to_string(), line: 0, message }
+    Error::Mesh { format: crate::error::Format::Fbx, file: file.to_string(), line: 0, message }
 }
 
 /// Whether the bytes look like an ASCII FBX file (a `; FBX` comment header or an `FBXHeaderExtension:` node).

@@ -139,7 +139,7 @@ pub(crate) fn error(file: &str, message: String) -> Error {
 }
 
 fn err(file: &str, message: String) -> Error {
-    Error::Obj { file: file.to_string(), line: 0, message }
+    Error::Mesh { format: crate::error::Format::Gltf, file: file.to_string(), line: 0, message }
 }
 
 /// Splits a GLB container into its JSON and BIN chunks, checking every length against the bytes present.

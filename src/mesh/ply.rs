@@ -19,7 +19,12 @@ use crate::error::{Error, Result};
 
 /// Parses one PLY file. `name` is used in error messages.
 pub fn parse_ply(name: &str, bytes: &[u8]) -> Result<Mesh> {
-    parse(bytes).map_err(|f| Error::Obj { file: name.to_string(), line: f.line, message: f.message })
+    parse(bytes).map_err(|f| Error::Mesh {
+        format: crate::error::Format::Ply,
+        file: name.to_string(),
+        line: f.line,
+        message: f.message,
+    })
 }
 
 /// Whether the bytes start like a PLY file (the magic line `ply`).

@@ -25,7 +25,7 @@ type DVec3 = Vector3<f64>;
 type DMat4 = Matrix4<f64>;
 
 fn err(file: &str, message: String) -> Error {
-    Error::Obj { file: file.to_string(), line: 0, message }
+    Error::Mesh { format: crate::error::Format::Usd, file: file.to_string(), line: 0, message }
 }
 
 fn damaged(file: &str, what: &str, e: impl std::fmt::Display) -> Error {

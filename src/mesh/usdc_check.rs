@@ -1190,7 +1190,7 @@ mod tests {
             }
             match crate::mesh::usd::read("fuzz.usdc", &b, &Default::default()) {
                 Ok(_) => loaded += 1,
-                Err(crate::Error::Obj { .. }) => refused += 1,
+                Err(crate::Error::Mesh { format: crate::error::Format::Usd, .. }) => refused += 1,
                 Err(e) => panic!("{e:?}"),
             }
         }
