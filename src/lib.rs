@@ -2,10 +2,10 @@
 //! triangle meshes (X. Wang, "Learning pose variations within shape population by constrained mixtures of
 //! factor analyzers"), with the corrections listed in the README.
 //!
-//! Data flow: OBJ bytes -> [`mesh::obj`] -> [`mesh::Mesh`] -> [`mesh::population::Population`] ->
-//! [`parts`] (which vertices form a part: the merge tree, Algorithm 1, the part rule), each fit by [`mfa`] (the
-//! constrained mixture: E-step, CM steps, AECM) -> [`mfa::Model`] -> [`articulate`] (part graph, joints,
-//! interpolation, skinning) -> [`export`] (JSON, OBJ, glTF).
+//! Data flow: mesh file bytes -> [`mesh`] readers -> [`mesh::Mesh`] -> [`mesh::population::Population`] ->
+//! [`parts`] (which vertices form a part: a driver and two rules, the merge tree and Algorithm 1), each run fit
+//! by [`mfa`] (the constrained mixture: E-step, CM steps, AECM) -> [`mfa::Model`] -> [`articulate`] (part
+//! graph, joints, interpolation, skinning) -> [`export`] (JSON, OBJ, glTF).
 //!
 //! Two rooms: [`mfa`] is the model and its fit and never names [`parts`]; [`parts`] decides the partition and
 //! calls into [`mfa`]. [`mesh`] and [`geometry`] name neither (`tests/module_rooms.rs` checks all three).

@@ -270,7 +270,8 @@ impl WasmPopulation {
     }
 }
 
-/// Algorithm 1 in progress. `step()` is one AECM iteration; `run(budgetMs)` steps until the budget is spent.
+/// A fit in progress (the merge tree's rule, or Algorithm 1 with the other part rules and in a lesson). `step()` is
+/// one AECM iteration; `run(budgetMs)` steps until the budget is spent.
 #[wasm_bindgen]
 pub struct Fitter {
     pipe: Pipeline,

@@ -1,21 +1,23 @@
-//! The default part rule ([`crate::mfa::params::PartRule::Distinct`]): how many parts, decided without any absolute
-//! threshold. Two ratios, both dimensionless, so the rule is the same for a shape at any scale, mesh resolution
-//! or number of poses (README, "A part count without tuning"):
+//! The part rule's two rules, which decide how many parts without any absolute threshold (both rules of a fit
+//! use them: [`crate::parts::hierarchy`]). Two ratios, both dimensionless, so the rule is the same for a shape
+//! at any scale, mesh resolution or number of poses (README, "A part count without tuning"):
 //!
 //! 1. **Flesh is not a part** ([`dissolve_flesh`]). A part whose motion is, in every pose, one fixed in-between
 //!    of two neighbours' motions (a slice of a skinning blend band) is the joint's flesh: its vertices go to
 //!    whichever neighbour moves them best. Test: [`blend_ratio`] < `blend_ratio` (on rotations) or
 //!    [`blend_fit_ratio`] < 1 (on positions: the two sides' motions blended per vertex explain the part better
 //!    than its own rigid motion), between two neighbours at least the part's own size.
-//! 2. **A joint must explain the motion** ([`merge_indistinct`]). Two adjacent parts stay apart only if fitting
+//! 2. **A joint must explain the motion**. Two adjacent parts stay apart only if fitting
 //!    them as one rigid body costs their smaller side, per vertex, at least `distinct_ratio` times the variance of
 //!    a typical part of this very fit (the vertex-weighted median of the parts' variances, fixed before any
-//!    merge). Pairs below are merged, cheapest first.
+//!    merge). The merge tree's rule reads the count off a merge tree of the fitted parts
+//!    ([`crate::parts::merge_tree`]); with Algorithm 1 ([`crate::mfa::params::PartRule::Distinct`]) pairs below
+//!    are merged, cheapest first ([`merge_indistinct`]).
 //!
-//! Algorithm 1's refinement runs first without a threshold (it splits while a split lowers the variance by
-//! `refine_min_gain`, and keeps a split only when it lowers the variance, or the cut sub-part's squared residuals,
-//! `distinct_ratio` times); the final AECM runs on its labels, then 1 and 2, then the final AECM once more if any
-//! part went.
+//! With Algorithm 1, its refinement runs first without a threshold (it splits while a split lowers the variance
+//! by `refine_min_gain`, and keeps a split only when it lowers the variance, or the cut sub-part's squared
+//! residuals, `distinct_ratio` times); the final AECM runs on its labels, then 1 and 2, then the final AECM once
+//! more if any part went.
 
 use super::labels::{adjacency, compact, weighted_median};
 pub use super::merge_tree::CurvePoint;

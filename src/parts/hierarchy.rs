@@ -1,26 +1,23 @@
-//! Algorithm 1, hierarchical optimisation, as a resumable pipeline (so a page can step it, show progress
-//! and cancel between iterations without threads):
+//! The driver of a fit, resumable (so a page can step it, show progress and cancel between iterations without
+//! threads): it runs the AECM ([`crate::mfa`]), keeps each run's statistics, lifts results from a coarse mesh to
+//! every vertex and reports every iteration ([`Progress`]). Which run comes next is the rule's to say: once a
+//! run finished, [`Pipeline::next_run`] hands its model to the rule, which answers with the next run or that the
+//! fit is done. There are two rules ([`Rule`]), each in its own module:
 //!
-//! 1. Coarse: AECM with m parts from k-means++.
-//! 2. Refine: for every coarse part k, AECM on its vertices alone with m_k = 1, 2, ... components; err is
-//!    the mass-weighted mean variance of the sub-components (the paper's plain average is fragile,
-//!    METHOD_NOTES item 8). Stop when m_k does not lower err by at least the fraction `refine_min_gain`, when a
-//!    component died, or at `max_subparts`, and with [`PartRule::Threshold`] when err < `refine_threshold`. Keep
-//!    the best m_k; with [`PartRule::Distinct`], the last m_k that lowered err `distinct_ratio` times, or whose
-//!    split lowered the squared residuals of the sub-part it cut `distinct_ratio` times.
-//! 3. Final: AECM on all vertices started from the refined labels. With [`PartRule::Distinct`], every vertex is
-//!    then labelled by rigid motion ([`super::motion_labels`]), every part is made one connected piece of the
-//!    mesh ([`super::islands`]) and the parts are fitted to those labels ([`super::label_fit`]); then flesh
-//!    between parts is dissolved and parts without a distinct motion are merged ([`super::distinct`]); if that
-//!    removed parts, the final AECM runs again from those labels (at most [`DECIDE_ROUNDS`] times).
-//! 4. Only with `target_parts` = N: parts are split or merged until there are exactly N ([`super::part_count`]),
-//!    then the final AECM runs again from those labels.
+//! - `tree_rule`, the merge tree (the default, [`PartRule::Tree`]): the start is the patches' merge tree cut
+//!   ([`super::merge_tree`]: no random draw), its flesh dissolved; after the first final-stage run, the count
+//!   is read off a merge tree of the fitted parts, and the parts left are refitted. A large population's
+//!   parts are decided on a coarse mesh ([`super::coarse_mesh`]) and fitted on all vertices last.
+//! - `algorithm1`, the paper's Algorithm 1 ([`PartRule::Distinct`], [`PartRule::Threshold`], the refinement
+//!   off, and the step-by-step lesson): a coarse AECM from k-means++, each coarse part refined with m_k = 1, 2,
+//!   ... components (err is the mass-weighted mean variance of the sub-components, as the paper's plain average
+//!   is fragile: docs/method.md, item 8), then the final AECM from the refined labels; with
+//!   [`PartRule::Distinct`] the part rule's rounds after it ([`super::distinct`]). With
+//!   `Params::subset_vertices` (multi-resolution, [`super::multires`]) the coarse and refinement runs are on a
+//!   well-spread subset of the vertices.
 //!
-//! Every stage is kept (coarse labels, refined labels, final model).
-//!
-//! With `Params::subset_vertices` (multi-resolution, [`super::multires`]) stages 1 and 2 run on a well-spread
-//! subset of the vertices; the coarse and refined labels of all vertices come from the E-step of those stages'
-//! components on the whole population, and stage 3 runs on all vertices.
+//! `rounds` holds the steps after a final-stage run that both rules take (motion labels, connected parts,
+//! flesh dissolved, the exact count asked for, [`super::part_count`]); `result` what a fit reports.
 
 use crate::error::Result;
 use crate::mesh::Population;
@@ -419,7 +416,7 @@ impl Pipeline {
                     self.close_stage(None);
                     self.refined_labels = self.coarse_labels.clone();
                     let model = self.coarse.clone().expect("just set");
-                    self.finish(model)?
+                    self.next_run(model)?
                 }
             }
             State::Refine(mut r) => {
@@ -436,11 +433,22 @@ impl Pipeline {
                     self.loose_components = Some(fit.components().to_vec());
                 }
                 self.full = Some(fit.into_laid_out());
-                self.finish(model)?
+                self.next_run(model)?
             }
             State::Done => State::Done,
         };
         Ok(())
+    }
+
+    /// The rule's answer once a final-stage run finished (with the refinement off, the coarse run): given that
+    /// run's model, the next run, or [`State::Done`] with the model kept as the fit's. Each rule says it in its
+    /// own module: the merge tree's in `tree_rule` ([`Pipeline::tree_next`]), Algorithm 1's in `algorithm1`
+    /// ([`Pipeline::algorithm1_next`]); the steps both take are in `rounds`.
+    fn next_run(&mut self, model: Model) -> Result<State> {
+        match self.rule() {
+            Rule::MergeTree => self.tree_next(model),
+            Rule::Algorithm1 => self.algorithm1_next(model),
+        }
     }
 
     /// The part rule left the loose first run's parts as they were: the AECM goes on from that run's components
@@ -461,7 +469,7 @@ impl Pipeline {
     /// The parts decided on the coarse mesh go to every vertex: the decisions' labels and merge tree to every
     /// vertex of each patch, and the last AECM runs on all vertices from the coarse fit's components (a new stage
     /// "all vertices"; as [`Pipeline::go_on`], no new start from labels). After it the part rule does not decide
-    /// again: [`Pipeline::finish`] only moves the boundaries by motion and makes the parts connected.
+    /// again: [`Pipeline::tree_next`] only moves the boundaries by motion and makes the parts connected.
     fn finish_on_all_vertices(&mut self, model: Model) -> Result<State> {
         let (nv, ns) = (self.population().n_vertices(), self.population().n_shapes());
         let budget = crate::memory::budget_bytes();
@@ -633,7 +641,7 @@ impl Pipeline {
     }
 }
 
-/// Runs the whole of Algorithm 1.
+/// Runs a whole fit: every run the rule asks for, to the end (`observer` as in [`Pipeline::run`]).
 pub fn fit(pop: &Population, params: &Params, observer: &mut dyn FnMut(&Progress) -> bool) -> Result<FitResult> {
     Pipeline::new(pop, params)?.run(observer)
 }

@@ -9,8 +9,8 @@
 //!    score: the rise in squared error when one rigid motion moves both (generalised Procrustes over the poses),
 //!    per vertex of the smaller side. Each node keeps additive sufficient statistics (its vertex count, per pose
 //!    the sum of its points and, per pair of poses, Σ_j x_j^i x_j^kᵀ), so the rigid fit of a union is solved on
-//!    3x3 blocks without touching the vertices again ([`rigid_stats`]). Every merge is recorded: the tree gives a partition for
-//!    every count, at once ([`MergeTree::labels_at`]).
+//!    3x3 blocks without touching the vertices again ([`rigid_stats`]). Every merge is recorded: the tree gives
+//!    a partition for every count, at once ([`MergeTree::labels_at`]).
 //! 3. **The count** ([`MergeTree::decided_count`]): read off the tree by the part rule: merges go on while the
 //!    next one costs the smaller side, per vertex, less than `distinct_ratio` times the variance of a typical
 //!    part of that partition (the vertex-weighted median of its nodes' rigid-fit variances).
@@ -295,8 +295,8 @@ impl MergeTree {
     /// ([`MergeTree::typical`]) falls where the parts' variances climb steeply, so a small change of the data
     /// moves it far: on horse-gallop with each pose dropped in turn it moved 1.09-1.67e-6 and the count split
     /// into two families (23-24 and 26-28 parts). The mean of the logs over the middle 40 % of vertices averages
-    /// across that climb: 25-28 parts, and the lion's 20-23 became 20-22 (docs/decisions.md, twenty-fourth
-    /// session). Its level is the median's where the logs are spread evenly around it.
+    /// across that climb: 25-28 parts, and the lion's 20-23 became 20-22 (docs/decisions.md). Its level is the
+    /// median's where the logs are spread evenly around it.
     pub fn middle_typical(&self) -> f64 {
         self.middle
     }

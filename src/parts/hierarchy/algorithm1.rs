@@ -4,6 +4,7 @@
 //! paper's rule, adjacent parts that one rigid motion explains are merged before the final AECM
 //! ([`merge_rigid_neighbours`]). The driver ([`super::Pipeline`]) runs the AECM; this says which run comes next.
 
+use super::rounds::Tail;
 use super::{lay_out, FinalRun, Pipeline, State};
 use crate::error::Result;
 use crate::mesh::Population;
@@ -224,7 +225,7 @@ impl Pipeline {
             Some(s) => crate::parts::multires::extend_labels(&self.pop, s, &r.refined, self.params.floor()),
         };
         self.refined_labels = match self.params.part_rule {
-            // parts are merged after the final AECM has cleaned the boundaries ([`Pipeline::finish`])
+            // parts are merged after the final AECM has cleaned the boundaries ([`Pipeline::algorithm1_next`])
             PartRule::Distinct | PartRule::Tree => compact(&refined),
             PartRule::Threshold => merge_rigid_neighbours(&self.pop, &refined, &self.params),
         };
@@ -232,6 +233,35 @@ impl Pipeline {
         self.begin_final(FinalRun::First);
         let labels = self.refined_labels.clone();
         Ok(State::Final(self.fit_all(&labels)?))
+    }
+
+    /// Algorithm 1's rule after a final-stage run (or the coarse run, with the refinement off;
+    /// [`Pipeline::next_run`]): the parts made connected; with the scale-free part rule ([`PartRule::Distinct`])
+    /// the vertices labelled by motion first and, while a round is due, a round of the rule (flesh dissolved,
+    /// parts without a distinct motion merged pair by pair, [`crate::parts::distinct::merge_indistinct`]), whose
+    /// removals are refitted; then the count asked for, if any.
+    pub(super) fn algorithm1_next(&mut self, mut model: Model) -> Result<State> {
+        // the part rule decides after the refinement (a run without it is the coarse AECM as it is)
+        let distinct = self.params.part_rule == PartRule::Distinct && self.params.refine;
+        self.tidy(&mut model, distinct);
+        let mut fitted = false;
+        if distinct && self.round_due() {
+            let (dissolved, before) = self.dissolve_round(&mut model);
+            fitted = true;
+            let (merged, curve) = crate::parts::distinct::merge_indistinct(&self.pop, &model.labels, &self.params);
+            let after = self.record_round(&merged, curve, before, dissolved);
+            if dissolved > 0 || after < before {
+                self.refined_labels = merged.clone();
+                if let Some(next) = self.count_after_round(&merged, after, |_, _| None)? {
+                    return Ok(next);
+                }
+                return self.refit(FinalRun::Round, &merged);
+            }
+        }
+        match self.exact_count(model, distinct && !fitted)? {
+            Tail::Run(next) => Ok(next),
+            Tail::Final(model) => Ok(self.done(model)),
+        }
     }
 
     fn sub_fit(&self, r: &mut Refinement, labels: &[u32]) -> Result<Fit> {

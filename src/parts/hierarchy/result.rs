@@ -109,7 +109,8 @@ pub struct PartRound {
     pub after: usize,
 }
 
-/// Everything Algorithm 1 produced.
+/// Everything a fit produced: the model, the labels and counts of its stages, each run's statistics, and
+/// what its rule decided.
 #[derive(Debug, Clone)]
 pub struct FitResult {
     /// The final model (or the best available if the fit was stopped early).

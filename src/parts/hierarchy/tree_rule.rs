@@ -4,12 +4,14 @@
 //! ([`super::Pipeline`]) runs the AECM and the rounds; this says where the runs start and which count the tree
 //! gives.
 
+use super::rounds::Tail;
 use super::{coarse_target, lay_out, FinalRun, Fine, Pipeline, State, COARSE_FACTOR};
 use crate::error::{Error, Result};
 use crate::mesh::Population;
 use crate::mfa::aecm::{Fit, StageStats};
 use crate::mfa::data::Data;
 use crate::mfa::params::{Params, PartRule};
+use crate::mfa::result::Model;
 use crate::parts::labels::compact;
 
 /// [`PartRule::Tree`]'s start when the part rule chooses the count: the patches' tree is cut where a merge first
@@ -17,7 +19,7 @@ use crate::parts::labels::compact;
 /// ([`MergeTree::merge_yardstick`]). A generous over-segmentation: the part rule decides after the first AECM.
 /// With every pose dropped in turn, the lion's start then moves by 4 parts where the patches' typical variance
 /// as the yardstick (the median of 400 tiny fits, [`TREE_COUNT_START_RATIO`]) moved it by 22; 16, 24, 32 and 40
-/// were measured too (docs/decisions.md, nineteenth session).
+/// were measured too (docs/decisions.md).
 pub const TREE_START_RATIO: f64 = 28.0;
 
 /// [`PartRule::Tree`]'s start with an exact part count (`target_parts`): the cut where a merge first costs 64
@@ -127,6 +129,59 @@ impl Pipeline {
         let (data, layout) = lay_out(data);
         p.state = State::Final(Fit::from_labels_laid_out(data, layout, &labels, &loose)?);
         Ok(p)
+    }
+
+    /// The merge tree's rule after a final-stage run ([`Pipeline::next_run`]): the vertices labelled by motion
+    /// and the parts made connected; then, while a round is due, a round of the part rule (flesh dissolved,
+    /// the count read off the tree of the fitted parts, [`Pipeline::decide_on_tree`]). A round that removed
+    /// parts refits them (warm on a coarse mesh, [`Pipeline::refit_warm`]), or makes the count asked for; one
+    /// that removed none lets the loose first run go on at the fit's tolerance ([`Pipeline::go_on`]) or, on a
+    /// coarse mesh, fits the parts on all vertices ([`Pipeline::finish_on_all_vertices`]). A partition given to
+    /// start from is the user's: the rule does not change it, but its tree of the fitted parts is made as on
+    /// any fit (the page's slider, the JSON).
+    pub(super) fn tree_next(&mut self, mut model: Model) -> Result<State> {
+        self.tidy(&mut model, true);
+        // whether the parts were fitted to the motion labels in this call (a model the rule leaves as it is
+        // stays fitted)
+        let mut fitted = false;
+        if self.count_rounds == 0 && self.decide_rounds == 0 && self.params.start_labels.is_some() {
+            self.decide_rounds += 1;
+            self.fit_to_labels(&mut model);
+            fitted = true;
+            let (_, curve) = self.decide_on_tree(&model.labels);
+            self.part_curve = curve;
+        } else if self.round_due() {
+            let (dissolved, before) = self.dissolve_round(&mut model);
+            fitted = true;
+            let (merged, curve) = self.decide_on_tree(&model.labels);
+            let after = self.record_round(&merged, curve, before, dissolved);
+            if dissolved > 0 || after < before {
+                self.refined_labels = merged.clone();
+                // more parts than decided: the tree's finer partition; fewer: merged from the decided parts
+                // (the tree's own 10-part cut of horse-gallop rigged worse than the merges, docs/part-count.md)
+                if let Some(next) = self.count_after_round(&merged, after, |p, n| p.tree_partition(n))? {
+                    return Ok(next);
+                }
+                if self.fine.is_some() {
+                    return self.refit_warm(FinalRun::Round, &merged);
+                }
+                return self.refit(FinalRun::Round, &merged);
+            }
+            if self.fine.is_some() && self.params.target_parts.is_none_or(|n| n == model.n_parts()) {
+                // nothing to remove, on a coarse mesh: the last run, on all vertices, goes on from these parts
+                // (with another count asked for, it is made below, on the coarse mesh)
+                return self.finish_on_all_vertices(model);
+            }
+            if self.loose_start {
+                // nothing to remove: the first run goes on at the fit's own tolerance
+                return self.go_on(&merged);
+            }
+        }
+        match self.exact_count(model, !fitted)? {
+            Tail::Run(next) => Ok(next),
+            Tail::Final(model) if self.fine.is_some() => self.finish_on_all_vertices(model),
+            Tail::Final(model) => Ok(self.done(model)),
+        }
     }
 
     /// [`PartRule::Tree`]'s rule 2: the merge tree of the fitted parts ([`crate::parts::merge_tree::MergeTree::from_leaves`],
