@@ -4,11 +4,11 @@
 //!
 //! Cycle 2, in this order, each a conditional maximiser of the expected complete log-likelihood with the
 //! E-step statistics E[z|h_j] = M^-1 Λ y_j and E[z z^T|h_j] = M^-1 + E[z]E[z]^T held fixed:
-//! - Λ, exact (METHOD_NOTES item 1): λ_d = Σ_i (1/s_i) (R_i^T C_i)_dd / (w G_d), with
+//! - Λ, exact (docs/method.md#item-1): λ_d = Σ_i (1/s_i) (R_i^T C_i)_dd / (w G_d), with
 //!   C_i = Σ_j γ_kj x_ji E[z_j]^T, x_ji = v_j^i - b^i, G_d = Σ_j γ_kj E[z_d² | h_j], w = Σ_i 1/s_i;
 //!   or the paper's literal eq 18 (Λ = sqrt of the shape-averaged eigenvalues of the per-shape covariances).
 //! - R_i (eq 19 with Lemma 1 / eq 31): the rotation maximising trace(R_i^T C_i Λ), by SVD, det +1.
-//! - Φ (eq 16 for isotropic per-shape noise, corrected, METHOD_NOTES item 2):
+//! - Φ (eq 16 for isotropic per-shape noise, corrected, docs/method.md#item-2):
 //!   s_i = (S_i - 2 <R_i, C_i Λ> + Σ_d λ_d² G_d) / (3 n_k), S_i = Σ_j γ_kj |x_ji|², floored.
 
 use super::component::Component;
@@ -315,7 +315,7 @@ pub fn cycle2(
     masses
 }
 
-/// The parameter-expanded step (PX-EM, Liu, Rubin & Wu 1998; METHOD_NOTES item 12). In the expanded model
+/// The parameter-expanded step (PX-EM, Liu, Rubin & Wu 1998; docs/method.md#item-12). In the expanded model
 /// z ~ N(0, Σ_z); the CM steps above are its CM steps for A* = RΛ and Φ, and its maximiser for Σ_z is the
 /// average posterior second moment Σ_z = Σ_j γ_j E[z z^T | h_j] / n_k. Reducing back to z ~ N(0, I) gives
 /// A = A* Σ_z^{1/2}, and A A^T = R (Λ Σ_z Λ) R^T. With Λ Σ_z Λ = U D U^T (U a proper rotation), A = (R U) D^{1/2}

@@ -1,4 +1,4 @@
-//! Initialisation (METHOD_NOTES item 11; the paper's "as in McLachlan et al. 2003" is undefined here):
+//! Initialisation (docs/method.md#item-11; the paper's "as in McLachlan et al. 2003" is undefined here):
 //! k-means++ on the data vectors h_j with restarts drawn from ONE seeded stream (best by k-means cost),
 //! then per cluster: the generalised-Procrustes mean of its points in principal axes (det +1) is the latent
 //! shape, R^i is the SO(3) Procrustes fit of that latent shape onto shape i, Λ the latent shape's principal

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum LambdaRule {
-    /// The exact conditional maximiser given R and Φ (METHOD_NOTES item 1). Default: a proper CM step, the
+    /// The exact conditional maximiser given R and Φ (docs/method.md#item-1). Default: a proper CM step, the
     /// log-likelihood never decreases.
     #[default]
     Exact,
@@ -46,14 +46,14 @@ pub struct Params {
     pub tol: f64,
     /// Iteration cap of each AECM run; reaching it is reported as not converged. Default 300.
     pub max_iter: usize,
-    /// Lower bound of every per-shape variance s_k^i (METHOD_NOTES item 6), in unit-box units² for a population
+    /// Lower bound of every per-shape variance s_k^i (docs/method.md#item-6), in unit-box units² for a population
     /// whose mean squared radius in the unit box is [`REFERENCE_SQUARED_RADIUS`] (an animal's, about); the fit
     /// scales it by the population's own ([`Params::floor`]), so that it follows the shape, not its bounding
     /// box: a turn of every pose changes the box, not the shape. Default 1e-7.
     pub variance_floor: f64,
     /// Λ update of cycle 2. Default [`LambdaRule::Exact`].
     pub lambda_rule: LambdaRule,
-    /// End cycle 2 with the parameter-expanded step ([`super::cm::px_fold`], METHOD_NOTES item 12): same
+    /// End cycle 2 with the parameter-expanded step ([`super::cm::px_fold`], docs/method.md#item-12): same
     /// optimum, fewer iterations. Default true.
     pub px_em: bool,
     /// Accelerate every AECM run by SQUAREM ([`super::squarem`]) with a monotonicity safeguard: the same

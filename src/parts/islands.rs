@@ -1,6 +1,6 @@
 //! Every part one connected piece of the mesh.
 //!
-//! Labels by eq 20 are not spatially coherent (METHOD_NOTES item 7): a fit leaves small islands, a few
+//! Labels by eq 20 are not spatially coherent (docs/method.md#item-7): a fit leaves small islands, a few
 //! vertices of one part surrounded by another (up to 15 extra pieces on some meshes). A rig needs every part
 //! to be one piece (its joints form a tree). An *island* is a connected component of one label in the mesh's
 //! edge graph (two vertices are adjacent when a triangle has both) other than that label's largest one.
