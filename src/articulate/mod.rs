@@ -43,6 +43,7 @@ pub mod joints;
 pub mod pose;
 pub mod report;
 pub mod rig;
+pub mod skeleton_match;
 pub mod skin;
 
 use crate::error::{Error, Result};

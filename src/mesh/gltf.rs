@@ -1042,6 +1042,41 @@ fn open(file: &str, bytes: &[u8], resources: &[(&str, &[u8])]) -> Result<(gltf::
 
 /// Reads the poses of one glTF file.
 pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Options) -> Result<Gltf> {
+    read_poses(file, bytes, resources, options, false).map(|(g, _)| g)
+}
+
+/// The skeleton a skinned mesh's poses were played from ([`read_with_skin`]).
+#[derive(Debug, Clone)]
+pub struct SkinTrack {
+    /// Every joint of the skin: its node's name, else `node N`.
+    pub names: Vec<String>,
+    /// Every joint's nearest ancestor that is a joint of the skin.
+    pub parent: Vec<Option<usize>>,
+    /// Every joint's world transform in the bind pose (the inverse of its inverse bind matrix), column-major.
+    pub bind: Vec<[f64; 16]>,
+    /// Per pose, every joint's world transform (column-major), in the frame the posed vertices are in.
+    pub world: Vec<Vec<[f64; 16]>>,
+    /// Per vertex as welded in the poses: every (joint, weight) of the file.
+    pub influences: Vec<Vec<(usize, f64)>>,
+}
+
+/// [`read`], and when the poses are the animation of a skinned mesh, its skeleton at every pose.
+pub fn read_with_skin(
+    file: &str,
+    bytes: &[u8],
+    resources: &[(&str, &[u8])],
+    options: &Options,
+) -> Result<(Gltf, Option<SkinTrack>)> {
+    read_poses(file, bytes, resources, options, true)
+}
+
+fn read_poses(
+    file: &str,
+    bytes: &[u8],
+    resources: &[(&str, &[u8])],
+    options: &Options,
+    keep_skin: bool,
+) -> Result<(Gltf, Option<SkinTrack>)> {
     let (doc, buffers) = open(file, bytes, resources)?;
     let data = Data { file, buffers: &buffers };
 
@@ -1186,6 +1221,7 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
     };
 
     let mut poses_raw: Vec<(String, Vec<DVec3>)> = Vec::new();
+    let mut joint_world: Vec<Vec<[f64; 16]>> = Vec::new();
     let description;
     let mut clips = String::new();
     let mut clip_list = None;
@@ -1295,6 +1331,10 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
                 }
             }
             let g = globals(&parents, &local);
+            if let (true, Some((joints, _))) = (keep_skin, &skinning) {
+                let at = |j: usize| g.get(j).copied().unwrap_or_else(DMat4::identity);
+                joint_world.push(joints.iter().map(|&j| std::array::from_fn(|i| at(j)[i])).collect());
+            }
             let morphed = morph(&md, &weights);
             let posed = match &skinning {
                 Some((joints, ibms)) => {
@@ -1362,14 +1402,50 @@ pub fn read(file: &str, bytes: &[u8], resources: &[(&str, &[u8])], options: &Opt
         .into_iter()
         .map(|(name, pos)| (format!("{file} {name}"), Mesh { positions: weld.keep(&pos), faces: weld.faces.clone() }))
         .collect();
-    Ok(Gltf {
-        file: file.to_string(),
-        poses,
-        source,
-        vertices_in_file: n_file,
-        vertices_welded: n_welded,
-        clips: clip_list,
-    })
+    let skin_track = match skinning {
+        Some((joints, ibms)) if keep_skin && use_animation => {
+            let slot: HashMap<usize, usize> = joints.iter().enumerate().map(|(k, &n)| (n, k)).collect();
+            let parent = joints
+                .iter()
+                .map(|&n| {
+                    let mut a = parents.get(n).copied().flatten();
+                    // (the hierarchy was walked above: no cycle reaches here unbounded)
+                    for _ in 0..parents.len() {
+                        match a {
+                            Some(p) if !slot.contains_key(&p) => a = parents.get(p).copied().flatten(),
+                            _ => break,
+                        }
+                    }
+                    a.and_then(|p| slot.get(&p).copied())
+                })
+                .collect();
+            let names = joints
+                .iter()
+                .map(|&n| doc.nodes().nth(n).and_then(|x| x.name().map(str::to_string)).unwrap_or_else(|| format!("node {n}")))
+                .collect();
+            let bind = ibms
+                .iter()
+                .map(|m| {
+                    let b = m.try_inverse().unwrap_or_else(DMat4::identity);
+                    std::array::from_fn(|i| b[i])
+                })
+                .collect();
+            let influences = weld.kept.iter().map(|&j| md.influences.get(j).cloned().unwrap_or_default()).collect();
+            Some(SkinTrack { names, parent, bind, world: joint_world, influences })
+        }
+        _ => None,
+    };
+    Ok((
+        Gltf {
+            file: file.to_string(),
+            poses,
+            source,
+            vertices_in_file: n_file,
+            vertices_welded: n_welded,
+            clips: clip_list,
+        },
+        skin_track,
+    ))
 }
 
 /// A node's local transform as stored in the file.
