@@ -206,6 +206,7 @@ fn interleaved_and_sparse_rigs_pose_as_the_original_and_hostile_ones_are_refused
     // Hostile rigs: each refused by name (the file's), never a panic.
     let refused = |what: &str, bytes: &[u8], wanted: &[&str]| {
         let e = read_rig("hostile.glb", bytes).expect_err(what).to_string();
+        eprintln!("{what}: {e}");
         assert!(e.contains("hostile.glb"), "{what}: {e}");
         for w in wanted {
             assert!(e.contains(w), "{what}: expected '{w}' in: {e}");
@@ -246,7 +247,7 @@ fn interleaved_and_sparse_rigs_pose_as_the_original_and_hostile_ones_are_refused
     refused(
         "a stride shorter than an element",
         &edit(&|d| d["bufferViews"][inter_view]["byteStride"] = json!(8)),
-        &[&format!("accessor {pos}"), "stride 8"],
+        &[&format!("accessor {pos}"), "byteStride of 8 bytes, shorter than one element (12 bytes)"],
     );
     refused(
         "a joint past the skin",
@@ -256,9 +257,52 @@ fn interleaved_and_sparse_rigs_pose_as_the_original_and_hostile_ones_are_refused
             d["skins"][0]["inverseBindMatrices"] = Value::Null;
             assert!(n > 1);
         }),
-        &["joint", "skin 0 has 1 joints"],
+        &["is bound to joint", "but skin 0 has 1 joints"],
     );
     let _ = joints;
+    let skeleton_child = |d: &Value| -> (usize, usize) {
+        let (p, n) = d["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .enumerate()
+            .find_map(|(i, n)| Some((i, n.get("children")?.as_array()?.first()?.as_u64()? as usize)))
+            .unwrap();
+        (p, n)
+    };
+    refused(
+        "a node with two parents",
+        &edit(&|d| {
+            let (p, c) = skeleton_child(d);
+            let other = (0..d["nodes"].as_array().unwrap().len()).find(|&i| i != p && i != c).unwrap();
+            let mut kids = d["nodes"][other]["children"].as_array().cloned().unwrap_or_default();
+            kids.push(json!(c));
+            d["nodes"][other]["children"] = json!(kids);
+        }),
+        &["is a child of nodes"],
+    );
+    refused(
+        "a cycle",
+        &edit(&|d| {
+            let (p, c) = skeleton_child(d);
+            let mut kids = d["nodes"][c]["children"].as_array().cloned().unwrap_or_default();
+            kids.push(json!(p));
+            d["nodes"][c]["children"] = json!(kids);
+        }),
+        &[],
+    );
+    refused(
+        "a joint with a matrix",
+        &edit(&|d| {
+            let j = d["skins"][0]["joints"][0].as_u64().unwrap() as usize;
+            let n = d["nodes"][j].as_object_mut().unwrap();
+            for k in ["translation", "rotation", "scale"] {
+                n.remove(k);
+            }
+            n.insert("matrix".into(), json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]));
+        }),
+        &["has a matrix"],
+    );
     let sparse = sparse_positions(&original);
     let (sdoc, sbin) = split(&sparse);
     let spos = sdoc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize;

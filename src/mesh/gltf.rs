@@ -505,7 +505,18 @@ impl<'a> Data<'a> {
                 } else {
                     (a.offset() as u64).saturating_add(stride.saturating_mul(count as u64 - 1)).saturating_add(elem)
                 };
-                if need > view.length() as u64 || stride < elem {
+                if stride < elem {
+                    return Err(err(
+                        file,
+                        format!(
+                            "accessor {idx} ({what}): its buffer view {} has a byteStride of {stride} bytes, shorter \
+                             than one element ({elem} bytes), so elements would overlap; the file is damaged: \
+                             export it again",
+                            view.index()
+                        ),
+                    ));
+                }
+                if need > view.length() as u64 {
                     return Err(err(
                         file,
                         format!(
@@ -1421,7 +1432,9 @@ fn read_poses(
                 .collect();
             let names = joints
                 .iter()
-                .map(|&n| doc.nodes().nth(n).and_then(|x| x.name().map(str::to_string)).unwrap_or_else(|| format!("node {n}")))
+                .map(|&n| {
+                    doc.nodes().nth(n).and_then(|x| x.name().map(str::to_string)).unwrap_or_else(|| format!("node {n}"))
+                })
                 .collect();
             let bind = ibms
                 .iter()
@@ -1558,14 +1571,23 @@ pub fn read_skinned(file: &str, bytes: &[u8], resources: &[(&str, &[u8])]) -> Re
         None => vec![std::array::from_fn(|i| if i % 5 == 0 { 1.0 } else { 0.0 }); joints.len()],
     };
     for (v, infl) in md.influences.iter().enumerate() {
-        if let Some(&(j, w)) = infl.iter().find(|&&(j, w)| j >= joints.len() || !(w > 0.0)) {
+        if let Some(&(j, _)) = infl.iter().find(|&&(j, _)| j >= joints.len()) {
             return Err(err(
                 file,
                 format!(
-                    "vertex {v} of {mname} has joint {j} with weight {w}, but skin {} has {} joints and weights must \
-                     not be negative; the file is damaged: export it again",
+                    "vertex {v} of {mname} is bound to joint {j}, but skin {} has {} joints; the file is damaged: \
+                     export it again",
                     skin.index(),
                     joints.len()
+                ),
+            ));
+        }
+        if let Some(&(j, w)) = infl.iter().find(|&&(_, w)| !(w > 0.0)) {
+            return Err(err(
+                file,
+                format!(
+                    "vertex {v} of {mname} has the negative weight {w} for joint {j}; skin weights are 0 to 1: the \
+                     file is damaged, export it again"
                 ),
             ));
         }
