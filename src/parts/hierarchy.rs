@@ -1,7 +1,7 @@
 //! The driver of a fit, resumable (so a page can step it, show progress and cancel between iterations without
 //! threads): it runs the AECM ([`crate::mfa`]), keeps each run's statistics, lifts results from a coarse mesh to
 //! every vertex and reports every iteration ([`Progress`]). Which run comes next is the rule's to say: once a
-//! run finished, [`Pipeline::next_run`] hands its model to the rule, which answers with the next run or that the
+//! run finished, `Pipeline::next_run` hands its model to the rule, which answers with the next run or that the
 //! fit is done. There are two rules ([`Rule`]), each in its own module:
 //!
 //! - `tree_rule`, the merge tree (the default, [`PartRule::Tree`]): the start is the patches' merge tree cut
@@ -38,10 +38,10 @@ mod tree_rule;
 
 pub use result::{FinalRun, FitResult, PartRound, Progress, Rule, Stage, StageParts};
 
-pub use algorithm1::merge_rigid_neighbours;
+pub use algorithm1::{merge_rigid_neighbours, SUBSET_FACTOR};
 use algorithm1::{placeholder_fit, Refinement};
 use tree_rule::check_start_labels;
-pub use tree_rule::{TREE_COUNT_START_RATIO, TREE_CUT_LEAVES, TREE_START_RATIO};
+pub use tree_rule::{coarse_target, COARSE_FACTOR, COARSE_POSES, TREE_COUNT_START_RATIO, TREE_CUT_LEAVES, TREE_START_RATIO};
 
 /// Data and their E-step layout (which depends on the data alone, so one serves every run on them).
 fn lay_out(data: Data) -> (Data, Blocked) {
@@ -61,35 +61,15 @@ enum State {
     Done,
 }
 
-/// Multi-resolution runs only on populations with at least this many times `subset_vertices` vertices (10 000
-/// at the default 2 000). A subset of more than a fifth of the mesh saves little and costs accuracy: on
-/// horse-gallop (8 431 vertices) a 2 000-vertex subset saved a quarter of the fit's time but gave 20 parts and
-/// RMSE 0.00450 against 21 and 0.00395 without it, and on the 3 000-vertex quadruped example a subset lost a tail
-/// piece on some seeds (`examples/speed_accuracy.rs`). Without a subset the fit does not depend on the frame the
-/// file is written in (the subset's grid is axis-aligned; every other step uses distances only).
-pub const SUBSET_FACTOR: usize = 5;
-
-/// [`PartRule::Tree`] decides on a coarse mesh ([`super::coarse_mesh`]) only on populations with at least this
-/// many times its size ([`coarse_target`]; 16 000 vertices at the default 8 000 and 20 poses or more): below that the decisions on all
-/// vertices cost little more, and horse-gallop (8 431 vertices), the lion and the generated 12 000-vertex
-/// creatures decide on every vertex as before.
-pub const COARSE_FACTOR: usize = 2;
-
-/// With fewer poses than this, the coarse mesh has more vertices ([`coarse_target`]).
-pub const COARSE_POSES: usize = 20;
-
-/// The coarse mesh's size for `coarse_vertices` ([`Params::coarse_vertices`]) and `n_shapes` poses: at least
-/// `coarse_vertices x COARSE_POSES` vertex-poses, i.e. `coarse_vertices` from 20 poses on and more below (16 000
-/// at 10 poses by default). The decisions read the poses' motion at the coarse vertices, and a population of few
-/// poses gives them less to read per vertex; the runs' cost goes with the vertex-poses, so it stays bounded. On
-/// 10-11 poses at 8 000 vertices the decisions moved more than on all vertices over the 9 standard runs of
-/// `posemfa robustness` (the lion subdivided twice 18-22 parts, once 17-20, horse-poses subdivided 23-26); at
-/// this size 19-20, 19-20 (on all vertices: under 2 x 16 000) and 26-27.
-pub fn coarse_target(coarse_vertices: usize, n_shapes: usize) -> usize {
-    if n_shapes >= COARSE_POSES {
-        coarse_vertices
+/// The rule a fit with `params` follows: the merge tree with [`PartRule::Tree`] (the default), Algorithm 1 with
+/// the other part rules. With the refinement off (`refine` false) it is Algorithm 1's coarse stage alone,
+/// whatever `part_rule` says: the merge tree has no stage without its rule, and the result says which rule ran
+/// ([`FitResult::from_merge_tree`], the JSON's `stage_stats`).
+pub fn rule_of(params: &Params) -> Rule {
+    if params.part_rule == PartRule::Tree && params.refine {
+        Rule::MergeTree
     } else {
-        coarse_vertices * COARSE_POSES / n_shapes.max(1)
+        Rule::Algorithm1
     }
 }
 
@@ -151,13 +131,6 @@ pub struct Pipeline {
     last_run: Option<Model>,
 }
 
-/// Most times [`Pipeline`] makes the part count exact and refits.
-const COUNT_ROUNDS: usize = 3;
-
-/// Most times [`PartRule::Distinct`] dissolves and merges parts and refits (a refit moves boundaries, which can
-/// leave a new sliver of flesh or a new island part).
-const DECIDE_ROUNDS: usize = 3;
-
 impl Pipeline {
     /// The pipeline a step-by-step lesson shows: the paper's Algorithm 1 (coarse AECM, refinement of each part,
     /// final AECM) with the scale-free part rule ([`PartRule::Distinct`]), whatever part rule `params` name: the
@@ -179,57 +152,10 @@ impl Pipeline {
             super::part_count::check_target(n, pop.n_vertices(), params.min_part_vertices)?;
         }
         let t0 = crate::clock::now_ms();
-        if params.part_rule == PartRule::Tree && params.refine {
-            return Pipeline::from_tree(pop, params, t0);
+        match rule_of(params) {
+            Rule::MergeTree => Pipeline::from_tree(pop, params, t0),
+            Rule::Algorithm1 => Pipeline::from_algorithm1(pop, params, t0),
         }
-        // the coarse and refinement runs stop at a loose tolerance and only pass labels on: they run plain AECM
-        // (SQUAREM would move where they stop); the final run is accelerated
-        let coarse = if params.refine {
-            Params { tol: params.refine_tol, accelerate: false, ..params.clone() }
-        } else {
-            params.clone()
-        };
-        let subset =
-            (params.refine && params.subset_vertices > 0 && pop.n_vertices() >= SUBSET_FACTOR * params.subset_vertices)
-                .then(|| super::multires::spread_subset(pop, params.subset_vertices));
-        let data = match &subset {
-            Some(s) => {
-                // the final stage runs on every vertex: the budget is checked for all of them first
-                let most =
-                    crate::memory::max_components(params.parts, params.refine, params.max_subparts, pop.n_vertices());
-                crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
-                Data::from_population_subset(pop, s)
-            }
-            None => Data::from_population(pop),
-        };
-        let fit = Fit::new(data, &coarse)?;
-        Ok(Pipeline {
-            pop: pop.clone(),
-            params: params.clone(),
-            state: State::Coarse(fit),
-            coarse: None,
-            coarse_labels: Vec::new(),
-            refined_labels: Vec::new(),
-            final_model: None,
-            stats: vec![StageStats { name: "coarse".into(), ..Default::default() }],
-            stage_started_ms: t0,
-            total_iterations: 0,
-            subset,
-            count_rounds: 0,
-            decide_rounds: 0,
-            part_curve: Vec::new(),
-            part_rounds: Vec::new(),
-            start_parts: None,
-            decided_labels: None,
-            merge_tree: None,
-            tree_count: None,
-            loose_start: false,
-            loose_components: None,
-            full: None,
-            fine: None,
-            final_runs: Vec::new(),
-            last_run: None,
-        })
     }
 
     /// The population fitted (all its vertices, also while the parts are decided on a coarse mesh).
@@ -269,13 +195,9 @@ impl Pipeline {
         matches!(self.state, State::Done)
     }
 
-    /// The rule deciding the parts: the merge tree ([`PartRule::Tree`] with the refinement on), else Algorithm 1.
+    /// The rule deciding the parts ([`rule_of`] the fit's parameters).
     pub fn rule(&self) -> Rule {
-        if self.params.part_rule == PartRule::Tree && self.params.refine {
-            Rule::MergeTree
-        } else {
-            Rule::Algorithm1
-        }
+        rule_of(&self.params)
     }
 
     /// The AECM run in progress (None when done).
@@ -625,7 +547,7 @@ impl Pipeline {
             refined: self.params.refine,
             parts_asked: self.params.target_parts,
             tree_count: self.tree_count,
-            from_merge_tree: self.params.part_rule == PartRule::Tree && self.params.refine,
+            from_merge_tree: self.rule() == Rule::MergeTree,
             count_unjudged: !self.params.refine || self.params.start_labels.is_some(),
         }
     }

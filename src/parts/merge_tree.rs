@@ -9,7 +9,7 @@
 //!    score: the rise in squared error when one rigid motion moves both (generalised Procrustes over the poses),
 //!    per vertex of the smaller side. Each node keeps additive sufficient statistics (its vertex count, per pose
 //!    the sum of its points and, per pair of poses, Σ_j x_j^i x_j^kᵀ), so the rigid fit of a union is solved on
-//!    3x3 blocks without touching the vertices again ([`rigid_stats`]). Every merge is recorded: the tree gives
+//!    3x3 blocks without touching the vertices again (`rigid_stats`). Every merge is recorded: the tree gives
 //!    a partition for every count, at once ([`MergeTree::labels_at`]).
 //! 3. **The count** ([`MergeTree::decided_count`]): read off the tree by the part rule: merges go on while the
 //!    next one costs the smaller side, per vertex, less than `distinct_ratio` times the variance of a typical

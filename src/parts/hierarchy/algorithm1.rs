@@ -2,10 +2,19 @@
 //! the coarse AECM from k-means++, then every coarse part refined on its own with m_k = 1, 2, ... components,
 //! each trial split of the worst sub-part by positions (retried by residuals), kept while err drops; with the
 //! paper's rule, adjacent parts that one rigid motion explains are merged before the final AECM
-//! ([`merge_rigid_neighbours`]). The driver ([`super::Pipeline`]) runs the AECM; this says which run comes next.
+//! ([`merge_rigid_neighbours`]). The driver ([`super::Pipeline`]) runs the AECM; this says which run comes next
+//! ([`Pipeline::refine_next`], [`Pipeline::algorithm1_next`]).
+//!
+//! What decides the count besides the part rule's own numbers (listed in `tree_rule`'s module documentation,
+//! which the scale-free rule [`PartRule::Distinct`] shares): the coarse parts m (`Params::parts`, 11), the seed
+//! of the k-means++ draw (`Params::seed`, 0) and its restarts (`Params::restarts`, 4), the refinement's stops
+//! (`Params::max_subparts` 6, `Params::refine_min_gain` 0.1, `Params::refine_max_iter` 60,
+//! `Params::refine_tol` 1e-2), the paper's threshold ([`PartRule::Threshold`]: `Params::refine_threshold` 1e-5,
+//! `Params::merge_ratio` 0.25), and multi-resolution (`Params::subset_vertices` 2 000, from [`SUBSET_FACTOR`]
+//! times as many vertices).
 
 use super::rounds::Tail;
-use super::{lay_out, FinalRun, Pipeline, State};
+use super::{lay_out, FinalRun, Pipeline, StageStats, State};
 use crate::error::Result;
 use crate::mesh::Population;
 use crate::mfa::aecm::Fit;
@@ -14,6 +23,14 @@ use crate::mfa::estep::Blocked;
 use crate::mfa::params::{Params, PartRule};
 use crate::mfa::result::Model;
 use crate::parts::labels::compact;
+
+/// Multi-resolution runs only on populations with at least this many times `subset_vertices` vertices (10 000
+/// at the default 2 000). A subset of more than a fifth of the mesh saves little and costs accuracy: on
+/// horse-gallop (8 431 vertices) a 2 000-vertex subset saved a quarter of the fit's time but gave 20 parts and
+/// RMSE 0.00450 against 21 and 0.00395 without it, and on the 3 000-vertex quadruped example a subset lost a tail
+/// piece on some seeds (`examples/speed_accuracy.rs`). Without a subset the fit does not depend on the frame the
+/// file is written in (the subset's grid is axis-aligned; every other step uses distances only).
+pub const SUBSET_FACTOR: usize = 5;
 
 pub(super) struct Refinement {
     pub(super) members: Vec<Vec<usize>>,
@@ -109,6 +126,59 @@ fn residual_ss(fit: &Fit, vertices: &[usize]) -> f64 {
 }
 
 impl Pipeline {
+    /// Algorithm 1's start: the coarse AECM from k-means++ on all vertices, or with multi-resolution on a
+    /// well-spread subset of them ([`SUBSET_FACTOR`]).
+    pub(super) fn from_algorithm1(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
+        // the coarse and refinement runs stop at a loose tolerance and only pass labels on: they run plain AECM
+        // (SQUAREM would move where they stop); the final run is accelerated
+        let coarse = if params.refine {
+            Params { tol: params.refine_tol, accelerate: false, ..params.clone() }
+        } else {
+            params.clone()
+        };
+        let subset =
+            (params.refine && params.subset_vertices > 0 && pop.n_vertices() >= SUBSET_FACTOR * params.subset_vertices)
+                .then(|| crate::parts::multires::spread_subset(pop, params.subset_vertices));
+        let data = match &subset {
+            Some(s) => {
+                // the final stage runs on every vertex: the budget is checked for all of them first
+                let most =
+                    crate::memory::max_components(params.parts, params.refine, params.max_subparts, pop.n_vertices());
+                crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
+                Data::from_population_subset(pop, s)
+            }
+            None => Data::from_population(pop),
+        };
+        let fit = Fit::new(data, &coarse)?;
+        Ok(Pipeline {
+            pop: pop.clone(),
+            params: params.clone(),
+            state: State::Coarse(fit),
+            coarse: None,
+            coarse_labels: Vec::new(),
+            refined_labels: Vec::new(),
+            final_model: None,
+            stats: vec![StageStats { name: "coarse".into(), ..Default::default() }],
+            stage_started_ms: t0,
+            total_iterations: 0,
+            subset,
+            count_rounds: 0,
+            decide_rounds: 0,
+            part_curve: Vec::new(),
+            part_rounds: Vec::new(),
+            start_parts: None,
+            decided_labels: None,
+            merge_tree: None,
+            tree_count: None,
+            loose_start: false,
+            loose_components: None,
+            full: None,
+            fine: None,
+            final_runs: Vec::new(),
+            last_run: None,
+        })
+    }
+
     pub(super) fn sub_params(&self) -> Params {
         self.params.for_refinement()
     }

@@ -4,11 +4,18 @@
 //! ([`Pipeline::record_round`]); and, with an exact count asked for, parts split or merged until it holds
 //! ([`Pipeline::exact_count`]).
 
-use super::{full_data, FinalRun, PartRound, Pipeline, State, COUNT_ROUNDS, DECIDE_ROUNDS};
+use super::{full_data, FinalRun, PartRound, Pipeline, State};
 use crate::error::Result;
 use crate::mfa::result::Model;
 
 use crate::parts::labels::compact;
+
+/// Most times [`Pipeline`] makes the part count exact and refits.
+pub(super) const COUNT_ROUNDS: usize = 3;
+
+/// Most times [`PartRule::Distinct`] dissolves and merges parts and refits (a refit moves boundaries, which can
+/// leave a new sliver of flesh or a new island part).
+pub(super) const DECIDE_ROUNDS: usize = 3;
 
 /// What [`Pipeline::exact_count`] leaves to the rule: the model as it is final, or the run that makes the count.
 pub(super) enum Tail {

@@ -1,11 +1,32 @@
 //! The merge tree's part rule ([`PartRule::Tree`], the default): the start is the patches' merge tree cut
 //! generously ([`tree_start`]: no random draw), its flesh dissolved before the first AECM; after each final AECM
 //! the rule reads the count off a merge tree of the fitted parts ([`Pipeline::decide_on_tree`]). The driver
-//! ([`super::Pipeline`]) runs the AECM and the rounds; this says where the runs start and which count the tree
-//! gives.
+//! ([`super::Pipeline`]) runs the AECM and the rounds; this says where the runs start, which run comes next
+//! ([`Pipeline::tree_next`]) and which count the tree gives.
+//!
+//! What decides the count, in one list (each value is documented where it is defined, with why it is that):
+//!
+//! | what | value | where |
+//! |---|---|---|
+//! | a joint must explain this many typical variances (rule 2, the tree's cut) | 4 | `Params::distinct_ratio` |
+//! | a part moving as a fixed blend of two neighbours within this fraction is flesh (rule 1) | 0.1 | `Params::blend_ratio` |
+//! | a part needs this many vertices | 4 | `Params::min_part_vertices` |
+//! | the start: the patches' tree cut at this many merge yardsticks | 28 | [`TREE_START_RATIO`] |
+//! | the start with an exact count asked for: cut at this many typical variances | 64 | [`TREE_COUNT_START_RATIO`] |
+//! | fewer patches than this: the start is every patch, uncut | 64 | [`TREE_CUT_LEAVES`] |
+//! | the patches' least typical variance | 1e-14 | `PATCH_VARIANCE_FLOOR` |
+//! | patches: at most / vertices per patch below that | 400 / 6 | [`crate::parts::patches::MAX_PATCHES`], [`crate::parts::patches::PATCH_VERTICES`] |
+//! | poses the tree's rigid fits read | 16 | [`crate::parts::merge_tree::TREE_POSES`] |
+//! | the start's yardstick averages merges above this many nodes | 100 | [`crate::parts::merge_tree::PART_NODES`] |
+//! | the fitted parts' yardstick: the middle of the variances between these quantiles | 0.3 / 0.7 | [`crate::parts::merge_tree::MIDDLE_BAND`] |
+//! | reference poses of the flesh test | 24 | [`crate::parts::distinct::BLEND_REFERENCES`] |
+//! | an island this fraction of its part's largest piece becomes a part | 0.25 | [`crate::parts::islands::SPLIT_FRACTION`] |
+//! | rounds of the part rule / of the exact count | 3 / 3 | `rounds::DECIDE_ROUNDS`, `rounds::COUNT_ROUNDS` |
+//! | decided on a coarse mesh: from this many times its size / with fewer poses it grows | 2 / 20 | [`COARSE_FACTOR`], [`COARSE_POSES`] |
+//! | the coarse mesh's vertices | 8 000 | `Params::coarse_vertices` |
 
 use super::rounds::Tail;
-use super::{coarse_target, lay_out, FinalRun, Fine, Pipeline, State, COARSE_FACTOR};
+use super::{lay_out, FinalRun, Fine, Pipeline, State};
 use crate::error::{Error, Result};
 use crate::mesh::Population;
 use crate::mfa::aecm::{Fit, StageStats};
@@ -13,6 +34,30 @@ use crate::mfa::data::Data;
 use crate::mfa::params::{Params, PartRule};
 use crate::mfa::result::Model;
 use crate::parts::labels::compact;
+
+/// [`PartRule::Tree`] decides on a coarse mesh ([`crate::parts::coarse_mesh`]) only on populations with at least
+/// this many times its size ([`coarse_target`]; 16 000 vertices at the default 8 000 and 20 poses or more):
+/// below that the decisions on all vertices cost little more, and horse-gallop (8 431 vertices), the lion and the
+/// generated 12 000-vertex creatures decide on every vertex.
+pub const COARSE_FACTOR: usize = 2;
+
+/// With fewer poses than this, the coarse mesh has more vertices ([`coarse_target`]).
+pub const COARSE_POSES: usize = 20;
+
+/// The coarse mesh's size for `coarse_vertices` ([`Params::coarse_vertices`]) and `n_shapes` poses: at least
+/// `coarse_vertices x COARSE_POSES` vertex-poses, i.e. `coarse_vertices` from 20 poses on and more below (16 000
+/// at 10 poses by default). The decisions read the poses' motion at the coarse vertices, and a population of few
+/// poses gives them less to read per vertex; the runs' cost goes with the vertex-poses, so it stays bounded. On
+/// 10-11 poses at 8 000 vertices the decisions moved more than on all vertices over the 9 standard runs of
+/// `posemfa robustness` (the lion subdivided twice 18-22 parts, once 17-20, horse-poses subdivided 23-26); at
+/// this size 19-20, 19-20 (on all vertices: under 2 x 16 000) and 26-27.
+pub fn coarse_target(coarse_vertices: usize, n_shapes: usize) -> usize {
+    if n_shapes >= COARSE_POSES {
+        coarse_vertices
+    } else {
+        coarse_vertices * COARSE_POSES / n_shapes.max(1)
+    }
+}
 
 /// [`PartRule::Tree`]'s start when the part rule chooses the count: the patches' tree is cut where a merge first
 /// costs the smaller side, per vertex, this many times what merging two pieces of one part typically costs
