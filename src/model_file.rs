@@ -32,7 +32,7 @@ use crate::mfa::component::Component;
 use crate::mfa::params::Params;
 use crate::mfa::result::Model;
 use crate::parts::diagnosis::Diagnosis;
-use crate::parts::hierarchy::{FitResult, PartRound, StageParts, StageStats};
+use crate::parts::hierarchy::{FitResult, PartRound, RuleReport, StageParts, StageStats};
 use crate::parts::merge_tree::{CurvePoint, Merge, MergeTree};
 use serde::{Deserialize, Serialize};
 use serde::{Deserializer, Serializer};
@@ -485,7 +485,7 @@ fn write(m: &Borrowed, with_points: bool, saved_rig: Option<&SavedRig>) -> Vec<u
     if let Some(d) = &r.decided_labels {
         body.labels("decidedLabels", d);
     }
-    if let Some(t) = &r.merge_tree {
+    if let Some(t) = r.merge_tree() {
         body.labels("treeLeaves", &t.leaves);
     }
     if let Some(s) = &m.params.start_labels {
@@ -536,13 +536,13 @@ fn write(m: &Borrowed, with_points: bool, saved_rig: Option<&SavedRig>) -> Vec<u
             complete: r.complete,
             part_curve: r.part_curve.iter().map(CurveHeader::from).collect(),
             part_rounds: r.part_rounds.clone(),
-            start_parts: r.start_parts,
-            tree_count: r.tree_count,
-            from_merge_tree: r.from_merge_tree,
+            start_parts: r.start_parts(),
+            tree_count: r.tree_count(),
+            from_merge_tree: r.from_merge_tree(),
             count_unjudged: r.count_unjudged,
-            refined: r.refined,
+            refined: r.refined(),
             parts_asked: r.parts_asked,
-            merge_tree: r.merge_tree.as_ref().map(|t| TreeHeader {
+            merge_tree: r.merge_tree().map(|t| TreeHeader {
                 n_leaves: t.n_leaves,
                 merges: t.merges.iter().map(MergeHeader::from).collect(),
                 typical: t.typical,
@@ -973,6 +973,24 @@ fn decode(file: &str, h: Header, body: &[u8]) -> Result<ModelFile> {
     population.clips = p.clips.as_ref().map(|c| crate::mesh::gltf::Clips { names: c.names.clone(), read: c.read });
     let mut params = h.params;
     params.start_labels = start_labels;
+    // the rule's own report: a file written from a fit has the merge tree's fields only with that rule, and
+    // that rule always refines
+    let rule = match h.fit.from_merge_tree {
+        true if !h.fit.refined => {
+            return Err(field(
+                "fit.refined",
+                "false, yet the parts came from the merge tree, which always refines; save the model again".into(),
+            ));
+        }
+        true => RuleReport::MergeTree { start_parts: h.fit.start_parts, merge_tree, tree_count: h.fit.tree_count },
+        false if h.fit.start_parts.is_some() || h.fit.tree_count.is_some() || merge_tree.is_some() => {
+            return Err(field(
+                "fit.fromMergeTree",
+                "false, yet the fit has the merge tree's start, tree or count; save the model again".into(),
+            ));
+        }
+        false => RuleReport::Algorithm1 { refined: h.fit.refined },
+    };
     let result = FitResult {
         model,
         coarse_labels,
@@ -982,14 +1000,10 @@ fn decode(file: &str, h: Header, body: &[u8]) -> Result<ModelFile> {
         complete: h.fit.complete,
         part_curve: h.fit.part_curve.into_iter().map(CurvePoint::from).collect(),
         part_rounds: h.fit.part_rounds,
-        start_parts: h.fit.start_parts,
         decided_labels,
-        merge_tree,
-        tree_count: h.fit.tree_count,
-        from_merge_tree: h.fit.from_merge_tree,
         count_unjudged: h.fit.count_unjudged,
-        refined: h.fit.refined,
         parts_asked: h.fit.parts_asked,
+        rule,
     };
     let rig = match h.rig {
         Some(r) => Some(rig::read(file, r, &a, nv, ns, np)?),

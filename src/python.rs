@@ -702,7 +702,7 @@ impl PyModel {
 
     /// The merge tree as JSON (null with Algorithm 1's rules).
     fn merge_tree_json(&self) -> PyResult<String> {
-        serde_json::to_string(&self.result.merge_tree).map_err(err)
+        serde_json::to_string(&self.result.merge_tree()).map_err(err)
     }
 
     /// The parameters as JSON (camelCase, every field).

@@ -554,9 +554,9 @@ impl FitModel {
         let v = serde_json::json!({
             "hasData": self.about.has_data,
             "shapes": m.n_shapes, "vertices": m.n_vertices, "parts": m.n_parts(),
-            "partsFrom": if self.result.from_merge_tree { "merge tree" } else { "Algorithm 1" },
+            "partsFrom": if self.result.from_merge_tree() { "merge tree" } else { "Algorithm 1" },
             "coarseParts": s.coarse_parts, "refinedParts": s.refined_parts,
-            "refine": self.result.refined, "partsAsked": self.result.parts_asked,
+            "refine": self.result.refined(), "partsAsked": self.result.parts_asked,
             "rmse": rmse, "rmseOriginal": self.pop.normalization.length_to_original(rmse),
             "eRms": figures.e_rms,
             "iterations": m.iterations, "converged": m.converged,
@@ -566,7 +566,7 @@ impl FitModel {
             "unfinished": (!self.result.complete).then_some(crate::parts::diagnosis::UNFINISHED),
             "partCurve": self.result.part_curve,
             "partRounds": self.result.part_rounds,
-            "startParts": self.result.start_parts,
+            "startParts": self.result.start_parts(),
         });
         to_js(&v)
     }
@@ -682,7 +682,7 @@ impl FitModel {
                     coarse: take_u32(&mut result.coarse_labels),
                     refined: take_u32(&mut result.refined_labels),
                     decided: result.decided_labels.as_mut().map(take_u32),
-                    leaves: result.merge_tree.as_mut().map(|t| take_u32(&mut t.leaves)),
+                    leaves: result.merge_tree_mut().map(|t| take_u32(&mut t.leaves)),
                     result,
                 }
             }
@@ -708,7 +708,7 @@ impl ParkedModel {
                 if let (Some(d), Some(a)) = (result.decided_labels.as_mut(), decided) {
                     *d = a.to_vec();
                 }
-                if let (Some(t), Some(a)) = (result.merge_tree.as_mut(), leaves) {
+                if let (Some(t), Some(a)) = (result.merge_tree_mut(), leaves) {
                     t.leaves = a.to_vec();
                 }
                 Rc::new(result)

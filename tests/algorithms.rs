@@ -238,8 +238,9 @@ dual_test! {
             "{:?}",
             tree.stage()
         );
-        assert!(tree.result().from_merge_tree);
-        assert!(!Pipeline::new(&c.pop, &Params { refine: false, ..Params::default() }).unwrap().result().from_merge_tree);
+        assert!(tree.result().from_merge_tree());
+        let coarse_only = Pipeline::new(&c.pop, &Params { refine: false, ..Params::default() }).unwrap();
+        assert!(!coarse_only.result().from_merge_tree());
         let mut lesson = Pipeline::for_teaching(&c.pop, &Params { parts: 3, ..Params::default() }).unwrap();
         assert_eq!(lesson.stage(), Stage::Coarse);
         let mut refined = false;
@@ -248,7 +249,7 @@ dual_test! {
         }
         assert!(refined, "a lesson shows the refinement");
         assert_eq!(lesson.result().model.n_parts(), 4);
-        assert!(!lesson.result().from_merge_tree);
+        assert!(!lesson.result().from_merge_tree());
     }
 
     fn pruned_e_step_equals_the_plain_one() {

@@ -41,15 +41,16 @@ fn assert_same_fit(a: &FitResult, b: &FitResult) {
         assert_eq!((x.score.to_bits(), x.variance.to_bits()), (y.score.to_bits(), y.variance.to_bits()));
     }
     assert_eq!(a.part_rounds, b.part_rounds);
-    assert_eq!(a.start_parts, b.start_parts);
-    assert_eq!(a.merge_tree, b.merge_tree, "the merge tree");
-    if let (Some(x), Some(y)) = (&a.merge_tree, &b.merge_tree) {
+    assert_eq!(a.start_parts(), b.start_parts());
+    assert_eq!(a.merge_tree(), b.merge_tree(), "the merge tree");
+    if let (Some(x), Some(y)) = (a.merge_tree(), b.merge_tree()) {
         assert_eq!(x.middle_typical().to_bits(), y.middle_typical().to_bits());
     }
-    assert_eq!(a.tree_count, b.tree_count);
+    assert_eq!(a.tree_count(), b.tree_count());
+    assert_eq!(a.rule, b.rule, "the rule's report");
     assert_eq!(
-        (a.from_merge_tree, a.count_unjudged, a.refined, a.parts_asked),
-        (b.from_merge_tree, b.count_unjudged, b.refined, b.parts_asked)
+        (a.from_merge_tree(), a.count_unjudged, a.refined(), a.parts_asked),
+        (b.from_merge_tree(), b.count_unjudged, b.refined(), b.parts_asked)
     );
 }
 
@@ -196,6 +197,13 @@ dual_test! {
         let leaves = format!("{}\"nLeaves\":4000000000{}", &text[..at], &text[end..]);
         let e = ModelFile::from_bytes("t.posemfa", &with_header(&bytes, &leaves)).unwrap_err().to_string();
         assert!(e.contains("header field fit.mergeTree: 4000000000 leaves"), "{e}");
+        // the rule's own report: the merge tree's fields with Algorithm 1, or that rule without its refinement
+        let algorithm1 = with_header(&bytes, &text.replacen("\"fromMergeTree\":true", "\"fromMergeTree\":false", 1));
+        let e = ModelFile::from_bytes("r.posemfa", &algorithm1).unwrap_err().to_string();
+        assert!(e.contains("header field fit.fromMergeTree: false, yet the fit has the merge tree's"), "{e}");
+        let unrefined = with_header(&bytes, &text.replacen("\"refined\":true", "\"refined\":false", 1));
+        let e = ModelFile::from_bytes("f.posemfa", &unrefined).unwrap_err().to_string();
+        assert!(e.contains("header field fit.refined: false, yet the parts came from the merge tree"), "{e}");
 
         // a label past the parts, in the body
         let saved = ModelFile::from_bytes("ok.posemfa", &bytes).unwrap();

@@ -55,7 +55,7 @@ dual_test! {
             let r = fit(&g.population, &Params::default(), &mut |_| true).unwrap();
             let rounds = &r.part_rounds;
             assert!(!rounds.is_empty(), "{preset:?}: no round recorded");
-            let start = r.start_parts.unwrap_or(r.stages.coarse_parts);
+            let start = r.start_parts().unwrap_or(r.stages.coarse_parts);
             assert!(start <= r.stages.coarse_parts, "{preset:?}: {start} parts after the start's flesh, cut {}", r.stages.coarse_parts);
             // a round judges at most what the AECM before it kept
             assert!(rounds[0].parts <= start, "{preset:?}: {rounds:?} from {start}");

@@ -110,9 +110,9 @@ impl FitJson {
             diagnosis: crate::parts::diagnosis::diagnose_finished(pop, result),
             part_curve: result.part_curve.clone(),
             part_rounds: result.part_rounds.clone(),
-            start_parts: result.start_parts,
-            merge_tree: result.merge_tree.clone(),
-            tree_count: result.tree_count,
+            start_parts: result.start_parts(),
+            merge_tree: result.merge_tree().cloned(),
+            tree_count: result.tree_count(),
         }
     }
 }

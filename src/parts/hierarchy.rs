@@ -36,7 +36,7 @@ mod rounds;
 mod tests;
 mod tree_rule;
 
-pub use result::{FinalRun, FitResult, PartRound, Progress, Rule, Stage, StageParts};
+pub use result::{FinalRun, FitResult, PartRound, Progress, Rule, RuleReport, Stage, StageParts};
 
 pub use algorithm1::{merge_rigid_neighbours, SUBSET_FACTOR};
 use algorithm1::{placeholder_fit, Refinement};
@@ -541,14 +541,15 @@ impl Pipeline {
             complete: self.is_done(),
             part_curve: self.part_curve.clone(),
             part_rounds: self.part_rounds.clone(),
-            start_parts: self.start_parts,
             decided_labels: self.decided_labels.as_deref().map(|d| self.everywhere(d)),
-            merge_tree,
-            refined: self.params.refine,
             parts_asked: self.params.target_parts,
-            tree_count: self.tree_count,
-            from_merge_tree: self.rule() == Rule::MergeTree,
             count_unjudged: !self.params.refine || self.params.start_labels.is_some(),
+            rule: match self.rule() {
+                Rule::MergeTree => {
+                    RuleReport::MergeTree { start_parts: self.start_parts, merge_tree, tree_count: self.tree_count }
+                }
+                Rule::Algorithm1 => RuleReport::Algorithm1 { refined: self.params.refine },
+            },
         }
     }
 

@@ -125,34 +125,91 @@ pub struct FitResult {
     pub part_curve: Vec<crate::parts::distinct::CurvePoint>,
     /// Every round of the part rule, in order (`part_curve` is the last one's merges; empty without the rule).
     pub part_rounds: Vec<PartRound>,
-    /// [`PartRule::Tree`]: the start's parts once its flesh was dissolved, before the first AECM (the cut's own
-    /// count is `stages.coarse_parts`).
-    pub start_parts: Option<usize>,
     /// With `target_parts` and [`PartRule::Distinct`]: the labels the part rule decided, before the count was made
     /// exact (what auto would have kept), for the diagnosis ([`crate::parts::diagnosis::diagnose_fit`]).
     pub decided_labels: Option<Vec<u32>>,
-    /// [`PartRule::Tree`]: the merge tree of the fitted parts the part rule read its count from (its leaves are
-    /// the parts of the first final AECM, its merges go down to one part): a partition for every count.
-    pub merge_tree: Option<crate::parts::merge_tree::MergeTree>,
-    /// [`PartRule::Tree`]: the count the part rule read off `merge_tree`.
-    pub tree_count: Option<usize>,
-    /// The parts came from the merge tree ([`PartRule::Tree`] with the refinement on), not from Algorithm 1 (the
-    /// other part rules, `refine` off, and a step-by-step lesson): what the page names the stages after.
-    pub from_merge_tree: bool,
     /// The part count is the user's own, with no rule behind it (`refine` off: Algorithm 1's coarse stage alone,
     /// m = `parts`; or a partition given to start from, [`Params::start_labels`]), so too few parts cannot be
     /// told from a shape that is no articulated one ([`crate::parts::diagnosis::diagnose_fit`]).
     pub count_unjudged: bool,
-    /// The refinement ran (`refine` on): Algorithm 1's refined stage is its own, not the coarse one again.
-    pub refined: bool,
     /// The exact part count asked for (`target_parts`), if one was.
     pub parts_asked: Option<usize>,
+    /// What the rule that decided the parts reports of itself (the fields above both rules fill).
+    pub rule: RuleReport,
+}
+
+/// What each rule reports of itself in a [`FitResult`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum RuleReport {
+    /// The merge tree's rule ([`Rule::MergeTree`]).
+    MergeTree {
+        /// The start's parts once its flesh was dissolved, before the first AECM (None when none was; the cut's
+        /// own count is `stages.coarse_parts`).
+        start_parts: Option<usize>,
+        /// The merge tree of the fitted parts the rule read its count from (its leaves are the parts of the
+        /// first final AECM, its merges go down to one part): a partition for every count. None when the fit
+        /// was stopped before that run finished.
+        merge_tree: Option<crate::parts::merge_tree::MergeTree>,
+        /// The count the rule read off `merge_tree`.
+        tree_count: Option<usize>,
+    },
+    /// Algorithm 1 ([`Rule::Algorithm1`]).
+    Algorithm1 {
+        /// The refinement ran (`refine` on): the refined stage is its own, not the coarse one again.
+        refined: bool,
+    },
 }
 
 impl FitResult {
-    /// The partitions of the merge tree ([`PartRule::Tree`]; none with Algorithm 1's rules).
+    /// The partitions of the merge tree (the merge tree's rule; none with Algorithm 1).
     pub fn tree_cuts(&self) -> Option<crate::parts::merge_tree::TreeCuts> {
-        let tree = self.merge_tree.clone()?;
-        Some(crate::parts::merge_tree::TreeCuts::new(tree, self.tree_count, &self.model.labels))
+        let tree = self.merge_tree()?.clone();
+        Some(crate::parts::merge_tree::TreeCuts::new(tree, self.tree_count(), &self.model.labels))
+    }
+
+    /// The parts came from the merge tree ([`Rule::MergeTree`]), not from Algorithm 1 (the other part rules,
+    /// `refine` off, and a step-by-step lesson): what the page names the stages after.
+    pub fn from_merge_tree(&self) -> bool {
+        matches!(self.rule, RuleReport::MergeTree { .. })
+    }
+
+    /// The refinement ran: always with the merge tree, with Algorithm 1 when `refine` was on.
+    pub fn refined(&self) -> bool {
+        match self.rule {
+            RuleReport::MergeTree { .. } => true,
+            RuleReport::Algorithm1 { refined } => refined,
+        }
+    }
+
+    /// The merge tree's start once its flesh was dissolved ([`RuleReport::MergeTree`]'s `start_parts`).
+    pub fn start_parts(&self) -> Option<usize> {
+        match self.rule {
+            RuleReport::MergeTree { start_parts, .. } => start_parts,
+            RuleReport::Algorithm1 { .. } => None,
+        }
+    }
+
+    /// The merge tree of the fitted parts ([`RuleReport::MergeTree`]'s `merge_tree`).
+    pub fn merge_tree(&self) -> Option<&crate::parts::merge_tree::MergeTree> {
+        match &self.rule {
+            RuleReport::MergeTree { merge_tree, .. } => merge_tree.as_ref(),
+            RuleReport::Algorithm1 { .. } => None,
+        }
+    }
+
+    /// [`FitResult::merge_tree`], to change (a page hands its leaves over without a copy).
+    pub fn merge_tree_mut(&mut self) -> Option<&mut crate::parts::merge_tree::MergeTree> {
+        match &mut self.rule {
+            RuleReport::MergeTree { merge_tree, .. } => merge_tree.as_mut(),
+            RuleReport::Algorithm1 { .. } => None,
+        }
+    }
+
+    /// The count the merge tree's rule read off its tree ([`RuleReport::MergeTree`]'s `tree_count`).
+    pub fn tree_count(&self) -> Option<usize> {
+        match self.rule {
+            RuleReport::MergeTree { tree_count, .. } => tree_count,
+            RuleReport::Algorithm1 { .. } => None,
+        }
     }
 }

@@ -95,7 +95,7 @@ fn a_refit_after_a_merge_goes_on_from_the_parts_that_stayed() {
     let done = pipe.run(&mut |_| true).unwrap();
     let last = pipe.last_run.clone().expect("the last run's model is kept");
     // the cheapest merge of the fitted parts' tree (the merge the part rule's rule 2 would make next)
-    let tree = done.merge_tree.as_ref().expect("the tree pipeline keeps its tree");
+    let tree = done.merge_tree().expect("the tree pipeline keeps its tree");
     let merged = tree.labels_at(done.model.n_parts() - 1);
     let mut cold = Pipeline::new(&g.population, &Params::default()).unwrap();
     let state = cold.refit(FinalRun::Round, &merged).unwrap();
@@ -134,7 +134,7 @@ fn a_refine_from_the_merge_trees_partition_keeps_that_partition() {
         let base = Params { coarse_vertices, ..Params::default() };
         let auto = fit(&g.population, &base, &mut |_| true).unwrap();
         let n = auto.model.n_parts() - 4;
-        let start = auto.merge_tree.as_ref().expect("the tree rule's tree").labels_at(n);
+        let start = auto.merge_tree().expect("the tree rule's tree").labels_at(n);
         let params = Params { start_labels: Some(start.clone()), ..base.clone() };
         let refined = fit(&g.population, &params, &mut |_| true).unwrap();
         assert_eq!(refined.model.n_parts(), n, "coarse {coarse_vertices}");
@@ -252,7 +252,7 @@ fn parts_decided_on_a_coarse_mesh_are_the_parts_of_all_vertices() {
     assert_eq!((names[0], *names.last().unwrap()), ("tree", "all vertices"), "{names:?}");
     // everything per vertex is per vertex of the population
     assert_eq!(result.model.n_vertices, nv);
-    let tree = result.merge_tree.as_ref().expect("the merge tree is kept");
+    let tree = result.merge_tree().expect("the merge tree is kept");
     assert_eq!(tree.leaves.len(), nv);
     assert_eq!((result.coarse_labels.len(), result.refined_labels.len()), (nv, nv));
     // the parts: the creature's, as the decisions on all vertices find them
