@@ -721,6 +721,32 @@ impl ParkedModel {
 /// Opens a model file (.posemfa) without fitting: `names` / `files` hold exactly one .posemfa and, optionally, the
 /// pose files it was fitted to (read as the Population constructor reads them, `animation` likewise; checked to be
 /// the model's mesh, else refused by name). Returns {population: Population, model: FitModel, params, hasData}.
+/// Whether the zip archive `bytes` holds a model file (`.posemfa`), from its listing alone (nothing unpacked).
+#[wasm_bindgen(js_name = zipHoldsModel)]
+pub fn zip_holds_model(bytes: &[u8]) -> bool {
+    crate::mesh::zip_archive::holds_model(bytes)
+}
+
+/// The files of the zip archive `name` that the page reads (mesh files and model files), checked as the CLI
+/// checks an archive (zip bombs, damage, encryption: src/mesh/zip_archive.rs): {names, files}, natural-sorted,
+/// named ARCHIVE/PATH. The worker opens an archive itself only when it holds a model file; the population's
+/// loader opens any other.
+#[wasm_bindgen(js_name = openZip)]
+pub fn open_zip(name: &str, bytes: &[u8]) -> Result<JsValue, JsValue> {
+    let budget = crate::memory::budget_bytes()? / 2;
+    let archive = crate::mesh::zip_archive::open_with(name, bytes, budget, true)?;
+    let names = js_sys::Array::new();
+    let files = js_sys::Array::new();
+    for (n, b) in &archive.files {
+        names.push(&JsValue::from_str(n));
+        files.push(&Uint8Array::from(b.as_slice()));
+    }
+    let obj = js_sys::Object::new();
+    js_sys::Reflect::set(&obj, &"names".into(), &names).map_err(|_| js_err("reflect"))?;
+    js_sys::Reflect::set(&obj, &"files".into(), &files).map_err(|_| js_err("reflect"))?;
+    Ok(obj.into())
+}
+
 #[wasm_bindgen(js_name = openModel)]
 pub fn open_model(names: Vec<String>, files: Vec<Uint8Array>, animation: Option<String>) -> Result<JsValue, JsValue> {
     if names.len() != files.len() {

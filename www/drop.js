@@ -1,9 +1,9 @@
 // Opening files: the file and folder pickers and drops anywhere on the page. Turns what a person drops or
-// picks (mesh files, folders, .zip archives) into [{ name, bytes }] for the worker. Nothing is parsed here:
-// the Rust readers pick themselves by extension (mesh::load: OBJ and PLY per pose, a .glb / .gltf with its
-// .bin buffers, a .pc2 / .mdd point cache with its base mesh, an .fbx, a .usd / .usda / .usdc / .usdz) and
-// validate the files.
-import { unzipSync } from 'fflate';
+// picks (mesh files, folders, .zip archives) into [{ name, bytes }] for the worker. Nothing is parsed or
+// unpacked here: the Rust readers pick themselves by extension (mesh::load: OBJ and PLY per pose, a .glb /
+// .gltf with its .bin buffers, a .pc2 / .mdd point cache with its base mesh, an .fbx, a .usd / .usda / .usdc /
+// .usdz) and validate the files, and a .zip is opened by the core as the CLI opens one (mesh/zip_archive.rs:
+// zip bombs refused before anything is unpacked; www/zip-models.js for an archive holding a model file).
 
 const collator = new Intl.Collator(undefined, { numeric: true, sensitivity: 'base' });
 export const naturalSort = (items) => items.sort((a, b) => collator.compare(a.name, b.name));
@@ -14,28 +14,16 @@ export const isMeshFile = (name) => /\.(obj|ply|glb|gltf|vrm|bin|pc2|mdd|fbx|usd
 const isZip = (name) => /\.zip$/i.test(name);
 const skip = (name) => /(^|\/)(__MACOSX\/|\.)/.test(name); // resource forks and hidden files
 
-// One File -> entries: a mesh file as is, a zip opened, anything else reported as ignored.
+// One File -> entries: a mesh file or an archive as is, anything else reported as ignored.
 async function fromFile(file, name, out) {
-  if (isZip(name)) {
-    let entries;
-    try {
-      entries = unzipSync(new Uint8Array(await file.arrayBuffer()), { filter: (f) => isMeshFile(f.name) && !skip(f.name) });
-    } catch (e) {
-      out.problems.push({ file: name, line: null, message: `cannot open the zip archive (${e.message || e})` });
-      return;
-    }
-    if (!Object.keys(entries).length) {
-      out.problems.push({ file: name, line: null, message: 'the zip archive holds no mesh or model file (.obj, .ply, .glb, .gltf, .pc2 / .mdd, .fbx, .usd*, .posemfa): zip the pose files themselves' });
-    }
-    for (const [inner, bytes] of Object.entries(entries)) out.files.push({ name: `${name}/${inner}`, bytes });
-  } else if (isMeshFile(name)) {
+  if (isMeshFile(name) || isZip(name)) {
     out.files.push({ name, bytes: new Uint8Array(await file.arrayBuffer()) });
   } else if (!skip(name)) {
     out.ignored.push(name);
   }
 }
 
-/** The files of `bytes` named `name` (a mesh or model file as is, a .zip opened), as a drop gives them. */
+/** The files of `bytes` named `name` (a mesh or model file or a .zip, as it is), as a drop gives them. */
 export async function filesFromBytes(name, bytes) {
   const out = emptyResult();
   await fromFile(new Blob([bytes]), name, out);

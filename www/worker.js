@@ -48,6 +48,7 @@
 //   teaching mode (one AECM iteration per Step): 'teach-reset', 'teach-step', 'teach-run', 'teach-pause' and
 //   the replies 'teach', see teach-worker.js
 import init, * as wasm from './pkg/posemfa.js';
+import { openModelZips } from './zip-models.js';
 import wasmUrl from './pkg/posemfa_bg.wasm?url';
 import { Teacher } from './teach-worker.js';
 import { workerQueries } from './worker-queries.js';
@@ -144,9 +145,7 @@ function openModel(data) {
   try {
     opened = wasm.openModel(names, files.map((b) => new Uint8Array(b)), data.animation ?? undefined);
   } catch (e) {
-    if (isCrash(e)) return crashed(e);
-    post({ type: 'load-error', id, problems: problemsOf(e) });
-    return;
+    return loadFailed(id, e);
   }
   replacePopulation(opened.population);
   sendPopulation(id, null);
@@ -159,7 +158,14 @@ function openModel(data) {
   post({ type: 'fitted', id: data.fit?.id ?? id, cancelled: false, fitMs: 0, model: msg });
 }
 
+const loadFailed = (id, e) => (isCrash(e) ? crashed(e) : post({ type: 'load-error', id, problems: problemsOf(e) }));
+
 function load(data) {
+  try {
+    data = openModelZips(wasm, data);
+  } catch (e) {
+    return loadFailed(data.id, e);
+  }
   const { id, names, files } = data;
   if (names.some(isModelFile)) return openModel(data);
   let pop;
@@ -167,9 +173,7 @@ function load(data) {
     // animation: a glTF's clip to read (the page's Animation list), else the core's choice
     pop = new wasm.Population(names, files.map((b) => new Uint8Array(b)), data.animation ?? undefined);
   } catch (e) {
-    if (isCrash(e)) return crashed(e);
-    post({ type: 'load-error', id, problems: problemsOf(e) });
-    return;
+    return loadFailed(id, e);
   }
   replacePopulation(pop);
   sendPopulation(id, null);
@@ -182,9 +186,7 @@ function generate(data) {
   try {
     synth = new wasm.Synthetic(spec);
   } catch (e) {
-    if (isCrash(e)) return crashed(e);
-    post({ type: 'load-error', id, problems: problemsOf(e) });
-    return;
+    return loadFailed(id, e);
   }
   const groundTruth = { partNames: synth.partNames(), partOfVertex: synth.partOfVertex() };
   replacePopulation(synth.population(), synth);

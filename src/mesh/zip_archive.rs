@@ -38,8 +38,13 @@ fn err(file: &str, message: String) -> Error {
     Error::Population { file: file.to_string(), message }
 }
 
-/// Why an entry is not read, or None when it is a file posemfa reads.
-fn skip_reason(path: &str) -> Option<&'static str> {
+/// Whether `path` names a model file (`.posemfa`): the page opens one from an archive ([`open_with`]).
+fn is_model(path: &str) -> bool {
+    path.to_ascii_lowercase().ends_with(&format!(".{}", crate::model_file::EXTENSION))
+}
+
+/// Why an entry is not read, or None when it is a file posemfa reads (`models`: model files too).
+fn skip_reason(path: &str, models: bool) -> Option<&'static str> {
     let parts: Vec<&str> = path.split('/').filter(|p| !p.is_empty()).collect();
     if parts.first() == Some(&"__MACOSX") {
         return Some("macOS resource fork");
@@ -51,14 +56,28 @@ fn skip_reason(path: &str) -> Option<&'static str> {
     if file.to_ascii_lowercase().ends_with(".zip") {
         return Some("an archive inside the archive, not opened");
     }
-    if !FileKind::is_known_extension(file) {
+    if !(FileKind::is_known_extension(file) || models && is_model(file)) {
         return Some("not a mesh file");
     }
     None
 }
 
+/// Whether the archive holds a model file (`.posemfa`) that [`open_with`] would read, from its listing alone
+/// (nothing unpacked); false for an archive that does not open (opening it says why).
+pub fn holds_model(bytes: &[u8]) -> bool {
+    let Ok(zip) = zip::ZipArchive::new(std::io::Cursor::new(bytes)) else { return false };
+    let holds = zip.file_names().any(|path| is_model(path) && skip_reason(&path.replace('\\', "/"), true).is_none());
+    holds
+}
+
 /// Opens the zip archive `name` (its `bytes`), unpacking at most `budget` bytes of mesh files.
 pub fn open(name: &str, bytes: &[u8], budget: u64) -> Result<Archive> {
+    open_with(name, bytes, budget, false)
+}
+
+/// [`open`]; with `models`, model files (`.posemfa`) are read too, as the page reads them beside pose files (a
+/// paper's demo serving one .zip of its model and its poses).
+pub fn open_with(name: &str, bytes: &[u8], budget: u64, models: bool) -> Result<Archive> {
     let damaged = |what: String| err(name, format!("{what}; the archive is cut or damaged: zip the files again"));
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes))
         .map_err(|e| damaged(format!("cannot open the zip archive ({e})")))?;
@@ -73,7 +92,7 @@ pub fn open(name: &str, bytes: &[u8], budget: u64) -> Result<Archive> {
         if entry.is_dir() {
             continue;
         }
-        if let Some(why) = skip_reason(&path) {
+        if let Some(why) = skip_reason(&path, models) {
             skipped.push((path, why));
             continue;
         }
@@ -95,8 +114,9 @@ pub fn open(name: &str, bytes: &[u8], budget: u64) -> Result<Archive> {
         return Err(err(
             name,
             format!(
-                "the zip archive holds no mesh files ({held}); posemfa reads {}: zip the pose files themselves",
-                super::load::formats_read()
+                "the zip archive holds no mesh files ({held}); posemfa reads {}{}: zip the pose files themselves",
+                super::load::formats_read(),
+                if models { " and model files (.posemfa)" } else { "" }
             ),
         ));
     }
@@ -176,15 +196,36 @@ mod tests {
     #[test]
     fn entries_are_read_or_skipped_by_their_path() {
         for p in ["pose1.obj", "walk/pose10.PLY", "a/b/c/horse.glb", "scene.gltf", "scene.bin", "walk.usdz"] {
-            assert_eq!(skip_reason(p), None, "{p}");
+            assert_eq!(skip_reason(p, false), None, "{p}");
         }
-        assert_eq!(skip_reason("__MACOSX/walk/._pose1.obj"), Some("macOS resource fork"));
-        assert_eq!(skip_reason("walk/._pose1.obj"), Some("hidden file"));
-        assert_eq!(skip_reason(".git/config.obj"), Some("hidden file"));
-        assert_eq!(skip_reason("old/more.zip"), Some("an archive inside the archive, not opened"));
+        assert_eq!(skip_reason("__MACOSX/walk/._pose1.obj", false), Some("macOS resource fork"));
+        assert_eq!(skip_reason("walk/._pose1.obj", false), Some("hidden file"));
+        assert_eq!(skip_reason(".git/config.obj", false), Some("hidden file"));
+        assert_eq!(skip_reason("old/more.zip", false), Some("an archive inside the archive, not opened"));
         for p in ["README", "notes.txt", "skin.png", "body.mtl"] {
-            assert_eq!(skip_reason(p), Some("not a mesh file"), "{p}");
+            assert_eq!(skip_reason(p, false), Some("not a mesh file"), "{p}");
         }
+        // a model file: read when asked for (the page), skipped otherwise (the CLI opens one with --model)
+        assert_eq!(skip_reason("demo/horse.posemfa", true), None);
+        assert_eq!(skip_reason("demo/horse.posemfa", false), Some("not a mesh file"));
+        assert_eq!(skip_reason("__MACOSX/._horse.posemfa", true), Some("macOS resource fork"));
+    }
+
+    #[test]
+    fn a_model_file_in_an_archive_is_seen_from_the_listing_and_read_when_asked() {
+        let with = zip_of(&[("demo/horse.posemfa", b"POSEMFA\0 not unpacked by the listing"), ("demo/p1.obj", TRI)]);
+        let without = zip_of(&[("demo/p1.obj", TRI), ("__MACOSX/._x.posemfa", b"fork")]);
+        assert!(holds_model(&with));
+        assert!(!holds_model(&without), "a resource fork named .posemfa is no model file");
+        assert!(!holds_model(b"not a zip"));
+        let page = open_with("d.zip", &with, 1 << 20, true).unwrap();
+        let names: Vec<&str> = page.files.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["d.zip/demo/horse.posemfa", "d.zip/demo/p1.obj"]);
+        let cli = open("d.zip", &with, 1 << 20).unwrap();
+        assert_eq!(cli.files.len(), 1);
+        assert_eq!(cli.skipped, [("demo/horse.posemfa".to_string(), "not a mesh file")]);
+        let e = open_with("e.zip", &zip_of(&[("notes.txt", b"hi")]), 1 << 20, true).unwrap_err().to_string();
+        assert!(e.contains("and model files (.posemfa)"), "{e}");
     }
 
     const TRI: &[u8] = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";

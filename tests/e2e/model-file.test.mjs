@@ -56,6 +56,8 @@ before(async () => {
 after(() => new Promise((ok) => other.close(ok)));
 
 const tube = tubePopulation({ segments: 3, poses: 6 });
+// the arm's model file saved without its poses, and the poses as OBJ files, in one archive
+const demoZip = () => Buffer.from(zipSync({ 'demo/arm.posemfa': new Uint8Array(withoutPoses), ...Object.fromEntries(poseFiles.map((f) => [`demo/poses/${f.name}`, new Uint8Array(f.buffer)])) }));
 const tubeZip = () => Buffer.from(zipSync(Object.fromEntries(tube.files.map((f) => [`tube/${f.name}`, strToU8(f.text)]))));
 
 async function fresh(path = '') {
@@ -132,9 +134,9 @@ test('a cut file and a file of a newer version are refused by name, and what was
   assert.equal(await pick(page, [{ name: 'cut.posemfa', buffer: withPoses.subarray(0, withPoses.length - 1000) }]), true);
   assert.match(await page.locator('[data-testid=errors]').innerText(), /cut\.posemfa.*cut short/s);
   const newer = Buffer.from(withPoses);
-  newer.writeUInt32LE(2, 8);
+  newer.writeUInt32LE(3, 8);
   assert.equal(await pick(page, [{ name: 'newer.posemfa', buffer: newer }]), true);
-  assert.match(await page.locator('[data-testid=errors]').innerText(), /format version 2.*newer posemfa/s);
+  assert.match(await page.locator('[data-testid=errors]').innerText(), /format version 3.*reads model files of version 1 to 2.*newer posemfa/s);
   assert.deepEqual(await labels(page), before);
   assert.equal(await page.evaluate(() => document.body.dataset.state), 'fitted');
   await context.close();
@@ -145,7 +147,7 @@ test('a link opens a model file or a .zip from its own server, in the embed, and
   // the page's own origin: answered by the test through the browser's routing
   await p.context.route('**/links/**', (route) => {
     const name = new URL(route.request().url()).pathname.split('/').pop();
-    const body = { 'arm.posemfa': withPoses, 'tube.zip': tubeZip() }[name];
+    const body = { 'arm.posemfa': withPoses, 'tube.zip': tubeZip(), 'demo.zip': demoZip() }[name];
     return body ? route.fulfill({ status: 200, body, contentType: 'application/octet-stream' }) : route.fulfill({ status: 404, body: 'not found' });
   });
   await p.page.goto(p.page.url().replace(/#.*$/, '') + '#embed=1&src=links/arm.posemfa&view=interp');
@@ -163,6 +165,15 @@ test('a link opens a model file or a .zip from its own server, in the embed, and
   const z = await summary(p.page);
   assert.equal(z.opened, undefined, 'a zip of poses is fitted');
   assert.equal(z.shapes, 6);
+
+  // a paper's demo in one archive: its model file (without the poses) and the OBJ poses it was fitted to
+  await p.page.goto(p.page.url().replace(/#.*$/, '') + '#embed=1&src=links/demo.zip');
+  await p.page.reload();
+  await waitState(p.page, ['fitted', 'error'], 90000);
+  const d = await summary(p.page);
+  assert.equal(d.opened, 'demo.zip/demo/arm.posemfa', 'the model file in the archive is opened, not fitted again');
+  assert.deepEqual(await labels(p.page), fitJson.labels);
+  assert.equal(d.hasData, true, "the archive's poses are the model's data");
 
   await p.page.goto(p.page.url().replace(/#.*$/, '') + '#embed=1&src=links/none.posemfa');
   await p.page.reload();
