@@ -52,7 +52,7 @@ const COMMANDS: &[(&str, &[&str])] = &[
         "export-gltf",
         &["--out", "--weights", "--influences", "--joints", "--morphs", "--bind", "--samples", "--band", "--seed"],
     ),
-    ("rig-report", &["--glb", "--out", "--weights", "--bind", "--band", "--parts"]),
+    ("rig-report", &["--glb", "--truth", "--out", "--weights", "--bind", "--band", "--parts"]),
     ("pose", &["--out", "--json"]),
     ("crossval", &["--json", "--weights", "--bones", "--parts"]),
     ("subdivide", &["--out", "--levels", "--object", "--animation", "--frames", "--poses-from"]),

@@ -4,7 +4,8 @@
 //! - **Which artist joints move.** A joint's rotation relative to its parent joint (each world rotation with its
 //!   scale removed by the polar factor) is taken at every pose of the clip; the joint *moves* when two poses'
 //!   relative rotations differ by at least [`MOVING_DEGREES`] (the largest angle over all pairs of poses: what
-//!   the poses show, whatever the bind pose is). A second root is measured against the first. Joints that do
+//!   the poses show, whatever the bind pose is). A root other than the main one (whose
+//!   subtree is dominant on the most vertices) is measured against the main root. Joints that do
 //!   not move are merged into their parents (transitively); every vertex's *artist part* is its dominant
 //!   joint's (largest skin weight) merged joint. Moving joints that hold no vertex after the merge are left
 //!   out (they move nothing).
@@ -15,7 +16,7 @@
 //!   centroid, not a joint between two parts. Summaries: the median and the largest over the joints of their
 //!   median distances, and the largest distance at any pose.
 //! - **Root placement.** The fitted root part's vertices vote with their dominant artist joint; the winner,
-//!   its share, its artist part, and whether that is the *central* artist part (the artist root's part, or,
+//!   its share, its artist part, and whether that is the *central* artist part (the main root's part, or,
 //!   when that holds no vertex, the shallowest part that does, the larger on a tie).
 //! - **Parents.** A matched artist joint agrees when the fitted parent of its match is the match of its artist
 //!   parent part (the joint its parent merged into; the central part's match is the fitted part that holds
@@ -133,18 +134,33 @@ impl ArtistSkeleton {
         order
     }
 
-    /// The joint each joint's turn is measured against: its parent; a root after the first, the first root.
-    fn reference(&self, j: usize) -> Option<usize> {
-        let first = self.parent.iter().position(Option::is_none);
-        self.parent[j].or(first.filter(|&r| r != j))
+    /// The main root: of the joints without a parent, the one whose subtree is dominant on the most vertices
+    /// (the first on a tie).
+    pub fn main_root(&self) -> Option<usize> {
+        let mut below = vec![0usize; self.names.len()];
+        for j in self.dominant.iter().flatten() {
+            below[*j] += 1;
+        }
+        for &j in self.order().iter().rev() {
+            if let Some(p) = self.parent[j] {
+                below[p] += below[j];
+            }
+        }
+        (0..self.names.len()).filter(|&j| self.parent[j].is_none()).max_by_key(|&j| (below[j], std::cmp::Reverse(j)))
+    }
+
+    /// The joint each joint's turn is measured against: its parent; another root, the main root.
+    fn reference(&self, j: usize, main: Option<usize>) -> Option<usize> {
+        self.parent[j].or(main.filter(|&r| r != j))
     }
 
     /// How far each joint turns over the clip against its reference joint, degrees: the largest angle between
-    /// two poses' relative rotations (None for the first root).
+    /// two poses' relative rotations (None for the main root).
     pub fn turns(&self) -> Vec<Option<f64>> {
+        let main = self.main_root();
         (0..self.names.len())
             .map(|j| {
-                let p = self.reference(j)?;
+                let p = self.reference(j, main)?;
                 let rel: Vec<Mat3> = self.rotations.iter().map(|r| r[p].transpose() * r[j]).collect();
                 let mut worst: f64 = 0.0;
                 for (a, ra) in rel.iter().enumerate() {
@@ -157,18 +173,18 @@ impl ArtistSkeleton {
             .collect()
     }
 
-    /// Every joint's merge target: itself when it moves (or is the first root), else its reference joint's.
+    /// Every joint's merge target: itself when it moves (or is the main root), else its reference joint's.
     pub fn merged(&self, turns: &[Option<f64>]) -> Vec<usize> {
         let mut kept: Vec<usize> = (0..self.names.len()).collect();
-        let first = self.parent.iter().position(Option::is_none);
-        // references before the joints measured against them: the first root, then parents before children
+        let main = self.main_root();
+        // references before the joints measured against them: the main root, then parents before children
         let mut order = self.order();
-        if let Some(r) = first {
+        if let Some(r) = main {
             order.retain(|&j| j != r);
             order.insert(0, r);
         }
         for j in order {
-            match (self.reference(j), turns[j]) {
+            match (self.reference(j, main), turns[j]) {
                 (Some(p), Some(t)) if t < MOVING_DEGREES => kept[j] = kept[p],
                 _ => {}
             }
@@ -208,6 +224,55 @@ impl FittedSkeleton {
         }
         (0..self.names.len()).filter(|&k| self.parent[k].is_none()).max_by_key(|&k| (held[k], std::cmp::Reverse(k)))
     }
+}
+
+/// The artist's skeleton of a rigged, animated glTF file whose clip is `pop` (read with the same `options`):
+/// refused, naming the file, when it has no skin animating the mesh or when its poses are not `pop`'s (vertex
+/// and pose counts, and every vertex of the first pose within 1e-6 of the diagonal).
+pub fn read_artist(
+    file: &str,
+    bytes: &[u8],
+    resources: &[(&str, &[u8])],
+    options: &crate::mesh::gltf::Options,
+    pop: &crate::mesh::Population,
+) -> Result<ArtistSkeleton> {
+    let (g, skin) = crate::mesh::gltf::read_with_skin(file, bytes, resources, options)?;
+    let skin = skin.ok_or_else(|| {
+        Error::Data(format!(
+            "{file}: the poses read are not a skin's animation (no skinned mesh, or morph targets read): the \
+             truth must be a rigged, animated character"
+        ))
+    })?;
+    if g.poses.len() != pop.n_shapes() || skin.influences.len() != pop.n_vertices() {
+        return Err(Error::Data(format!(
+            "{file}: its clip is {} poses of {} vertices, the poses measured {} of {}: give the truth the same \
+             file (and --animation / --frames) the poses were read from",
+            g.poses.len(),
+            skin.influences.len(),
+            pop.n_shapes(),
+            pop.n_vertices()
+        )));
+    }
+    let first: Vec<Vec3> = pop.shape(0).iter().map(|u| pop.normalization.to_original(u)).collect();
+    let d = crate::export::rig_report::bbox_diagonal(&first);
+    if let Some(v) = g.poses[0].1.positions.iter().zip(&first).position(|(p, q)| norm(sub(*p, *q)) > 1e-6 * d) {
+        return Err(Error::Data(format!(
+            "{file}: vertex {v} of its first pose is not where the poses measured have it: the truth must be \
+             the file the poses were read from"
+        )));
+    }
+    ArtistSkeleton::from_skin(file, &skin)
+}
+
+/// The rig's skeleton ([`FittedSkeleton::of_rig`]) against `artist` over the training poses, distances divided
+/// by the diagonal of the bind pose's bounding box (the rig's E_RMS unit).
+pub fn against_rig(artist: &ArtistSkeleton, art: &Articulation, rig: &Rig, bind: usize) -> Result<SkeletonMatch> {
+    let pop = &art.population;
+    if bind >= pop.n_shapes() {
+        return Err(Error::Request(format!("bind pose {bind} (0-based): the population has {} poses", pop.n_shapes())));
+    }
+    let rest: Vec<Vec3> = pop.shape(bind).iter().map(|u| pop.normalization.to_original(u)).collect();
+    compare(artist, &FittedSkeleton::of_rig(art, rig), crate::export::rig_report::bbox_diagonal(&rest))
 }
 
 /// One joint's distance to its match, fractions of the diagonal.
@@ -261,6 +326,19 @@ pub struct ParentAgreement {
     pub disagreeing: Vec<[String; 4]>,
 }
 
+/// One artist joint as measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct ArtistJoint {
+    pub name: String,
+    pub parent: Option<String>,
+    /// How far it turns over the clip against its parent (None for the main root), degrees.
+    pub turn_degrees: Option<f64>,
+    /// The joint it merges into (itself when it moves).
+    pub part: String,
+    /// Vertices whose dominant joint it is.
+    pub vertices: usize,
+}
+
 /// The fitted skeleton against the artist's ([`compare`]).
 #[derive(Debug, Clone, Serialize)]
 pub struct SkeletonMatch {
@@ -276,6 +354,8 @@ pub struct SkeletonMatch {
     pub parents: ParentAgreement,
     /// Adjusted Rand index of the fitted labels against the artist parts.
     pub parts_ari: f64,
+    /// Every artist joint, in the skin's order.
+    pub artist: Vec<ArtistJoint>,
 }
 
 fn median(v: &mut [f64]) -> Option<f64> {
@@ -379,9 +459,9 @@ pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) 
     for p in part_of.iter().flatten() {
         held[*p] += 1;
     }
-    let first_root = artist.parent.iter().position(Option::is_none);
+    let main_root = artist.main_root();
     let moving: Vec<usize> =
-        (0..na).filter(|&j| kept[j] == j && held[j] > 0 && Some(j) != first_root && turns[j].is_some()).collect();
+        (0..na).filter(|&j| kept[j] == j && held[j] > 0 && Some(j) != main_root && turns[j].is_some()).collect();
     let fitted_joints: Vec<usize> = {
         let mut in_tree = vec![false; nf];
         for &l in &fitted.labels {
@@ -392,7 +472,7 @@ pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) 
     let forward = nearest(&moving, &artist.positions, &fitted_joints, &fitted.positions, diagonal);
     let backward = nearest(&fitted_joints, &fitted.positions, &moving, &artist.positions, diagonal);
 
-    // the central artist part: the first root's, else the shallowest part holding vertices (larger on a tie)
+    // the central artist part: the main root's, else the shallowest part holding vertices (larger on a tie)
     let depth = {
         let mut d = vec![0usize; na];
         for j in artist.order() {
@@ -402,7 +482,7 @@ pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) 
         }
         d
     };
-    let central = match first_root.map(|r| kept[r]).filter(|&r| held[r] > 0) {
+    let central = match main_root.map(|r| kept[r]).filter(|&r| held[r] > 0) {
         Some(r) => r,
         None => (0..na)
             .filter(|&j| held[j] > 0)
@@ -448,7 +528,7 @@ pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) 
     let mut agreement = ParentAgreement { matched: 0, agreeing: 0, share: None, disagreeing: Vec::new() };
     for &(a, b, _, _) in &forward {
         // (a parent part that holds no vertex, e.g. a root above the hips, has no match to compare)
-        let Some(p) = artist.reference(a).map(|p| kept[p]).filter(|&p| held[p] > 0) else { continue };
+        let Some(p) = artist.reference(a, main_root).map(|p| kept[p]).filter(|&p| held[p] > 0) else { continue };
         agreement.matched += 1;
         let expected = matched[p];
         if expected.is_some() && fitted.parent[b] == expected {
@@ -485,6 +565,15 @@ pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) 
         root: root_placement,
         parents: agreement,
         parts_ari: crate::metrics::adjusted_rand_index(&labels, &truth),
+        artist: (0..na)
+            .map(|j| ArtistJoint {
+                name: artist.names[j].clone(),
+                parent: artist.parent[j].map(|p| artist.names[p].clone()),
+                turn_degrees: turns[j],
+                part: artist.names[kept[j]].clone(),
+                vertices: artist.dominant.iter().filter(|&&d| d == Some(j)).count(),
+            })
+            .collect(),
     })
 }
 
@@ -549,6 +638,21 @@ mod tests {
         assert_eq!(a.merged(&t), vec![0, 1, 1, 3]);
         let m = compare(&a, &same(&a), 4.0).unwrap();
         assert_eq!((m.artist_joints, m.moving_joints, m.artist_parts), (4, 2, 3));
+    }
+
+    #[test]
+    fn a_second_root_turns_against_the_main_root() {
+        // bone 2 made a root: its subtree (bones 2-4, 30 vertices) outweighs bone 0's (20), so it is the main
+        // root and bone 0 turns against it by bend 1 + bend 2
+        let mut a = chain(&[0.0, 20.0, 15.0, 30.0, 25.0], 40);
+        a.parent[2] = None;
+        assert_eq!(a.main_root(), Some(2));
+        let t = a.turns();
+        assert_eq!(t[2], None);
+        assert!((t[0].unwrap() - 70.0).abs() < 0.7, "{:?}", t[0]);
+        assert!((t[1].unwrap() - 40.0).abs() < 0.4, "{:?}", t[1]);
+        let m = compare(&a, &same(&a), 5.0).unwrap();
+        assert_eq!(m.root.central_part, "bone2");
     }
 
     #[test]

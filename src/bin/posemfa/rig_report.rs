@@ -1,4 +1,5 @@
-//! `posemfa rig-report DIR_OR_FILES... [--glb FILE.glb]`: how well a rig's .glb reproduces the poses.
+//! `posemfa rig-report DIR_OR_FILES... [--glb FILE.glb] [--truth CHARACTER.glb]`: how well a rig's .glb
+//! reproduces the poses, and where its joints are against an artist's skeleton.
 
 use crate::shared::{BandArgs, FitArgs, RigArgs};
 use clap::ValueHint;
@@ -11,6 +12,10 @@ pub struct Args {
     /// Measure this .glb (written by export-gltf from the same files) instead of fitting one
     #[arg(long, value_name = "FILE.glb", value_hint = ValueHint::FilePath)]
     glb: Option<String>,
+    /// A rigged, animated character whose clip the poses are (the same file): also compare the rig's skeleton
+    /// with the artist's (joint distances both ways, root placement, parents, parts against the skeleton)
+    #[arg(long, value_name = "CHARACTER.glb", value_hint = ValueHint::FilePath, conflicts_with = "glb")]
+    truth: Option<String>,
     /// Also write the .glb that was measured
     #[arg(long, value_name = "rig.glb", value_hint = ValueHint::FilePath)]
     out: Option<String>,
@@ -76,6 +81,12 @@ pub fn run(a: Args) -> Result<(), String> {
                 posemfa::parts::islands::island_count(&result.model.labels, pop.graph_faces()).into(),
             );
             info.insert("solver_trace".into(), rig.trace.clone().into());
+            if let Some(file) = &a.truth {
+                let t = std::time::Instant::now();
+                let m = skeleton_against(file, &a.fit.input, &pop, &art, &rig, g.bind_pose)?;
+                info.insert("skeleton".into(), serde_json::to_value(m).map_err(|e| e.to_string())?);
+                timings.insert("skeleton".into(), ms(t).into());
+            }
             glb
         }
     };
@@ -98,4 +109,19 @@ pub fn run(a: Args) -> Result<(), String> {
     }
     out!("{json}");
     Ok(())
+}
+
+/// The rig's skeleton against the artist's of `file` ([`posemfa::articulate::skeleton_match`]).
+fn skeleton_against(
+    file: &str,
+    input: &crate::shared::InputArgs,
+    pop: &posemfa::mesh::Population,
+    art: &posemfa::articulate::Articulation,
+    rig: &posemfa::articulate::rig::Rig,
+    bind: usize,
+) -> Result<posemfa::articulate::skeleton_match::SkeletonMatch, String> {
+    use posemfa::articulate::skeleton_match::{against_rig, read_artist};
+    let bytes = std::fs::read(file).map_err(|e| format!("cannot read --truth {file}: {e}"))?;
+    let artist = read_artist(file, &bytes, &[], &input.gltf(), pop).map_err(|e| e.to_string())?;
+    against_rig(&artist, art, rig, bind).map_err(|e| e.to_string())
 }

@@ -127,7 +127,7 @@ pub struct InputArgs {
 }
 
 impl InputArgs {
-    fn gltf(&self) -> posemfa::mesh::gltf::Options {
+    pub fn gltf(&self) -> posemfa::mesh::gltf::Options {
         posemfa::mesh::gltf::Options {
             mesh: self.mesh.clone(),
             animation: self.animation.clone(),
