@@ -4,20 +4,11 @@
 // Run: npm run build && node --test tests/e2e/examples.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState, tubePopulation, asPayload } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload, summary, text, frames, openFitted } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  await frames(p.page);
-  return p;
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 // Clicks a preset and waits for its fit.
 async function preset(page, id) {

@@ -5,59 +5,11 @@
 // Run: npm run build && node --test tests/e2e/exports.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { readFile } from 'node:fs/promises';
-import { pageSession, waitState, asPayload, tubePopulation, dropAndFit } from './helpers.mjs';
+import { pageSession, waitState, asPayload, tubePopulation, dropAndFit, summary, text, frames, openFitted, setMode, exportObj, relativeRms } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  await frames(p.page);
-  return p;
-}
-
-async function mode(page, m) {
-  await page.check(`#modes input[value=${m}]`, { force: true });
-  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
-}
-
-// The OBJ the export button writes now: { text, objects: [{ name, v: [[x, y, z]...], groups: [names] }] }.
-async function exportObj(page) {
-  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-obj')]);
-  const t = await readFile(await download.path(), 'utf8');
-  const objects = [];
-  let cur = null;
-  for (const line of t.split('\n')) {
-    if (line.startsWith('o ')) objects.push((cur = { name: line.slice(2), v: [], groups: [] }));
-    else if (line.startsWith('v ')) {
-      if (!cur) objects.push((cur = { name: null, v: [], groups: [] }));
-      cur.v.push(line.slice(2).split(' ').map(Number));
-    } else if (line.startsWith('g ')) cur.groups.push(line.slice(2));
-  }
-  return { text: t, name: download.suggestedFilename(), objects };
-}
-
-// RMS distance between two vertex lists, over the diagonal of the first one's bounding box.
-function relativeRms(a, b) {
-  assert.equal(a.length, b.length);
-  let s = 0;
-  const lo = [Infinity, Infinity, Infinity];
-  const hi = [-Infinity, -Infinity, -Infinity];
-  a.forEach((p, i) => {
-    for (let k = 0; k < 3; k++) {
-      s += (p[k] - b[i][k]) ** 2;
-      lo[k] = Math.min(lo[k], p[k]);
-      hi[k] = Math.max(hi[k], p[k]);
-    }
-  });
-  const diag = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-  return Math.sqrt(s / a.length) / diag;
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 test('every export button says what it writes before it is pressed', async () => {
   const { page, context, log } = await session.open();
@@ -112,7 +64,7 @@ test('export names: an interpolation by its two poses and t, files sharing no na
 test('OBJ export: both meshes where two are shown, named for what they are; Stages: each stage\'s parts as groups', async () => {
   const { page, context, log } = await fitted();
   const s = await summary(page);
-  await mode(page, 'recon');
+  await setMode(page, 'recon');
   await page.waitForFunction(() => window.posemfa.shown().join() === 'original,reconstruction');
   assert.equal(await text(page, '#export-obj'), 'OBJ of the 2 shown meshes');
   const recon = await exportObj(page);
@@ -124,7 +76,7 @@ test('OBJ export: both meshes where two are shown, named for what they are; Stag
   assert.match(recon.name, /original_reconstruction/);
   const faces = [...recon.text.matchAll(/^f /gm)].length;
   assert.ok(faces > 0 && faces % 2 === 0, `${faces} faces: each mesh its own triangles`);
-  await mode(page, 'stages');
+  await setMode(page, 'stages');
   await page.waitForFunction(() => window.posemfa.shown().join() === 'coarse,refined,final');
   const st = await exportObj(page);
   assert.deepEqual(st.objects.map((o) => o.name), ['coarse', 'refined', 'final']);

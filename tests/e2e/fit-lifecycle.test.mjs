@@ -7,13 +7,10 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
-import { pageSession, waitState, tubePopulation, asPayload, moveTreeSlider, openCancelledFirstFit, dropAndFit } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload, moveTreeSlider, openCancelledFirstFit, dropAndFit, summary, text, frames, openFitted, untilFitted, nextFit } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const fits = (page) => page.evaluate(() => window.posemfa.fitCount());
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
 // The Log-likelihood field's number: nats, its thousands apart (views/result.js natsText)
 const natsValue = (t) => {
@@ -22,24 +19,7 @@ const natsValue = (t) => {
   return Number(`${m[1] ? '-' : ''}${m[2].replace(/\u202f/g, '')}`);
 };
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  await frames(p.page);
-  return p;
-}
-
-// Asserts that the page is fitted (its errors shown if not).
-async function untilFitted(page) {
-  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted', await text(page, '[data-testid=errors]'));
-}
-
-// Waits until the fit after `n` ended and the page is fitted.
-async function nextFit(page, n) {
-  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 180000, polling: 50 });
-  await untilFitted(page);
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 test('a new population starts with "Parts in the end" on auto and the exact Λ step, whatever the last one had', async () => {
   const { page, context, log } = await session.open('#ex=literal-eq18');

@@ -9,11 +9,10 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { pageSession, waitState, tubePopulation, dropAndFit, afterNextFit, ROOT } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, dropAndFit, afterNextFit, ROOT, summary } from './helpers.mjs';
 
 const session = pageSession();
 const fixture = (name) => ({ name, buffer: readFileSync(join(ROOT, 'tests/fixtures/blender', name)) });
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const counters = (page) => page.evaluate(() => [window.posemfa.fitCount(), window.posemfa.loadErrorCount()]);
 const shownSource = (page) => page.locator('[data-testid=pop-source]').innerText();
 

@@ -1,5 +1,6 @@
 // Shared by the page tests and scripts/bench-page.mjs: a tiny static server for dist/, a headless Chromium
 // (Debian's, through playwright-core), and OBJ text of small generated articulated populations.
+import assert from 'node:assert/strict';
 import http from 'node:http';
 import { readFile, stat } from 'node:fs/promises';
 import { readFileSync, readdirSync } from 'node:fs';
@@ -343,3 +344,70 @@ export async function answerQuestions(page, yes) {
   }, yes);
 }
 export const askedQuestions = (page) => page.evaluate(() => window.__asked ?? []);
+
+/** The page's summary of the fit shown (window.posemfa.summary()), or null. */
+export const summary = (page) => page.evaluate(() => window.posemfa.summary());
+/** The text of the element `sel`. */
+export const text = (page, sel) => page.locator(sel).innerText();
+/** Resolves after two animation frames: what was asked is on the screen. */
+export const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+
+/** A page of `session` opened at `path` (the part after #) with its fit finished (the page's errors are the
+ * assertion's message when it failed) and drawn: { page, context, log }. */
+export async function openFitted(session, path = '', opts) {
+  const p = await session.open(path, opts);
+  const state = await waitState(p.page, ['fitted', 'error'], 90000);
+  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
+  await frames(p.page);
+  return p;
+}
+
+/** Shows view mode `m` (parts, stages, recon, latent, interp, pose) as a click on its button does. */
+export async function setMode(page, m) {
+  await page.check(`#modes input[value=${m}]`, { force: true });
+  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
+}
+
+// The OBJ the export button writes now: { text, objects: [{ name, v: [[x, y, z]...], groups: [names] }] }.
+export async function exportObj(page) {
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-obj')]);
+  const t = await readFile(await download.path(), 'utf8');
+  const objects = [];
+  let cur = null;
+  for (const line of t.split('\n')) {
+    if (line.startsWith('o ')) objects.push((cur = { name: line.slice(2), v: [], groups: [] }));
+    else if (line.startsWith('v ')) {
+      if (!cur) objects.push((cur = { name: null, v: [], groups: [] }));
+      cur.v.push(line.slice(2).split(' ').map(Number));
+    } else if (line.startsWith('g ')) cur.groups.push(line.slice(2));
+  }
+  return { text: t, name: download.suggestedFilename(), objects };
+}
+
+// RMS distance between two vertex lists, over the diagonal of the first one's bounding box.
+export function relativeRms(a, b) {
+  assert.equal(a.length, b.length);
+  let s = 0;
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  a.forEach((p, i) => {
+    for (let k = 0; k < 3; k++) {
+      s += (p[k] - b[i][k]) ** 2;
+      lo[k] = Math.min(lo[k], p[k]);
+      hi[k] = Math.max(hi[k], p[k]);
+    }
+  });
+  const diag = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  return Math.sqrt(s / a.length) / diag;
+}
+
+// Asserts that the page is fitted (its errors shown if not).
+export async function untilFitted(page) {
+  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted', await text(page, '[data-testid=errors]'));
+}
+
+// Waits until the fit after `n` ended and the page is fitted.
+export async function nextFit(page, n) {
+  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 180000, polling: 50 });
+  await untilFitted(page);
+}

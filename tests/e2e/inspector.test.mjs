@@ -7,12 +7,10 @@ import assert from 'node:assert/strict';
 import { existsSync, readdirSync } from 'node:fs';
 import { readFile } from 'node:fs/promises';
 import path from 'node:path';
-import { pageSession, waitState, moveTreeSlider, ROOT } from './helpers.mjs';
+import { pageSession, waitState, moveTreeSlider, ROOT, summary, text } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const fits = (page) => page.evaluate(() => window.posemfa.fitCount());
-const text = (page, sel) => page.locator(sel).innerText();
 const info = (page) => page.locator('#info').innerText().then((t) => t.trim());
 const horseDir = path.join(process.env.POSEMFA_SHARED ?? path.join(ROOT, '../shared'), 'data/horse-poses');
 

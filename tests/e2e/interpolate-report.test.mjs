@@ -3,26 +3,15 @@
 // Run: npm run build && node --test tests/e2e/interpolate-report.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, text, openFitted, setMode } from './helpers.mjs';
 
 const session = pageSession();
-const text = (page, sel) => page.locator(sel).innerText();
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  return p;
-}
-
-async function mode(page, m) {
-  await page.check(`#modes input[value=${m}]`, { force: true });
-  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 test('"Measure at this t" says what each error is measured against', async () => {
   const { page, context, log } = await fitted('#ex=arm');
-  await mode(page, 'interp');
+  await setMode(page, 'interp');
   await page.click('#measure');
   await page.waitForFunction(() => document.querySelector('#report table'));
   const table = await page.$$eval('#report tr', (rows) => rows.map((r) => [...r.children].map((c) => c.textContent)));
@@ -42,7 +31,7 @@ test('"Measure at this t" says what each error is measured against', async () =>
 test('"Measure at this t": a line says how to read the stretch; the report scrolls in its own box, the poses stay in the window (1280x800, 390 wide)', async () => {
   for (const [width, height] of [[1280, 800], [390, 844]]) {
     const { page, context, log } = await fitted('', { width, height });
-    await mode(page, 'interp');
+    await setMode(page, 'interp');
     await page.click('#measure');
     await page.waitForFunction(() => document.querySelector('#report table'));
     const reading = await text(page, '[data-testid=report-reading]');

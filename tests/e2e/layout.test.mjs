@@ -4,24 +4,11 @@
 // Run: npm run build && node --test tests/e2e/layout.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, text, frames, openFitted, setMode } from './helpers.mjs';
 
 const session = pageSession();
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  await frames(p.page);
-  return p;
-}
-
-async function mode(page, m) {
-  await page.check(`#modes input[value=${m}]`, { force: true });
-  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 // Whether an element lies fully inside the window (not cut by its bottom or right edge, nor scrolled away).
 const inWindow = (page, sel) => page.$eval(sel, (e) => {
@@ -111,7 +98,7 @@ test('layout at 1280x800: nothing below the window, the running fit\'s progress 
 
 test('pose mode at 1280x800: every pose-space slider\'s label is one line, its slider beside it', async () => {
   const { page, context, log } = await fitted();
-  await mode(page, 'pose');
+  await setMode(page, 'pose');
   await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
   await page.waitForFunction(() => document.querySelectorAll('#pose-modes label').length > 0);
   const labels = await lines(page, '#pose-modes label');
@@ -144,7 +131,7 @@ test('a phone (390x844): no label or button text cut, no control broken off its 
   assert.ok(await width() <= 390, `the page is ${await width()} px wide`);
   assert.deepEqual(await cutOff(page), [], 'parts view');
   for (const m of ['interp', 'latent', 'pose']) {
-    await mode(page, m);
+    await setMode(page, m);
     if (m === 'pose') await page.waitForFunction(() => window.posemfa.pose?.ready(), null, { timeout: 120000, polling: 50 });
     await frames(page);
     assert.ok(await width() <= 390, `${m}: the page is ${await width()} px wide`);

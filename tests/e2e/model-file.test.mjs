@@ -13,10 +13,9 @@ import { execFileSync } from 'node:child_process';
 import { join } from 'node:path';
 import { tmpdir } from 'node:os';
 import { zipSync, strToU8 } from 'fflate';
-import { pageSession, waitState, tubePopulation, debugCli } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, debugCli, summary } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const counters = (page) => page.evaluate(() => [window.posemfa.fitCount(), window.posemfa.loadErrorCount()]);
 const labels = (page) => page.evaluate(() => window.posemfa.fittedParts()?.labels ?? null);
 

@@ -4,14 +4,11 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { zipSync, strToU8 } from 'fflate';
-import {
-  pageSession, waitState, tubePopulation, asPayload, paletteCounts, canvasFingerprint,
-} from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload, paletteCounts, canvasFingerprint, summary } from './helpers.mjs';
 
 const session = pageSession();
 
 const SUMMARY_KEYS = ['shapes', 'vertices', 'parts', 'rmse', 'iterations', 'fitMs'];
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
 
 // Opens the page (at `path`, e.g. '?faultInjection=1') and waits until it has settled (its default fitted).
 async function fresh(opts, path = '') {

@@ -7,22 +7,13 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
-import { pageSession, waitState, afterNextFit, ROOT } from './helpers.mjs';
+import { pageSession, waitState, afterNextFit, ROOT, summary, text, frames, openFitted } from './helpers.mjs';
 import { decade } from '../../www/views/part-curve.js';
 
 const session = pageSession();
 const core = () => createRequire(import.meta.url)(join(ROOT, 'pkg-node', 'posemfa.js'));
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  await frames(p.page);
-  return p;
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 // The one line of the form's problems about `field`, once it is there.
 async function fieldLine(page, field) {

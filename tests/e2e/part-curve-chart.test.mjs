@@ -5,13 +5,10 @@
 // Run: npm run build && node --test tests/e2e/part-curve-chart.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, summary, text, frames } from './helpers.mjs';
 import { decade } from '../../www/views/part-curve.js';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
 for (const [width, height] of [[1280, 800], [390, 844]]) {
   test(`the part rule chart has axis titles with units, a legend and a sentence on reading it (${width}x${height})`, async () => {

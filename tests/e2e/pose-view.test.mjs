@@ -12,10 +12,9 @@ import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
-import { pageSession, asPayload, ROOT, enterPoseMode, waitState, objFiles, debugCli } from './helpers.mjs';
+import { pageSession, asPayload, ROOT, enterPoseMode, waitState, objFiles, debugCli, text, openFitted, setMode } from './helpers.mjs';
 
 const session = pageSession();
-const text = (page, sel) => page.locator(sel).innerText();
 let dir;
 let opened = null;
 
@@ -61,17 +60,7 @@ async function downloaded(page, selector, { binary = false } = {}) {
 const vertices = (obj) => obj.split('\n').filter((l) => l.startsWith('v ')).map((l) => l.slice(2).split(' ').map(Number));
 const headerOf = (obj) => obj.split('\n').filter((l) => l.startsWith('#')).join('\n');
 const rms = (a, b) => Math.sqrt(a.reduce((s, p, i) => s + (p[0] - b[i][0]) ** 2 + (p[1] - b[i][1]) ** 2 + (p[2] - b[i][2]) ** 2, 0) / a.length);
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  return p;
-}
-
-async function mode(page, m) {
-  await page.check(`#modes input[value=${m}]`, { force: true });
-  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 const errorsText = (page) => page.locator('[data-testid=errors]').innerText();
 
@@ -236,7 +225,7 @@ test('pose mode: the pose-space sliders follow the pose shown (rest pose, a turn
 
 test('pose mode: after Random pose the caption describes the whole pose until a part is turned; the Part list is in number order', async () => {
   const { page, context, log } = await fitted(); // the quadruped: 18 bones, whose parent-first order is not by number
-  await mode(page, 'pose');
+  await setMode(page, 'pose');
   await page.waitForFunction(() => window.posemfa.pose.ready(), null, { timeout: 60000 });
   const sk = await page.evaluate(() => window.posemfa.pose.skeleton());
   const options = await page.$$eval('#pose-part option', (os) => os.map((o) => ({ value: Number(o.value), name: o.textContent })));

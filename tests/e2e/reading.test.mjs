@@ -6,12 +6,9 @@
 // Run: npm run build && node --test tests/e2e/reading.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState, openCancelledFirstFit, moveTreeSlider } from './helpers.mjs';
+import { pageSession, waitState, openCancelledFirstFit, moveTreeSlider, summary, text, frames } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-const text = (page, sel) => page.locator(sel).innerText();
 
 async function fitted(path = '') {
   const p = await session.open(path);

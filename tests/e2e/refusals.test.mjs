@@ -3,10 +3,9 @@
 // Run: npm run build && node --test tests/e2e/refusals.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState, tubePopulation, asPayload } from './helpers.mjs';
+import { pageSession, waitState, tubePopulation, asPayload, text } from './helpers.mjs';
 
 const session = pageSession();
-const text = (page, sel) => page.locator(sel).innerText();
 
 async function fitted(page) {
   assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted', await text(page, '[data-testid=errors]'));

@@ -4,12 +4,9 @@
 // Run: npm run build && node --test tests/e2e/result-panel.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, summary, text, frames, openFitted, setMode } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
 // The Log-likelihood field's number: nats, its thousands apart (views/result.js natsText)
 const natsValue = (t) => {
@@ -18,18 +15,7 @@ const natsValue = (t) => {
   return Number(`${m[1] ? '-' : ''}${m[2].replace(/\u202f/g, '')}`);
 };
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  await frames(p.page);
-  return p;
-}
-
-async function mode(page, m) {
-  await page.check(`#modes input[value=${m}]`, { force: true });
-  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 test('E_RMS: per coordinate, as the rig\'s; a small one in significant digits, not "0.000"', async () => {
   const { page, context, log } = await session.open('#ex=arm');
@@ -73,7 +59,7 @@ test('figures say their units: the Log-likelihood in nats, the variance floor in
   await page.waitForFunction(() => document.querySelector('[data-testid=param-errors] li[data-field=varianceFloor]'));
   assert.match(await text(page, '[data-testid=param-errors] li[data-field=varianceFloor]'), /^Variance floor \(unit-box units²\): .*unit-box units²/);
   await page.click('#reset-params');
-  await mode(page, 'pose');
+  await setMode(page, 'pose');
   await page.waitForFunction(() => window.posemfa.pose.ready(), null, { timeout: 60000 });
   await page.waitForFunction(() => document.querySelectorAll('#pose-modes label').length > 0);
   const labels = await page.$$eval('#pose-modes label', (l) => l.map((x) => x.textContent.trim()));

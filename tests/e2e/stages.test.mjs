@@ -4,37 +4,12 @@
 // Run: npm run build && node --test tests/e2e/stages.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { pageSession, waitState, openCancelledFirstFit } from './helpers.mjs';
+import { pageSession, waitState, openCancelledFirstFit, summary, text, frames, openFitted, setMode, untilFitted, nextFit } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const fits = (page) => page.evaluate(() => window.posemfa.fitCount());
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  await frames(p.page);
-  return p;
-}
-
-async function mode(page, m) {
-  await page.check(`#modes input[value=${m}]`, { force: true });
-  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
-}
-
-// Asserts that the page is fitted (its errors shown if not).
-async function untilFitted(page) {
-  assert.equal(await waitState(page, ['fitted', 'error'], 120000), 'fitted', await text(page, '[data-testid=errors]'));
-}
-
-// Waits until the fit after `n` ended and the page is fitted.
-async function nextFit(page, n) {
-  await page.waitForFunction((c) => window.posemfa.fitCount() > c, n, { timeout: 180000, polling: 50 });
-  await untilFitted(page);
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 // The parts line (next to the part count) of a merge-tree fit, finished or cancelled: the same words.
 const TREE_PARTS = /^\(started from the merge tree's \d+ parts?(, cancelled)?\)$/;
@@ -43,7 +18,7 @@ test('the Stages view names what ran: the merge tree\'s stages for the default f
   const { page, context, log } = await fitted();
   const s = await summary(page);
   assert.match(await text(page, '#stage-parts'), TREE_PARTS);
-  await mode(page, 'stages');
+  await setMode(page, 'stages');
   await page.waitForFunction(() => window.posemfa.shown().join() === 'coarse,refined,final');
   await frames(page);
   const pose = await page.evaluate(() => document.getElementById('pose-select').selectedOptions[0].textContent);
@@ -57,7 +32,7 @@ test('the Stages view names what ran: the merge tree\'s stages for the default f
   assert.ok(l.every((x) => x.visible), JSON.stringify(l));
   assert.ok(l[0].x < l[1].x && l[1].x < l[2].x, `left to right: ${JSON.stringify(l)}`);
   // one mesh: no label
-  await mode(page, 'parts');
+  await setMode(page, 'parts');
   await frames(page);
   assert.equal((await labels()).filter((x) => x.visible).length, 0);
   // the refinement off: Algorithm 1's coarse stage alone, named as such
@@ -70,7 +45,7 @@ test('the Stages view names what ran: the merge tree\'s stages for the default f
   // (a part of the coarse fit in pieces is a part per piece: the count after that is said when it is more)
   const pieces = a.parts > a.refinedParts ? `; ${a.parts} once each part is one connected piece` : '';
   assert.match(await text(page, '#stage-parts'), new RegExp(`^\\(coarse ${a.coarseParts}, no refinement${pieces}\\)$`));
-  await mode(page, 'stages');
+  await setMode(page, 'stages');
   await page.waitForFunction(() => /^Algorithm 1 on pose/.test(document.getElementById('caption').textContent));
   await frames(page);
   assert.equal(await text(page, '#caption'), `Algorithm 1 on pose “${pose}”: coarse (${a.coarseParts} parts) | refined (${a.refinedParts}) | final (${a.parts})`);

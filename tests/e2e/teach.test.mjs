@@ -8,15 +8,12 @@ import assert from 'node:assert/strict';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
 import { readFile } from 'node:fs/promises';
-import { pageSession, waitState, canvasFingerprint, ROOT, answerQuestions, askedQuestions } from './helpers.mjs';
+import { pageSession, waitState, canvasFingerprint, ROOT, answerQuestions, askedQuestions, summary, text, frames } from './helpers.mjs';
 
 const session = pageSession();
 
 const core = () => createRequire(import.meta.url)(join(ROOT, 'pkg-node', 'posemfa.js'));
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
 const teaching = (page) => page.evaluate(() => window.posemfa.teaching());
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-const text = (page, sel) => page.locator(sel).innerText();
 
 // Opens `hash` (or the default) and waits until the page is fitted and any view in the link is applied.
 async function fitted(hash = '', opts) {

@@ -7,10 +7,9 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { existsSync, readdirSync } from 'node:fs';
 import path from 'node:path';
-import { pageSession, waitState, moveTreeSlider, afterNextFit, ROOT } from './helpers.mjs';
+import { pageSession, waitState, moveTreeSlider, afterNextFit, ROOT, text } from './helpers.mjs';
 
 const session = pageSession();
-const text = (page, sel) => page.locator(sel).innerText();
 
 async function fitted(page) {
   assert.equal(await waitState(page, ['fitted', 'error'], 90000), 'fitted');

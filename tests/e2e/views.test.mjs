@@ -4,59 +4,11 @@
 // Run: npm run build && node --test tests/e2e/views.test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { readFile } from 'node:fs/promises';
-import { pageSession, waitState } from './helpers.mjs';
+import { pageSession, waitState, summary, text, frames, openFitted, setMode, exportObj, relativeRms } from './helpers.mjs';
 
 const session = pageSession();
-const summary = (page) => page.evaluate(() => window.posemfa.summary());
-const text = (page, sel) => page.locator(sel).innerText();
-const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
-async function fitted(path = '', opts) {
-  const p = await session.open(path, opts);
-  const state = await waitState(p.page, ['fitted', 'error'], 90000);
-  assert.equal(state, 'fitted', await text(p.page, '[data-testid=errors]'));
-  await frames(p.page);
-  return p;
-}
-
-async function mode(page, m) {
-  await page.check(`#modes input[value=${m}]`, { force: true });
-  await page.waitForFunction((x) => window.posemfa.mode() === x, m);
-}
-
-// The OBJ the export button writes now: { text, objects: [{ name, v: [[x, y, z]...], groups: [names] }] }.
-async function exportObj(page) {
-  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-obj')]);
-  const t = await readFile(await download.path(), 'utf8');
-  const objects = [];
-  let cur = null;
-  for (const line of t.split('\n')) {
-    if (line.startsWith('o ')) objects.push((cur = { name: line.slice(2), v: [], groups: [] }));
-    else if (line.startsWith('v ')) {
-      if (!cur) objects.push((cur = { name: null, v: [], groups: [] }));
-      cur.v.push(line.slice(2).split(' ').map(Number));
-    } else if (line.startsWith('g ')) cur.groups.push(line.slice(2));
-  }
-  return { text: t, name: download.suggestedFilename(), objects };
-}
-
-// RMS distance between two vertex lists, over the diagonal of the first one's bounding box.
-function relativeRms(a, b) {
-  assert.equal(a.length, b.length);
-  let s = 0;
-  const lo = [Infinity, Infinity, Infinity];
-  const hi = [-Infinity, -Infinity, -Infinity];
-  a.forEach((p, i) => {
-    for (let k = 0; k < 3; k++) {
-      s += (p[k] - b[i][k]) ** 2;
-      lo[k] = Math.min(lo[k], p[k]);
-      hi[k] = Math.max(hi[k], p[k]);
-    }
-  });
-  const diag = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-  return Math.sqrt(s / a.length) / diag;
-}
+const fitted = (path, opts) => openFitted(session, path, opts);
 
 test('the 3D view takes keys once focused: arrows pan, Shift+arrows orbit, + and - zoom, 0 frames again', async () => {
   const { page, context, log } = await session.open();
@@ -105,7 +57,7 @@ test('the 3D view takes keys once focused: arrows pan, Shift+arrows orbit, + and
 test('latent view: the parts placed by the pose\'s R and b by default, readable; "each in its own frame" is a choice with its own caption', async () => {
   const { page, context, log } = await fitted();
   const pose = (await exportObj(page)).objects[0].v; // the Parts view: pose 1
-  await mode(page, 'latent');
+  await setMode(page, 'latent');
   await page.waitForFunction(() => /latent shape/i.test(document.querySelector('#caption').textContent));
   assert.match(await text(page, '#caption'), /turned by its R and moved by its b of pose/);
   assert.equal(await page.locator('[data-testid=latent-place]').isVisible(), true);
