@@ -41,7 +41,9 @@ pub use result::{FinalRun, FitResult, PartRound, Progress, Rule, RuleReport, Sta
 pub use algorithm1::{merge_rigid_neighbours, SUBSET_FACTOR};
 use algorithm1::{placeholder_fit, Refinement};
 use tree_rule::check_start_labels;
-pub use tree_rule::{coarse_target, COARSE_FACTOR, COARSE_POSES, TREE_COUNT_START_RATIO, TREE_CUT_LEAVES, TREE_START_RATIO};
+pub use tree_rule::{
+    coarse_target, COARSE_FACTOR, COARSE_POSES, TREE_COUNT_START_RATIO, TREE_CUT_LEAVES, TREE_START_RATIO,
+};
 
 /// Data and their E-step layout (which depends on the data alone, so one serves every run on them).
 fn lay_out(data: Data) -> (Data, Blocked) {
@@ -80,7 +82,7 @@ struct Fine {
     /// The whole population's data and E-step layout for the last run, made before the coarse mesh: the
     /// largest block of the fit is then taken first, and the blocks of the coarse mesh and its runs, freed
     /// before the last run, do not leave it to be placed above them (in wasm, where linear memory only grows,
-    /// made last they raised the generated 42 k x 11 quadruped's peak from 59 to 69 bytes per vertex-pose).
+    /// made last they raised the peak memory per vertex-pose: docs/decisions.md).
     full: (Data, Blocked),
 }
 
@@ -427,11 +429,9 @@ impl Pipeline {
     /// On a coarse mesh, after a round of the part rule that removed parts: the AECM again from `labels`, each
     /// part that is still a part of the last run ([`super::labels::same_parts`]) from that run's component, the
     /// others (a merge's union) from their labels; a union that is mostly one of its sides is that side (rule 2
-    /// merges parts that move alike). The subdivided horse-gallop's refit took 22 iterations from labels, 10 from
-    /// there; over the 9 standard runs of the subdivided lion, 16-20 parts (adjusted Rand min 0.843) from labels,
-    /// 17-20 (0.949) from there. Not on all vertices: there it made horse-gallop's fit 341 -> 280 ms but moved the
-    /// skinned characters' parts away from their skeletons (adjusted Rand 0.811 / 0.830 / 0.878 -> 0.779 / 0.785
-    /// / 0.846).
+    /// merges parts that move alike): fewer iterations than from labels, and steadier counts over the standard
+    /// runs of `posemfa robustness`. Not on all vertices: there it was faster but moved the skinned characters'
+    /// parts away from their skeletons (the figures of both: docs/decisions.md).
     fn refit_warm(&mut self, run: FinalRun, labels: &[u32]) -> Result<State> {
         let last = self.last_run_parts(labels);
         self.open_run(run);

@@ -19,10 +19,10 @@
 //! merges ([`super::distinct`]) judge the fitted parts.
 
 use super::patches::{patch_count, patches, spread_poses};
-use rigid_stats::{rigid_sse, Stats};
 use crate::geometry::procrustes::best_rotation;
 use crate::geometry::{Mat3, IDENTITY};
 use crate::mesh::Population;
+use rigid_stats::{rigid_sse, Stats};
 use serde::Serialize;
 use std::cmp::Ordering;
 use std::collections::{BTreeSet, BinaryHeap};

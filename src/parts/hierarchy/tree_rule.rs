@@ -69,16 +69,15 @@ pub const TREE_START_RATIO: f64 = 28.0;
 
 /// [`PartRule::Tree`]'s start with an exact part count (`target_parts`): the cut where a merge first costs 64
 /// times the patches' typical variance ([`MergeTree::typical`]), and no flesh dissolved before the first AECM.
-/// The count's steadiness does not matter there, and this start rigs better: horse-gallop at 10 bones E_RMS
-/// 3.13 against 3.91 from the part rule's start (20 bones 1.035 and 1.036, 30 bones 0.613 and 0.556).
+/// The count's steadiness does not matter there, and this start rigs better than the part rule's at 10, 20 and
+/// 30 bones (horse-gallop's E_RMS: docs/decisions.md).
 pub const TREE_COUNT_START_RATIO: f64 = 64.0;
 
 /// A patch tree with fewer leaves than this (a mesh of under about 384 vertices) starts from every patch, uncut.
 /// There a patch of about 6 vertices spans much of a part, so most patches straddle a joint and their typical
-/// variance is not a rigid patch's: on Blender's 174-vertex skinned character (18 parts) it was 24 times the
-/// 692-vertex one's, the cut at [`TREE_START_RATIO`] kept 6 of its 29 patches and the fit ended at 5 parts
-/// (adjusted Rand 0.447 against the skeleton); from all 29 it ends at 18 (0.856). The AECM from at most 63 parts
-/// on so few vertices is cheap.
+/// variance is not a rigid patch's: on Blender's 174-vertex skinned character the cut at [`TREE_START_RATIO`]
+/// kept a few patches and the fit lost most of its 18 parts, from every patch it finds them (docs/decisions.md).
+/// The AECM from at most 63 parts on so few vertices is cheap.
 pub const TREE_CUT_LEAVES: usize = 64;
 
 /// The least typical variance of the patches (unit-box units²; the data are in the unit box), against 0 on
@@ -169,7 +168,7 @@ impl Pipeline {
         p.close_stage(None);
         p.begin_final(FinalRun::First);
         // the first run only feeds the part rule's decisions: at the refinement's loose tolerance (from a
-        // generous over-segmentation a converged run took 64 iterations on the 12 k hand, the loose one 10)
+        // generous over-segmentation a converged run takes several times the iterations: docs/decisions.md)
         let loose = params.at_loose_tolerance();
         let (data, layout) = lay_out(data);
         p.state = State::Final(Fit::from_labels_laid_out(data, layout, &labels, &loose)?);
@@ -316,9 +315,9 @@ pub(super) fn tree_start(pop: &Population, data: &Data, params: &Params) -> Resu
 /// AECM: each start part's component in closed form ([`crate::mfa::init::components_from_labels`]), and a part
 /// whose motion is a blend of two neighbours' goes to them. A start cut from the patches has slices of the
 /// skinning bands between bones; left in, the first AECM makes each a band part of its own, how many depending on
-/// small changes of the data (horse-gallop with one of 49 frames dropped: 7-15 dissolved after the AECM), and
-/// the decided count with them (23-29 parts). Dissolved on the start, 11-13 go on the horses and the lion, the
-/// AECM starts with fewer components and the rounds after it find next to no flesh. Compact labels.
+/// small changes of the data (a frame dropped), and the decided count with them (docs/decisions.md). Dissolved on
+/// the start, the AECM starts with fewer components and the rounds after it find next to no flesh. Compact
+/// labels.
 pub(super) fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &Params) -> Vec<u32> {
     let t0 = crate::clock::now_ms();
     let comps = crate::mfa::init::components_from_labels(data, labels, params.floor());
