@@ -214,6 +214,27 @@ impl FittedSkeleton {
         }
     }
 
+    /// The same joints with the tree rooted at part `r`: the parent relations on the path from `r` to the root
+    /// reversed, each contact on it now the joint of the part that became the child (the same point), `r`'s
+    /// own joint dropped (a root has none).
+    pub fn rerooted(&self, r: usize) -> FittedSkeleton {
+        let mut out = self.clone();
+        if r >= self.names.len() {
+            return out;
+        }
+        out.parent[r] = None;
+        let (mut child, mut at) = (r, self.parent[r]);
+        while let Some(p) = at {
+            at = self.parent[p];
+            out.parent[p] = Some(child);
+            for (o, s) in out.positions.iter_mut().zip(&self.positions) {
+                o[p] = s[child];
+            }
+            child = p;
+        }
+        out
+    }
+
     fn root(&self) -> Option<usize> {
         // the root of the tree: a joint without parent that holds vertices
         let mut held = vec![0usize; self.names.len()];
@@ -339,6 +360,16 @@ pub struct ArtistJoint {
     pub vertices: usize,
 }
 
+/// What the figures would be with the fitted tree rooted on the artist's central part.
+#[derive(Debug, Clone, Serialize)]
+pub struct Rerooted {
+    /// The fitted part that holds most of the central part's vertices.
+    pub root: String,
+    pub parents: ParentAgreement,
+    pub artist_to_fitted_median: Option<f64>,
+    pub fitted_to_artist_median: Option<f64>,
+}
+
 /// The fitted skeleton against the artist's ([`compare`]).
 #[derive(Debug, Clone, Serialize)]
 pub struct SkeletonMatch {
@@ -356,6 +387,10 @@ pub struct SkeletonMatch {
     pub parts_ari: f64,
     /// Every artist joint, in the skin's order.
     pub artist: Vec<ArtistJoint>,
+    /// When the fitted root is not on the central part: the same measure with the fitted tree rooted there
+    /// ([`FittedSkeleton::rerooted`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rooted_at_central: Option<Rerooted>,
 }
 
 fn median(v: &mut [f64]) -> Option<f64> {
@@ -421,6 +456,28 @@ fn summary(
 
 /// Compares `fitted` with `artist` over the same poses (see the module doc); distances divided by `diagonal`.
 pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) -> Result<SkeletonMatch> {
+    let mut m = compare_rooted(artist, fitted, diagonal)?;
+    if !m.result.root.on_central_part {
+        if let Some(r) = m.central_match {
+            let again = compare_rooted(artist, &fitted.rerooted(r), diagonal)?;
+            m.result.rooted_at_central = Some(Rerooted {
+                root: fitted.names[r].clone(),
+                parents: again.result.parents,
+                artist_to_fitted_median: again.result.artist_to_fitted.median,
+                fitted_to_artist_median: again.result.fitted_to_artist.median,
+            });
+        }
+    }
+    Ok(m.result)
+}
+
+struct Rooted {
+    result: SkeletonMatch,
+    /// The fitted part that holds most of the central part's vertices.
+    central_match: Option<usize>,
+}
+
+fn compare_rooted(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) -> Result<Rooted> {
     artist.check()?;
     let n_poses = artist.positions.len();
     let n_vertices = artist.dominant.len();
@@ -522,8 +579,9 @@ pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) 
             overlap[l] += 1;
         }
     }
+    let central_match = (0..nf).filter(|&k| overlap[k] > 0).max_by_key(|&k| (overlap[k], std::cmp::Reverse(k)));
     if matched[central].is_none() {
-        matched[central] = (0..nf).max_by_key(|&k| (overlap[k], std::cmp::Reverse(k)));
+        matched[central] = central_match;
     }
     let mut agreement = ParentAgreement { matched: 0, agreeing: 0, share: None, disagreeing: Vec::new() };
     for &(a, b, _, _) in &forward {
@@ -549,7 +607,7 @@ pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) 
 
     let truth: Vec<u32> = part_of.iter().map(|p| p.map_or(na as u32, |j| j as u32)).collect();
     let labels: Vec<u32> = fitted.labels.iter().map(|&l| l as u32).collect();
-    Ok(SkeletonMatch {
+    let result = SkeletonMatch {
         rule: format!(
             "artist joints that turn at least {MOVING_DEGREES} degrees against their parent between two poses move; \
              the others are merged into their parents; distances to the nearest joint of the other skeleton \
@@ -574,7 +632,9 @@ pub fn compare(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f64) 
                 vertices: artist.dominant.iter().filter(|&&d| d == Some(j)).count(),
             })
             .collect(),
-    })
+        rooted_at_central: None,
+    };
+    Ok(Rooted { result, central_match })
 }
 
 #[cfg(test)]
@@ -744,6 +804,15 @@ mod tests {
         assert_eq!(m.parents.share, Some(0.0));
         assert_eq!(m.parents.disagreeing.len(), 3);
         assert_eq!(m.parts_ari, 1.0);
+        // rooted at the part on the artist's root the tree is the artist's again
+        let r = m.rooted_at_central.expect("the root is off the central part");
+        assert_eq!(r.root, "part 1");
+        assert_eq!(
+            (r.parents.share, r.artist_to_fitted_median, r.fitted_to_artist_median),
+            (Some(1.0), Some(0.0), Some(0.0))
+        );
+        // and a tree already rooted there is not measured again
+        assert!(compare(&a, &same(&a), 4.0).unwrap().rooted_at_central.is_none());
     }
 
     #[test]
