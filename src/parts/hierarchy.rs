@@ -154,6 +154,9 @@ impl Pipeline {
             super::part_count::check_target(n, pop.n_vertices(), params.min_part_vertices)?;
         }
         let t0 = crate::clock::now_ms();
+        if params.part_rule == PartRule::Tree && !params.refine && crate::trace::enabled() {
+            crate::trace_line!("refinement off: Algorithm 1's coarse stage alone (the merge tree always refines)");
+        }
         match rule_of(params) {
             Rule::MergeTree => Pipeline::from_tree(pop, params, t0),
             Rule::Algorithm1 => Pipeline::from_algorithm1(pop, params, t0),

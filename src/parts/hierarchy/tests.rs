@@ -269,3 +269,39 @@ fn parts_decided_on_a_coarse_mesh_are_the_parts_of_all_vertices() {
     let (rmse, rmse_all) = (result.model.rmse(pop), all.model.rmse(pop));
     assert!(rmse < 1.05 * rmse_all, "RMSE {rmse} against {rmse_all}");
 }
+
+/// Which rule a fit follows is said once ([`rule_of`]): the merge tree only with its part rule and the
+/// refinement on; the refinement off is Algorithm 1's coarse stage alone, which the trace says and the result
+/// reports (the run's stage and the rule's report), as does each final-stage run it makes.
+#[test]
+fn the_rule_is_chosen_in_one_place_and_the_refinement_off_says_so() {
+    let tree = Params::default();
+    let coarse_only = Params { refine: false, ..Params::default() };
+    let distinct = Params { part_rule: PartRule::Distinct, ..Params::default() };
+    assert_eq!(
+        (rule_of(&tree), rule_of(&coarse_only), rule_of(&distinct)),
+        (Rule::MergeTree, Rule::Algorithm1, Rule::Algorithm1)
+    );
+    let g = generate(&Spec { preset: Preset::Arm, vertices: 400, poses: 5, ..Spec::default() }).unwrap();
+    let lines = std::rc::Rc::new(std::cell::RefCell::new(Vec::<String>::new()));
+    let kept = lines.clone();
+    crate::trace::set_sink(Some(Box::new(move |l: &str| kept.borrow_mut().push(l.to_string()))));
+    let pipe = Pipeline::new(&g.population, &coarse_only);
+    crate::trace::set_sink(None);
+    let mut pipe = pipe.unwrap();
+    assert!(
+        lines.borrow().iter().any(|l| l.starts_with("refinement off: Algorithm 1's coarse stage alone")),
+        "{lines:?}"
+    );
+    assert_eq!((pipe.rule(), pipe.stage()), (Rule::Algorithm1, Stage::Coarse));
+    let result = pipe.run(&mut |_| true).unwrap();
+    assert_eq!(result.rule, RuleReport::Algorithm1 { refined: false });
+    assert!(!result.from_merge_tree() && !result.refined() && result.merge_tree().is_none());
+    // the default: the merge tree's first run, and its report
+    let pipe = Pipeline::new(&g.population, &tree).unwrap();
+    assert!(matches!(pipe.stage(), Stage::Final { rule: Rule::MergeTree, run: FinalRun::First, number: 1, .. }));
+    let result = fit(&g.population, &tree, &mut |_| true).unwrap();
+    assert!(result.from_merge_tree() && result.refined() && result.merge_tree().is_some());
+    assert!(result.tree_count().is_some());
+    assert_eq!(result.tree_count(), result.tree_cuts().and_then(|c| c.decided()));
+}
