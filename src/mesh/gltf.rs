@@ -1023,6 +1023,15 @@ fn read_channels(data: &Data, anim: &gltf::Animation, aname: &str) -> Result<Vec
 /// of its buffers (checked by [`buffers`]).
 fn open(file: &str, bytes: &[u8], resources: &[(&str, &[u8])]) -> Result<(gltf::Document, Vec<Vec<u8>>)> {
     let (json, blob) = if bytes.starts_with(b"glTF") { split_glb(file, bytes)? } else { (bytes.to_vec(), None) };
+    if blob.is_none() && json.iter().find(|b| !b.is_ascii_whitespace()) != Some(&b'{') {
+        // (an OBJ, a PLY, an image given where a glTF belongs: "expected value at line 1" would say nothing)
+        return Err(err(
+            file,
+            "not a .glb or .gltf file: it neither starts with a .glb's signature (glTF) nor is a JSON document; \
+             give a glTF 2.0 file (for `posemfa pose`, the .glb `posemfa export-gltf` wrote)"
+                .into(),
+        ));
+    }
     let invalid =
         |e: gltf::Error| err(file, format!("not a valid glTF 2.0 document: {e}; export the file again as glTF 2.0"));
     let root = gltf::Gltf::from_slice_without_validation(&json).map_err(invalid)?.document.into_json();

@@ -160,7 +160,7 @@ test('pose: bad input is refused with the file and what is wrong', () => {
   const other = path.join(dir, 'other');
   posemfa('generate', 'arm', '--vertices', '300', '--poses', '2', '--out', other);
   assert.throws(() => posemfa('pose', rig, other, '--out', path.join(dir, 'x.glb')), (e) => /vertices but the rig .* has \d+/.test(e.stderr));
-  assert.throws(() => posemfa('pose', path.join(other, 'pose01.obj'), other, '--out', path.join(dir, 'x.glb')), (e) => /file .*pose01\.obj: not a valid \.glb/.test(e.stderr));
+  assert.throws(() => posemfa('pose', path.join(other, 'pose01.obj'), other, '--out', path.join(dir, 'x.glb')), (e) => /file .*pose01\.obj: not a \.glb or \.gltf file/.test(e.stderr));
 });
 
 test('crossval writes one fold per pose with both E_RMS', () => {
