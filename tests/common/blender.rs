@@ -24,3 +24,16 @@ pub fn fit_summary(pop: &Population) -> (usize, f64, Vec<u32>) {
     let rmse = r.model.rmse(pop);
     (r.model.parts.len(), rmse, r.model.labels)
 }
+
+/// Asserts that a file's fit (parts, RMSE in the OBJ's units, labels) is the OBJ folder's: the same part count,
+/// RMSE within 1 % and adjusted Rand at least 0.99; prints both.
+pub fn assert_same_fit_as_obj(name: &str, file: (usize, f64, &[u32]), obj: (usize, f64, &[u32])) {
+    let ((parts, rmse, labels), (parts_obj, rmse_obj, labels_obj)) = (file, obj);
+    let ari = posemfa::metrics::adjusted_rand_index(labels, labels_obj);
+    eprintln!(
+        "{name}: {parts} parts, RMSE {rmse:.3e}, ARI {ari:.4}; OBJ folder: {parts_obj} parts, RMSE {rmse_obj:.3e}"
+    );
+    assert_eq!(parts, parts_obj, "{name}");
+    assert!((rmse - rmse_obj).abs() <= 0.01 * rmse_obj, "{name}: RMSE {rmse}, OBJ {rmse_obj}");
+    assert!(ari >= 0.99, "{name}: ARI {ari}");
+}
