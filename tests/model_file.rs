@@ -114,6 +114,12 @@ fn round_trip(name: &str, pop: &Population, params: &Params) -> (usize, usize) {
     (bytes.len(), small.len())
 }
 
+/// The JSON header of model file `bytes`.
+fn header_text(bytes: &[u8]) -> String {
+    let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    String::from_utf8(bytes[24..24 + n].to_vec()).unwrap()
+}
+
 /// `bytes` (a model file) with another JSON header, the body where it was.
 fn with_header(bytes: &[u8], header: &str) -> Vec<u8> {
     let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
@@ -172,11 +178,7 @@ dual_test! {
         assert!(posemfa::model_file::looks_like(&bytes) && &bytes[..8] == MAGIC);
 
         // a header field of the wrong type, named with its path
-        let header = |b: &[u8]| {
-            let n = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
-            String::from_utf8(b[24..24 + n].to_vec()).unwrap()
-        };
-        let text = header(&bytes);
+        let text = header_text(&bytes);
         let damaged = with_header(&bytes, &text.replacen("\"converged\":", "\"converged\":\"yes\",\"was\":", 1));
         let e = ModelFile::from_bytes("d.posemfa", &damaged).unwrap_err().to_string();
         assert!(e.contains("header field fit.converged: invalid type: string \"yes\""), "{e}");
@@ -244,8 +246,7 @@ dual_test! {
         assert!(saved.for_request(&moved, band, &g.rig_options()).is_none(), "one point moved: other poses");
 
         // damage in the rig's header is refused by name
-        let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-        let text = String::from_utf8(bytes[24..24 + n].to_vec()).unwrap();
+        let text = header_text(&bytes);
         let influences = saved.rig.weights.influences.iter().map(Vec::len).sum::<usize>();
         let damaged = text.replacen(&format!("\"influences\":{influences}"), &format!("\"influences\":{}", influences + 1), 1);
         let e = ModelFile::from_bytes("r.posemfa", &with_header(&bytes, &damaged)).unwrap_err().to_string();
