@@ -325,6 +325,118 @@ impl GlbRig {
     }
 }
 
+/// The rig as the frames' mesh has it: [`GlbRig::on_frames`].
+#[derive(Debug, Clone)]
+pub struct RigOnFrames {
+    /// The rig whose vertices are the frames' (the file's own, or its points welded).
+    pub rig: SkinnedRig,
+    /// When welded: for each of the frames' vertices, one of the file's vertices at that point (the first), so
+    /// that a pose played from the file is read at the frames' vertices. None: the file's vertices are the frames'.
+    pub file_vertex: Option<Vec<usize>>,
+}
+
+impl RigOnFrames {
+    /// A pose of the file's vertices (a player's output) at the frames' vertices.
+    pub fn at_frames(&self, played: &[Vec3]) -> Vec<Vec3> {
+        match &self.file_vertex {
+            None => played.to_vec(),
+            Some(first) => first.iter().map(|&v| played[v]).collect(),
+        }
+    }
+}
+
+impl GlbRig {
+    /// The file's vertices grouped into points: vertices with the same bind position and the same joint weights
+    /// (bit for bit) are one point, numbered in the order of their first vertex. Exporters write a vertex once per
+    /// normal or UV it has (a flat-shaded mesh: once per face corner), which is this.
+    fn welded_points(&self) -> (Vec<usize>, Vec<usize>) {
+        let mut index: std::collections::HashMap<Vec<u64>, usize> = std::collections::HashMap::new();
+        let mut of_vertex = Vec::with_capacity(self.rig.rest.len());
+        let mut first = Vec::new();
+        for (v, p) in self.rig.rest.iter().enumerate() {
+            let mut key: Vec<u64> = p.iter().map(|c| c.to_bits()).collect();
+            for (k, w) in self.rig.weights.influences(v) {
+                key.push(k as u64);
+                key.push(w.to_bits());
+            }
+            let next = first.len();
+            let point = *index.entry(key).or_insert(next);
+            if point == next {
+                first.push(v);
+            }
+            of_vertex.push(point);
+        }
+        (of_vertex, first)
+    }
+
+    /// The rig on frames of `frame_vertices` vertices and triangles `frame_faces` (the first frame's): the rig
+    /// itself when the counts agree. A rig saved again by a tool that splits vertices along seams or per face
+    /// (Blender's glTF exporter on a flat-shaded mesh) has more vertices than the frames; when its points
+    /// ([`Self::welded_points`]) are as many as the frames' vertices and its triangles over those points are
+    /// exactly the frames' triangles, it is that mesh, and the rig on its points is returned. Otherwise the
+    /// frames are refused by name (`frame_name`), saying what the rig's vertices are.
+    pub fn on_frames(
+        &self,
+        rig_file: &str,
+        frame_name: &str,
+        frame_vertices: usize,
+        frame_faces: &[[u32; 3]],
+    ) -> Result<RigOnFrames> {
+        let nv = self.rig.n_vertices();
+        if frame_vertices == nv {
+            return Ok(RigOnFrames { rig: self.rig.clone(), file_vertex: None });
+        }
+        let (of_vertex, first) = self.welded_points();
+        let refuse = |why: String| Error::Population {
+            file: frame_name.to_string(),
+            message: format!(
+                "has {frame_vertices} vertices but the rig {rig_file} has {nv}{why}: add frames of the fitted mesh \
+                 (the same vertices in the same order, as the training poses)"
+            ),
+        };
+        if first.len() == nv {
+            return Err(refuse(String::new()));
+        }
+        let split = format!(" ({} points, some written more than once, as exporters do along seams)", first.len());
+        if first.len() != frame_vertices {
+            return Err(refuse(split));
+        }
+        let canonical = |f: [usize; 3]| {
+            let mut f = f;
+            f.sort_unstable();
+            f
+        };
+        let mut ours: Vec<[usize; 3]> = self
+            .faces
+            .iter()
+            .map(|f| f.map(|v| of_vertex[v as usize]))
+            .filter(|f| f[0] != f[1] && f[1] != f[2] && f[0] != f[2])
+            .map(canonical)
+            .collect();
+        let mut theirs: Vec<[usize; 3]> = frame_faces.iter().map(|f| canonical(f.map(|v| v as usize))).collect();
+        ours.sort_unstable();
+        theirs.sort_unstable();
+        if ours != theirs {
+            return Err(refuse(format!(
+                "{split}; its {} points are as many as the frames' vertices, but its triangles over them are not the \
+                 frames' (the tool that saved the rig changed the vertex order)",
+                first.len()
+            )));
+        }
+        let rest = first.iter().map(|&v| self.rig.rest[v]).collect();
+        let influences = first.iter().map(|&v| self.rig.weights.influences[v].clone()).collect();
+        let rig = SkinnedRig {
+            rest,
+            weights: SkinWeights { influences },
+            parent: self.rig.parent.clone(),
+            order: self.rig.order.clone(),
+            joint_points: self.rig.joint_points.clone(),
+        };
+        rig.validate()?;
+        Ok(RigOnFrames { rig, file_vertex: Some(first) })
+    }
+}
+
 /// The rig's skinning of one pose, scene coordinates (shorthand for [`SkinnedRig::skin`]).
 pub fn posed(rig: &GlbRig, bones: &[RigidMotion]) -> Vec<Vec3> {
     rig.rig.skin(bones)

@@ -25,8 +25,12 @@ pub struct Args {
     json: Option<String>,
 }
 
+/// The frames read: every frame's name and positions, in natural order of the names, and the first frame's
+/// triangles (the mesh the rig must be).
+type Frames = (Vec<(String, Vec<[f64; 3]>)>, Vec<[u32; 3]>);
+
 /// Reads the frame files (folders expanded) in natural order of their names.
-pub fn read_frames(paths: &[String]) -> Result<Vec<(String, Vec<[f64; 3]>)>, String> {
+pub fn read_frames(paths: &[String]) -> Result<Frames, String> {
     use posemfa::mesh::load::FileKind;
     let mut files: Vec<std::path::PathBuf> = Vec::new();
     for p in paths {
@@ -55,7 +59,8 @@ pub fn read_frames(paths: &[String]) -> Result<Vec<(String, Vec<[f64; 3]>)>, Str
     named.sort_by(|a, b| posemfa::mesh::population::natural_cmp(&a.0, &b.0));
     let loaded = posemfa::mesh::load::load(named)
         .map_err(|errors| errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))?;
-    Ok(loaded.poses.into_iter().map(|(n, m)| (n, m.positions)).collect())
+    let faces = loaded.poses.first().map(|(_, m)| m.faces.clone()).unwrap_or_default();
+    Ok((loaded.poses.into_iter().map(|(n, m)| (n, m.positions)).collect(), faces))
 }
 
 pub fn run(a: Args) -> Result<(), String> {
@@ -64,24 +69,34 @@ pub fn run(a: Args) -> Result<(), String> {
     let bytes = std::fs::read(&a.rig).map_err(|e| format!("cannot read {}: {e}", a.rig))?;
     let rig = read_rig(&a.rig, &bytes).map_err(|e| e.to_string())?;
     let t = std::time::Instant::now();
-    let frames = read_frames(&a.frames)?;
+    let (frames, faces) = read_frames(&a.frames)?;
     let read_ms = ms(t);
-    let nv = rig.rig.n_vertices();
+    // the rig on the frames' vertices: its own, or its points when the file splits vertices along seams
+    let (first_name, first) = &frames[0];
+    let on = rig.on_frames(&a.rig, first_name, first.len(), &faces).map_err(|e| e.to_string())?;
+    let nv = on.rig.n_vertices();
+    if on.file_vertex.is_some() {
+        out!(
+            "the rig's {} vertices are the frames' {nv} points, some written more than once (split along seams or per \
+             face, as exporters do for flat shading): posed and measured at the points",
+            rig.rig.n_vertices()
+        );
+    }
     posemfa::articulate::pose::check_frame_sizes(frames.iter().map(|(n, f)| (n.as_str(), f.len())), nv, Some(&a.rig))
         .map_err(|e| e.to_string())?;
     let points: Vec<Vec<[f64; 3]>> = frames.iter().map(|(_, f)| f.clone()).collect();
     let t = std::time::Instant::now();
-    let solved = solve_frames(&rig.rig, &points).map_err(|e| e.to_string())?;
+    let solved = solve_frames(&on.rig, &points).map_err(|e| e.to_string())?;
     let solve_ms = ms(t);
     let glb = rig.with_clip("frames", &solved.bones).map_err(|e| e.to_string())?;
     std::fs::write(&a.out, &glb).map_err(|e| format!("cannot write {}: {e}", a.out))?;
     // measured on the file as written: its clip played by linear blend skinning from the stored numbers
     let play = posemfa::export::gltf::play_glb_clip(&glb, "frames").map_err(|e| e.to_string())?;
-    let d = rig.rig.diagonal();
+    let d = on.rig.diagonal();
     let mut total = 0.0;
     let mut per_frame = Vec::new();
     for ((name, f), shown) in frames.iter().zip(&play.frames) {
-        let e = sse(shown, f);
+        let e = sse(&on.at_frames(shown), f);
         total += e;
         let x = e_rms(e, nv, d);
         out!("{name}: E_RMS {x:.4}");
