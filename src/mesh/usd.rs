@@ -41,6 +41,83 @@ fn crate_layer(file: &str, bytes: &[u8], what: &str) -> Result<Box<dyn AbstractD
     Ok(Box::new(data))
 }
 
+/// Deepest nesting of brackets a USDA layer may have. A stage nests prims, dictionaries and arrays a few dozen
+/// levels at most; openusd's parser descends once per level (about a kilobyte of stack each natively, more of
+/// the 1 MiB a wasm module has), so a file of a few thousand opening braces would overflow the stack and abort
+/// the process (or trap the page's worker) instead of being refused.
+pub const USDA_MAX_NESTING: usize = 128;
+
+/// The first place where `text`'s brackets (`{ ( [`) nest deeper than [`USDA_MAX_NESTING`]: its line, or None.
+/// Brackets inside strings (`"..."`, `'...'`, triple-quoted), asset paths (`@...@`, `@@@...@@@`) and comments
+/// (`#` to the end of the line) do not count.
+fn usda_too_deep(text: &str) -> Option<usize> {
+    let b = text.as_bytes();
+    let (mut i, mut depth, mut line) = (0usize, 0usize, 1usize);
+    // the end of a quoted run opening at `i` with delimiter `q` (`len` 1 or 3), escapes skipped; lines counted
+    let skip = |mut i: usize, q: &[u8], line: &mut usize| -> usize {
+        i += q.len();
+        while i < b.len() {
+            if b[i..].starts_with(q) {
+                return i + q.len();
+            }
+            if b[i] == b'\\' && q.len() == 1 && q[0] != b'@' {
+                i += 1;
+            } else if b[i] == b'\n' {
+                *line += 1;
+            }
+            i += 1;
+        }
+        i
+    };
+    while i < b.len() {
+        match b[i] {
+            b'\n' => {
+                line += 1;
+                i += 1;
+            }
+            b'#' => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            q @ (b'"' | b'\'' | b'@') => {
+                let triple = [q; 3];
+                let delim: &[u8] = if b[i..].starts_with(&triple) { &triple } else { &triple[..1] };
+                i = skip(i, delim, &mut line);
+            }
+            b'{' | b'(' | b'[' => {
+                depth += 1;
+                if depth > USDA_MAX_NESTING {
+                    return Some(line);
+                }
+                i += 1;
+            }
+            b'}' | b')' | b']' => {
+                depth = depth.saturating_sub(1);
+                i += 1;
+            }
+            _ => i += 1,
+        }
+    }
+    None
+}
+
+/// A USDA layer: its nesting checked ([`usda_too_deep`]), then read by openusd.
+fn text_layer(file: &str, text: &str, what: &str) -> Result<Box<dyn AbstractData>> {
+    if let Some(line) = usda_too_deep(text) {
+        return Err(err(
+            file,
+            format!(
+                "cannot read the {what}: line {line}: its brackets nest deeper than {USDA_MAX_NESTING} levels, \
+                 far deeper than a stage nests prims and values; the file is damaged, or not a stage a USD tool \
+                 wrote: export it again"
+            ),
+        ));
+    }
+    let data = openusd::usda::parse(text).map_err(|e| damaged(file, what, e))?;
+    Ok(Box::new(data))
+}
+
 /// Which encoding the bytes are in.
 fn layer(file: &str, bytes: &[u8]) -> Result<Box<dyn AbstractData>> {
     if bytes.starts_with(b"PXR-USDC") {
@@ -74,8 +151,7 @@ fn layer(file: &str, bytes: &[u8]) -> Result<Box<dyn AbstractData>> {
         }
         let text = String::from_utf8(layer_bytes)
             .map_err(|e| damaged(file, what, format!("{name} is not UTF-8 text: {e}")))?;
-        let data = openusd::usda::parse(&text).map_err(|e| damaged(file, what, e))?;
-        return Ok(Box::new(data));
+        return text_layer(file, &text, what);
     }
     if bytes.starts_with(b"#usda") {
         let text = std::str::from_utf8(bytes).map_err(|e| {
@@ -84,8 +160,7 @@ fn layer(file: &str, bytes: &[u8]) -> Result<Box<dyn AbstractData>> {
                 format!("the USDA text is not UTF-8 (byte {}); the file is damaged: export it again", e.valid_up_to()),
             )
         })?;
-        let data = openusd::usda::parse(text).map_err(|e| damaged(file, "USDA text", e))?;
-        return Ok(Box::new(data));
+        return text_layer(file, text, "USDA text");
     }
     Err(err(
         file,
@@ -499,4 +574,46 @@ pub fn read(file: &str, bytes: &[u8], options: &Options) -> Result<Gltf> {
         times.len()
     );
     Ok(weld(file, &first, &faces, poses_raw, description))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nested(levels: usize) -> String {
+        let mut s = String::from("#usda 1.0\n");
+        (0..levels).for_each(|i| s.push_str(&format!("def Xform \"a{i}\" {{\n")));
+        (0..levels).for_each(|_| s.push_str("}\n"));
+        s
+    }
+
+    #[test]
+    fn brackets_nested_past_the_limit_are_refused_by_line_not_by_a_stack_overflow() {
+        assert_eq!(usda_too_deep(&nested(USDA_MAX_NESTING)), None);
+        assert_eq!(usda_too_deep(&nested(USDA_MAX_NESTING + 1)), Some(USDA_MAX_NESTING + 2));
+        // 100 000 levels: natively several times the main thread's stack if parsed
+        let e = match layer("deep.usda", nested(100_000).as_bytes()) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("a stage nested 100 000 deep was read"),
+        };
+        assert!(e.contains("deep.usda") && e.contains("line 130") && e.contains("deeper than 128 levels"), "{e}");
+    }
+
+    #[test]
+    fn brackets_in_strings_asset_paths_and_comments_do_not_count() {
+        let open = "{".repeat(USDA_MAX_NESTING + 1);
+        for quoted in [
+            format!("\"{open}\""),
+            format!("'{open}'"),
+            format!("\"\"\"{open}\n\"\"\""),
+            format!("@{open}@"),
+            format!("@@@{open}@@@"),
+            format!("\"\\\"{open}\""),
+        ] {
+            let text = format!("#usda 1.0\n(\n    doc = {quoted}\n)\n# {open}\ndef Xform \"World\" {{\n}}\n");
+            assert_eq!(usda_too_deep(&text), None, "{quoted}");
+        }
+        let text = format!("#usda 1.0\n(\n    doc = \"a\"\n)\n{open}\n");
+        assert_eq!(usda_too_deep(&text), Some(5));
+    }
 }
