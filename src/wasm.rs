@@ -613,7 +613,7 @@ impl FitModel {
 /// wasm memory, and come back with [`ParkedModel::restore`] when the new fit is cancelled and the old model stays,
 /// or when it is asked something meanwhile. Wasm memory never shrinks: held through a new fit's tree stage, those
 /// arrays and the holes they leave raised a refit's peak on the generated 42 k x 11 population from 56.9 to 61.1
-/// and 67.1 bytes per vertex-pose (issue 27).
+/// and 67.1 bytes per vertex-pose.
 #[wasm_bindgen]
 pub struct ParkedModel {
     kept: Parked,
@@ -894,7 +894,7 @@ pub fn examples() -> Result<JsValue, JsValue> {
     to_js(&crate::synth::presets::examples())
 }
 
-// ---------------------------------------------------------------- articulation (issue 4)
+// ---------------------------------------------------------------- articulation
 
 thread_local! {
     /// The articulation of the last FitModel asked (graph, joints, weights are computed once per fit).
@@ -1038,7 +1038,7 @@ impl FitModel {
         Ok(obj.into())
     }
 
-    /// Pose mode (issue 28): the rig of `opts` (rig options as for [`FitModel::rig`]; default fitted weights),
+    /// Pose mode: the rig of `opts` (rig options as for [`FitModel::rig`]; default fitted weights),
     /// written and read back, its training poses solved onto it and their pose space.
     pub fn poser(&self, opts: JsValue) -> Result<WasmPoser, JsValue> {
         self.needs_data("pose mode (its rig's weights are fitted to the poses)")?;
@@ -1060,7 +1060,7 @@ impl FitModel {
     }
 }
 
-// ---------------------------------------------------------------- ground-truth accuracy (issue 5)
+// ---------------------------------------------------------------- ground-truth accuracy
 
 #[wasm_bindgen]
 impl Synthetic {
@@ -1140,7 +1140,7 @@ pub fn fault_injection(kind: &str) -> Result<(), JsValue> {
     }
 }
 
-// ---------------------------------------------------------------- pose mode (issue 28)
+// ---------------------------------------------------------------- pose mode
 
 /// A rig being posed ([`crate::export::pose_glb::Poser`]); positions in the population's original units.
 #[wasm_bindgen(js_name = Poser)]

@@ -380,7 +380,7 @@ impl Pipeline {
 
     /// The part rule left the loose first run's parts as they were: the AECM goes on from that run's components
     /// at the fit's own tolerance (a new stage "final"; the run stopped at `refine_tol` was a few iterations short
-    /// of `tol`, and a start again from its labels took 17 iterations on horse-poses, 39 on lion-poses). From
+    /// of `tol`, and a start again from its labels took many more: docs/decisions.md, "Figures behind src/parts"). From
     /// `labels` as [`Pipeline::refit`] when the motion labels have another number of parts than the run had
     /// components.
     fn go_on(&mut self, labels: &[u32]) -> Result<State> {

@@ -40,7 +40,7 @@ pub enum Preset {
     Arm,
     /// 8 parts `seg1` (tail tip) .. `seg8` (head) along one tube; the root is `seg4`.
     Snake,
-    /// A bean-shaped closed surface (a swept ellipse with round ends, about 1.5 : 1) bent along its length
+    /// A bean-shaped closed surface (a swept ellipse, its ends rounded, about 1.5 : 1) bent along its length
     /// in a random plane and twisted about its axis, both smoothly (no rigid parts). Ground truth: one part
     /// `blob`, its rotation the best rigid (Procrustes) fit of each pose to the rest shape.
     Blob,

@@ -24,12 +24,11 @@ use crate::mfa::params::{Params, PartRule};
 use crate::mfa::result::Model;
 use crate::parts::labels::compact;
 
-/// Multi-resolution runs only on populations with at least this many times `subset_vertices` vertices (10 000
-/// at the default 2 000). A subset of more than a fifth of the mesh saves little and costs accuracy: on
-/// horse-gallop (8 431 vertices) a 2 000-vertex subset saved a quarter of the fit's time but gave 20 parts and
-/// RMSE 0.00450 against 21 and 0.00395 without it, and on the 3 000-vertex quadruped example a subset lost a tail
-/// piece on some seeds (`examples/speed_accuracy.rs`). Without a subset the fit does not depend on the frame the
-/// file is written in (the subset's grid is axis-aligned; every other step uses distances only).
+/// Multi-resolution runs only on populations with at least this many times `subset_vertices` vertices (10 000 at the
+/// default 2 000). A subset of more than a fifth of the mesh saves little and costs accuracy (fewer parts, a larger
+/// RMSE, a small part lost on some seeds: docs/decisions.md, "Figures behind src/parts", `examples/speed_accuracy.rs`).
+/// Without a subset the fit does not depend on the frame the file is written in (the subset's grid is axis-aligned;
+/// every other step uses distances only).
 pub const SUBSET_FACTOR: usize = 5;
 
 pub(super) struct Refinement {

@@ -61,7 +61,7 @@ fn the_start_over_segments_a_generated_creature_inside_its_parts() {
 
 #[test]
 fn parts_the_rule_leaves_alone_go_on_from_the_loose_run() {
-    // a generated quadruped: the part rule's first round keeps the first run's parts as they are
+    // a generated quadruped: the part rule's opening round keeps the first run's parts as they are
     let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
     let mut pipe = Pipeline::new(&g.population, &Params::default()).unwrap();
     let mut runs: Vec<Vec<f64>> = vec![Vec::new()];
@@ -73,7 +73,7 @@ fn parts_the_rule_leaves_alone_go_on_from_the_loose_run() {
         }
     }
     let names: Vec<&str> = pipe.stats.iter().map(|s| s.name.as_str()).collect();
-    assert_eq!(names, ["tree", "final", "final"], "the first round removed nothing");
+    assert_eq!(names, ["tree", "final", "final"], "the opening round removed nothing");
     // the second run starts where the first stopped (its components), so AECM's monotonicity carries over
     // from one run to the next; a start again from labels begins below it
     let (first, second) = (&runs[0], &runs[1]);

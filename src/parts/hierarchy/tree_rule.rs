@@ -37,20 +37,19 @@ use crate::parts::labels::compact;
 
 /// [`PartRule::Tree`] decides on a coarse mesh ([`crate::parts::coarse_mesh`]) only on populations with at least
 /// this many times its size ([`coarse_target`]; 16 000 vertices at the default 8 000 and 20 poses or more):
-/// below that the decisions on all vertices cost little more, and horse-gallop (8 431 vertices), the lion and the
-/// generated 12 000-vertex creatures decide on every vertex.
+/// below that the decisions on all vertices cost little more (which populations decide on every vertex:
+/// docs/decisions.md, "Figures behind src/parts").
 pub const COARSE_FACTOR: usize = 2;
 
 /// With fewer poses than this, the coarse mesh has more vertices ([`coarse_target`]).
 pub const COARSE_POSES: usize = 20;
 
-/// The coarse mesh's size for `coarse_vertices` ([`Params::coarse_vertices`]) and `n_shapes` poses: at least
-/// `coarse_vertices x COARSE_POSES` vertex-poses, i.e. `coarse_vertices` from 20 poses on and more below (16 000
-/// at 10 poses by default). The decisions read the poses' motion at the coarse vertices, and a population of few
-/// poses gives them less to read per vertex; the runs' cost goes with the vertex-poses, so it stays bounded. On
-/// 10-11 poses at 8 000 vertices the decisions moved more than on all vertices over the 9 standard runs of
-/// `posemfa robustness` (the lion subdivided twice 18-22 parts, once 17-20, horse-poses subdivided 23-26); at
-/// this size 19-20, 19-20 (on all vertices: under 2 x 16 000) and 26-27.
+/// The coarse mesh's size for `coarse_vertices` ([`crate::mfa::TreeParams::coarse_vertices`]) and `n_shapes` poses: at
+/// least `coarse_vertices x COARSE_POSES` vertex-poses, i.e. `coarse_vertices` from 20 poses on and more below (16 000
+/// at 10 poses by default). The decisions read the poses' motion at the coarse vertices, and a population of few poses
+/// gives them less to read per vertex; the runs' cost goes with the vertex-poses, so it stays bounded. A fixed 8 000
+/// vertices on 10-11 poses made the decisions move more than on all vertices over the standard runs of `posemfa
+/// robustness` (the counts: docs/decisions.md, "Figures behind src/parts").
 pub fn coarse_target(coarse_vertices: usize, n_shapes: usize) -> usize {
     if n_shapes >= COARSE_POSES {
         coarse_vertices
@@ -62,21 +61,21 @@ pub fn coarse_target(coarse_vertices: usize, n_shapes: usize) -> usize {
 /// [`PartRule::Tree`]'s start when the part rule chooses the count: the patches' tree is cut where a merge first
 /// costs the smaller side, per vertex, this many times what merging two pieces of one part typically costs
 /// ([`MergeTree::merge_yardstick`]). A generous over-segmentation: the part rule decides after the first AECM.
-/// With every pose dropped in turn, the lion's start then moves by 4 parts where the patches' typical variance
-/// as the yardstick (the median of 400 tiny fits, [`TREE_COUNT_START_RATIO`]) moved it by 22; 16, 24, 32 and 40
-/// were measured too (docs/decisions.md).
+/// The merges' yardstick, not the patches' typical variance (the median of a few hundred tiny fits,
+/// [`TREE_COUNT_START_RATIO`]): with a pose dropped it moves the start far less (the counts, and the other
+/// ratios tried: docs/decisions.md, "Figures behind src/parts").
 pub const TREE_START_RATIO: f64 = 28.0;
 
 /// [`PartRule::Tree`]'s start with an exact part count (`target_parts`): the cut where a merge first costs 64
 /// times the patches' typical variance ([`MergeTree::typical`]), and no flesh dissolved before the first AECM.
-/// The count's steadiness does not matter there, and this start rigs better than the part rule's at 10, 20 and
-/// 30 bones (horse-gallop's E_RMS: docs/decisions.md).
+/// The count's steadiness does not matter there, and this start rigs better than the part rule's at the bone
+/// counts asked for (the rigs' errors: docs/decisions.md, "Figures behind src/parts").
 pub const TREE_COUNT_START_RATIO: f64 = 64.0;
 
-/// A patch tree with fewer leaves than this (a mesh of under about 384 vertices) starts from every patch, uncut.
-/// There a patch of about 6 vertices spans much of a part, so most patches straddle a joint and their typical
-/// variance is not a rigid patch's: on Blender's 174-vertex skinned character the cut at [`TREE_START_RATIO`]
-/// kept a few patches and the fit lost most of its 18 parts, from every patch it finds them (docs/decisions.md).
+/// A patch tree with fewer leaves than this (a mesh of under about 384 vertices) starts from every patch, uncut. There
+/// a patch of about 6 vertices spans much of a part, so most patches straddle a joint and their typical variance is not
+/// a rigid patch's, and a cut at [`TREE_START_RATIO`] can keep so few patches that the fit loses most of the parts;
+/// from every patch it finds them (the character it was measured on: docs/decisions.md, "Figures behind src/parts").
 /// The AECM from at most 63 parts on so few vertices is cheap.
 pub const TREE_CUT_LEAVES: usize = 64;
 
@@ -228,14 +227,15 @@ impl Pipeline {
         }
     }
 
-    /// [`PartRule::Tree`]'s rule 2: the merge tree of the fitted parts ([`crate::parts::merge_tree::MergeTree::from_leaves`],
-    /// every merge down to one part), cut where a merge first scores `distinct_ratio`. The first round's tree is
-    /// the one kept in the result (its leaves are the parts of the first final AECM). Returns the labels at the
-    /// count read off the tree and the curve of decisions (as [`crate::parts::distinct::merge_indistinct`]'s).
+    /// [`PartRule::Tree`]'s rule 2: the merge tree of the fitted parts
+    /// ([`crate::parts::merge_tree::MergeTree::from_leaves`], every merge down to one part), cut where a merge first
+    /// scores `distinct_ratio`. The opening round's tree is the one kept in the result (its leaves are the parts of the
+    /// first final AECM). Returns the labels at the count read off the tree and the curve of decisions (as
+    /// [`crate::parts::distinct::merge_indistinct`]'s).
     pub(super) fn decide_on_tree(&mut self, labels: &[u32]) -> (Vec<u32>, Vec<crate::parts::distinct::CurvePoint>) {
         let leaves = compact(labels);
         let mut tree = crate::parts::merge_tree::MergeTree::from_leaves(&self.pop, leaves, self.params.floor());
-        // the first round's typical variance stays the yardstick: a refit's larger parts have larger variances,
+        // the opening round's typical variance stays the yardstick: a refit's larger parts have larger variances,
         // and with its own yardstick every round would merge a few more (lion-poses: 43 -> 40 -> 36 -> 34)
         let yardstick = self.merge_tree.as_ref().map_or_else(|| tree.middle_typical(), |first| first.typical);
         tree.rescore(yardstick);
