@@ -42,7 +42,7 @@ fn load(arg: &str) -> Result<Input, String> {
         let g = synth::generate(&spec).map_err(|e| e.to_string())?;
         return Ok(Input { label: arg.into(), pop: g.population.clone(), truth: Some(g), params: Params::default() });
     }
-    let pop = Population::from_paths_with(&[arg.to_string()], &Default::default()).map_err(|e| e.to_string())?;
+    let pop = Population::new(posemfa::mesh::Sources::paths(&[arg])).map_err(|e| e.to_string())?;
     Ok(Input { label: arg.into(), pop, truth: None, params: Params::default() })
 }
 

@@ -968,8 +968,14 @@ fn decode(file: &str, h: Header, body: &[u8]) -> Result<ModelFile> {
         crate::memory::check(nv, ns, 1, crate::memory::budget_bytes()?)?;
         (0..ns).flat_map(|i| model.reconstruct(i)).map(crate::mesh::population::narrow).collect()
     };
-    let mut population =
-        Population::from_saved(file, p.names.clone(), faces, points, p.normalization, p.source.clone())?;
+    let mut population = Population::new(crate::mesh::Sources::Saved(crate::mesh::Saved {
+        file: file.into(),
+        names: p.names.clone(),
+        faces,
+        points,
+        normalization: p.normalization,
+        source: p.source.clone(),
+    }))?;
     population.clips = p.clips.as_ref().map(|c| crate::mesh::gltf::Clips { names: c.names.clone(), read: c.read });
     let mut params = h.params;
     params.start_labels = start_labels;

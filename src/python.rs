@@ -10,7 +10,7 @@
 
 use crate::export::gltf::{GltfOptions, Joints, Morphs, Weights};
 use crate::mesh::gltf::PoseSource;
-use crate::mesh::{Mesh, Population};
+use crate::mesh::{Mesh, Population, ReadOptions, Sources};
 use crate::mfa::{LambdaRule, Params, PartRule};
 use crate::model_file::{Borrowed, ModelFile, Summary};
 use crate::parts::hierarchy::{FitResult, Pipeline, Progress, Stage};
@@ -151,9 +151,9 @@ fn read(
     if paths.is_empty() {
         return Err(err("no files were given"));
     }
-    let options = crate::mesh::gltf::Options { mesh: object, animation, frames, source };
-    let pop = py.detach(|| Population::from_paths_with(&paths, &options));
-    Ok(PyPoses { pop: core(pop)? })
+    let gltf = crate::mesh::gltf::Options { mesh: object, animation, frames, source };
+    let pop = py.detach(|| Population::read(Sources::paths(&paths), &ReadOptions { gltf }));
+    Ok(PyPoses { pop: core(pop.map_err(|mut e| e.swap_remove(0)))? })
 }
 
 /// Poses from arrays: `points` (n_poses, n_vertices, 3) float64 in any units, `faces` (n_faces, 3) int64,
@@ -225,7 +225,7 @@ fn poses_from_arrays(
         let positions: Vec<[f64; 3]> = shape.outer_iter().map(|v| [v[0], v[1], v[2]]).collect();
         meshes.push((name, Mesh { positions, faces: tris.clone() }));
     }
-    let pop = py.detach(|| Population::from_meshes(meshes));
+    let pop = py.detach(|| Population::new(crate::mesh::Sources::Meshes(meshes)));
     let mut pop = core(pop)?;
     pop.source = format!("{ns} poses from arrays");
     Ok(PyPoses { pop })

@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Problem};
 use crate::export::shown::{obj_in_original_units, Shown};
-use crate::mesh::Population;
+use crate::mesh::{Population, ReadOptions, Sources};
 use crate::mfa::{Model, Params};
 use crate::parts::hierarchy::{FitResult, Pipeline};
 use js_sys::{Array, Float32Array, Float64Array, Uint32Array, Uint8Array};
@@ -102,17 +102,18 @@ impl WasmPopulation {
         use crate::mesh::load::FileKind;
         let one_each = names.iter().all(|n| matches!(FileKind::of(n), FileKind::Obj | FileKind::Ply));
         let read = if one_each {
-            Population::from_mesh_files_one_at_a_time(&names, |i, buffer| {
+            let mut fetch = |i: usize, buffer: &mut Vec<u8>| {
                 // the last file's bytes go before the next one's come (a buffer kept for the largest file, grown
                 // by doubling, held 7 bytes per vertex-pose more at the peak on horse-poses subdivided)
                 *buffer = Vec::new();
                 *buffer = files[i].to_vec();
                 Ok(())
-            })
+            };
+            Population::read(Sources::MeshFiles { names: &names, fetch: &mut fetch }, &ReadOptions::default())
         } else {
             let options = crate::mesh::gltf::Options { animation, ..Default::default() };
             let files = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
-            Population::from_files_all_errors_with(files, &options)
+            Population::read(Sources::Files(files), &ReadOptions { gltf })
         };
         match read {
             // poses with no motion are refused as a bad file is: the page keeps what it had

@@ -96,7 +96,11 @@ fn chain(parts: usize, poses: usize, noise: f64, seed: u64) -> Chain {
         rotations.push(rots);
     }
     let names = (0..poses).map(|i| format!("pose{i:02}.obj")).collect();
-    Chain { pop: Population::from_unit_shapes(names, faces, shapes).expect("valid chain"), part_of, rotations }
+    Chain {
+        pop: Population::new(posemfa::mesh::Sources::UnitShapes { names, faces, shapes }).expect("valid chain"),
+        part_of,
+        rotations,
+    }
 }
 
 /// Worst angle (degrees) between fitted and true RELATIVE rotations R^i (R^0)^T, each fitted part matched

@@ -97,7 +97,7 @@ dual_test! {
             ("a.obj".to_string(), b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_vec()),
             ("b.obj".to_string(), b"v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n".to_vec()),
         ];
-        let errors = posemfa::mesh::Population::from_files_all_errors(files).expect_err("b.obj is broken");
+        let errors = posemfa::mesh::Population::read(posemfa::mesh::Sources::Files(files), &Default::default()).expect_err("b.obj is broken");
         let p = errors[0].problem();
         assert_eq!((p.kind, p.file.as_deref(), p.line), ("obj", Some("b.obj"), Some(2)));
         assert!(!p.message.contains("b.obj"), "{}", p.message);

@@ -548,7 +548,11 @@ pub fn crossval(
         let names: Vec<String> = keep.iter().map(|&i| pop.names[i].clone()).collect();
         let shapes: Vec<Vec<Vec3>> =
             keep.iter().map(|&i| pop.shape(i).iter().map(|p| pop.normalization.to_original(p)).collect()).collect();
-        let train = crate::mesh::Population::from_unit_shapes(names, pop.faces.to_vec(), shapes)?;
+        let train = crate::mesh::Population::new(crate::mesh::Sources::UnitShapes {
+            names,
+            faces: pop.faces.to_vec(),
+            shapes,
+        })?;
         let fit = crate::parts::hierarchy::fit(&train, params, &mut |_| true)?;
         let art = super::Articulation::new(&fit.model, &train)?;
         let bind = crate::export::rig_report::default_bind_pose(&train);

@@ -112,7 +112,12 @@ mod tests {
         let h = 1.0 / (n - 1) as f64;
         let flat: Vec<[f64; 3]> = (0..n * n).map(|j| [(j % n) as f64 * h, (j / n) as f64 * h, 0.0]).collect();
         let bent: Vec<[f64; 3]> = flat.iter().map(|p| if p[0] > 0.5 { [0.5, p[1], p[0] - 0.5] } else { *p }).collect();
-        Population::from_unit_shapes(vec!["a".into(), "b".into()], faces, vec![flat, bent]).unwrap()
+        Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces,
+            shapes: vec![flat, bent],
+        })
+        .unwrap()
     }
 
     #[test]

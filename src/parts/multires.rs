@@ -147,7 +147,12 @@ mod tests {
                     .collect()
             })
             .collect();
-        let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], vec![[0, 1, 2]], shapes).unwrap();
+        let pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces: vec![[0, 1, 2]],
+            shapes,
+        })
+        .unwrap();
         let s = spread_subset(&pop, 1000);
         assert!(s.len() >= 900 && s.len() <= 1000, "{}", s.len());
         assert!(s.windows(2).all(|w| w[0] < w[1]));

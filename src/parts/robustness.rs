@@ -105,7 +105,7 @@ impl Variant {
             .collect();
         // names that keep this order under the natural sort
         let names = (0..shapes.len()).map(|k| format!("pose{k:04}")).collect();
-        Population::from_unit_shapes(names, pop.faces.to_vec(), shapes)
+        Population::new(crate::mesh::Sources::UnitShapes { names, faces: pop.faces.to_vec(), shapes })
     }
 }
 

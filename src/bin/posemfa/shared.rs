@@ -395,7 +395,9 @@ fn load_inputs(
             return Ok((g.population.clone(), Some(g)));
         }
     }
-    Ok((Population::from_paths_with(inputs, gltf).map_err(|e| e.to_string())?, None))
+    let options = posemfa::mesh::ReadOptions { gltf: gltf.clone() };
+    let pop = Population::read(posemfa::mesh::Sources::paths(inputs), &options).map_err(|e| e[0].to_string())?;
+    Ok((pop, None))
 }
 
 // ---------------------------------------------------------------- fit output (fit, bench)
