@@ -83,8 +83,11 @@ fn main() {
         let mut worst_ari = f64::NEG_INFINITY;
         for seed in 0..seeds {
             let mut rows = Vec::new();
-            for (name, subset, accelerate) in [("full", 0, false), ("fast", input.params.subset_vertices, true)] {
-                let params = Params { seed, subset_vertices: subset, accelerate, ..input.params.clone() };
+            for (name, subset, accelerate) in
+                [("full", 0, false), ("fast", input.params.algorithm1.subset_vertices, true)]
+            {
+                let mut params = Params { seed, accelerate, ..input.params.clone() };
+                params.algorithm1.subset_vertices = subset;
                 let t0 = std::time::Instant::now();
                 let r = match fit(&input.pop, &params, &mut |_| true) {
                     Ok(r) => r,

@@ -8,7 +8,7 @@
 use crate::error::{Error, Problem};
 use crate::export::shown::{obj_in_original_units, Shown};
 use crate::mesh::{Population, ReadOptions, Sources};
-use crate::mfa::{Model, Params};
+use crate::mfa::{FitStart, FlatParams, Model, Params};
 use crate::parts::hierarchy::{FitResult, Pipeline};
 use js_sys::{Array, Float32Array, Float64Array, Uint32Array, Uint8Array};
 use std::rc::Rc;
@@ -111,7 +111,7 @@ impl WasmPopulation {
             };
             Population::read(Sources::MeshFiles { names: &names, fetch: &mut fetch }, &ReadOptions::default())
         } else {
-            let options = crate::mesh::gltf::Options { animation, ..Default::default() };
+            let gltf = crate::mesh::gltf::Options { animation, ..Default::default() };
             let files = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
             Population::read(Sources::Files(files), &ReadOptions { gltf })
         };
@@ -281,16 +281,16 @@ pub struct Fitter {
 }
 
 impl Fitter {
-    /// The parameters read from JS and the pipeline `make` builds from them.
+    /// The parameters (and the start, `startLabels`) read from JS and the pipeline `make` builds from them.
     fn with(
         population: &WasmPopulation,
         params: JsValue,
-        make: fn(&Population, &Params) -> crate::error::Result<Pipeline>,
+        make: fn(&Population, &Params, &FitStart) -> crate::error::Result<Pipeline>,
     ) -> Result<Fitter, JsValue> {
-        let params: Params = from_js(params, "parameters")?;
+        let (params, start) = from_js::<FlatParams>(params, "parameters")?.split();
         // the fit needs the memory more than a view of the last model does (rebuilt when asked again)
         forget_articulation(None);
-        let pipe = make(&population.inner, &params)?;
+        let pipe = make(&population.inner, &params, &start)?;
         Ok(Fitter { pipe, pop: population.inner.clone(), params: Rc::new(params) })
     }
 }
@@ -301,7 +301,7 @@ impl Fitter {
     /// varianceFloor, lambdaRule: "exact" | "paper-eq18", restarts, refine, ...); missing fields take defaults.
     #[wasm_bindgen(constructor)]
     pub fn new(population: &WasmPopulation, params: JsValue) -> Result<Fitter, JsValue> {
-        Fitter::with(population, params, Pipeline::new)
+        Fitter::with(population, params, Pipeline::starting)
     }
 
     /// The fit a step-by-step lesson shows (`Pipeline::for_teaching`: the paper's Algorithm 1, whatever
@@ -603,9 +603,10 @@ impl FitModel {
         Uint8Array::from(fit.to_bytes(with_poses && self.about.has_data).as_slice())
     }
 
-    /// The parameters of the fit, as a plain object (camelCase, as the Fitter takes them).
+    /// The parameters of the fit, as a plain object (camelCase, as the Fitter takes them; `startLabels` when
+    /// the fit started from a partition).
     pub fn params(&self) -> Result<JsValue, JsValue> {
-        to_js(&self.about.params)
+        to_js(&FlatParams::new(&self.about.params, &FitStart { labels: self.result.start_labels.clone() }))
     }
 }
 
@@ -805,11 +806,12 @@ pub fn memory_bytes() -> f64 {
 /// count, when one is loaded) a part count the population cannot hold is refused too, naming the limit.
 #[wasm_bindgen(js_name = formParams)]
 pub fn form_params(base: JsValue, fields: JsValue, vertices: Option<u32>) -> Result<JsValue, JsValue> {
-    let base: Params = from_js(base, "fit parameters")?;
+    // (a start in `base` is kept as it is: the form has no field of it)
+    let (base, start) = from_js::<FlatParams>(base, "fit parameters")?.split();
     let fields: std::collections::BTreeMap<String, String> = descriptor(fields, "form fields")?;
     let pairs: Vec<(&str, &str)> = fields.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
     let v = match base.with_fields_for(&pairs, vertices.map(|n| n as usize)) {
-        Ok(p) => serde_json::json!({ "params": p, "problems": [] }),
+        Ok(p) => serde_json::json!({ "params": FlatParams::new(&p, &start), "problems": [] }),
         Err(problems) => serde_json::json!({ "params": null, "problems": problems }),
     };
     to_js(&v)

@@ -40,7 +40,12 @@ use posemfa::Error;
 
 /// Small and fast fit settings (the cases are about answers, not accuracy).
 fn quick(parts: usize) -> Params {
-    Params { parts, max_iter: 40, restarts: 2, refine_max_iter: 20, ..Params::default() }
+    Params {
+        max_iter: 40,
+        restarts: 2,
+        algorithm1: posemfa::mfa::Algorithm1Params { parts, refine_max_iter: 20, ..Default::default() },
+        ..Params::default()
+    }
 }
 
 fn names(n: usize) -> Vec<String> {
@@ -297,7 +302,11 @@ dual_test! {
             .collect();
         let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(2), faces: fan(4), shapes }).unwrap();
         // (Algorithm 1's working set: the merge tree's start does not grow with `parts`)
-        let params = Params { parts: 512, max_subparts: 64, part_rule: posemfa::mfa::PartRule::Distinct, ..Params::default() };
+        let params = Params {
+            algorithm1: posemfa::mfa::Algorithm1Params { parts: 512, max_subparts: 64, ..Default::default() },
+            part_rule: posemfa::mfa::PartRule::Distinct,
+            ..Params::default()
+        };
         let need = memory::estimate_bytes(n, 2, 512 * 64);
         assert!(need > 8 << 30 && need > budget, "{need}");
         let e = fit(&pop, &params, &mut |_| true).err().expect("must be refused");

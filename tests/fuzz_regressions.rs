@@ -72,7 +72,7 @@ dual_test! {
         let ShapesInput { cfg, names, faces, shapes } = decode_shapes(data).expect("long enough");
         assert_eq!((shapes.len(), shapes[0].len()), (2, 7));
         let params = params_from(cfg);
-        assert!(params.refine && params.parts == 3);
+        assert!(params.refine && params.algorithm1.parts == 3);
         let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names, faces, shapes }).unwrap();
         assert_fits(&pop, cfg);
     }

@@ -12,7 +12,8 @@ use posemfa::Error;
 use posemfa_fuzz::{bounded_fit, check_population};
 
 /// Names that exercise the natural sort: numbers of different widths, case, shared prefixes.
-const NAMES: [&str; 8] = ["pose10.obj", "pose2.obj", "Pose1.obj", "pose02.obj", "a.obj", "A.obj", "pose1.obj", "b9.obj"];
+const NAMES: [&str; 8] =
+    ["pose10.obj", "pose2.obj", "Pose1.obj", "pose02.obj", "a.obj", "A.obj", "pose1.obj", "b9.obj"];
 
 fuzz_target!(|data: &[u8]| {
     let Some((&cfg, rest)) = data.split_first() else { return };

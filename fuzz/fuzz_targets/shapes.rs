@@ -9,8 +9,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use posemfa::mesh::Population;
 use posemfa::fuzzing::{decode_shapes, ShapesInput};
+use posemfa::mesh::Population;
 use posemfa::Error;
 use posemfa_fuzz::{bounded_fit, check_population};
 

@@ -237,7 +237,16 @@ mod tests {
         // Algorithm 1's coarse stage alone at m = 4: a quadruped's 4 parts explain too little, and that says
         // nothing about the quadruped
         let g = generate(&Spec { preset: Preset::Quadruped, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
-        let r = fit(&g.population, &Params { parts: 4, refine: false, ..Params::default() }, &mut |_| true).unwrap();
+        let r = fit(
+            &g.population,
+            &Params {
+                algorithm1: crate::mfa::Algorithm1Params { parts: 4, ..Default::default() },
+                refine: false,
+                ..Params::default()
+            },
+            &mut |_| true,
+        )
+        .unwrap();
         assert!(r.count_unjudged);
         assert!(!diagnose(&g.population, &r.model).articulated);
         let d = diagnose_fit(&g.population, &r);
@@ -253,7 +262,16 @@ mod tests {
             d.reason
         );
         // enough parts fixed by hand: the verdict stands
-        let r = fit(&g.population, &Params { parts: 40, refine: false, ..Params::default() }, &mut |_| true).unwrap();
+        let r = fit(
+            &g.population,
+            &Params {
+                algorithm1: crate::mfa::Algorithm1Params { parts: 40, ..Default::default() },
+                refine: false,
+                ..Params::default()
+            },
+            &mut |_| true,
+        )
+        .unwrap();
         let d = diagnose_fit(&g.population, &r);
         assert!(!d.undecided && d.articulated, "{d:?}");
         // with the part rule on, the verdict is the rule's (no such hedge)

@@ -8,8 +8,8 @@
 //!
 //! | what | value | where |
 //! |---|---|---|
-//! | a joint must explain this many typical variances (rule 2, the tree's cut) | 4 | `Params::distinct_ratio` |
-//! | a part moving as a fixed blend of two neighbours within this fraction is flesh (rule 1) | 0.1 | `Params::blend_ratio` |
+//! | a joint must explain this many typical variances (rule 2, the tree's cut) | 4 | `DistinctParams::distinct_ratio` |
+//! | a part moving as a fixed blend of two neighbours within this fraction is flesh (rule 1) | 0.1 | `DistinctParams::blend_ratio` |
 //! | a part needs this many vertices | 4 | `Params::min_part_vertices` |
 //! | the start: the patches' tree cut at this many merge yardsticks | 28 | [`TREE_START_RATIO`] |
 //! | the start with an exact count asked for: cut at this many typical variances | 64 | [`TREE_COUNT_START_RATIO`] |
@@ -23,7 +23,7 @@
 //! | an island this fraction of its part's largest piece becomes a part | 0.25 | [`crate::parts::islands::SPLIT_FRACTION`] |
 //! | rounds of the part rule / of the exact count | 3 / 3 | `rounds::DECIDE_ROUNDS`, `rounds::COUNT_ROUNDS` |
 //! | decided on a coarse mesh: from this many times its size / with fewer poses it grows | 2 / 20 | [`COARSE_FACTOR`], [`COARSE_POSES`] |
-//! | the coarse mesh's vertices | 8 000 | `Params::coarse_vertices` |
+//! | the coarse mesh's vertices | 8 000 | `TreeParams::coarse_vertices` |
 
 use super::rounds::Tail;
 use super::{lay_out, FinalRun, Fine, Pipeline, State};
@@ -31,7 +31,7 @@ use crate::error::{Error, Result};
 use crate::mesh::Population;
 use crate::mfa::aecm::{Fit, StageStats};
 use crate::mfa::data::Data;
-use crate::mfa::params::{Params, PartRule};
+use crate::mfa::params::{Params, PartRule, RunParams};
 use crate::mfa::result::Model;
 use crate::parts::labels::compact;
 
@@ -88,10 +88,10 @@ impl Pipeline {
     /// where a merge first costs the smaller side [`TREE_START_RATIO`] times the tree's typical merge within a
     /// part; the start's flesh goes ([`dissolve_start_flesh`]) and the final AECM runs from what is left. With
     /// an exact part count, the cut at [`TREE_COUNT_START_RATIO`] instead, flesh and all.
-    pub(super) fn from_tree(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
+    pub(super) fn from_tree(pop: &Population, params: &RunParams, start: Option<&[u32]>, t0: f64) -> Result<Pipeline> {
         // (an exact count the coarse mesh cannot hold is made on all vertices)
-        let target = coarse_target(params.coarse_vertices, pop.n_shapes());
-        let on_coarse = params.coarse_vertices > 0
+        let target = coarse_target(params.tree.coarse_vertices, pop.n_shapes());
+        let on_coarse = params.tree.coarse_vertices > 0
             && pop.n_vertices() >= COARSE_FACTOR * target
             && params
                 .target_parts
@@ -117,7 +117,7 @@ impl Pipeline {
         if full.is_none() {
             crate::mfa::aecm::check_population(&data, 1, 1)?;
         }
-        let (cut, labels) = match &params.start_labels {
+        let (cut, labels) = match start {
             // on the coarse mesh each coarse vertex takes its seed's part (a part no seed holds is made again by
             // the exact count's split)
             Some(start) => {
@@ -140,6 +140,7 @@ impl Pipeline {
         let mut p = Pipeline {
             pop: work,
             params: params.clone(),
+            start_labels: start.map(<[u32]>::to_vec),
             state: State::Done,
             coarse: None,
             coarse_labels: cut,
@@ -187,7 +188,7 @@ impl Pipeline {
         // whether the parts were fitted to the motion labels in this call (a model the rule leaves as it is
         // stays fitted)
         let mut fitted = false;
-        if self.count_rounds == 0 && self.decide_rounds == 0 && self.params.start_labels.is_some() {
+        if self.count_rounds == 0 && self.decide_rounds == 0 && self.start_labels.is_some() {
             self.decide_rounds += 1;
             self.fit_to_labels(&mut model);
             fitted = true;
@@ -239,7 +240,7 @@ impl Pipeline {
         // and with its own yardstick every round would merge a few more (lion-poses: 43 -> 40 -> 36 -> 34)
         let yardstick = self.merge_tree.as_ref().map_or_else(|| tree.middle_typical(), |first| first.typical);
         tree.rescore(yardstick);
-        let count = tree.decided_count(self.params.distinct_ratio);
+        let count = tree.decided_count(self.params.distinct.distinct_ratio);
         let merged = tree.labels_at(count);
         let curve = tree.curve(count);
         if self.merge_tree.is_none() {
@@ -258,8 +259,8 @@ impl Pipeline {
     }
 }
 
-/// The number of parts of [`Params::start_labels`], once they are found to be a start for `pop`: one label per
-/// vertex, with the merge tree's part rule.
+/// The number of parts of a start's labels ([`crate::mfa::FitStart`]), once they are found to be a start for `pop`: one
+/// label per vertex, with the merge tree's part rule.
 pub(super) fn check_start_labels(start: &[u32], pop: &Population, params: &Params) -> Result<usize> {
     if start.len() != pop.n_vertices() {
         return Err(Error::Params(format!(
@@ -281,7 +282,7 @@ pub(super) fn check_start_labels(start: &[u32], pop: &Population, params: &Param
 /// [`MergeTree::merge_yardstick`] (with `target_parts`: at [`TREE_COUNT_START_RATIO`] times its typical variance),
 /// not cut when it has fewer than [`TREE_CUT_LEAVES`] patches; then, when the part rule decides the count, the
 /// start's flesh dissolved ([`dissolve_start_flesh`]). Returns the cut and the start (compact labels).
-pub(super) fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32>, Vec<u32>)> {
+pub(super) fn tree_start(pop: &Population, data: &Data, params: &RunParams) -> Result<(Vec<u32>, Vec<u32>)> {
     // the patches' own yardstick, not the variance floor: on clean data the patches fit far below the floor,
     // and the floor as the yardstick merged the generated hand's fingertips before the AECM
     let t0 = crate::clock::now_ms();
@@ -318,11 +319,11 @@ pub(super) fn tree_start(pop: &Population, data: &Data, params: &Params) -> Resu
 /// small changes of the data (a frame dropped), and the decided count with them (docs/decisions.md). Dissolved on
 /// the start, the AECM starts with fewer components and the rounds after it find next to no flesh. Compact
 /// labels.
-pub(super) fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &Params) -> Vec<u32> {
+pub(super) fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &RunParams) -> Vec<u32> {
     let t0 = crate::clock::now_ms();
     let comps = crate::mfa::init::components_from_labels(data, labels, params.floor());
     let mut model = crate::mfa::aecm::model_of(data, &comps, compact(labels));
-    let dissolved = crate::parts::distinct::dissolve_flesh(&mut model, pop, params.blend_ratio);
+    let dissolved = crate::parts::distinct::dissolve_flesh(&mut model, pop, params.distinct.blend_ratio);
     if dissolved > 0 {
         crate::parts::islands::connect_parts(&mut model, pop, false, params.min_part_vertices);
     }
