@@ -1,7 +1,7 @@
 //! Reading speed: `cargo run --release --example bench_read -- DIR_OR_FILES... [--repeat N] [--population]`.
 //! Prints JSON: files, bytes, and per repeat the time to read every file into poses with the reader its
 //! extension calls for (`mesh::load`: OBJ, PLY, glTF, point caches; no population checks or unit box), or with
-//! `--population` the time of `Population::from_files` (reading, the population's checks and the unit box: what
+//! `--population` the time of `Population::read` of the files (reading, the population's checks and the unit box: what
 //! the page's `new Population(names, files)` runs; scripts/bench-read-wasm.mjs compares the two).
 //!
 //! `--write FORMAT DIR` instead reads the input as a population and writes it, in its original units, as
@@ -40,7 +40,7 @@ fn read_inputs(paths: &[std::path::PathBuf]) -> Result<Vec<(String, Vec<u8>)>, S
 /// The population of `files` written as `format`: (file name, bytes).
 fn convert(files: Vec<(String, Vec<u8>)>, format: &str) -> Result<Vec<(String, Vec<u8>)>, String> {
     use posemfa::export::ply::{write_ply, PlyFormat};
-    let pop = posemfa::mesh::Population::from_files(files).map_err(|e| e.to_string())?;
+    let pop = posemfa::mesh::Population::new(posemfa::mesh::Sources::Files(files)).map_err(|e| e.to_string())?;
     let poses: Vec<Vec<[f64; 3]>> =
         pop.shapes().map(|s| s.iter().map(|p| pop.normalization.to_original(p)).collect()).collect();
     let stem = |n: &str| n.rsplit_once('.').map_or(n, |(s, _)| s).to_string();
@@ -118,7 +118,7 @@ fn run() -> Result<(), String> {
         let input = files.clone();
         let t = Instant::now();
         if population {
-            let p = posemfa::mesh::Population::from_files(input).map_err(|e| e.to_string())?;
+            let p = posemfa::mesh::Population::new(posemfa::mesh::Sources::Files(input)).map_err(|e| e.to_string())?;
             std::hint::black_box(p);
         } else {
             let loaded = posemfa::mesh::load::load(input)

@@ -68,7 +68,7 @@ fn load(input: &str) -> Population {
         // the generator's own working set is not the fit's: keep only the population
         posemfa::synth::generate(&spec).unwrap().population
     } else {
-        Population::from_paths(&[input]).unwrap()
+        Population::new(posemfa::mesh::Sources::paths(&[input])).unwrap()
     }
 }
 

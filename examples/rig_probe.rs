@@ -52,7 +52,7 @@ fn main() -> Result<(), String> {
         ));
     }
     let t = Instant::now();
-    let pop = Population::from_files(files).map_err(|e| e.to_string())?;
+    let pop = Population::new(posemfa::mesh::Sources::Files(files)).map_err(|e| e.to_string())?;
     let read_ms = t.elapsed().as_secs_f64() * 1e3;
     let bind = posemfa::export::rig_report::default_bind_pose(&pop);
     let mut report = Vec::new();

@@ -42,7 +42,7 @@ fn load(arg: &str) -> Result<Input, String> {
         let g = synth::generate(&spec).map_err(|e| e.to_string())?;
         return Ok(Input { label: arg.into(), pop: g.population.clone(), truth: Some(g), params: Params::default() });
     }
-    let pop = Population::from_paths_with(&[arg.to_string()], &Default::default()).map_err(|e| e.to_string())?;
+    let pop = Population::new(posemfa::mesh::Sources::paths(&[arg])).map_err(|e| e.to_string())?;
     Ok(Input { label: arg.into(), pop, truth: None, params: Params::default() })
 }
 
@@ -83,8 +83,11 @@ fn main() {
         let mut worst_ari = f64::NEG_INFINITY;
         for seed in 0..seeds {
             let mut rows = Vec::new();
-            for (name, subset, accelerate) in [("full", 0, false), ("fast", input.params.subset_vertices, true)] {
-                let params = Params { seed, subset_vertices: subset, accelerate, ..input.params.clone() };
+            for (name, subset, accelerate) in
+                [("full", 0, false), ("fast", input.params.algorithm1.subset_vertices, true)]
+            {
+                let mut params = Params { seed, accelerate, ..input.params.clone() };
+                params.algorithm1.subset_vertices = subset;
                 let t0 = std::time::Instant::now();
                 let r = match fit(&input.pop, &params, &mut |_| true) {
                     Ok(r) => r,

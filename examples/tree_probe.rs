@@ -23,7 +23,7 @@ fn main() {
         };
         posemfa::synth::generate(&spec).unwrap().population
     } else {
-        posemfa::mesh::Population::from_paths(&[input.clone()]).unwrap()
+        posemfa::mesh::Population::new(posemfa::mesh::Sources::paths(&[input.clone()])).unwrap()
     };
     let floor = posemfa::mfa::Params::default().variance_floor;
     let mut labels = Vec::new();

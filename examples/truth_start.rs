@@ -13,10 +13,11 @@ fn main() {
         eprintln!("usage: truth_start INPUT TRUTH.json");
         std::process::exit(2);
     };
-    let pop = posemfa::mesh::Population::from_paths(std::slice::from_ref(input)).unwrap_or_else(|e| {
-        eprintln!("{input}: {e}");
-        std::process::exit(1);
-    });
+    let pop = posemfa::mesh::Population::new(posemfa::mesh::Sources::paths(std::slice::from_ref(input)))
+        .unwrap_or_else(|e| {
+            eprintln!("{input}: {e}");
+            std::process::exit(1);
+        });
     let truth: Vec<u32> =
         std::fs::read_to_string(truth).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_else(|| {
             eprintln!("{truth}: not a JSON array of labels");

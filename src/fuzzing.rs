@@ -2,19 +2,22 @@
 //! targets and the crash inputs kept as plain tests (`tests/fuzz_regressions.rs`) decode an input the same way.
 
 use crate::geometry::Vec3;
-use crate::mfa::Params;
+use crate::mfa::{Algorithm1Params, Params};
 
 /// Small, fast fit parameters chosen by a target's config byte (byte 0 of every input that fits).
 pub fn params_from(cfg: u8) -> Params {
     Params {
-        parts: 1 + (cfg as usize >> 4) % 5,
         seed: cfg as u64,
         max_iter: 4,
         restarts: 1,
         refine: cfg & 1 == 1,
-        max_subparts: 2,
-        refine_max_iter: 3,
         min_part_vertices: 1 + (cfg as usize >> 1) % 3,
+        algorithm1: Algorithm1Params {
+            parts: 1 + (cfg as usize >> 4) % 5,
+            max_subparts: 2,
+            refine_max_iter: 3,
+            ..Algorithm1Params::default()
+        },
         ..Params::default()
     }
 }

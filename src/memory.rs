@@ -25,7 +25,7 @@
 //! the page, the worker and the typed arrays of the views need their share) and 8 GiB natively, where the
 //! environment variable `POSEMFA_MEMORY_BUDGET` can change it (bytes, or a number with a K, M or G suffix, in
 //! units of 1024). A population whose smallest fit (1 part) does not fit is refused when it is assembled
-//! ([`crate::mesh::Population::from_meshes`]); a fit whose parts do not fit is refused when it starts
+//! ([`crate::mesh::Population::read`]); a fit whose parts do not fit is refused when it starts
 //! ([`crate::mfa::aecm::Fit::new`]). Both errors say the size, the budget and what to do.
 
 use crate::error::{Error, Result};

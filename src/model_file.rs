@@ -488,7 +488,7 @@ fn write(m: &Borrowed, with_points: bool, saved_rig: Option<&SavedRig>) -> Vec<u
     if let Some(t) = r.merge_tree() {
         body.labels("treeLeaves", &t.leaves);
     }
-    if let Some(s) = &m.params.start_labels {
+    if let Some(s) = &r.start_labels {
         body.labels("startLabels", s);
     }
     body.f64s("latent", model.latent.as_flattened());
@@ -509,8 +509,7 @@ fn write(m: &Borrowed, with_points: bool, saved_rig: Option<&SavedRig>) -> Vec<u
     }
     let rig = saved_rig.map(|r| rig::write(r, &mut body));
     let version = if rig.is_some() { 2 } else { 1 };
-    let mut params = m.params.clone();
-    params.start_labels = None;
+    let params = m.params.clone();
     let header = Header {
         format: FORMAT.into(),
         version,
@@ -968,11 +967,16 @@ fn decode(file: &str, h: Header, body: &[u8]) -> Result<ModelFile> {
         crate::memory::check(nv, ns, 1, crate::memory::budget_bytes()?)?;
         (0..ns).flat_map(|i| model.reconstruct(i)).map(crate::mesh::population::narrow).collect()
     };
-    let mut population =
-        Population::from_saved(file, p.names.clone(), faces, points, p.normalization, p.source.clone())?;
+    let mut population = Population::new(crate::mesh::Sources::Saved(crate::mesh::Saved {
+        file: file.into(),
+        names: p.names.clone(),
+        faces,
+        points,
+        normalization: p.normalization,
+        source: p.source.clone(),
+    }))?;
     population.clips = p.clips.as_ref().map(|c| crate::mesh::gltf::Clips { names: c.names.clone(), read: c.read });
-    let mut params = h.params;
-    params.start_labels = start_labels;
+    let params = h.params;
     // the rule's own report: a file written from a fit has the merge tree's fields only with that rule, and
     // that rule always refines
     let rule = match h.fit.from_merge_tree {
@@ -1003,6 +1007,7 @@ fn decode(file: &str, h: Header, body: &[u8]) -> Result<ModelFile> {
         decided_labels,
         count_unjudged: h.fit.count_unjudged,
         parts_asked: h.fit.parts_asked,
+        start_labels,
         rule,
     };
     let rig = match h.rig {

@@ -10,8 +10,8 @@
 
 use crate::export::gltf::{GltfOptions, Joints, Morphs, Weights};
 use crate::mesh::gltf::PoseSource;
-use crate::mesh::{Mesh, Population};
-use crate::mfa::{LambdaRule, Params, PartRule};
+use crate::mesh::{Mesh, Population, ReadOptions, Sources};
+use crate::mfa::{FitStart, FlatParams, LambdaRule, Params, PartRule};
 use crate::model_file::{Borrowed, ModelFile, Summary};
 use crate::parts::hierarchy::{FitResult, Pipeline, Progress, Stage};
 use numpy::ndarray::{Array1, Array2, Array3, Array4};
@@ -151,9 +151,9 @@ fn read(
     if paths.is_empty() {
         return Err(err("no files were given"));
     }
-    let options = crate::mesh::gltf::Options { mesh: object, animation, frames, source };
-    let pop = py.detach(|| Population::from_paths_with(&paths, &options));
-    Ok(PyPoses { pop: core(pop)? })
+    let gltf = crate::mesh::gltf::Options { mesh: object, animation, frames, source };
+    let pop = py.detach(|| Population::read(Sources::paths(&paths), &ReadOptions { gltf }));
+    Ok(PyPoses { pop: core(pop.map_err(|mut e| e.swap_remove(0)))? })
 }
 
 /// Poses from arrays: `points` (n_poses, n_vertices, 3) float64 in any units, `faces` (n_faces, 3) int64,
@@ -225,7 +225,7 @@ fn poses_from_arrays(
         let positions: Vec<[f64; 3]> = shape.outer_iter().map(|v| [v[0], v[1], v[2]]).collect();
         meshes.push((name, Mesh { positions, faces: tris.clone() }));
     }
-    let pop = py.detach(|| Population::from_meshes(meshes));
+    let pop = py.detach(|| Population::new(crate::mesh::Sources::Meshes(meshes)));
     let mut pop = core(pop)?;
     pop.source = format!("{ns} poses from arrays");
     Ok(PyPoses { pop })
@@ -270,9 +270,11 @@ const PARAM_NAMES: &[&str] = &[
     "start_labels",
 ];
 
-/// The fit parameters of the CLI's fit options (`posemfa fit --help`), by their names with `_` for `-`.
-fn params_from(kwargs: &Bound<'_, PyDict>, n_vertices: usize) -> PyResult<Params> {
+/// The fit parameters of the CLI's fit options (`posemfa fit --help`), by their names with `_` for `-`, and
+/// the start (`start_labels`).
+fn params_from(kwargs: &Bound<'_, PyDict>, n_vertices: usize) -> PyResult<(Params, FitStart)> {
     let mut p = Params::default();
+    let mut start = FitStart::default();
     let mut part_rule = None;
     let mut threshold = None;
     for (k, v) in kwargs.iter() {
@@ -328,13 +330,13 @@ fn params_from(kwargs: &Bound<'_, PyDict>, n_vertices: usize) -> PyResult<Params
                     other => return Err(err(format!("part_rule = '{other}': use 'tree', 'distinct' or 'threshold'"))),
                 })
             }
-            "distinct_ratio" => p.distinct_ratio = number("a number")?,
-            "blend_ratio" => p.blend_ratio = number("a number")?,
+            "distinct_ratio" => p.distinct.distinct_ratio = number("a number")?,
+            "blend_ratio" => p.distinct.blend_ratio = number("a number")?,
             "refine_threshold" => threshold = Some(number("a number")?),
-            "max_subparts" => p.max_subparts = whole("a whole number")?,
+            "max_subparts" => p.algorithm1.max_subparts = whole("a whole number")?,
             "refine_tol" => p.refine_tol = number("a number")?,
-            "subset" => p.subset_vertices = whole("a whole number of vertices (0 = all)")?,
-            "coarse" => p.coarse_vertices = whole("a whole number of vertices (0 = decide on all)")?,
+            "subset" => p.algorithm1.subset_vertices = whole("a whole number of vertices (0 = all)")?,
+            "coarse" => p.tree.coarse_vertices = whole("a whole number of vertices (0 = decide on all)")?,
             "start_labels" => {
                 let labels: Vec<u32> = v.extract().map_err(|_| {
                     err("start_labels: it must be a sequence of whole numbers, one part per vertex".to_string())
@@ -345,7 +347,7 @@ fn params_from(kwargs: &Bound<'_, PyDict>, n_vertices: usize) -> PyResult<Params
                         labels.len()
                     )));
                 }
-                p.start_labels = Some(labels);
+                start.labels = Some(labels);
             }
             other => {
                 return Err(err(format!("unknown parameter '{other}': the parameters are {}", PARAM_NAMES.join(", "))))
@@ -362,11 +364,11 @@ fn params_from(kwargs: &Bound<'_, PyDict>, n_vertices: usize) -> PyResult<Params
                 "refine_threshold is the paper's part rule (threshold): leave out part_rule='{name}'"
             )));
         }
-        p.refine_threshold = e;
+        p.algorithm1.threshold.refine_threshold = e;
         p.part_rule = PartRule::Threshold;
     }
     core(p.validate())?;
-    Ok(p)
+    Ok((p, start))
 }
 
 // ---------------------------------------------------------------- fitting
@@ -397,12 +399,13 @@ fn run_fit(
     py: Python<'_>,
     pop: &Population,
     params: &Params,
+    start: &FitStart,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(FitResult, bool)> {
     let mut raised: Option<PyErr> = None;
     let mut stopped = false;
     let result = py.detach(|| -> crate::Result<FitResult> {
-        let mut pipe = Pipeline::new(pop, params)?;
+        let mut pipe = Pipeline::starting(pop, params, start)?;
         let mut observer = |p: &Progress| -> bool {
             let Some(cb) = &progress else { return true };
             Python::attach(|py| {
@@ -437,11 +440,11 @@ fn fit(
     progress: Option<Py<PyAny>>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(PyModel, bool)> {
-    let params = match params {
+    let (params, start) = match params {
         Some(d) => params_from(d, poses.pop.n_vertices())?,
         None => params_from(&PyDict::new(py), poses.pop.n_vertices())?,
     };
-    let (result, stopped) = run_fit(py, &poses.pop, &params, progress)?;
+    let (result, stopped) = run_fit(py, &poses.pop, &params, &start, progress)?;
     Ok((PyModel::fitted(poses.pop.clone(), result, params), stopped))
 }
 
@@ -705,9 +708,10 @@ impl PyModel {
         serde_json::to_string(&self.result.merge_tree()).map_err(err)
     }
 
-    /// The parameters as JSON (camelCase, every field).
+    /// The parameters as JSON (camelCase, every field; `startLabels` when the fit started from a partition).
     fn params_json(&self) -> PyResult<String> {
-        serde_json::to_string(&self.params).map_err(err)
+        let start = FitStart { labels: self.result.start_labels.clone() };
+        serde_json::to_string(&FlatParams::new(&self.params, &start)).map_err(err)
     }
 
     /// `posemfa fit --json`'s document.
@@ -735,9 +739,11 @@ impl PyModel {
         let mut params = self.params.clone();
         let d = PyDict::new(py);
         d.set_item("bones", bones)?;
-        params.target_parts = params_from(&d, self.pop().n_vertices())?.target_parts;
+        params.target_parts = params_from(&d, self.pop().n_vertices())?.0.target_parts;
         core(params.validate())?;
-        let (result, stopped) = run_fit(py, self.pop(), &params, progress)?;
+        // (from the same start as this fit, if it had one)
+        let start = FitStart { labels: self.result.start_labels.clone() };
+        let (result, stopped) = run_fit(py, self.pop(), &params, &start, progress)?;
         Ok((PyModel::fitted(self.pop().clone(), result, params), stopped))
     }
 

@@ -7,8 +7,8 @@
 
 use crate::error::{Error, Problem};
 use crate::export::shown::{obj_in_original_units, Shown};
-use crate::mesh::Population;
-use crate::mfa::{Model, Params};
+use crate::mesh::{Population, ReadOptions, Sources};
+use crate::mfa::{FitStart, FlatParams, Model, Params};
 use crate::parts::hierarchy::{FitResult, Pipeline};
 use js_sys::{Array, Float32Array, Float64Array, Uint32Array, Uint8Array};
 use std::rc::Rc;
@@ -102,17 +102,18 @@ impl WasmPopulation {
         use crate::mesh::load::FileKind;
         let one_each = names.iter().all(|n| matches!(FileKind::of(n), FileKind::Obj | FileKind::Ply));
         let read = if one_each {
-            Population::from_mesh_files_one_at_a_time(&names, |i, buffer| {
+            let mut fetch = |i: usize, buffer: &mut Vec<u8>| {
                 // the last file's bytes go before the next one's come (a buffer kept for the largest file, grown
                 // by doubling, held 7 bytes per vertex-pose more at the peak on horse-poses subdivided)
                 *buffer = Vec::new();
                 *buffer = files[i].to_vec();
                 Ok(())
-            })
+            };
+            Population::read(Sources::MeshFiles { names: &names, fetch: &mut fetch }, &ReadOptions::default())
         } else {
-            let options = crate::mesh::gltf::Options { animation, ..Default::default() };
+            let gltf = crate::mesh::gltf::Options { animation, ..Default::default() };
             let files = names.into_iter().zip(files.iter().map(|f| f.to_vec())).collect();
-            Population::from_files_all_errors_with(files, &options)
+            Population::read(Sources::Files(files), &ReadOptions { gltf })
         };
         match read {
             // poses with no motion are refused as a bad file is: the page keeps what it had
@@ -280,16 +281,16 @@ pub struct Fitter {
 }
 
 impl Fitter {
-    /// The parameters read from JS and the pipeline `make` builds from them.
+    /// The parameters (and the start, `startLabels`) read from JS and the pipeline `make` builds from them.
     fn with(
         population: &WasmPopulation,
         params: JsValue,
-        make: fn(&Population, &Params) -> crate::error::Result<Pipeline>,
+        make: fn(&Population, &Params, &FitStart) -> crate::error::Result<Pipeline>,
     ) -> Result<Fitter, JsValue> {
-        let params: Params = from_js(params, "parameters")?;
+        let (params, start) = from_js::<FlatParams>(params, "parameters")?.split();
         // the fit needs the memory more than a view of the last model does (rebuilt when asked again)
         forget_articulation(None);
-        let pipe = make(&population.inner, &params)?;
+        let pipe = make(&population.inner, &params, &start)?;
         Ok(Fitter { pipe, pop: population.inner.clone(), params: Rc::new(params) })
     }
 }
@@ -300,7 +301,7 @@ impl Fitter {
     /// varianceFloor, lambdaRule: "exact" | "paper-eq18", restarts, refine, ...); missing fields take defaults.
     #[wasm_bindgen(constructor)]
     pub fn new(population: &WasmPopulation, params: JsValue) -> Result<Fitter, JsValue> {
-        Fitter::with(population, params, Pipeline::new)
+        Fitter::with(population, params, Pipeline::starting)
     }
 
     /// The fit a step-by-step lesson shows (`Pipeline::for_teaching`: the paper's Algorithm 1, whatever
@@ -602,9 +603,10 @@ impl FitModel {
         Uint8Array::from(fit.to_bytes(with_poses && self.about.has_data).as_slice())
     }
 
-    /// The parameters of the fit, as a plain object (camelCase, as the Fitter takes them).
+    /// The parameters of the fit, as a plain object (camelCase, as the Fitter takes them; `startLabels` when
+    /// the fit started from a partition).
     pub fn params(&self) -> Result<JsValue, JsValue> {
-        to_js(&self.about.params)
+        to_js(&FlatParams::new(&self.about.params, &FitStart { labels: self.result.start_labels.clone() }))
     }
 }
 
@@ -613,7 +615,7 @@ impl FitModel {
 /// wasm memory, and come back with [`ParkedModel::restore`] when the new fit is cancelled and the old model stays,
 /// or when it is asked something meanwhile. Wasm memory never shrinks: held through a new fit's tree stage, those
 /// arrays and the holes they leave raised a refit's peak on the generated 42 k x 11 population from 56.9 to 61.1
-/// and 67.1 bytes per vertex-pose (issue 27).
+/// and 67.1 bytes per vertex-pose.
 #[wasm_bindgen]
 pub struct ParkedModel {
     kept: Parked,
@@ -804,11 +806,12 @@ pub fn memory_bytes() -> f64 {
 /// count, when one is loaded) a part count the population cannot hold is refused too, naming the limit.
 #[wasm_bindgen(js_name = formParams)]
 pub fn form_params(base: JsValue, fields: JsValue, vertices: Option<u32>) -> Result<JsValue, JsValue> {
-    let base: Params = from_js(base, "fit parameters")?;
+    // (a start in `base` is kept as it is: the form has no field of it)
+    let (base, start) = from_js::<FlatParams>(base, "fit parameters")?.split();
     let fields: std::collections::BTreeMap<String, String> = descriptor(fields, "form fields")?;
     let pairs: Vec<(&str, &str)> = fields.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
     let v = match base.with_fields_for(&pairs, vertices.map(|n| n as usize)) {
-        Ok(p) => serde_json::json!({ "params": p, "problems": [] }),
+        Ok(p) => serde_json::json!({ "params": FlatParams::new(&p, &start), "problems": [] }),
         Err(problems) => serde_json::json!({ "params": null, "problems": problems }),
     };
     to_js(&v)
@@ -894,7 +897,7 @@ pub fn examples() -> Result<JsValue, JsValue> {
     to_js(&crate::synth::presets::examples())
 }
 
-// ---------------------------------------------------------------- articulation (issue 4)
+// ---------------------------------------------------------------- articulation
 
 thread_local! {
     /// The articulation of the last FitModel asked (graph, joints, weights are computed once per fit).
@@ -1038,7 +1041,7 @@ impl FitModel {
         Ok(obj.into())
     }
 
-    /// Pose mode (issue 28): the rig of `opts` (rig options as for [`FitModel::rig`]; default fitted weights),
+    /// Pose mode: the rig of `opts` (rig options as for [`FitModel::rig`]; default fitted weights),
     /// written and read back, its training poses solved onto it and their pose space.
     pub fn poser(&self, opts: JsValue) -> Result<WasmPoser, JsValue> {
         self.needs_data("pose mode (its rig's weights are fitted to the poses)")?;
@@ -1060,7 +1063,7 @@ impl FitModel {
     }
 }
 
-// ---------------------------------------------------------------- ground-truth accuracy (issue 5)
+// ---------------------------------------------------------------- ground-truth accuracy
 
 #[wasm_bindgen]
 impl Synthetic {
@@ -1140,7 +1143,7 @@ pub fn fault_injection(kind: &str) -> Result<(), JsValue> {
     }
 }
 
-// ---------------------------------------------------------------- pose mode (issue 28)
+// ---------------------------------------------------------------- pose mode
 
 /// A rig being posed ([`crate::export::pose_glb::Poser`]); positions in the population's original units.
 #[wasm_bindgen(js_name = Poser)]

@@ -96,7 +96,11 @@ fn chain(parts: usize, poses: usize, noise: f64, seed: u64) -> Chain {
         rotations.push(rots);
     }
     let names = (0..poses).map(|i| format!("pose{i:02}.obj")).collect();
-    Chain { pop: Population::from_unit_shapes(names, faces, shapes).expect("valid chain"), part_of, rotations }
+    Chain {
+        pop: Population::new(posemfa::mesh::Sources::UnitShapes { names, faces, shapes }).expect("valid chain"),
+        part_of,
+        rotations,
+    }
 }
 
 /// Worst angle (degrees) between fitted and true RELATIVE rotations R^i (R^0)^T, each fitted part matched
@@ -132,7 +136,7 @@ dual_test! {
         for (parts, seed) in [(3usize, 1u64), (5, 2), (7, 3), (10, 4)] {
             let c = chain(parts, 6, 2e-4, seed);
             // Algorithm 1 as the paper uses it: a small initial m, the refinement finds the rest.
-            let params = Params { parts: parts.div_ceil(2), seed, ..Params::default() };
+            let params = Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: parts.div_ceil(2), ..Default::default() }, seed, ..Params::default() };
             let result = Pipeline::new(&c.pop, &params).unwrap().run(&mut |_| true).unwrap();
             let m = &result.model;
             let ari = adjusted_rand_index(&m.labels, &c.part_of);
@@ -152,7 +156,7 @@ dual_test! {
         for (parts, seed) in [(3usize, 11u64), (6, 12)] {
             let c = chain(parts, 5, 1e-3, seed);
             // more components than parts, from k-means: the hard case for monotonicity
-            let params = Params { parts: parts + 2, seed, tol: 1e-12, ..Params::default() };
+            let params = Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: parts + 2, ..Default::default() }, seed, tol: 1e-12, ..Params::default() };
             let mut fit = Fit::new(Data::from_population(&c.pop), &params).unwrap();
             let mut trace = vec![fit.initial_log_likelihood()];
             for _ in 0..40 {
@@ -176,7 +180,7 @@ dual_test! {
             for seed in 0..20u64 {
                 for parts in [3usize, 6] {
                     let c = chain(parts, 5, 1e-3, seed);
-                    let params = Params { parts: parts + 2, seed, tol: 1e-12, px_em, accelerate, ..Params::default() };
+                    let params = Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: parts + 2, ..Default::default() }, seed, tol: 1e-12, px_em, accelerate, ..Params::default() };
                     let mut fit = Fit::new(Data::from_population(&c.pop), &params).unwrap();
                     let mut prev = fit.initial_log_likelihood();
                     for _ in 0..40 {
@@ -209,7 +213,7 @@ dual_test! {
 
     fn the_pipeline_trace_never_decreases_either() {
         let c = chain(4, 6, 5e-4, 21);
-        let mut pipe = Pipeline::new(&c.pop, &Params { parts: 3, ..Params::default() }).unwrap();
+        let mut pipe = Pipeline::new(&c.pop, &Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: 3, ..Default::default() }, ..Params::default() }).unwrap();
         // (an iteration that drops a component, whose mass fell below `min_part_vertices`, is another model: it
         // may lower the likelihood)
         let mut last: Option<(String, usize, f64)> = None;
@@ -241,7 +245,11 @@ dual_test! {
         assert!(tree.result().from_merge_tree());
         let coarse_only = Pipeline::new(&c.pop, &Params { refine: false, ..Params::default() }).unwrap();
         assert!(!coarse_only.result().from_merge_tree());
-        let mut lesson = Pipeline::for_teaching(&c.pop, &Params { parts: 3, ..Params::default() }).unwrap();
+        let mut lesson = Pipeline::for_teaching(
+            &c.pop,
+            &Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: 3, ..Default::default() }, ..Params::default() },
+            &posemfa::mfa::FitStart::default(),
+        ).unwrap();
         assert_eq!(lesson.stage(), Stage::Coarse);
         let mut refined = false;
         while !lesson.is_done() {
@@ -255,7 +263,7 @@ dual_test! {
     fn pruned_e_step_equals_the_plain_one() {
         let c = chain(5, 5, 1e-3, 31);
         let data = Data::from_population(&c.pop);
-        let mut fit = Fit::new(data.clone(), &Params { parts: 5, seed: 3, ..Params::default() }).unwrap();
+        let mut fit = Fit::new(data.clone(), &Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: 5, ..Default::default() }, seed: 3, ..Params::default() }).unwrap();
         for _ in 0..3 {
             fit.step();
         }
@@ -275,7 +283,7 @@ dual_test! {
 
     fn the_literal_eq18_option_runs_and_returns_its_best_state() {
         let c = chain(4, 6, 5e-4, 41);
-        let params = Params { parts: 4, seed: 1, lambda_rule: LambdaRule::PaperEq18, max_iter: 40, ..Params::default() };
+        let params = Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: 4, ..Default::default() }, seed: 1, lambda_rule: LambdaRule::PaperEq18, max_iter: 40, ..Params::default() };
         let mut fit = Fit::new(Data::from_population(&c.pop), &params).unwrap();
         fit.run(&mut |_| true);
         let trace = fit.trace().to_vec();
@@ -301,7 +309,7 @@ dual_test! {
 
     fn reconstruction_equals_eq22_and_rmse_matches() {
         let c = chain(3, 5, 1e-3, 51);
-        let result = Pipeline::new(&c.pop, &Params { parts: 3, ..Params::default() }).unwrap().run(&mut |_| true).unwrap();
+        let result = Pipeline::new(&c.pop, &Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: 3, ..Default::default() }, ..Params::default() }).unwrap().run(&mut |_| true).unwrap();
         let m = &result.model;
         let mut s = 0.0;
         for i in 0..c.pop.n_shapes() {

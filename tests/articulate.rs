@@ -153,7 +153,7 @@ dual_test! {
         let turn = |deg: f64| axis_angle([0.0, 0.0, 1.0], deg.to_radians());
         let (r0, r1) = (turn(170.0), turn(-170.0));
         let shapes: Vec<Vec<Vec3>> = [r0, r1].iter().map(|r| g.rest.iter().map(|&v| mat_vec(r, v)).collect()).collect();
-        let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], g.population.faces.to_vec(), shapes).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: vec!["a".into(), "b".into()], faces: g.population.faces.to_vec(), shapes }).unwrap();
         let mut model = truth_model(&g);
         // latent = shape a turned back; every part: R = (r0, r1), b = (0, x^b - r1 latent)
         model.latent = pop.unit_shapes()[0].iter().map(|&x| posemfa::geometry::mat_t_vec(&r0, x)).collect();
@@ -289,7 +289,7 @@ dual_test! {
 #[test]
 fn horse_poses_3_to_8() {
     let Some(dir) = common::shared_dir("data/horse-poses", "horse_poses_3_to_8") else { return };
-    let pop = Population::from_paths(&[&dir]).unwrap();
+    let pop = Population::new(posemfa::mesh::Sources::paths(&[&dir])).unwrap();
     let model = fitted(&pop);
     let art = Articulation::new(&model, &pop).unwrap();
     let rep = posemfa::articulate::report::report(&art, 2, 7, 0.5).unwrap();

@@ -25,7 +25,8 @@ fn read_timed(path: &Path) -> (Population, f64) {
     let mut pop = None;
     for _ in 0..3 {
         let t = std::time::Instant::now();
-        let p = Population::from_paths(&[path.to_path_buf()]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let p = Population::new(posemfa::mesh::Sources::paths(&[path.to_path_buf()]))
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         times.push(t.elapsed().as_secs_f64() * 1e3);
         pop = Some(p);
     }

@@ -45,7 +45,7 @@ dual_test! {
     fn reports_and_accuracy_are_camel_case() {
         let spec = Spec { preset: posemfa::synth::Preset::Arm, vertices: 800, poses: 5, ..Default::default() };
         let g = posemfa::synth::generate(&spec).unwrap();
-        let params = Params { parts: 3, ..Default::default() };
+        let params = Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: 3, ..Default::default() }, ..Default::default() };
         let result = posemfa::parts::hierarchy::fit(&g.population, &params, &mut |_| true).unwrap();
         let art = posemfa::articulate::Articulation::new(&result.model, &g.population).unwrap();
         let report = posemfa::articulate::report::report(&art, 0, 3, 0.5).unwrap();
@@ -74,7 +74,7 @@ dual_test! {
         let spec = Spec { preset: posemfa::synth::Preset::Arm, vertices: 800, poses: 5, ..Default::default() };
         let g = posemfa::synth::generate(&spec).unwrap();
         // Algorithm 1 (the refinement stage is its own)
-        let params = Params { parts: 3, part_rule: posemfa::mfa::PartRule::Distinct, ..Default::default() };
+        let params = Params { algorithm1: posemfa::mfa::Algorithm1Params { parts: 3, ..Default::default() }, part_rule: posemfa::mfa::PartRule::Distinct, ..Default::default() };
         let mut pipe = posemfa::parts::hierarchy::Pipeline::new(&g.population, &params).unwrap();
         let mut values = vec![serde_json::to_value(pipe.stage()).unwrap()];
         while !pipe.is_done() {
@@ -97,7 +97,7 @@ dual_test! {
             ("a.obj".to_string(), b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_vec()),
             ("b.obj".to_string(), b"v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n".to_vec()),
         ];
-        let errors = posemfa::mesh::Population::from_files_all_errors(files).expect_err("b.obj is broken");
+        let errors = posemfa::mesh::Population::read(posemfa::mesh::Sources::Files(files), &Default::default()).expect_err("b.obj is broken");
         let p = errors[0].problem();
         assert_eq!((p.kind, p.file.as_deref(), p.line), ("obj", Some("b.obj"), Some(2)));
         assert!(!p.message.contains("b.obj"), "{}", p.message);

@@ -18,9 +18,9 @@
 //! - more parts than vertices for Algorithm 1: `Error::Params` "parts = P is more than the N vertices of the mesh; ask for at
 //!   most N parts"; exactly as many parts as vertices is a sane model; the merge tree (the default) ignores `parts`.
 //! - NaN/inf coordinates: OBJ text `Error::Obj` naming file, line and coordinate; shapes given as numbers
-//!   (`from_meshes`, `from_unit_shapes`) `Error::Population` naming the file and the vertex; data given to a
-//!   fit directly `Error::Data` naming the vertex and the shape. An extent too small or too large to scale
-//!   into the unit box is refused by name too.
+//!   (`Population::read` of meshes or of unit-box shapes) `Error::Population` naming the file and the vertex; data
+//!   given to a fit directly `Error::Data` naming the vertex and the shape. An extent too small or too large to
+//!   scale into the unit box is refused by name too.
 //! - a population too large for the memory budget: `Error::Data` giving the estimated size, the budget
 //!   (1 GiB in wasm32, 8 GiB natively, `POSEMFA_MEMORY_BUDGET` to change it natively) and what to change,
 //!   before the fit allocates its working set (see posemfa::memory).
@@ -40,7 +40,12 @@ use posemfa::Error;
 
 /// Small and fast fit settings (the cases are about answers, not accuracy).
 fn quick(parts: usize) -> Params {
-    Params { parts, max_iter: 40, restarts: 2, refine_max_iter: 20, ..Params::default() }
+    Params {
+        max_iter: 40,
+        restarts: 2,
+        algorithm1: posemfa::mfa::Algorithm1Params { parts, refine_max_iter: 20, ..Default::default() },
+        ..Params::default()
+    }
 }
 
 fn names(n: usize) -> Vec<String> {
@@ -105,13 +110,13 @@ fn relative(r: &[Mat3], i: usize) -> Mat3 {
 dual_test! {
     fn one_shape_is_refused_with_the_count_and_what_to_do() {
         let shape = blob(10, 0.0);
-        let e = Population::from_unit_shapes(names(1), fan(10), vec![shape.clone()]).unwrap_err();
+        let e = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(1), faces: fan(10), shapes: vec![shape.clone()] }).unwrap_err();
         assert!(matches!(e, Error::Population { ref file, .. } if file == "pose1.obj"), "{e:?}");
         assert_err_has(&e, &["at least 2 shapes, got 1", "add more poses"]);
         let obj = posemfa::export::obj::write_obj(&shape, &fan(10), "one");
-        let e = Population::from_files(vec![("only.obj".into(), obj.into_bytes())]).unwrap_err();
+        let e = Population::new(posemfa::mesh::Sources::Files(vec![("only.obj".into(), obj.into_bytes())])).unwrap_err();
         assert_err_has(&e, &["only.obj", "at least 2 shapes"]);
-        let e = Population::from_meshes(Vec::new()).unwrap_err();
+        let e = Population::new(posemfa::mesh::Sources::Meshes(Vec::new())).unwrap_err();
         assert_err_has(&e, &["got 0"]);
         // data handed to a fit directly
         let h: Vec<f64> = shape.iter().flatten().copied().collect();
@@ -123,19 +128,19 @@ dual_test! {
 
     fn identical_shapes_load_but_the_fit_says_there_is_no_motion() {
         let shape = blob(30, 0.0);
-        let pop = Population::from_unit_shapes(names(4), fan(30), vec![shape.clone(); 4]).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(4), faces: fan(30), shapes: vec![shape.clone(); 4] }).unwrap();
         let e = fit(&pop, &quick(3), &mut |_| true).err().expect("identical shapes must be refused");
         assert!(matches!(e, Error::Data(_)), "{e:?}");
         assert_err_has(&e, &["all 4 shapes are the same", "no motion to learn", "poses in which the parts move"]);
         // the same mesh moved by one translation: still nothing to learn
         let moved: Vec<Vec<Vec3>> = (0..3).map(|i| shape.iter().map(|&p| add(p, [0.1 * i as f64, 0.03, 0.0])).collect()).collect();
-        let pop = Population::from_unit_shapes(names(3), fan(30), moved).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(3), faces: fan(30), shapes: moved }).unwrap();
         let e = fit(&pop, &quick(1), &mut |_| true).err().expect("translated copies must be refused");
         assert_err_has(&e, &["all 3 shapes are the same", "translation"]);
         // one vertex moving is motion: no refusal
         let mut shapes = vec![shape.clone(); 3];
         shapes[2][7][1] += 0.05;
-        let pop = Population::from_unit_shapes(names(3), fan(30), shapes).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(3), faces: fan(30), shapes }).unwrap();
         assert_sane(&fit(&pop, &quick(2), &mut |_| true).unwrap(), &pop);
     }
 
@@ -147,7 +152,7 @@ dual_test! {
             .enumerate()
             .map(|(i, g)| rest.iter().map(|&p| add(mat_vec(g, p), [0.05 * i as f64, -0.02 * i as f64, 0.1])).collect())
             .collect();
-        let pop = Population::from_unit_shapes(names(5), fan(40), shapes).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(5), faces: fan(40), shapes }).unwrap();
         for parts in [1, 3] {
             let result = fit(&pop, &quick(parts), &mut |_| true).unwrap();
             let model = assert_sane(&result, &pop);
@@ -187,7 +192,7 @@ dual_test! {
             (0..3).map(|i| dup.iter().map(|&p| mat_vec(&axis_angle([1.0, 0.0, 0.5], 0.4 * i as f64), p)).collect()).collect();
         for (what, shapes) in [("rod", rod_shapes), ("sheet", sheet_shapes), ("coincident", dup_shapes)] {
             let n = shapes[0].len();
-            let pop = Population::from_unit_shapes(names(shapes.len()), fan(n), shapes).unwrap();
+            let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(shapes.len()), faces: fan(n), shapes }).unwrap();
             for parts in [1, 2, 4] {
                 let result = fit(&pop, &quick(parts), &mut |_| true).unwrap_or_else(|e| panic!("{what}, parts {parts}: {e}"));
                 assert_sane(&result, &pop);
@@ -209,7 +214,7 @@ dual_test! {
                 })
                 .collect();
             let n = shapes[0].len();
-            let pop = Population::from_unit_shapes(names(4), fan(n), shapes).unwrap();
+            let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(4), faces: fan(n), shapes }).unwrap();
             for (parts, min_part_vertices) in [(2, 1), (3, 1), (2, 4)] {
                 let params = Params { min_part_vertices, ..quick(parts) };
                 let result = fit(&pop, &params, &mut |_| true).unwrap();
@@ -220,7 +225,7 @@ dual_test! {
 
     fn more_parts_than_vertices_is_a_parameter_error() {
         let shapes: Vec<Vec<Vec3>> = (0..3).map(|i| blob(5, i as f64)).collect();
-        let pop = Population::from_unit_shapes(names(3), fan(5), shapes).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(3), faces: fan(5), shapes }).unwrap();
         // Algorithm 1 starts from `parts` k-means clusters; the merge tree (the default) does not use the field,
         // so it does not refuse it (the page greys it as ignored)
         let distinct = |parts| Params { part_rule: posemfa::mfa::PartRule::Distinct, ..quick(parts) };
@@ -241,26 +246,26 @@ dual_test! {
         let good = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_string();
         for (bad, needle) in [("nan", "`nan`"), ("inf", "`inf`"), ("-1.#INF", "`-1.#INF`"), ("1e999", "`1e999` overflows")] {
             let text = format!("v 0 0 0\nv 1 {bad} 0\nv 0 1 0\nf 1 2 3\n");
-            let e = Population::from_files(vec![("a.obj".into(), good.clone().into_bytes()), ("b.obj".into(), text.into_bytes())])
+            let e = Population::new(posemfa::mesh::Sources::Files(vec![("a.obj".into(), good.clone().into_bytes()), ("b.obj".into(), text.into_bytes())]))
                 .unwrap_err();
             assert!(matches!(e, Error::Obj { ref file, line: 2, .. } if file == "b.obj"), "{e:?}");
             assert_err_has(&e, &["b.obj", "line 2", "y coordinate", needle]);
         }
-        // numbers: from_unit_shapes and from_meshes
+        // numbers: from unit-box shapes and from meshes
         for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
             let mut shapes = vec![blob(6, 0.0), blob(6, 1.0)];
             shapes[1][2][0] = bad;
-            let e = Population::from_unit_shapes(names(2), fan(6), shapes).unwrap_err();
+            let e = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(2), faces: fan(6), shapes }).unwrap_err();
             assert!(matches!(e, Error::Population { ref file, .. } if file == "pose2.obj"), "{e:?}");
             assert_err_has(&e, &["pose2.obj", "vertex 3", "non-finite", "fix or remove it"]);
             let mut m = Mesh { positions: blob(6, 0.0), faces: fan(6) };
             m.positions[4][2] = bad;
-            let e = Population::from_meshes(vec![("x.obj".into(), Mesh { positions: blob(6, 1.0), faces: fan(6) }), ("y.obj".into(), m)])
+            let e = Population::new(posemfa::mesh::Sources::Meshes(vec![("x.obj".into(), Mesh { positions: blob(6, 1.0), faces: fan(6) }), ("y.obj".into(), m)]))
                 .unwrap_err();
             assert_err_has(&e, &["y.obj", "vertex 5", "non-finite"]);
         }
         // data given to a fit directly (no population in between)
-        let pop = Population::from_unit_shapes(names(2), fan(6), vec![blob(6, 0.0), blob(6, 1.0)]).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(2), faces: fan(6), shapes: vec![blob(6, 0.0), blob(6, 1.0)] }).unwrap();
         let data = Data::from_population(&pop);
         let mut h: Vec<f64> = (0..data.n_vertices).flat_map(|j| data.vertex(j).to_vec()).flatten().collect();
         h[(4 * 2 + 1) * 3 + 2] = f64::NAN; // vertex 5, shape 2, z
@@ -273,11 +278,11 @@ dual_test! {
             let mut shapes = vec![vec![[0.0; 3]; 3], vec![[0.0; 3]; 3]];
             shapes[0][1][0] = a;
             shapes[1][2][0] = b;
-            let e = Population::from_unit_shapes(names(2), fan(3), shapes).unwrap_err();
+            let e = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(2), faces: fan(3), shapes }).unwrap_err();
             assert_err_has(&e, &["pose1.obj", "cannot scale into a unit box", "rescale"]);
         }
         // all at one point
-        let e = Population::from_unit_shapes(names(2), fan(3), vec![vec![[0.5; 3]; 3]; 2]).unwrap_err();
+        let e = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(2), faces: fan(3), shapes: vec![vec![[0.5; 3]; 3]; 2] }).unwrap_err();
         assert_err_has(&e, &["at one point"]);
     }
 
@@ -295,9 +300,13 @@ dual_test! {
         let shapes: Vec<Vec<Vec3>> = (0..2)
             .map(|i| (0..n).map(|j| [(j % 200) as f64 / 200.0, (j / 200) as f64 / 200.0, 0.01 * i as f64 * (j % 7) as f64]).collect())
             .collect();
-        let pop = Population::from_unit_shapes(names(2), fan(4), shapes).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names: names(2), faces: fan(4), shapes }).unwrap();
         // (Algorithm 1's working set: the merge tree's start does not grow with `parts`)
-        let params = Params { parts: 512, max_subparts: 64, part_rule: posemfa::mfa::PartRule::Distinct, ..Params::default() };
+        let params = Params {
+            algorithm1: posemfa::mfa::Algorithm1Params { parts: 512, max_subparts: 64, ..Default::default() },
+            part_rule: posemfa::mfa::PartRule::Distinct,
+            ..Params::default()
+        };
         let need = memory::estimate_bytes(n, 2, 512 * 64);
         assert!(need > 8 << 30 && need > budget, "{need}");
         let e = fit(&pop, &params, &mut |_| true).err().expect("must be refused");
@@ -309,7 +318,7 @@ dual_test! {
         );
         // without the refinement the same 512 parts would fit (not run: it is a slow fit)
         assert!(memory::estimate_bytes(n, 2, memory::max_components(512, false, 64, n)) < budget);
-        // The check that Population::from_meshes makes (the smallest fit, 1 part) for a population too large
+        // The check that Population::read makes (the smallest fit, 1 part) for a population too large
         // to build in a test: 2 million vertices x 200 poses.
         let e = memory::check(2_000_000, 200, 1, budget).unwrap_err();
         assert_err_has(&e, &["2000000 vertices x 200 shapes needs about", "GiB", "fewer vertices", "fewer poses"]);

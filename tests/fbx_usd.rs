@@ -16,7 +16,7 @@ dual_test! {
     fn blender_shape_key_fbx_gives_the_obj_population() {
         let g = blender_source();
         let bytes = include_bytes!("fixtures/blender/quadruped-shapekeys.fbx").to_vec();
-        let pop = Population::from_files(vec![("quadruped-shapekeys.fbx".into(), bytes)]).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::Files(vec![("quadruped-shapekeys.fbx".into(), bytes)])).unwrap();
         assert!(pop.source.starts_with("6 frames of posed in quadruped-shapekeys.fbx (animation 'Scene', 24 fps"), "{}", pop.source);
         assert!(pop.source.contains("5 blend shapes"), "{}", pop.source);
         assert_eq!((pop.n_shapes(), pop.n_vertices()), (6, 1198));
@@ -40,9 +40,9 @@ dual_test! {
         let f = posemfa::mesh::fbx::read("quadruped-skinned.fbx", bytes, &Default::default()).unwrap();
         assert_eq!(f.vertices_welded, 1198, "{}", f.source);
         assert!(f.source.contains("skinned by"), "{}", f.source);
-        let pop = Population::from_files(vec![("quadruped-skinned.fbx".into(), bytes.to_vec())]).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::Files(vec![("quadruped-skinned.fbx".into(), bytes.to_vec())])).unwrap();
         let glb = include_bytes!("fixtures/blender/quadruped-skinned-seams.glb");
-        let gl = Population::from_files(vec![("quadruped-skinned-seams.glb".into(), glb.to_vec())]).unwrap();
+        let gl = Population::new(posemfa::mesh::Sources::Files(vec![("quadruped-skinned-seams.glb".into(), glb.to_vec())])).unwrap();
         assert!(pop.source.starts_with("121 frames of mesh in quadruped-skinned.fbx (animation 'Scene', 24 fps, 0.000 s to 5.000 s; skinned by 18 bones)"), "{}", pop.source);
         let (parts, rmse, _) = fit_summary(&pop);
         let (parts_gl, rmse_gl, _) = fit_summary(&gl);
@@ -201,7 +201,7 @@ dual_test! {
             ("arm-pointcache.usdc", &include_bytes!("fixtures/usd/arm-pointcache.usdc")[..]),
             ("arm-pointcache.usdz", &include_bytes!("fixtures/usd/arm-pointcache.usdz")[..]),
         ] {
-            let pop = Population::from_files(vec![(name.into(), bytes.to_vec())]).unwrap();
+            let pop = Population::new(posemfa::mesh::Sources::Files(vec![(name.into(), bytes.to_vec())])).unwrap();
             assert_eq!(
                 pop.source,
                 format!("5 frames of Body in {name} (time-sampled points of /World/Character/Body, one per time sample, times 1 to 5 at 24 per second); upAxis Z turned to Y up, metersPerUnit 0.01 turned to metres; 408 vertices")

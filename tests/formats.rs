@@ -42,7 +42,7 @@ dual_test! {
         let ascii: Vec<(String, Vec<u8>)> = pop.names.iter().zip(&pop.unit_shapes()).map(|(n, s)| {
             (n.replace(".obj", ".ply"), write_ply(s, &pop.faces, PlyFormat::Ascii, "ascii"))
         }).collect();
-        let back = Population::from_files(ascii).unwrap();
+        let back = Population::new(posemfa::mesh::Sources::Files(ascii)).unwrap();
         assert_eq!(back.unit_shapes(), pop.unit_shapes());
         assert_eq!(back.faces, pop.faces);
         assert_eq!(back.source, "4 PLY files");
@@ -53,7 +53,7 @@ dual_test! {
                 (n.clone(), obj_bytes(s, &pop.faces))
             }
         }).collect();
-        let back = Population::from_files(mixed).unwrap();
+        let back = Population::new(posemfa::mesh::Sources::Files(mixed)).unwrap();
         assert_eq!(back.source, "2 OBJ and 2 PLY files");
         assert_eq!(back.n_shapes(), 4);
         let worst = back.unit_shapes().iter().zip(&pop.unit_shapes()).flat_map(|(a, b)| a.iter().zip(b))
@@ -66,7 +66,7 @@ dual_test! {
     fn morph_target_glb_gives_the_population() {
         let pop = small();
         let glb = posemfa::export::morph_glb::write_morph_glb("arm", &pop.names, &pop.unit_shapes(), &pop.faces).unwrap();
-        let back = Population::from_files(vec![("arm.glb".into(), glb)]).unwrap();
+        let back = Population::new(posemfa::mesh::Sources::Files(vec![("arm.glb".into(), glb)])).unwrap();
         assert!(back.source.starts_with("4 frames of animation 'Poses' (sampled at its keyframes, 24 fps) of mesh 'arm' in arm.glb"), "{}", back.source);
         assert_eq!((back.n_shapes(), back.n_vertices()), (4, pop.n_vertices()));
         assert_eq!(back.faces, pop.faces);
@@ -85,15 +85,15 @@ dual_test! {
         let pop = small();
         let base = ("rest.obj".to_string(), obj_bytes(&pop.unit_shapes()[0], &pop.faces));
         for (name, bytes) in [("walk.pc2", write_pc2(&pop.unit_shapes())), ("walk.mdd", write_mdd(&pop.unit_shapes(), 24.0))] {
-            let back = Population::from_files(vec![(name.into(), bytes.clone()), base.clone()]).unwrap();
+            let back = Population::new(posemfa::mesh::Sources::Files(vec![(name.into(), bytes.clone()), base.clone()])).unwrap();
             assert_eq!(back.n_shapes(), 4);
             assert_eq!(back.faces, pop.faces);
             assert!(back.source.starts_with(&format!("4 frames of the point cache {name}")), "{}", back.source);
             assert!(back.source.ends_with("faces from rest.obj"), "{}", back.source);
-            let e = Population::from_files(vec![(name.into(), bytes.clone())]).unwrap_err().to_string();
+            let e = Population::new(posemfa::mesh::Sources::Files(vec![(name.into(), bytes.clone())])).unwrap_err().to_string();
             assert!(e.contains(name) && e.contains("base mesh"), "{e}");
             let other = ("rest.ply".to_string(), write_ply(&pop.unit_shapes()[0][..500], &[[0, 1, 2]], PlyFormat::Ascii, ""));
-            let e = Population::from_files(vec![(name.into(), bytes), other]).unwrap_err().to_string();
+            let e = Population::new(posemfa::mesh::Sources::Files(vec![(name.into(), bytes), other])).unwrap_err().to_string();
             let n = pop.n_vertices();
             assert!(e.contains(&format!("{n} vertices per frame")) && e.contains("rest.ply has 500"), "{e}");
         }
@@ -112,7 +112,7 @@ fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
     let Some(dir) = common::shared_dir("data/horse-poses", "horse_as_ply_and_pc2_fits_like_the_obj_folder") else {
         return;
     };
-    let obj = Population::from_paths(&[&dir]).unwrap();
+    let obj = Population::new(posemfa::mesh::Sources::paths(&[&dir])).unwrap();
     let original: Vec<Vec<[f64; 3]>> =
         obj.unit_shapes().iter().map(|s| s.iter().map(|&p| obj.normalization.to_original(p)).collect()).collect();
     let ply: Vec<(String, Vec<u8>)> = obj
@@ -121,7 +121,7 @@ fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
         .zip(&original)
         .map(|(n, s)| (n.replace(".obj", ".ply"), write_ply(s, &obj.faces, PlyFormat::Binary, "horse-poses")))
         .collect();
-    let ply = Population::from_files(ply).unwrap();
+    let ply = Population::new(posemfa::mesh::Sources::Files(ply)).unwrap();
     // ASCII PLY of each OBJ file's own coordinates (printed in full: they read back bit for bit)
     let ascii: Vec<(String, Vec<u8>)> = obj
         .names
@@ -131,17 +131,17 @@ fn horse_as_ply_and_pc2_fits_like_the_obj_folder() {
             (n.replace(".obj", ".ply"), write_ply(&m.positions, &m.faces, PlyFormat::Ascii, "horse-poses"))
         })
         .collect();
-    let ascii = Population::from_files(ascii).unwrap();
+    let ascii = Population::new(posemfa::mesh::Sources::Files(ascii)).unwrap();
     assert_eq!(ascii.source, "11 PLY files");
     assert_eq!(
         (&ascii.unit_shapes(), &ascii.faces),
         (&obj.unit_shapes(), &obj.faces),
         "ASCII PLY gives the OBJ population exactly"
     );
-    let pc2 = Population::from_files(vec![
+    let pc2 = Population::new(posemfa::mesh::Sources::Files(vec![
         ("horse.pc2".into(), write_pc2(&original)),
         ("reference.obj".into(), std::fs::read(dir.join("reference.obj")).unwrap()),
-    ])
+    ]))
     .unwrap();
     assert_eq!(ply.n_shapes(), 11);
     assert_eq!(pc2.n_shapes(), 11);
@@ -208,7 +208,7 @@ dual_test! {
     fn blender_shape_key_glb_fits_like_the_obj_population() {
         let g = blender_source();
         let bytes = include_bytes!("fixtures/blender/quadruped-shapekeys.glb").to_vec();
-        let pop = Population::from_files(vec![("quadruped-shapekeys.glb".into(), bytes)]).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::Files(vec![("quadruped-shapekeys.glb".into(), bytes)])).unwrap();
         assert!(pop.source.starts_with("6 frames of animation"), "{}", pop.source);
         assert!(pop.source.contains("24 fps"), "{}", pop.source);
         assert_eq!((pop.n_shapes(), pop.n_vertices()), (6, 1198));
@@ -233,7 +233,7 @@ dual_test! {
         assert!(gl.vertices_in_file > 3 * 1198, "{} vertices in the file", gl.vertices_in_file);
         assert_eq!(gl.vertices_welded, 1198);
         assert!(gl.source.contains(&format!("{} vertices welded to 1198", gl.vertices_in_file)), "{}", gl.source);
-        let pop = Population::from_files(vec![("quadruped-skinned-seams.glb".into(), bytes.to_vec())]).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::Files(vec![("quadruped-skinned-seams.glb".into(), bytes.to_vec())])).unwrap();
         assert_eq!(pop.n_vertices(), 1198);
         let (parts, rmse, _) = fit_summary(&pop);
         assert!((5..=30).contains(&parts) && rmse < 0.01, "{parts} parts, RMSE {rmse}");

@@ -51,14 +51,14 @@ dual_test! {
     }
 
     /// shapes target, before the fix: a face naming vertex 130 of a 4-vertex mesh was accepted by
-    /// `Population::from_unit_shapes` (from_meshes checked faces only against the other shapes' faces), so
+    /// a `Population` of unit-box shapes (the meshes' check looked at faces only against the other shapes' faces), so
     /// anything indexing vertices by face (part graph, export) would have panicked later.
     fn shapes_face_out_of_range_is_refused() {
         let data = b"\xd5\x21\x01\x0c\x81\x0c\x21\x04\xe9\xe9\xe9\x7f\xe9\xe9\xe9\x7f\xe9\xe9\x81\x0c\x81\x7a\x3f\x0c\x81\x0c\x81\xf4\x7e\x0c\x81\x0c\x81\x0c\x81\x0c\x81\x0c\x81\x86\xc0\x0c\x81\x0c\x81\x00\x00\x0c\x81\x0c\x81\x00\x00\x86\xc0\x0c\x81\x00\x00\x00\x00\x0c\x81";
         let ShapesInput { names, faces, shapes, .. } = decode_shapes(data).expect("long enough");
         assert_eq!(shapes[0].len(), 4);
         assert_eq!(faces[1], [1, 12, 129]);
-        let e = Population::from_unit_shapes(names, faces, shapes).unwrap_err();
+        let e = Population::new(posemfa::mesh::Sources::UnitShapes { names, faces, shapes }).unwrap_err();
         assert!(matches!(e, Error::Population { ref file, .. } if file == "s0"), "{e:?}");
         let m = e.to_string();
         assert!(m.contains("triangle 2 is [2, 13, 130]") && m.contains("4 vertices"), "{m}");
@@ -72,8 +72,8 @@ dual_test! {
         let ShapesInput { cfg, names, faces, shapes } = decode_shapes(data).expect("long enough");
         assert_eq!((shapes.len(), shapes[0].len()), (2, 7));
         let params = params_from(cfg);
-        assert!(params.refine && params.parts == 3);
-        let pop = Population::from_unit_shapes(names, faces, shapes).unwrap();
+        assert!(params.refine && params.algorithm1.parts == 3);
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names, faces, shapes }).unwrap();
         assert_fits(&pop, cfg);
     }
 }

@@ -12,7 +12,7 @@ mod common;
 
 fn horse(test: &str) -> Option<(PathBuf, Population)> {
     let dir = common::shared_dir("data/horse-poses", test)?;
-    let pop = Population::from_paths(&[&dir]).expect("horse loads");
+    let pop = Population::new(posemfa::mesh::Sources::paths(&[&dir])).expect("horse loads");
     Some((dir, pop))
 }
 

@@ -44,7 +44,7 @@ fn horse_populations_have_connected_parts() {
         let Some(dir) = common::shared_dir(&format!("data/{name}"), "horse_populations_have_connected_parts") else {
             return;
         };
-        let pop = Population::from_paths(&[dir]).unwrap();
+        let pop = Population::new(posemfa::mesh::Sources::paths(&[dir])).unwrap();
         for seed in 0..2u64 {
             let (islands, parts) = islands_of(&pop, &Params { seed, ..Params::default() });
             assert_eq!(islands, 0, "{name} seed {seed}: {islands} islands ({parts} parts)");

@@ -239,10 +239,10 @@ dual_test! {
         assert!(saved.for_request(&read.population, band, &three.rig_options()).is_none());
         assert!(saved.for_request(&read.population, band * 2.0, &g.rig_options()).is_none());
         let mut points: Vec<[f32; 3]> = (0..pop.n_shapes()).flat_map(|i| pop.shape(i).as_f32().to_vec()).collect();
-        let same = Population::from_saved("same", pop.names.clone(), pop.faces.to_vec(), points.clone(), pop.normalization, pop.source.clone()).unwrap();
+        let same = Population::new(posemfa::mesh::Sources::Saved(posemfa::mesh::Saved { file: "same".into(), names: pop.names.clone(), faces: pop.faces.to_vec(), points: points.clone(), normalization: pop.normalization, source: pop.source.clone() })).unwrap();
         assert!(saved.for_request(&same, band, &g.rig_options()).is_some(), "the same poses read again");
         points[5][0] += 1e-3;
-        let moved = Population::from_saved("moved", pop.names.clone(), pop.faces.to_vec(), points, pop.normalization, pop.source.clone()).unwrap();
+        let moved = Population::new(posemfa::mesh::Sources::Saved(posemfa::mesh::Saved { file: "moved".into(), names: pop.names.clone(), faces: pop.faces.to_vec(), points, normalization: pop.normalization, source: pop.source.clone() })).unwrap();
         assert!(saved.for_request(&moved, band, &g.rig_options()).is_none(), "one point moved: other poses");
 
         // damage in the rig's header is refused by name
@@ -284,7 +284,7 @@ fn the_real_populations_open_as_the_same_fits_with_the_same_exports() {
     for name in ["horse-poses", "lion-poses", "horse-gallop"] {
         let test = "the_real_populations_open_as_the_same_fits_with_the_same_exports";
         let Some(dir) = common::shared_dir(&format!("data/{name}"), test) else { return };
-        let pop = Population::from_paths(&[&dir]).expect("loads");
+        let pop = Population::new(posemfa::mesh::Sources::paths(&[&dir])).expect("loads");
         let (with, without) = round_trip(name, &pop, &Params::default());
         let raw = pop.n_shapes() * pop.n_vertices() * 12 + pop.faces.len() * 12;
         assert!((with as f64) <= 1.3 * raw as f64, "{name}: {with} bytes for {raw} of f32 points and u32 triangles");

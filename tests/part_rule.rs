@@ -107,7 +107,7 @@ fn the_parts_do_not_depend_on_how_the_poses_are_turned() {
     files.sort();
     let every_fifth: Vec<_> =
         files.iter().filter(|p| p.file_stem().is_some_and(|s| s != "reference")).step_by(5).collect();
-    let pop = posemfa::mesh::Population::from_paths(&every_fifth).unwrap();
+    let pop = posemfa::mesh::Population::new(posemfa::mesh::Sources::paths(&every_fifth)).unwrap();
     let moved = posemfa::parts::robustness::Variant::Moved.apply(&pop).unwrap();
     let a = fit(&pop, &Params::default(), &mut |_| true).unwrap().model;
     let b = fit(&moved, &Params::default(), &mut |_| true).unwrap().model;

@@ -165,11 +165,14 @@ fn fitted(pop: &Population) -> (Articulation, posemfa::articulate::rig::Rig) {
 
 fn subset(pop: &Population, keep: impl Fn(usize) -> bool) -> Population {
     let idx: Vec<usize> = (0..pop.n_shapes()).filter(|&i| keep(i)).collect();
-    Population::from_unit_shapes(
-        idx.iter().map(|&i| pop.names[i].clone()).collect(),
-        pop.faces.to_vec(),
-        idx.iter().map(|&i| pop.unit_shapes()[i].iter().map(|&p| pop.normalization.to_original(p)).collect()).collect(),
-    )
+    Population::new(posemfa::mesh::Sources::UnitShapes {
+        names: idx.iter().map(|&i| pop.names[i].clone()).collect(),
+        faces: pop.faces.to_vec(),
+        shapes: idx
+            .iter()
+            .map(|&i| pop.unit_shapes()[i].iter().map(|&p| pop.normalization.to_original(p)).collect())
+            .collect(),
+    })
     .unwrap()
 }
 

@@ -155,7 +155,7 @@ dual_test! {
 #[test]
 fn horse_gallop_fitted_rig() {
     let Some(dir) = common::shared_dir("data/horse-gallop", "horse_gallop_fitted_rig") else { return };
-    let pop = Population::from_paths(&[dir]).unwrap();
+    let pop = Population::new(posemfa::mesh::Sources::paths(&[dir])).unwrap();
     let r = fit(&pop, &Default::default(), &mut |_| true).unwrap();
     let art = Articulation::new(&r.model, &pop).unwrap();
     let bind = pop.names.iter().position(|n| n.starts_with("reference")).unwrap_or(0);

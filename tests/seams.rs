@@ -46,7 +46,7 @@ fn cut(pop: &Population, axis: usize) -> (Population, Vec<usize>) {
             v
         })
         .collect();
-    (Population::from_unit_shapes(pop.names.clone(), faces, shapes).unwrap(), copied)
+    (Population::new(posemfa::mesh::Sources::UnitShapes { names: pop.names.clone(), faces, shapes }).unwrap(), copied)
 }
 
 dual_test! {

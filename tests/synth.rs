@@ -368,7 +368,7 @@ fn obj_files_round_trip_through_the_importer() {
     assert!(files[0].1.starts_with("# posemfa synthetic population: preset snake"));
     // reversed input order: the population orders by name
     let bytes: Vec<(String, Vec<u8>)> = files.into_iter().rev().map(|(n, t)| (n, t.into_bytes())).collect();
-    let back = Population::from_files(bytes).unwrap();
+    let back = Population::new(posemfa::mesh::Sources::Files(bytes)).unwrap();
     assert_eq!(back.names, g.population.names);
     assert_eq!(back.faces, g.population.faces);
     assert_eq!(back.normalization, Normalization::IDENTITY);

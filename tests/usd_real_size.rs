@@ -78,7 +78,7 @@ fn usd_core_point_caches_of_30k_vertices_give_the_obj_population() {
     eprintln!("{test}: files written in {:.1} s", t.elapsed().as_secs_f64());
 
     let t = std::time::Instant::now();
-    let obj = Population::from_paths(&[dir.join("obj")]).unwrap();
+    let obj = Population::new(posemfa::mesh::Sources::paths(&[dir.join("obj")])).unwrap();
     eprintln!("OBJ folder: read in {:.0} ms", t.elapsed().as_secs_f64() * 1e3);
     assert_eq!(obj.source, "8 OBJ files");
     assert!(obj.n_vertices() >= 30_000, "{}", obj.n_vertices());
@@ -92,7 +92,8 @@ fn usd_core_point_caches_of_30k_vertices_give_the_obj_population() {
         let name = format!("quadruped.{ext}");
         let bytes = std::fs::metadata(dir.join(&name)).unwrap().len();
         let t = std::time::Instant::now();
-        let pop = Population::from_paths(&[dir.join(&name)]).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let pop = Population::new(posemfa::mesh::Sources::paths(&[dir.join(&name)]))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         eprintln!("{name} ({bytes} bytes): read in {:.0} ms", t.elapsed().as_secs_f64() * 1e3);
         assert_eq!(
             pop.source,

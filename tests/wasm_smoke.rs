@@ -135,7 +135,7 @@ dual_test! {
             ("2.obj".to_string(), square(0.0, 2.0)),
             ("1.obj".to_string(), square(-1.0, 2.0)),
         ];
-        let p = Population::from_meshes(named).unwrap();
+        let p = Population::new(posemfa::mesh::Sources::Meshes(named)).unwrap();
         assert_eq!(p.names, vec!["1.obj", "2.obj", "10.obj"]);
         assert_eq!((p.n_shapes(), p.n_vertices(), p.faces.len()), (3, 4, 2));
         // x spans [-1, 6]: one common scale 1/7 and offset at the minimum corner for every shape
@@ -156,10 +156,10 @@ dual_test! {
     fn population_rejects_a_mismatched_shape_and_names_it() {
         let mut bad = square(0.0, 1.0);
         bad.faces[1] = [0, 3, 2];
-        let e = Population::from_meshes(vec![("a.obj".into(), square(0.0, 1.0)), ("b.obj".into(), bad)]).unwrap_err();
+        let e = Population::new(posemfa::mesh::Sources::Meshes(vec![("a.obj".into(), square(0.0, 1.0)), ("b.obj".into(), bad)])).unwrap_err();
         let msg = e.to_string();
         assert!(msg.contains("b.obj") && msg.contains("triangle 2"), "{msg}");
-        let e = Population::from_meshes(vec![("only.obj".into(), square(0.0, 1.0))]).unwrap_err();
+        let e = Population::new(posemfa::mesh::Sources::Meshes(vec![("only.obj".into(), square(0.0, 1.0))])).unwrap_err();
         assert!(e.to_string().contains("at least 2"), "{e}");
     }
 

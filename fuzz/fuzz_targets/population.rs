@@ -1,4 +1,4 @@
-//! bytes -> several OBJ files -> Population::from_files_all_errors (and from_files, which must agree) ->
+//! bytes -> several OBJ files -> Population::read of them (and Population::new, which must agree) ->
 //! a bounded fit on small populations.
 //!
 //! Input layout: byte 0 configures the names and the fit parameters ([`posemfa_fuzz::params_from`]); the
@@ -12,7 +12,8 @@ use posemfa::Error;
 use posemfa_fuzz::{bounded_fit, check_population};
 
 /// Names that exercise the natural sort: numbers of different widths, case, shared prefixes.
-const NAMES: [&str; 8] = ["pose10.obj", "pose2.obj", "Pose1.obj", "pose02.obj", "a.obj", "A.obj", "pose1.obj", "b9.obj"];
+const NAMES: [&str; 8] =
+    ["pose10.obj", "pose2.obj", "Pose1.obj", "pose02.obj", "a.obj", "A.obj", "pose1.obj", "b9.obj"];
 
 fuzz_target!(|data: &[u8]| {
     let Some((&cfg, rest)) = data.split_first() else { return };
@@ -22,11 +23,11 @@ fuzz_target!(|data: &[u8]| {
         .enumerate()
         .map(|(i, bytes)| (NAMES[(i + cfg as usize) % NAMES.len()].to_string(), bytes.to_vec()))
         .collect();
-    let all = Population::from_files_all_errors(files.clone());
-    let first = Population::from_files(files.clone());
+    let all = Population::read(posemfa::mesh::Sources::Files(files.clone()), &Default::default());
+    let first = Population::new(posemfa::mesh::Sources::Files(files.clone()));
     match (&all, &first) {
         (Ok(a), Ok(b)) => {
-            assert_eq!(a, b, "from_files and from_files_all_errors disagree");
+            assert_eq!(a, b, "Population::new and Population::read disagree");
             check_population(a);
             bounded_fit(a, cfg);
         }
@@ -42,9 +43,9 @@ fuzz_target!(|data: &[u8]| {
                     other => panic!("unexpected kind of error: {other:?}"),
                 }
             }
-            // from_files stops at the first failure, which from_files_all_errors reports too.
+            // new stops at the first failure, which read reports too.
             assert!(errors.contains(e), "{e:?} not among {errors:?}");
         }
-        _ => panic!("from_files and from_files_all_errors disagree: {all:?} vs {first:?}"),
+        _ => panic!("Population::new and Population::read disagree: {all:?} vs {first:?}"),
     }
 });

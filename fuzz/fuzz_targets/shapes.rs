@@ -1,4 +1,4 @@
-//! bytes -> coordinates -> Population::from_unit_shapes -> a bounded fit. Reaches the model with geometry
+//! bytes -> coordinates -> a Population of unit-box shapes -> a bounded fit. Reaches the model with geometry
 //! the OBJ text rarely gives: coincident and collinear vertices on a coarse grid, huge and tiny scales,
 //! subnormals, NaN and infinities (raw f64 bits), faces out of range.
 //!
@@ -9,8 +9,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use posemfa::mesh::Population;
 use posemfa::fuzzing::{decode_shapes, ShapesInput};
+use posemfa::mesh::Population;
 use posemfa::Error;
 use posemfa_fuzz::{bounded_fit, check_population};
 
@@ -19,7 +19,7 @@ fuzz_target!(|data: &[u8]| {
     let n_vertices = shapes[0].len();
     let faces_ok = faces.iter().flatten().all(|&v| (v as usize) < n_vertices);
     let finite = shapes.iter().flatten().flatten().all(|v| v.is_finite());
-    match Population::from_unit_shapes(names, faces, shapes) {
+    match Population::new(posemfa::mesh::Sources::UnitShapes { names, faces, shapes }) {
         Ok(pop) => {
             assert!(faces_ok, "a face out of range was accepted");
             assert!(finite, "a non-finite coordinate was accepted");

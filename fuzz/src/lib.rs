@@ -1,10 +1,10 @@
 //! Checks shared by the fuzz targets: what must hold for every population that loads and for every fit that
 //! succeeds. A broken invariant panics, which libFuzzer reports as a crash (with the input saved).
 
-use posemfa::mesh::Population;
-use posemfa::parts::hierarchy::fit;
 pub use posemfa::fuzzing::params_from;
+use posemfa::mesh::Population;
 use posemfa::mfa::Model;
+use posemfa::parts::hierarchy::fit;
 use posemfa::Error;
 
 /// Largest population that the targets fit (the fit is the slow part: keep executions fast).
@@ -75,8 +75,8 @@ pub fn bounded_fit(pop: &Population, cfg: u8) {
         // The fit may refuse a loaded population only for these documented reasons, each checked here
         // independently of the library; any other refusal (say, of a small part inside the refinement) is a bug.
         Err(Error::Data(m)) if pop.n_vertices() < 3 => assert!(m.contains("at least 3 are needed"), "{m}"),
-        Err(Error::Params(m)) if params.parts > pop.n_vertices() => {
-            assert!(m.contains(&format!("parts = {}", params.parts)) && m.contains("vertices"), "{m}")
+        Err(Error::Params(m)) if params.algorithm1.parts > pop.n_vertices() => {
+            assert!(m.contains(&format!("parts = {}", params.algorithm1.parts)) && m.contains("vertices"), "{m}")
         }
         Err(Error::Data(m)) if all_shapes_same(pop) => assert!(m.contains("shapes are the same"), "{m}"),
         Err(e) => panic!("the fit refused a population it should fit: {e:?}"),

@@ -527,10 +527,12 @@ pub struct Fold {
 /// Leave-one-out cross-validation of the rig: for every pose, fit (`params`) and build the rig (`rig_opts`, bind
 /// pose [`crate::export::rig_report::default_bind_pose`] of the remaining poses) on all poses but that one, then
 /// solve the left-out pose onto it. E_RMS as [`crate::export::rig_report`]: with the diagonal of the fold's bind
-/// pose. `progress(i, n)` is called before each fold.
+/// pose. Every fold starts from `start` ([`crate::mfa::FitStart`]: the same vertices in every fold). `progress(i,
+/// n)` is called before each fold.
 pub fn crossval(
     pop: &crate::mesh::Population,
     params: &crate::mfa::Params,
+    start: &crate::mfa::FitStart,
     rig_opts: &super::rig::RigOptions,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<Fold>> {
@@ -548,8 +550,12 @@ pub fn crossval(
         let names: Vec<String> = keep.iter().map(|&i| pop.names[i].clone()).collect();
         let shapes: Vec<Vec<Vec3>> =
             keep.iter().map(|&i| pop.shape(i).iter().map(|p| pop.normalization.to_original(p)).collect()).collect();
-        let train = crate::mesh::Population::from_unit_shapes(names, pop.faces.to_vec(), shapes)?;
-        let fit = crate::parts::hierarchy::fit(&train, params, &mut |_| true)?;
+        let train = crate::mesh::Population::new(crate::mesh::Sources::UnitShapes {
+            names,
+            faces: pop.faces.to_vec(),
+            shapes,
+        })?;
+        let fit = crate::parts::hierarchy::fit_from(&train, params, start, &mut |_| true)?;
         let art = super::Articulation::new(&fit.model, &train)?;
         let bind = crate::export::rig_report::default_bind_pose(&train);
         let opts = super::rig::RigOptions { bind_pose: bind, ..*rig_opts };

@@ -1,5 +1,5 @@
 //! A rig .glb this project wrote ([`super::gltf::write_glb`]), read back for posing, and written again with a
-//! clip of new poses (issue 28: `posemfa pose`, the page's pose export).
+//! clip of new poses (`posemfa pose`, the page's pose export).
 //!
 //! Reading ([`read_rig`], through the checked reader [`crate::mesh::gltf::read_skinned`]: strides, sparse
 //! accessors and every bound): the mesh of the first node with a mesh and a skin (its triangle primitives;

@@ -162,8 +162,12 @@ mod tests {
             vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             vec![[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.5]],
         ];
-        let mut pop =
-            Population::from_unit_shapes(vec!["a.obj".into(), "b.obj".into()], vec![[0, 1, 2]], shapes).unwrap();
+        let mut pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a.obj".into(), "b.obj".into()],
+            faces: vec![[0, 1, 2]],
+            shapes,
+        })
+        .unwrap();
         pop.normalization = Normalization { offset: [100.0, -7.0, 0.25], scale: 0.1 };
         pop
     }

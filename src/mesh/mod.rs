@@ -13,7 +13,7 @@ pub mod population;
 pub mod subdivide;
 pub mod zip_archive;
 
-pub use population::{Normalization, Population};
+pub use population::{Normalization, Population, ReadOptions, Saved, Sources};
 
 /// A triangle mesh: positions in file order (`v` order) and triangles as 0-based vertex indices.
 #[derive(Debug, Clone, PartialEq, Default)]

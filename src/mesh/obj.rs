@@ -52,7 +52,7 @@ pub fn parse_obj(name: &str, bytes: &[u8]) -> Result<Mesh> {
 /// The vertex positions of an OBJ file, as [`parse_obj`] gives them, read faster: one-line `f` statements are
 /// skipped to their line end instead of read (a statement continued by a backslash still goes through the
 /// full reader). For a file [`parse_obj`] has already accepted: a face this skips is not checked (the second
-/// reading of a large population, [`crate::mesh::Population::from_mesh_files_one_at_a_time`]).
+/// reading of a large population, [`crate::mesh::Sources::MeshFiles`]).
 pub fn parse_obj_positions(name: &str, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
     parse(bytes, true).map(|m| m.positions).map_err(|f| Error::Obj {
         file: name.to_string(),

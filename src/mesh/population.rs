@@ -121,7 +121,7 @@ pub fn widen(p: [f32; 3]) -> [f64; 3] {
     [p[0] as f64, p[1] as f64, p[2] as f64]
 }
 
-/// Above this many bytes of f64 poses, [`Population::from_mesh_files_one_at_a_time`] reads its files twice
+/// Above this many bytes of f64 poses, [`Sources::MeshFiles`] reads its files twice
 /// rather than hold every pose in f64 until the unit box is known (24 bytes per vertex-pose beside the
 /// population's 12). 8 MB is about 350 000 vertex-poses: smaller populations are read once (a second reading
 /// would add 35-50 % to their load time, in Node, for a few MB).
@@ -234,6 +234,90 @@ fn seam_bridged(pop: &Population) -> Option<Vec<[u32; 3]>> {
         }
     }
     Some(faces)
+}
+
+/// Where the poses of a population come from: the input of [`Population::read`], the one constructor.
+pub enum Sources<'a> {
+    /// Files in memory, (name, bytes), each read by the reader its extension calls for ([`super::load`]: OBJ,
+    /// PLY, glTF, FBX, USD, point caches, a .zip of any of them); errors in natural order of the names.
+    Files(Vec<(String, Vec<u8>)>),
+    /// OBJ or PLY files of one pose each, read one at a time: `fetch(i, buffer)` puts the bytes of `names[i]` in
+    /// the buffer (emptied first), asked for in natural order of the names, so each file's text goes as soon as
+    /// it is read. The page hands dropped files over this way and so do [`Sources::Paths`] of such files (with
+    /// every text in memory at once, a population's peak was its text: docs/decisions.md). Only the first mesh
+    /// keeps its faces; every other is checked against them as it is read, as [`Sources::Meshes`] are checked.
+    /// The same population and the same errors as [`Sources::Files`]; a file `fetch` cannot give comes before
+    /// them all (in the order of `names`).
+    ///
+    /// A population whose poses would take more than [`READ_TWICE_ABOVE_BYTES`] in f64 is read twice: the first
+    /// pass checks every file and finds the unit box, the second reads only the positions
+    /// ([`super::load::read_positions`]) and stores each pose straight into the f32 population (the same
+    /// numbers: the unit box is the same minimum and maximum). Its peak is then the population's 12 bytes per
+    /// vertex-pose and one file, not the 36 of every pose in f64 and in f32 together.
+    MeshFiles { names: &'a [String], fetch: &'a mut dyn FnMut(usize, &mut Vec<u8>) -> Result<()> },
+    /// The mesh files of directories (every file of an extension [`super::load::FORMATS`] lists, and `.vrm` and
+    /// `.bin`, any case) and files named (one of another extension is refused by name). OBJ and PLY files alone
+    /// are read one at a time ([`Sources::MeshFiles`]), so their bytes are never all in memory. (Compiles on
+    /// wasm32 too, where std::fs reports "unsupported" at run time.)
+    Paths(Vec<std::path::PathBuf>),
+    /// Meshes already read, (name, mesh).
+    Meshes(Vec<(String, Mesh)>),
+    /// Shapes already in the unit box (generated data, tests), with their names and the faces.
+    UnitShapes { names: Vec<String>, faces: Vec<[u32; 3]>, shapes: Vec<Vec<[f64; 3]>> },
+    /// A population as a model file stored it ([`crate::model_file`]).
+    Saved(Saved),
+}
+
+impl Sources<'_> {
+    /// [`Sources::Paths`] of any kind of path.
+    pub fn paths<P: AsRef<std::path::Path>>(paths: &[P]) -> Sources<'static> {
+        Sources::Paths(paths.iter().map(|p| p.as_ref().to_path_buf()).collect())
+    }
+}
+
+/// A population as a model file stored it: its unit-box points as they were, pose after pose, with the names in
+/// their order; `file` names the model file in errors.
+pub struct Saved {
+    pub file: String,
+    pub names: Vec<String>,
+    pub faces: Vec<[u32; 3]>,
+    pub points: Vec<[f32; 3]>,
+    pub normalization: Normalization,
+    pub source: String,
+}
+
+/// How [`Population::read`] reads its sources.
+#[derive(Debug, Clone, Default)]
+pub struct ReadOptions {
+    /// Choices for glTF, FBX and USD files (which animation, which frames...).
+    pub gltf: super::gltf::Options,
+}
+
+impl Population {
+    /// The population of `sources`: validated (at least 2 poses of one mesh, finite coordinates, within the
+    /// memory budget), ordered by natural sort of the names, and moved into the unit box by one offset and one
+    /// scale. Every error found, in natural order of the files' names (one for sources that stop at the first).
+    pub fn read(sources: Sources<'_>, options: &ReadOptions) -> std::result::Result<Population, Vec<Error>> {
+        let one = |e: Error| vec![e];
+        match sources {
+            Sources::Files(files) => Population::from_files_all_errors_with(files, &options.gltf),
+            Sources::MeshFiles { names, fetch } => Population::read_one_at_a_time(names, fetch, READ_TWICE_ABOVE_BYTES),
+            Sources::Paths(paths) => Population::from_paths_with(&paths, &options.gltf).map_err(one),
+            Sources::Meshes(named) => Population::from_meshes_sharing(named, false).map_err(one),
+            Sources::UnitShapes { names, faces, shapes } => {
+                Population::from_unit_shapes(names, faces, shapes).map_err(one)
+            }
+            Sources::Saved(s) => {
+                Population::from_saved(&s.file, s.names, s.faces, s.points, s.normalization, s.source).map_err(one)
+            }
+        }
+    }
+
+    /// [`Population::read`] with the default options, and its first error only: for the callers that report one
+    /// error and pass it on with `?` as a [`crate::Error`] (generated data, the model file, the CLI, tests).
+    pub fn new(sources: Sources<'_>) -> Result<Population> {
+        Population::read(sources, &ReadOptions::default()).map_err(|mut e| e.swap_remove(0))
+    }
 }
 
 impl Population {
@@ -382,9 +466,8 @@ impl Population {
         }
     }
 
-    /// A population as a model file stored it ([`crate::model_file`]): its unit-box points as they were, pose
-    /// after pose, with the names in their order; `file` names the model file in errors.
-    pub fn from_saved(
+    /// [`Sources::Saved`].
+    fn from_saved(
         file: &str,
         names: Vec<String>,
         faces: Vec<[u32; 3]>,
@@ -414,12 +497,7 @@ impl Population {
         Ok(Population::assembled(names, faces, points, n_vertices, normalization, source))
     }
 
-    /// Validates, orders by natural sort of the names, and normalises into the unit box.
-    pub fn from_meshes(named: Vec<(String, Mesh)>) -> Result<Population> {
-        Population::from_meshes_sharing(named, false)
-    }
-
-    /// [`Population::from_meshes`]; with `faces_of_first`, only the first mesh (in natural order) carries the
+    /// [`Sources::Meshes`]; with `faces_of_first`, only the first mesh (in natural order) carries the
     /// faces and the others none (one copy of the faces instead of one per shape).
     fn from_meshes_sharing(mut named: Vec<(String, Mesh)>, faces_of_first: bool) -> Result<Population> {
         if named.len() < 2 {
@@ -466,26 +544,8 @@ impl Population {
         Ok(Population::assembled(names, faces, points, n_vertices, normalization, source))
     }
 
-    /// Reads every file (name, bytes) with the reader its extension calls for ([`super::load`]: OBJ, PLY,
-    /// glTF, point caches), then [`Population::from_meshes`]. The first file that fails stops the load; use
-    /// [`Population::from_files_all_errors`] to list all.
-    pub fn from_files(files: Vec<(String, Vec<u8>)>) -> Result<Population> {
-        Population::from_loaded(files).map_err(|mut errors| {
-            if errors.is_empty() {
-                Error::Io("no files were given".into())
-            } else {
-                errors.swap_remove(0)
-            }
-        })
-    }
-
-    /// Like [`Population::from_files`] but reports every file's error, in natural order of the names.
-    pub fn from_files_all_errors(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
-        Population::from_files_all_errors_with(files, &super::gltf::Options::default())
-    }
-
-    /// [`Population::from_files_all_errors`] with choices for glTF, FBX and USD files (which animation...).
-    pub fn from_files_all_errors_with(
+    /// [`Sources::Files`]: sorted by name, then read ([`Population::from_files_with`]).
+    fn from_files_all_errors_with(
         mut files: Vec<(String, Vec<u8>)>,
         options: &super::gltf::Options,
     ) -> std::result::Result<Population, Vec<Error>> {
@@ -499,28 +559,7 @@ impl Population {
         })
     }
 
-    /// [`Population::from_files_all_errors`] for poses of one OBJ or PLY file each, read one file at a time:
-    /// `fetch(i, buffer)` puts the bytes of `names[i]` in the buffer (emptied first), asked for in natural order
-    /// of the names, so each file's text goes as soon as it is read. The page hands dropped files over this way
-    /// (with every text in its memory at once, an OBJ population's peak was the text: horse-poses 111 bytes per
-    /// vertex-pose, now 82) and so does [`Population::from_paths`]. Only the first mesh keeps its faces; every
-    /// other is checked against them as it is read, as [`Population::from_meshes`] checks it. The same
-    /// population and the same errors; a file `fetch` cannot give comes before them all (in the order of
-    /// `names`).
-    ///
-    /// A population whose poses would take more than [`READ_TWICE_ABOVE_BYTES`] in f64 is read twice: the
-    /// first pass checks every file and finds the unit box, the second reads only the positions
-    /// ([`super::load::read_positions`]) and stores each pose straight into the f32 population (the same numbers:
-    /// the unit box is the same minimum and maximum). Its peak is then the
-    /// population's 12 bytes per vertex-pose and one file, not the 36 of every pose in f64 and in f32 together.
-    pub fn from_mesh_files_one_at_a_time(
-        names: &[String],
-        fetch: impl FnMut(usize, &mut Vec<u8>) -> Result<()>,
-    ) -> std::result::Result<Population, Vec<Error>> {
-        Population::read_one_at_a_time(names, fetch, READ_TWICE_ABOVE_BYTES)
-    }
-
-    /// [`Population::from_mesh_files_one_at_a_time`], reading twice above `read_twice_above` bytes of f64 poses.
+    /// [`Sources::MeshFiles`], reading twice above `read_twice_above` bytes of f64 poses.
     fn read_one_at_a_time(
         names: &[String],
         mut fetch: impl FnMut(usize, &mut Vec<u8>) -> Result<()>,
@@ -540,7 +579,7 @@ impl Population {
             .filter(|&&i| !matches!(FileKind::of(&names[i]), FileKind::Obj | FileKind::Ply))
             .map(|&i| Error::Population {
                 file: names[i].clone(),
-                message: "is not an OBJ or PLY file: read a set with it by Population::from_files_all_errors".into(),
+                message: "is not an OBJ or PLY file: read a set with it as Sources::Files".into(),
             })
             .collect();
         if !other.is_empty() {
@@ -655,28 +694,21 @@ impl Population {
         Ok(Population::assembled(names, faces, points, n_vertices, normalization, source))
     }
 
-    fn from_loaded(files: Vec<(String, Vec<u8>)>) -> std::result::Result<Population, Vec<Error>> {
-        Population::from_files_with(files, &super::gltf::Options::default())
-    }
-
-    /// Reads the files as [`Population::from_files_all_errors`] does, with choices for glTF files.
-    pub fn from_files_with(
+    /// Reads every file (name, bytes) with the reader its extension calls for, then checks and places the poses
+    /// as [`Sources::Meshes`].
+    fn from_files_with(
         files: Vec<(String, Vec<u8>)>,
         options: &super::gltf::Options,
     ) -> std::result::Result<Population, Vec<Error>> {
         let loaded = super::load::load_with(files, options)?;
-        let mut population = Population::from_meshes(loaded.poses).map_err(|e| vec![e])?;
+        let mut population = Population::from_meshes_sharing(loaded.poses, false).map_err(|e| vec![e])?;
         population.source = loaded.source;
         population.clips = loaded.clips;
         Ok(population)
     }
 
-    /// Builds a population directly from unit-box shapes (generated data, tests).
-    pub fn from_unit_shapes(
-        names: Vec<String>,
-        faces: Vec<[u32; 3]>,
-        shapes: Vec<Vec<[f64; 3]>>,
-    ) -> Result<Population> {
+    /// [`Sources::UnitShapes`].
+    fn from_unit_shapes(names: Vec<String>, faces: Vec<[u32; 3]>, shapes: Vec<Vec<[f64; 3]>>) -> Result<Population> {
         if names.len() != shapes.len() {
             return Err(Error::Population {
                 file: names.first().cloned().unwrap_or_else(|| "(none)".into()),
@@ -698,21 +730,10 @@ impl Population {
         Population::from_meshes_sharing(named, true)
     }
 
-    /// Loads the mesh files of a directory (every file of an extension [`super::load::FORMATS`] lists, and
-    /// `.vrm` and `.bin`, any case) or an explicit list of files (one of another extension is refused by name).
-    // (compiles on wasm32 too, where std::fs reports "unsupported" at run time)
-    pub fn from_paths<P: AsRef<std::path::Path>>(paths: &[P]) -> Result<Population> {
-        Population::from_paths_with(paths, &super::gltf::Options::default())
-    }
-
-    /// [`Population::from_paths`] with choices for glTF files.
-    pub fn from_paths_with<P: AsRef<std::path::Path>>(
-        paths: &[P],
-        options: &super::gltf::Options,
-    ) -> Result<Population> {
+    /// [`Sources::Paths`]: the first error.
+    fn from_paths_with(paths: &[std::path::PathBuf], options: &super::gltf::Options) -> Result<Population> {
         let mut files = Vec::new();
         for p in paths {
-            let p = p.as_ref();
             if p.is_dir() {
                 let rd = std::fs::read_dir(p)
                     .map_err(|e| Error::Io(format!("cannot read directory {}: {e}", p.display())))?;
@@ -758,22 +779,22 @@ impl Population {
     }
 
     /// The end of [`Population::from_paths_with`] for one OBJ or PLY file per pose, with the same result and
-    /// the same error as reading every file first ([`Population::from_mesh_files_one_at_a_time`]): each file
+    /// the same error as reading every file first ([`Sources::MeshFiles`]): each file
     /// is read into one reused buffer and parsed straight away, in natural order, so the files' bytes are never
     /// all in memory (36 MB of fresh pages, a fault per 4 KB, for horse-gallop). The error is the first file
     /// that cannot be read in the given order, else the first file that does not parse in natural order, else
-    /// what [`Population::from_meshes`] says.
+    /// what [`Sources::Meshes`] says.
     fn from_mesh_paths(files: Vec<std::path::PathBuf>) -> Result<Population> {
         use std::io::Read;
         let names: Vec<String> =
             files.iter().map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect();
-        Population::from_mesh_files_one_at_a_time(&names, |i, buffer| {
+        let mut fetch = |i: usize, buffer: &mut Vec<u8>| {
             std::fs::File::open(&files[i])
                 .and_then(|mut file| file.read_to_end(buffer))
                 .map(|_| ())
                 .map_err(|e| Error::Io(format!("cannot read {}: {e}", files[i].display())))
-        })
-        .map_err(|mut e| e.swap_remove(0))
+        };
+        Population::read_one_at_a_time(&names, &mut fetch, READ_TWICE_ABOVE_BYTES).map_err(|mut e| e.swap_remove(0))
     }
 }
 
@@ -810,7 +831,7 @@ fn first_non_finite(name: &str, positions: &[[f64; 3]]) -> Option<Error> {
     })
 }
 
-/// What [`Population::from_meshes`] asks of the first mesh in natural order: vertices, triangles, and every
+/// What [`Sources::Meshes`] asks of the first mesh in natural order: vertices, triangles, and every
 /// triangle's indices naming a vertex.
 fn check_first_mesh(first_name: &str, first: &Mesh) -> Result<()> {
     if first.positions.is_empty() {
@@ -836,7 +857,7 @@ fn check_first_mesh(first_name: &str, first: &Mesh) -> Result<()> {
     Ok(())
 }
 
-/// The first problem [`Population::from_meshes`]'s checks of the first mesh and of the others against it meet,
+/// The first problem [`Sources::Meshes`]'s checks of the first mesh and of the others against it meet,
 /// with the place of its mesh in `meshes` (natural order): for a set where other files failed to read, whose
 /// errors it joins (a file a vertex short was only named once the broken ones had been mended).
 pub(super) fn first_mismatch<'a>(meshes: impl IntoIterator<Item = (&'a str, &'a Mesh)>) -> Option<(usize, Error)> {
@@ -848,7 +869,7 @@ pub(super) fn first_mismatch<'a>(meshes: impl IntoIterator<Item = (&'a str, &'a 
     meshes.find_map(|(k, (name, mesh))| check_same_mesh(first_name, first, name, mesh).err().map(|e| (k, e)))
 }
 
-/// What [`Population::from_meshes`] asks of every other mesh: the first one's vertex count and its very faces.
+/// What [`Sources::Meshes`] asks of every other mesh: the first one's vertex count and its very faces.
 fn check_same_mesh(first_name: &str, first: &Mesh, name: &str, mesh: &Mesh) -> Result<()> {
     // two files of one name (dropped from two folders): "1.obj has ... but 1.obj has" would say nothing
     let first_name =
@@ -901,7 +922,13 @@ mod tests {
         let moved = |dx: f64, bend: f64| -> Vec<[f64; 3]> {
             base.iter().enumerate().map(|(j, p)| [p[0] + dx, p[1], if j == 2 { bend } else { 0.0 }]).collect()
         };
-        let pop = |shapes| Population::from_unit_shapes(vec!["a.obj".into(), "b.obj".into()], vec![[0, 1, 2]], shapes);
+        let pop = |shapes| {
+            Population::new(crate::mesh::Sources::UnitShapes {
+                names: vec!["a.obj".into(), "b.obj".into()],
+                faces: vec![[0, 1, 2]],
+                shapes,
+            })
+        };
         let still = pop(vec![moved(0.0, 0.0), moved(0.25, 0.0)]).unwrap().still_error().expect("still");
         assert!(
             matches!(&still, Error::Population { file, message } if file == "a.obj, b.obj"
@@ -920,20 +947,23 @@ mod tests {
             let (a, b, c, d) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, t], [1.5, 1.0, 0.0]);
             vec![a, b, c, d, c, b, [0.0, t, 0.0]]
         };
-        let pop =
-            Population::from_unit_shapes(vec!["a".into(), "b".into()], faces.clone(), vec![shape(0.0), shape(0.3)])
-                .unwrap();
+        let pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces: faces.clone(),
+            shapes: vec![shape(0.0), shape(0.3)],
+        })
+        .unwrap();
         assert_eq!(*pop.faces, faces, "the faces themselves are as given");
         // the face on 4 and 5 again on 2 and 1, the faces on 1 and 2 again on 5 and 4; vertex 6 is not 0
         assert_eq!(pop.graph_faces(), &[[0, 1, 2], [4, 5, 3], [6, 2, 1], [0, 5, 4], [2, 1, 3], [6, 4, 5]]);
         assert_eq!(crate::parts::islands::island_count(&[0; 7], pop.graph_faces()), 0);
         assert_eq!(crate::parts::islands::island_count(&[0; 7], &pop.faces), 1);
         // without such vertices, the faces
-        let plain = Population::from_unit_shapes(
-            vec!["a".into(), "b".into()],
-            vec![[0, 1, 2]],
-            vec![shape(0.0)[..3].to_vec(), shape(0.3)[..3].to_vec()],
-        )
+        let plain = Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces: vec![[0, 1, 2]],
+            shapes: vec![shape(0.0)[..3].to_vec(), shape(0.3)[..3].to_vec()],
+        })
         .unwrap();
         assert!(std::ptr::eq(plain.graph_faces(), plain.faces.as_slice()));
     }
@@ -953,7 +983,10 @@ mod tests {
     fn both(
         files: &[(&str, Vec<u8>)],
     ) -> (std::result::Result<Population, Vec<Error>>, std::result::Result<Population, Vec<Error>>) {
-        let all = Population::from_files_all_errors(files.iter().map(|(n, b)| (n.to_string(), b.clone())).collect());
+        let all = Population::read(
+            crate::mesh::Sources::Files(files.iter().map(|(n, b)| (n.to_string(), b.clone())).collect()),
+            &Default::default(),
+        );
         let names: Vec<String> = files.iter().map(|(n, _)| n.to_string()).collect();
         let mut want = names.clone();
         want.sort_by(|a, b| natural_cmp(a, b));
@@ -1005,7 +1038,10 @@ mod tests {
             ("2.obj".to_string(), quad_obj(0.2, f)),
         ];
         let want = "file 2.obj: two of the files are named so: the poses are ordered by their file names, so each needs its own; rename one, or open the files of one folder at a time";
-        assert_eq!(messages(&Population::from_files_all_errors(files.clone())), [want]);
+        assert_eq!(
+            messages(&Population::read(crate::mesh::Sources::Files(files.clone()), &Default::default())),
+            [want]
+        );
         let names: Vec<String> = files.iter().map(|f| f.0.clone()).collect();
         let one = Population::read_one_at_a_time(
             &names,
@@ -1017,7 +1053,11 @@ mod tests {
         );
         assert_eq!(messages(&one), [want]);
         // distinct names read as before
-        assert!(Population::from_files_all_errors(vec![files[0].clone(), files[1].clone()]).is_ok());
+        assert!(Population::read(
+            crate::mesh::Sources::Files(vec![files[0].clone(), files[1].clone()]),
+            &Default::default()
+        )
+        .is_ok());
     }
 
     #[test]
@@ -1104,7 +1144,8 @@ mod tests {
 
     #[test]
     fn one_common_scale_into_unit_box() {
-        let p = Population::from_meshes(vec![("b".into(), tri(1.0)), ("a".into(), tri(0.0))]).unwrap();
+        let p = Population::new(crate::mesh::Sources::Meshes(vec![("b".into(), tri(1.0)), ("a".into(), tri(0.0))]))
+            .unwrap();
         assert_eq!(p.names, vec!["a", "b"]);
         let n = p.normalization;
         assert!((n.scale - 0.5).abs() < 1e-12);
@@ -1128,19 +1169,19 @@ mod tests {
         for (n, b) in &files {
             std::fs::write(dir.join(n), b).unwrap();
         }
-        let from_bytes = Population::from_files(files.clone()).unwrap();
+        let from_bytes = Population::new(crate::mesh::Sources::Files(files.clone())).unwrap();
         assert_eq!(from_bytes.source, "2 OBJ and 1 PLY file");
-        assert_eq!(Population::from_paths(&[&dir]).unwrap(), from_bytes);
+        assert_eq!(Population::new(crate::mesh::Sources::paths(&[&dir])).unwrap(), from_bytes);
         let listed: Vec<_> = ["3.ply", "10.obj", "2.obj"].iter().map(|n| dir.join(n)).collect();
-        assert_eq!(Population::from_paths(&listed).unwrap(), from_bytes);
+        assert_eq!(Population::new(crate::mesh::Sources::paths(&listed)).unwrap(), from_bytes);
         // Two files that do not parse: the first in natural order is named, as from the bytes.
         std::fs::write(dir.join("10.obj"), b"v 0 0 0\nv 1 0\n").unwrap();
         std::fs::write(dir.join("2.obj"), b"v 0 0 0\nf 1 1 7\n").unwrap();
-        let e = Population::from_paths(&[&dir]).unwrap_err().to_string();
+        let e = Population::new(crate::mesh::Sources::paths(&[&dir])).unwrap_err().to_string();
         assert!(e.starts_with("file 2.obj, line 2:") && e.contains("index 7"), "{e}");
         // A file that cannot be read wins over one that does not parse, even one earlier in natural order.
         let listed = [dir.join("2.obj"), dir.join("9.obj"), dir.join("1.obj")];
-        let e = Population::from_paths(&listed).unwrap_err().to_string();
+        let e = Population::new(crate::mesh::Sources::paths(&listed)).unwrap_err().to_string();
         assert!(e.starts_with("cannot read ") && e.contains("9.obj"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -1149,9 +1190,10 @@ mod tests {
     fn rejects_mismatch_naming_file() {
         let mut m = tri(0.0);
         m.positions.push([0.0, 0.0, 1.0]);
-        let e = Population::from_meshes(vec![("a.obj".into(), tri(0.0)), ("b.obj".into(), m)]).unwrap_err();
+        let e = Population::new(crate::mesh::Sources::Meshes(vec![("a.obj".into(), tri(0.0)), ("b.obj".into(), m)]))
+            .unwrap_err();
         assert!(e.to_string().contains("b.obj") && e.to_string().contains("4 vertices"), "{e}");
-        let e = Population::from_meshes(vec![("a.obj".into(), tri(0.0))]).unwrap_err();
+        let e = Population::new(crate::mesh::Sources::Meshes(vec![("a.obj".into(), tri(0.0))])).unwrap_err();
         assert!(e.to_string().contains("at least 2"), "{e}");
     }
 
@@ -1164,7 +1206,8 @@ mod tests {
         // beside another file's error, still tells them apart)
         let e = check_same_mesh("1.obj", &tri(0.0), "1.obj", &m).unwrap_err();
         assert!(e.to_string().contains("has 4 vertices but the first file, also named 1.obj, has 3"), "{e}");
-        let e = Population::from_meshes(vec![("1.obj".into(), tri(0.0)), ("1.obj".into(), m)]).unwrap_err();
+        let e = Population::new(crate::mesh::Sources::Meshes(vec![("1.obj".into(), tri(0.0)), ("1.obj".into(), m)]))
+            .unwrap_err();
         assert!(e.to_string().contains("two of the files are named so"), "{e}");
     }
 }

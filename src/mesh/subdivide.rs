@@ -79,10 +79,10 @@ impl Midpoints {
     }
 }
 
-/// The population with every triangle split in four, `levels` times, in its original units (each pose's
-/// coordinates mapped back through the population's normalization), with the same names. Its shapes and faces,
-/// for writing out; [`Population::from_meshes`] of them gives the finer population. Refused before anything is
-/// allocated when the result could need more than `budget` bytes ([`crate::memory::subdivision_bytes`]: each level
+/// The population with every triangle split in four, `levels` times, in its original units (each pose's coordinates
+/// mapped back through the population's normalization), with the same names. Its shapes and faces, for writing out;
+/// [`Population::read`] of them ([`crate::mesh::Sources::Meshes`]) gives the finer population. Refused before anything
+/// is allocated when the result could need more than `budget` bytes ([`crate::memory::subdivision_bytes`]: each level
 /// multiplies the triangles by 4).
 pub fn subdivide(pop: &Population, levels: usize, budget: u64) -> Result<(Vec<[u32; 3]>, Vec<Vec<[f64; 3]>>)> {
     crate::memory::check_subdivision(pop.n_vertices(), pop.faces.len(), pop.n_shapes(), levels, budget)?;
@@ -194,7 +194,7 @@ mod tests {
     fn a_population_subdivided_twice_in_original_units() {
         let (v, f) = tetra();
         let moved: Vec<[f64; 3]> = v.iter().map(|p| [10.0 * p[0] + 5.0, 10.0 * p[2], -10.0 * p[1]]).collect();
-        let pop = Population::from_meshes(vec![
+        let pop = Population::new(crate::mesh::Sources::Meshes(vec![
             (
                 "a.obj".into(),
                 crate::mesh::Mesh {
@@ -203,7 +203,7 @@ mod tests {
                 },
             ),
             ("b.obj".into(), crate::mesh::Mesh { positions: moved, faces: f.clone() }),
-        ])
+        ]))
         .unwrap();
         let (faces, shapes) = subdivide(&pop, 2, u64::MAX).unwrap();
         assert_eq!(faces.len(), 4 * 4 * f.len());
@@ -211,13 +211,13 @@ mod tests {
         // V - E + F = 2 with F = 64 and E = 3F/2 = 96: 34 vertices
         assert_eq!(shapes[0].len(), 34);
         assert!((shapes[0][1][0] - 10.0).abs() < 1e-5, "{:?}", shapes[0][1]);
-        let finer = Population::from_meshes(
+        let finer = Population::new(crate::mesh::Sources::Meshes(
             shapes
                 .into_iter()
                 .zip(["a.obj", "b.obj"])
                 .map(|(s, n)| (n.to_string(), crate::mesh::Mesh { positions: s, faces: faces.clone() }))
                 .collect(),
-        )
+        ))
         .unwrap();
         assert_eq!(finer.n_vertices(), 34);
         // a result larger than the budget is refused by its size, before anything is made

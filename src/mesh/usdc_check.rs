@@ -1073,10 +1073,10 @@ mod tests {
         with_reps(&b, &reps)
     }
 
-    /// usd-core codes an all-triangle mesh's faceVertexCounts to a few dozen bytes: 300 000 threes are 75 005
-    /// bytes of codes, 310 bytes of LZ4, and openusd's buffer for them is 1 275 004 bytes (4100 x). Such a
-    /// file is read (issue 58: it was refused as damaged): openusd decodes the integers, and the reader sees
-    /// them (the counts add up to 900 000 corners, the indices are the same 300 000 threes).
+    /// usd-core codes an all-triangle mesh's faceVertexCounts to a few dozen bytes: 300 000 threes are 75 005 bytes of
+    /// codes, 310 bytes of LZ4, and openusd's buffer for them is 1 275 004 bytes (4100 x). Such a file is read, not
+    /// refused as damaged (a buffer that large is no sign of damage here): openusd decodes the integers, and the reader
+    /// sees them (the counts add up to 900 000 corners, the indices are the same 300 000 threes).
     #[test]
     fn integer_arrays_that_code_to_a_few_bytes_are_read() {
         let seed = include_bytes!("../../fuzz/seeds/arm-pointcache.usdc");

@@ -1,4 +1,4 @@
-//! A `.zip` of mesh files, opened as the page opens one (issue 58): `posemfa fit poses.zip` reads what the
+//! A `.zip` of mesh files, opened as the page opens one: `posemfa fit poses.zip` reads what the
 //! page reads when the same archive is dropped on it (`www/drop.js` unzips with fflate, and hands the entries
 //! to the same [`super::load`]).
 //!

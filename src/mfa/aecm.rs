@@ -23,7 +23,7 @@ use super::component::Component;
 use super::data::Data;
 use super::estep::{e_step, Blocked, EStep};
 use super::init;
-use super::params::{LambdaRule, Params};
+use super::params::{InFit, LambdaRule, RunParams};
 use super::result::Model;
 use super::squarem;
 use crate::error::{Error, Result};
@@ -83,29 +83,32 @@ pub struct Fit {
 
 impl Fit {
     /// Starts from k-means++ (m = `params.parts`) with the per-cluster Procrustes initialisation.
-    pub fn new(data: Data, params: &Params) -> Result<Fit> {
+    pub fn new(data: Data, params: &impl InFit) -> Result<Fit> {
+        let params = &floor_for(&data, params);
         params.validate()?;
-        let most = memory::max_components(params.parts, params.refine, params.max_subparts, data.n_vertices);
-        check_population(&data, params.parts, most)?;
-        let labels = init::kmeans(&data, params.parts, params.seed, params.restarts);
+        let a = &params.algorithm1;
+        let most = memory::max_components(a.parts, params.refine, a.max_subparts, data.n_vertices);
+        check_population(&data, a.parts, most)?;
+        let labels = init::kmeans(&data, a.parts, params.seed, params.restarts);
         Fit::from_labels(data, &labels, params)
     }
 
     /// Starts from a labelling (one component per distinct label).
-    pub fn from_labels(data: Data, labels: &[u32], params: &Params) -> Result<Fit> {
+    pub fn from_labels(data: Data, labels: &[u32], params: &impl InFit) -> Result<Fit> {
         let layout = Blocked::new(&data);
         Fit::from_labels_laid_out(data, layout, labels, params)
     }
 
     /// [`Fit::from_labels`] with the E-step's layout of `data` (`Blocked::new(&data)`) already built.
-    pub fn from_labels_laid_out(data: Data, layout: Blocked, labels: &[u32], params: &Params) -> Result<Fit> {
+    pub fn from_labels_laid_out(data: Data, layout: Blocked, labels: &[u32], params: &impl InFit) -> Result<Fit> {
+        let params = &floor_for(&data, params);
         params.validate()?;
         let most = labels.iter().max().map_or(1, |&l| l as usize + 1).min(data.n_vertices);
         check_data(&data, 1, most)?;
         if labels.len() != data.n_vertices {
             return Err(Error::Request(format!("{} labels for {} vertices", labels.len(), data.n_vertices)));
         }
-        let comps = init::components_from_labels(&data, labels, floor_for(&data, params));
+        let comps = init::components_from_labels(&data, labels, params.floor());
         // the labels' components are evaluated first in the first E-step (they are its best guess)
         let owners = (comps.len() == labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0)).then_some(labels);
         Ok(Fit::from_components_owned(data, EStep::with_layout(layout), comps, params, owners))
@@ -113,11 +116,11 @@ impl Fit {
 
     /// [`Fit::from_components`] with the E-step's layout of `data` already built (a run that goes on from
     /// another run's components on the same data).
-    pub fn from_components_laid_out(data: Data, layout: Blocked, comps: Vec<Component>, params: &Params) -> Fit {
+    pub fn from_components_laid_out(data: Data, layout: Blocked, comps: Vec<Component>, params: &impl InFit) -> Fit {
         Fit::from_components_owned(data, EStep::with_layout(layout), comps, params, None)
     }
 
-    pub fn from_components(data: Data, comps: Vec<Component>, params: &Params) -> Fit {
+    pub fn from_components(data: Data, comps: Vec<Component>, params: &impl InFit) -> Fit {
         let estep = EStep::new(&data);
         Fit::from_components_owned(data, estep, comps, params, None)
     }
@@ -127,10 +130,11 @@ impl Fit {
         data: Data,
         estep: EStep,
         comps: Vec<Component>,
-        params: &Params,
+        params: &impl InFit,
         owners: Option<&[u32]>,
     ) -> Fit {
-        let floor = floor_for(&data, params);
+        let params = &floor_for(&data, params);
+        let floor = params.floor();
         let mut fit = Fit {
             estep,
             data,
@@ -490,13 +494,10 @@ fn check_data(data: &Data, parts: usize, most_components: usize) -> Result<()> {
     memory::check(data.n_vertices, data.n_shapes, most_components, memory::budget_bytes()?)
 }
 
-/// The variance floor of a run on `data`: the fit's ([`Params::floor`]), or, for a run on its own (parameters
-/// not yet scaled for a population), scaled by this data's mean squared radius.
-pub(crate) fn floor_for(data: &Data, params: &Params) -> f64 {
-    match params.floor_scale {
-        Some(_) => params.floor(),
-        None => params.for_radius(data.mean_squared_radius()).floor(),
-    }
+/// The parameters of a run on `data`: the fit's ([`RunParams`]), or, for a run on its own (plain [`super::Params`]),
+/// with the variance floor scaled by this data's mean squared radius.
+pub(crate) fn floor_for(data: &Data, params: &impl InFit) -> RunParams {
+    params.in_fit(|| data.mean_squared_radius())
 }
 
 /// Refuses a population whose shapes are all the same point set (up to rounding, after each is centred on

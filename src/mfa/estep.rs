@@ -885,8 +885,12 @@ mod tests {
                     .collect()
             })
             .collect();
-        let pop =
-            Population::from_unit_shapes((0..ns).map(|i| format!("{i}")).collect(), vec![[0, 1, 2]], shapes).unwrap();
+        let pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: (0..ns).map(|i| format!("{i}")).collect(),
+            faces: vec![[0, 1, 2]],
+            shapes,
+        })
+        .unwrap();
         let data = Data::from_population(&pop);
         let comps: Vec<Component> = (0..3)
             .map(|k| Component {

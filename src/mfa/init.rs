@@ -322,8 +322,12 @@ mod tests {
             .collect();
         let truth: Vec<Mat3> = (0..4).map(|i| axis_angle([1.0, 0.5, i as f64], 0.4 * i as f64)).collect();
         let shapes: Vec<Vec<Vec3>> = truth.iter().map(|r| rest.iter().map(|&p| mat_vec(r, p)).collect()).collect();
-        let pop =
-            Population::from_unit_shapes((0..4).map(|i| i.to_string()).collect(), vec![[0, 1, 2]], shapes).unwrap();
+        let pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: (0..4).map(|i| i.to_string()).collect(),
+            faces: vec![[0, 1, 2]],
+            shapes,
+        })
+        .unwrap();
         let data = Data::from_population(&pop);
         let comps = components_from_labels(&data, &vec![0; 30], 1e-9);
         assert_eq!(comps.len(), 1);
@@ -350,7 +354,12 @@ mod tests {
                     .collect()
             })
             .collect();
-        let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], vec![[0, 1, 2]], shapes).unwrap();
+        let pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces: vec![[0, 1, 2]],
+            shapes,
+        })
+        .unwrap();
         let data = Data::from_population(&pop);
         let a = kmeans(&data, 3, 7, 3);
         assert_eq!(a, kmeans(&data, 3, 7, 3));

@@ -26,5 +26,8 @@ pub mod result;
 pub mod squarem;
 
 pub use component::Component;
-pub use params::{LambdaRule, Params, PartRule};
+pub use params::{
+    Algorithm1Params, DistinctParams, FitStart, FlatParams, InFit, LambdaRule, Params, PartRule, RunParams,
+    ThresholdParams, TreeParams,
+};
 pub use result::Model;

@@ -1,7 +1,17 @@
-//! Fit parameters, validated once before fitting. Each field's default is in its doc comment.
+//! Fit parameters, validated once before fitting. Each field's default is in its doc comment; the fields
+//! only one part rule reads are in that rule's own type (`rules`), the JSON's flat form is `wire`, and the
+//! state a fit adds to them (the variance floor's scale) is `run`.
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
+
+mod rules;
+mod run;
+mod wire;
+
+pub use rules::{Algorithm1Params, DistinctParams, ThresholdParams, TreeParams};
+pub use run::{InFit, RunParams};
+pub use wire::{FitStart, FlatParams};
 
 /// How cycle 2 updates Λ.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -35,11 +45,13 @@ pub enum PartRule {
     Threshold,
 }
 
+/// The fit parameters, validated once before fitting ([`Params::validate`]). Those every rule reads are fields
+/// here; those only one rule reads are in that rule's own type ([`TreeParams`], [`DistinctParams`],
+/// [`Algorithm1Params`] with its [`ThresholdParams`]). Each default is in the doc comment of its field. The JSON
+/// is flat ([`FlatParams`]): `{"parts": 11, "coarseVertices": 8000, ...}`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, rename_all = "camelCase", deny_unknown_fields)]
+#[serde(try_from = "FlatParams", into = "FlatParams")]
 pub struct Params {
-    /// Number of coarse parts m of the first AECM (Algorithm 1's input). Default 11.
-    pub parts: usize,
     /// Seed of the one random stream used for every restart. Default 0.
     pub seed: u64,
     /// Convergence tolerance on |ΔL| / n_v (nats per vertex) between AECM iterations. Default 1e-3.
@@ -48,7 +60,7 @@ pub struct Params {
     pub max_iter: usize,
     /// Lower bound of every per-shape variance s_k^i (docs/method.md#item-6), in unit-box units² for a population
     /// whose mean squared radius in the unit box is [`REFERENCE_SQUARED_RADIUS`] (an animal's, about); the fit
-    /// scales it by the population's own ([`Params::floor`]), so that it follows the shape, not its bounding
+    /// scales it by the population's own ([`RunParams::floor`]), so that it follows the shape, not its bounding
     /// box: a turn of every pose changes the box, not the shape. Default 1e-7.
     pub variance_floor: f64,
     /// Λ update of cycle 2. Default [`LambdaRule::Exact`].
@@ -61,62 +73,29 @@ pub struct Params {
     pub accelerate: bool,
     /// k-means++ restarts (the best by k-means cost is kept). Default 4.
     pub restarts: usize,
-    /// Run Algorithm 1's refinement and final stage; false stops after the coarse AECM. Default true.
-    pub refine: bool,
-    /// Multi-resolution ([`crate::parts::multires`]): with at least 3 times this many vertices
-    /// ([`crate::parts::hierarchy::SUBSET_FACTOR`]), the coarse and refinement stages run on about this many
-    /// well-spread vertices and only the final AECM on all of them; 0 runs every stage on all vertices (the full
-    /// hierarchy). Only with `refine`. Default 2000.
-    pub subset_vertices: usize,
-    /// A coarse mesh for the part decisions ([`crate::parts::coarse_mesh`]): with the merge tree's part rule and
-    /// at least twice this many vertices ([`crate::parts::hierarchy::COARSE_FACTOR`]), the tree, the AECM runs and
-    /// the part rule's decisions run on about this many well-spread vertices with their own triangles, and only
-    /// the last AECM on all vertices, from the coarse fit's parts; 0 decides on all vertices. With fewer than 20
-    /// poses the coarse mesh is larger, as many vertex-poses as this many vertices in 20 poses
-    /// ([`crate::parts::hierarchy::coarse_target`]). Default 8000.
-    pub coarse_vertices: usize,
-    /// How the parts are found and counted. Default [`PartRule::Tree`].
-    pub part_rule: PartRule,
-    /// [`PartRule::Distinct`]: two adjacent parts stay apart only if moving both by one rigid motion raises the
-    /// squared error of the smaller one, per vertex, to at least this many times a typical part's variance; and
-    /// a refinement split is kept only if it lowers the variance this many times. Default 4.
-    pub distinct_ratio: f64,
-    /// [`PartRule::Distinct`]: a part whose motion is a fixed in-between of two neighbours' motions to within
-    /// this fraction of their relative rotation is flesh, not a part ([`crate::parts::distinct::blend_ratio`]).
-    /// Default 0.1.
-    pub blend_ratio: f64,
-    /// [`PartRule::Threshold`], Algorithm 1 step 5: stop splitting a part when its mean variance err falls below
-    /// this. Default 1e-5.
-    pub refine_threshold: f64,
-    /// [`PartRule::Threshold`]: after the refinement, adjacent parts that one rigid component explains with a
-    /// mean variance below `merge_ratio * refine_threshold` are merged (0 turns the merge off). Default 0.25.
-    pub merge_ratio: f64,
-    /// Most sub-parts tried per coarse part in the refinement. Default 6.
-    pub max_subparts: usize,
-    /// A sub-part must lower err by at least this fraction to be kept (makes "stops decreasing" robust).
-    /// Default 0.1.
-    pub refine_min_gain: f64,
-    /// Components whose responsibility mass falls below this many vertices are dropped. Default 4.
+    /// Components whose responsibility mass falls below this many vertices are dropped, and no part may have
+    /// fewer vertices. Default 4.
     pub min_part_vertices: usize,
-    /// Iteration cap of each small AECM run inside the refinement. Default 60.
-    pub refine_max_iter: usize,
-    /// Convergence tolerance of the coarse AECM and of the small AECM runs of the refinement (they only
-    /// decide the labels that start the next stage; the final stage uses `tol`). Default 1e-2.
-    pub refine_tol: f64,
-    /// Exact part count: after Algorithm 1, parts are split or merged until there are exactly this many, then
+    /// Exact part count: after the part rule, parts are split or merged until there are exactly this many, then
     /// the final AECM runs again ([`crate::parts::part_count`]). None (default) keeps the part rule's own count.
     pub target_parts: Option<usize>,
-    /// A partition to start from (one label per vertex; `startLabels`), with the merge tree's part rule: its
-    /// parts are the start of the final AECM in place of the patches' cut, and the count is exactly its number
-    /// of parts (`target_parts`, when unset). The page's "Refine N parts" fits the merge tree's partition it
-    /// shows. None (default): the part rule's own start.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub start_labels: Option<Vec<u32>>,
-    /// The population's mean squared radius over [`REFERENCE_SQUARED_RADIUS`], which scales `variance_floor`;
-    /// set once per fit by [`Params::for_radius`] (the whole population's, also for runs on a subset of it).
-    /// None: unset (an AECM run then sets it from its own data).
-    #[serde(skip)]
-    pub floor_scale: Option<f64>,
+    /// How the parts are found and counted. Default [`PartRule::Tree`].
+    pub part_rule: PartRule,
+    /// Decide the parts. False is a choice of its own, for every part rule: Algorithm 1's coarse AECM alone
+    /// (`algorithm1.parts` parts from k-means++), no refinement and no part rule; the merge tree has no stage
+    /// without its rule, so `part_rule` is then not read ([`crate::parts::hierarchy::rule_of`]; the result says
+    /// which rule ran). The CLI's `--no-refine`, the page's "refine" box. Default true.
+    pub refine: bool,
+    /// Convergence tolerance of the runs that only decide labels another run starts from: Algorithm 1's coarse
+    /// AECM and the small runs of its refinement, and the merge tree's first run and its runs on a coarse mesh
+    /// (when looser than `tol`). The last run uses `tol`. Default 1e-2.
+    pub refine_tol: f64,
+    /// The merge tree's ([`PartRule::Tree`]).
+    pub tree: TreeParams,
+    /// The scale-free rule's ratios ([`PartRule::Tree`] and [`PartRule::Distinct`]).
+    pub distinct: DistinctParams,
+    /// Algorithm 1's ([`PartRule::Distinct`], [`PartRule::Threshold`], `refine` off), with the threshold rule's.
+    pub algorithm1: Algorithm1Params,
 }
 
 /// The mean squared radius (unit-box units²) at which `variance_floor` is the floor itself: about the horses'
@@ -126,7 +105,6 @@ pub const REFERENCE_SQUARED_RADIUS: f64 = 0.09;
 impl Default for Params {
     fn default() -> Self {
         Params {
-            parts: 11,
             seed: 0,
             tol: 1e-3,
             max_iter: 300,
@@ -135,38 +113,23 @@ impl Default for Params {
             px_em: true,
             accelerate: true,
             restarts: 4,
-            refine: true,
-            subset_vertices: 2000,
-            coarse_vertices: 8000,
-            part_rule: PartRule::Tree,
-            distinct_ratio: 4.0,
-            blend_ratio: 0.1,
-            refine_threshold: 1e-5,
-            merge_ratio: 0.25,
-            max_subparts: 6,
-            refine_min_gain: 0.1,
             min_part_vertices: 4,
-            refine_max_iter: 60,
-            refine_tol: 1e-2,
             target_parts: None,
-            start_labels: None,
-            floor_scale: None,
+            part_rule: PartRule::Tree,
+            refine: true,
+            refine_tol: 1e-2,
+            tree: TreeParams::default(),
+            distinct: DistinctParams::default(),
+            algorithm1: Algorithm1Params::default(),
         }
     }
 }
 
 impl Params {
-    /// The variance floor in this population's unit box: `variance_floor` scaled by [`Params::floor_scale`].
-    pub fn floor(&self) -> f64 {
-        self.variance_floor * self.floor_scale.unwrap_or(1.0)
-    }
-
-    /// These parameters with the floor scaled for a population of mean squared radius `mean_squared_radius`
-    /// (unit box), unless it is scaled already: a run inside a fit keeps the whole population's scale.
-    pub fn for_radius(&self, mean_squared_radius: f64) -> Params {
-        let scale = mean_squared_radius / REFERENCE_SQUARED_RADIUS;
-        let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
-        Params { floor_scale: self.floor_scale.or(Some(scale)), ..self.clone() }
+    /// These parameters for a population of mean squared radius `mean_squared_radius` (unit box): a fit's
+    /// parameters, with the variance floor scaled for it ([`RunParams`]).
+    pub fn for_radius(&self, mean_squared_radius: f64) -> RunParams {
+        RunParams::new(self, mean_squared_radius)
     }
 }
 
@@ -234,7 +197,7 @@ impl Params {
             }
         };
         match field {
-            "parts" => self.parts = whole(ALLOWED_PARTS)?.min(usize::MAX as u64) as usize,
+            "parts" => self.algorithm1.parts = whole(ALLOWED_PARTS)?.min(usize::MAX as u64) as usize,
             "seed" => self.seed = whole(ALLOWED_SEED)?,
             "tol" => self.tol = number(ALLOWED_TOL)?,
             "varianceFloor" => self.variance_floor = number(ALLOWED_VARIANCE_FLOOR)?,
@@ -300,7 +263,7 @@ impl Params {
     /// makes the same way): the refinement's tolerance and cap, no SQUAREM (they stop loose and only hand labels
     /// on).
     pub fn for_refinement(&self) -> Params {
-        Params { max_iter: self.refine_max_iter, tol: self.refine_tol, accelerate: false, ..self.clone() }
+        Params { max_iter: self.algorithm1.refine_max_iter, tol: self.refine_tol, accelerate: false, ..self.clone() }
     }
 
     /// These parameters for a final-stage run that only decides (the merge tree's first run, every run on a
@@ -333,11 +296,7 @@ impl Params {
     pub fn problems(&self) -> Vec<(&'static str, String)> {
         let mut out: Vec<(&'static str, String)> = Vec::new();
         let mut bad = |f: &'static str, m: String| out.push((f, m));
-        if self.parts == 0 {
-            bad("parts", format!("= {} must be {ALLOWED_PARTS}", self.parts));
-        } else if self.parts > 512 {
-            bad("parts", format!("= {} is too large: it must be {ALLOWED_PARTS}", self.parts));
-        }
+        self.algorithm1.problems(&mut bad);
         if !(self.tol > 0.0 && self.tol.is_finite()) {
             bad("tol", format!("= {} must be {ALLOWED_TOL}", shown(self.tol)));
         }
@@ -350,47 +309,16 @@ impl Params {
         if self.restarts == 0 || self.restarts > 100 {
             bad("restarts", format!("= {} must be between 1 and 100", self.restarts));
         }
-        if !(self.refine_threshold >= 0.0 && self.refine_threshold.is_finite()) {
-            bad("refineThreshold", format!("= {} must be >= 0", shown(self.refine_threshold)));
-        }
-        if !(self.distinct_ratio > 0.0 && self.distinct_ratio.is_finite()) {
-            bad("distinctRatio", format!("= {} must be a positive number (try 4)", shown(self.distinct_ratio)));
-        }
-        if !(0.0..1.0).contains(&self.blend_ratio) {
-            bad("blendRatio", format!("= {} must be in [0, 1) (try 0.1; 0 keeps every part)", shown(self.blend_ratio)));
-        }
-        if !(0.0..=1.0).contains(&self.merge_ratio) {
-            bad("mergeRatio", format!("= {} must be in [0, 1]", shown(self.merge_ratio)));
-        }
-        if self.max_subparts == 0 || self.max_subparts > 64 {
-            bad("maxSubparts", format!("= {} must be between 1 and 64", self.max_subparts));
-        }
-        if !(0.0..1.0).contains(&self.refine_min_gain) {
-            bad("refineMinGain", format!("= {} must be in [0, 1)", shown(self.refine_min_gain)));
-        }
+        self.distinct.problems(&mut bad);
         if self.min_part_vertices == 0 {
             bad("minPartVertices", "= 0 must be at least 1".into());
         }
         if !(self.refine_tol > 0.0 && self.refine_tol.is_finite()) {
             bad("refineTol", format!("= {} must be a positive number (try 1e-2)", self.refine_tol));
         }
-        if self.subset_vertices > 0 && self.subset_vertices < 64 {
-            bad(
-                "subsetVertices",
-                format!("= {} must be 0 (every stage on all vertices) or at least 64 (try 2000)", self.subset_vertices),
-            );
-        }
-        if self.coarse_vertices > 0 && self.coarse_vertices < 500 {
-            bad(
-                "coarseVertices",
-                format!("= {} must be 0 (decide on all vertices) or at least 500 (try 8000)", self.coarse_vertices),
-            );
-        }
+        self.tree.problems(&mut bad);
         if self.target_parts == Some(0) {
             bad("targetParts", format!("= 0 must be {ALLOWED_TARGET_PARTS}"));
-        }
-        if self.refine_max_iter == 0 {
-            bad("refineMaxIter", "= 0 must be at least 1".into());
         }
         out
     }
@@ -426,7 +354,7 @@ mod tests {
     fn defaults_are_valid_and_each_bad_value_is_named() {
         Params::default().validate().unwrap();
         let cases: Vec<(Params, &str)> = vec![
-            (Params { parts: 0, ..Default::default() }, "parts"),
+            (Params { algorithm1: Algorithm1Params { parts: 0, ..Default::default() }, ..Default::default() }, "parts"),
             (Params { tol: -1.0, ..Default::default() }, "tol"),
             (Params { tol: f64::NAN, ..Default::default() }, "tol"),
             (Params { variance_floor: 0.0, ..Default::default() }, "variance_floor"),
@@ -443,6 +371,34 @@ mod tests {
     }
 
     #[test]
+    fn the_json_is_flat_with_the_same_keys_and_the_start_is_no_parameter() {
+        let mut p = Params { seed: 7, refine: false, part_rule: PartRule::Distinct, ..Params::default() };
+        p.algorithm1.parts = 9;
+        p.tree.coarse_vertices = 600;
+        p.distinct.blend_ratio = 0.2;
+        p.algorithm1.threshold.merge_ratio = 0.5;
+        let json = serde_json::to_value(&p).unwrap();
+        let keys: Vec<&str> = json.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+        assert_eq!(keys.len(), FIELDS.len() + 5, "{keys:?}");
+        assert!(FIELDS.iter().all(|f| keys.contains(&f.0)), "{keys:?}");
+        assert_eq!((json["parts"].as_u64(), json["coarseVertices"].as_u64()), (Some(9), Some(600)));
+        assert_eq!((json["blendRatio"].as_f64(), json["mergeRatio"].as_f64()), (Some(0.2), Some(0.5)));
+        assert!(json.get("startLabels").is_none());
+        assert_eq!(serde_json::from_value::<Params>(json).unwrap(), p);
+        // a missing key takes its default, an unknown one is refused
+        assert_eq!(serde_json::from_str::<Params>("{}").unwrap(), Params::default());
+        assert!(serde_json::from_str::<Params>(r#"{"part": 3}"#).is_err());
+        // the start: in a fit request beside the parameters, refused by the parameters alone
+        let request = r#"{"parts": 5, "startLabels": [0, 0, 1]}"#;
+        let (q, start) = serde_json::from_str::<FlatParams>(request).unwrap().split();
+        assert_eq!((q.algorithm1.parts, start.labels), (5, Some(vec![0, 0, 1])));
+        let e = serde_json::from_str::<Params>(request).unwrap_err().to_string();
+        assert!(e.contains("startLabels is where a fit starts"), "{e}");
+        let back = serde_json::to_value(FlatParams::new(&q, &FitStart { labels: Some(vec![0, 0, 1]) })).unwrap();
+        assert_eq!(back["startLabels"], serde_json::json!([0, 0, 1]));
+    }
+
+    #[test]
     fn form_fields_are_read_and_each_bad_one_is_named_with_what_is_allowed() {
         let base = Params { refine: false, ..Params::default() };
         let p = base
@@ -455,7 +411,7 @@ mod tests {
             ])
             .unwrap();
         assert_eq!(
-            (p.parts, p.target_parts, p.seed, p.tol, p.variance_floor, p.refine),
+            (p.algorithm1.parts, p.target_parts, p.seed, p.tol, p.variance_floor, p.refine),
             (7, None, 3, 1e-4, 1e-6, false)
         );
         assert_eq!(base.with_fields(&[("targetParts", "12")]).unwrap().target_parts, Some(12));
@@ -475,7 +431,7 @@ mod tests {
         assert!(base.with_fields(&[("varianceFloor", "2")]).unwrap_err()[0].message.contains("(0, 1)"));
         assert!(base.with_fields(&[("targetParts", "0")]).unwrap_err()[0].field == "targetParts");
         // a whole number in exponent form is read as its value, then judged by its range
-        assert_eq!(base.with_fields(&[("parts", "1.2e1")]).unwrap().parts, 12);
+        assert_eq!(base.with_fields(&[("parts", "1.2e1")]).unwrap().algorithm1.parts, 12);
         let big = base.with_fields(&[("parts", "1e9")]).unwrap_err();
         assert_eq!(big[0].message, format!("1000000000 is too large: it must be {ALLOWED_PARTS}"));
         assert_eq!(

@@ -1,13 +1,12 @@
-//! A registered coarse mesh of a large population, on which the parts are decided ([`super::hierarchy`]):
-//! the patches of [`super::patches::seeded_patches`] at about `target` vertices (farthest-point seeds by
-//! edge hops, every vertex to its nearest seed), each patch one coarse vertex. Hops, not the poses' edge
-//! lengths: the coarse mesh is then the same whichever poses are given, and the decisions on it move less
-//! with one pose dropped (the subdivided horse-gallop with each of its 49 poses dropped in turn: 23-25 parts,
-//! adjusted Rand min 0.904; with the lengths 20-25, 0.862). A coarse vertex is its seed, a vertex of the population, so its trajectory is a real one and the
-//! coarse mesh is registered in every pose as the population is (no new positions are made). Its triangles are
-//! where three patches meet on a triangle of the mesh; two patches that touch only along an edge get a
-//! triangle with a patch next to both. It depends on the mesh's connectivity alone: not on the poses, their
-//! order, nor where the population stands (no axis-aligned grid).
+//! A registered coarse mesh of a large population, on which the parts are decided ([`super::hierarchy`]): the patches
+//! of [`super::patches::seeded_patches`] at about `target` vertices (farthest-point seeds by edge hops, every vertex to
+//! its nearest seed), each patch one coarse vertex. Hops, not the poses' edge lengths: the coarse mesh is then the same
+//! whichever poses are given, and the decisions on it move less with one pose dropped (docs/decisions.md, "Figures
+//! behind src/parts"). A coarse vertex is its seed, a vertex of the population, so its trajectory is a real one and the
+//! coarse mesh is registered in every pose as the population is (no new positions are made). Its triangles are where
+//! three patches meet on a triangle of the mesh; two patches that touch only along an edge get a triangle with a patch
+//! next to both. It depends on the mesh's connectivity alone: not on the poses, their order, nor where the population
+//! stands (no axis-aligned grid).
 //!
 //! A part is a union of patches there; [`CoarseMesh::to_fine`] gives every vertex its patch's label.
 
@@ -113,7 +112,12 @@ mod tests {
         let h = 1.0 / (n - 1) as f64;
         let flat: Vec<[f64; 3]> = (0..n * n).map(|j| [(j % n) as f64 * h, (j / n) as f64 * h, 0.0]).collect();
         let bent: Vec<[f64; 3]> = flat.iter().map(|p| if p[0] > 0.5 { [0.5, p[1], p[0] - 0.5] } else { *p }).collect();
-        Population::from_unit_shapes(vec!["a".into(), "b".into()], faces, vec![flat, bent]).unwrap()
+        Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces,
+            shapes: vec![flat, bent],
+        })
+        .unwrap()
     }
 
     #[test]

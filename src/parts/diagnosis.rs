@@ -2,13 +2,13 @@
 //! model does not suit (a face making expressions, a bending blob) gets an honest word instead of a list of
 //! arbitrary "parts".
 //!
-//! The figure is how much of the motion the rigid parts explain: with RMSE_1 the error of the best single rigid
-//! motion of the whole shape (generalised Procrustes) and RMSE_K the fitted model's, the explained fraction of
-//! the non-rigid motion is 1 - (RMSE_K / RMSE_1)². Articulated shapes, whose parts move rigidly up to a little
-//! flesh at the joints, measure 0.99 and above at the part rule's count (generated creatures 0.999, horse-poses
-//! 0.996, horse-gallop 0.990); a smoothly bending blob 0.9 or less, however many parts it is cut into. The verdict
-//! is "articulated" from [`MIN_EXPLAINED`] (97.5 %) up, with at least two parts: the one threshold the page, the
-//! article and the CLI print (the page and the article read it from the core, wasm `minExplained`).
+//! The figure is how much of the motion the rigid parts explain: with RMSE_1 the error of the best single rigid motion
+//! of the whole shape (generalised Procrustes) and RMSE_K the fitted model's, the explained fraction of the non-rigid
+//! motion is 1 - (RMSE_K / RMSE_1)². Articulated shapes, whose parts move rigidly up to a little flesh at the joints,
+//! measure 0.99 and above at the part rule's count; a smoothly bending blob 0.9 or less, however many parts it is cut
+//! into (each population's figure: docs/decisions.md, "Figures behind src/parts"). The verdict is "articulated" from
+//! [`MIN_EXPLAINED`] (97.5 %) up, with at least two parts: the one threshold the page, the article and the CLI print
+//! (the page and the article read it from the core, wasm `minExplained`).
 
 use super::hierarchy::FitResult;
 use crate::mesh::Population;
@@ -86,11 +86,11 @@ fn rigid_rmse(pop: &Population, labels: &[u32]) -> f64 {
     (sse / (nv * ns).max(1) as f64).sqrt()
 }
 
-/// The verdict for a fit of `pop`: [`diagnose`] of its model, except with an exact part count (`target_parts`)
-/// other than the one the part rule decided. The question is about the population, not the count asked for:
-/// horse-gallop asked for 10 parts is still articulated although 10 rigid parts explain only 96.6 % of its
-/// motion (its own 33 explain 99.9 %), so the verdict is also taken at the part rule's count
-/// ([`FitResult::decided_labels`], each part fitted rigidly), and the reason gives both figures. The figures
+/// The verdict for a fit of `pop`: [`diagnose`] of its model, except with an exact part count (`target_parts`) other
+/// than the one the part rule decided. The question is about the population, not the count asked for: a population
+/// asked for a few parts is still articulated although those few rigid parts explain less than [`MIN_EXPLAINED`] of its
+/// motion (an example: docs/decisions.md, "Figures behind src/parts"), so the verdict is also taken at the part rule's
+/// count ([`FitResult::decided_labels`], each part fitted rigidly), and the reason gives both figures. The figures
 /// (`parts_rmse`, `explained`, `parts`) stay the asked model's.
 pub fn diagnose_fit(pop: &Population, result: &FitResult) -> Diagnosis {
     let asked = diagnose(pop, &result.model);
@@ -237,7 +237,16 @@ mod tests {
         // Algorithm 1's coarse stage alone at m = 4: a quadruped's 4 parts explain too little, and that says
         // nothing about the quadruped
         let g = generate(&Spec { preset: Preset::Quadruped, vertices: 1500, poses: 8, ..Spec::default() }).unwrap();
-        let r = fit(&g.population, &Params { parts: 4, refine: false, ..Params::default() }, &mut |_| true).unwrap();
+        let r = fit(
+            &g.population,
+            &Params {
+                algorithm1: crate::mfa::Algorithm1Params { parts: 4, ..Default::default() },
+                refine: false,
+                ..Params::default()
+            },
+            &mut |_| true,
+        )
+        .unwrap();
         assert!(r.count_unjudged);
         assert!(!diagnose(&g.population, &r.model).articulated);
         let d = diagnose_fit(&g.population, &r);
@@ -253,7 +262,16 @@ mod tests {
             d.reason
         );
         // enough parts fixed by hand: the verdict stands
-        let r = fit(&g.population, &Params { parts: 40, refine: false, ..Params::default() }, &mut |_| true).unwrap();
+        let r = fit(
+            &g.population,
+            &Params {
+                algorithm1: crate::mfa::Algorithm1Params { parts: 40, ..Default::default() },
+                refine: false,
+                ..Params::default()
+            },
+            &mut |_| true,
+        )
+        .unwrap();
         let d = diagnose_fit(&g.population, &r);
         assert!(!d.undecided && d.articulated, "{d:?}");
         // with the part rule on, the verdict is the rule's (no such hedge)

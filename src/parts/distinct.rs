@@ -23,7 +23,7 @@ use super::labels::{adjacency, compact, weighted_median};
 pub use super::merge_tree::CurvePoint;
 use super::motion_labels::motion_residual;
 use crate::mesh::Population;
-use crate::mfa::params::Params;
+use crate::mfa::params::{InFit, RunParams};
 use crate::mfa::result::Model;
 
 mod blend;
@@ -135,10 +135,11 @@ pub fn dissolve_flesh(model: &mut Model, pop: &Population, ratio: f64) -> usize 
 
 /// Mean variance of the best rigid fit (generalised Procrustes, [`crate::mfa::init::component_from_points`]) of a set of
 /// vertices; with multi-resolution, estimated on at most `subset_vertices` evenly spaced ones.
-pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f64 {
+pub fn rigid_variance(pop: &Population, members: &[usize], params: &RunParams) -> f64 {
     let thinned: Vec<usize>;
-    let members = if params.subset_vertices > 0 && members.len() > params.subset_vertices {
-        let stride = members.len().div_ceil(params.subset_vertices);
+    let subset = params.algorithm1.subset_vertices;
+    let members = if subset > 0 && members.len() > subset {
+        let stride = members.len().div_ceil(subset);
         thinned = members.iter().copied().step_by(stride).collect();
         &thinned[..]
     } else {
@@ -155,8 +156,8 @@ pub fn rigid_variance(pop: &Population, members: &[usize], params: &Params) -> f
 /// variance s_ref of a typical part of the fit (vertex-weighted median of the parts' s before any merge; fixed, so
 /// that a merge does not make the next one look cheap). s = [`rigid_variance`]. Pairs scoring below
 /// `params.distinct_ratio` are merged. Returns compact labels and the curve of decisions.
-pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &Params) -> (Vec<u32>, Vec<CurvePoint>) {
-    let params = &params.for_radius(pop.mean_squared_radius());
+pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &impl InFit) -> (Vec<u32>, Vec<CurvePoint>) {
+    let params = &params.in_fit(|| pop.mean_squared_radius());
     let mut labels = compact(labels);
     let (_, members) = adjacency(&labels, pop.graph_faces(), 0);
     let mut err: Vec<f64> = members.iter().map(|m| rigid_variance(pop, m, params)).collect();
@@ -190,7 +191,7 @@ pub fn merge_indistinct(pop: &Population, labels: &[u32], params: &Params) -> (V
             curve.push(CurvePoint { parts: n_parts, score: f64::INFINITY, variance, merged: false });
             break;
         };
-        let merged = score < params.distinct_ratio;
+        let merged = score < params.distinct.distinct_ratio;
         curve.push(CurvePoint { parts: n_parts, score, variance, merged });
         if !merged {
             break;
@@ -268,7 +269,11 @@ mod tests {
         m.labels = labels;
         m.latent = vec![[0.0; 3]; m.n_vertices];
         let forearm_size = forearm_ids.len() - ring.len() - 20;
-        assert_eq!(dissolve_flesh(&mut m, pop, Params::default().blend_ratio), 1, "only the slice is flesh");
+        assert_eq!(
+            dissolve_flesh(&mut m, pop, crate::mfa::Params::default().distinct.blend_ratio),
+            1,
+            "only the slice is flesh"
+        );
         assert_eq!(m.n_parts(), 4);
         assert!(m.labels.iter().filter(|&&l| l == forearm).count() >= forearm_size);
     }
@@ -328,11 +333,14 @@ mod tests {
                 labels[j] = 3;
             }
         }
-        let (merged, curve) = merge_indistinct(pop, &labels, &Params::default());
+        let (merged, curve) = merge_indistinct(pop, &labels, &crate::mfa::Params::default());
         let ari = crate::metrics::adjusted_rand_index(&merged, &g.part_of_vertex);
         assert!(ari > 0.999, "ari {ari}, curve {curve:?}");
         assert_eq!(curve.len(), 2, "{curve:?}");
         assert_eq!((curve[0].parts, curve[1].parts), (4, 3));
-        assert!(curve[0].score < 1.0 && curve[1].score > Params::default().distinct_ratio, "{curve:?}");
+        assert!(
+            curve[0].score < 1.0 && curve[1].score > crate::mfa::Params::default().distinct.distinct_ratio,
+            "{curve:?}"
+        );
     }
 }

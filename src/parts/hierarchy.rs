@@ -13,8 +13,8 @@
 //!   ... components (err is the mass-weighted mean variance of the sub-components, as the paper's plain average
 //!   is fragile: docs/method.md, item 8), then the final AECM from the refined labels; with
 //!   [`PartRule::Distinct`] the part rule's rounds after it ([`super::distinct`]). With
-//!   `Params::subset_vertices` (multi-resolution, [`super::multires`]) the coarse and refinement runs are on a
-//!   well-spread subset of the vertices.
+//!   `Algorithm1Params::subset_vertices` (multi-resolution, [`super::multires`]) the coarse and refinement runs
+//!   are on a well-spread subset of the vertices.
 //!
 //! `rounds` holds the steps after a final-stage run that both rules take (motion labels, connected parts,
 //! flesh dissolved, the exact count asked for, [`super::part_count`]); `result` what a fit reports.
@@ -26,7 +26,7 @@ use crate::mfa::aecm::{Fit, StepInfo};
 use crate::mfa::component::Component;
 use crate::mfa::data::Data;
 use crate::mfa::estep::Blocked;
-use crate::mfa::params::{Params, PartRule};
+use crate::mfa::params::{FitStart, Params, PartRule, RunParams};
 use crate::mfa::result::Model;
 
 mod algorithm1;
@@ -88,7 +88,11 @@ struct Fine {
 
 pub struct Pipeline {
     pop: Population,
-    params: Params,
+    /// The fit's parameters, with the variance floor scaled for the whole population (also while the runs are on
+    /// a subset or a coarse mesh of it).
+    params: RunParams,
+    /// The partition the fit started from ([`FitStart`]), when one was given.
+    start_labels: Option<Vec<u32>>,
     state: State,
     coarse: Option<Model>,
     coarse_labels: Vec<u32>,
@@ -137,17 +141,26 @@ impl Pipeline {
     /// The pipeline a step-by-step lesson shows: the paper's Algorithm 1 (coarse AECM, refinement of each part,
     /// final AECM) with the scale-free part rule ([`PartRule::Distinct`]), whatever part rule `params` name: the
     /// default merge tree starts from its own partition and has no coarse or refinement stage to step through.
-    pub fn for_teaching(pop: &Population, params: &Params) -> Result<Pipeline> {
-        Pipeline::new(pop, &Params { part_rule: PartRule::Distinct, ..params.clone() })
+    /// A `start` is refused as with Algorithm 1 (it starts from its own k-means++ draw).
+    pub fn for_teaching(pop: &Population, params: &Params, start: &FitStart) -> Result<Pipeline> {
+        Pipeline::starting(pop, &Params { part_rule: PartRule::Distinct, ..params.clone() }, start)
     }
 
-    /// Validates the parameters and the data and runs the coarse initialisation (k-means++).
+    /// Validates the parameters and the data and makes the rule's start (the merge tree's cut, or Algorithm 1's
+    /// k-means++ draw).
     pub fn new(pop: &Population, params: &Params) -> Result<Pipeline> {
+        Pipeline::starting(pop, params, &FitStart::default())
+    }
+
+    /// [`Pipeline::new`] from `start` when it gives a partition ([`FitStart`]): it is checked against `pop` and
+    /// `params`, and the count is exactly its number of parts unless `target_parts` says otherwise.
+    pub fn starting(pop: &Population, params: &Params, start: &FitStart) -> Result<Pipeline> {
         params.validate()?;
         // the variance floor follows the whole population's size, in every run of the fit (subsets included)
         let mut params = params.for_radius(pop.mean_squared_radius());
-        if let Some(start) = &params.start_labels {
-            params.target_parts = Some(params.target_parts.unwrap_or(check_start_labels(start, pop, &params)?));
+        if let Some(start) = &start.labels {
+            let n = check_start_labels(start, pop, &params)?;
+            params = params.map(|p| p.target_parts = Some(p.target_parts.unwrap_or(n)));
         }
         let params = &params;
         if let Some(n) = params.target_parts {
@@ -158,7 +171,7 @@ impl Pipeline {
             crate::trace_line!("refinement off: Algorithm 1's coarse stage alone (the merge tree always refines)");
         }
         match rule_of(params) {
-            Rule::MergeTree => Pipeline::from_tree(pop, params, t0),
+            Rule::MergeTree => Pipeline::from_tree(pop, params, start.labels.as_deref(), t0),
             Rule::Algorithm1 => Pipeline::from_algorithm1(pop, params, t0),
         }
     }
@@ -175,7 +188,7 @@ impl Pipeline {
     }
 
     pub fn params(&self) -> &Params {
-        &self.params
+        self.params.params()
     }
 
     /// Which run the pipeline is in: Algorithm 1's coarse or refinement runs, or which of the final stage's runs.
@@ -380,7 +393,7 @@ impl Pipeline {
 
     /// The part rule left the loose first run's parts as they were: the AECM goes on from that run's components
     /// at the fit's own tolerance (a new stage "final"; the run stopped at `refine_tol` was a few iterations short
-    /// of `tol`, and a start again from its labels took 17 iterations on horse-poses, 39 on lion-poses). From
+    /// of `tol`, and a start again from its labels took many more: docs/decisions.md, "Figures behind src/parts"). From
     /// `labels` as [`Pipeline::refit`] when the motion labels have another number of parts than the run had
     /// components.
     fn go_on(&mut self, labels: &[u32]) -> Result<State> {
@@ -491,7 +504,7 @@ impl Pipeline {
 
     /// The parameters of a run after the first: the fit's own, but on a coarse mesh, where every run only decides,
     /// at the loose tolerance (the last run, on all vertices, is at `tol`).
-    fn run_params(&self) -> Params {
+    fn run_params(&self) -> RunParams {
         match self.fine {
             Some(_) => self.params.at_loose_tolerance(),
             None => self.params.clone(),
@@ -546,7 +559,8 @@ impl Pipeline {
             part_rounds: self.part_rounds.clone(),
             decided_labels: self.decided_labels.as_deref().map(|d| self.everywhere(d)),
             parts_asked: self.params.target_parts,
-            count_unjudged: !self.params.refine || self.params.start_labels.is_some(),
+            count_unjudged: !self.params.refine || self.start_labels.is_some(),
+            start_labels: self.start_labels.clone(),
             rule: match self.rule() {
                 Rule::MergeTree => {
                     RuleReport::MergeTree { start_parts: self.start_parts, merge_tree, tree_count: self.tree_count }
@@ -570,4 +584,14 @@ impl Pipeline {
 /// Runs a whole fit: every run the rule asks for, to the end (`observer` as in [`Pipeline::run`]).
 pub fn fit(pop: &Population, params: &Params, observer: &mut dyn FnMut(&Progress) -> bool) -> Result<FitResult> {
     Pipeline::new(pop, params)?.run(observer)
+}
+
+/// [`fit`] from `start` ([`Pipeline::starting`]).
+pub fn fit_from(
+    pop: &Population,
+    params: &Params,
+    start: &FitStart,
+    observer: &mut dyn FnMut(&Progress) -> bool,
+) -> Result<FitResult> {
+    Pipeline::starting(pop, params, start)?.run(observer)
 }

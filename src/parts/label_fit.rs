@@ -20,7 +20,7 @@
 use crate::mfa::cm::{self, Member, Members};
 use crate::mfa::data::Data;
 use crate::mfa::estep::LANES;
-use crate::mfa::{Model, Params};
+use crate::mfa::{InFit, Model};
 
 /// The responsibilities of the labels (γ = 1 for each vertex's own part) with y under `comps`, written into
 /// `members` (emptied first, its lists' capacity kept), and L_c of the labels under `comps` from the same
@@ -64,7 +64,7 @@ fn label_members(data: &Data, labels: &[u32], comps: &[crate::mfa::Component], m
 /// Refits `model.parts` to `model.labels` (see the module documentation) and recomputes the latent shape;
 /// the labels are kept. Returns the classification log-likelihood after every iteration (never decreasing).
 /// Every part must have at least one vertex.
-pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64> {
+pub fn fit_to_labels(model: &mut Model, data: &Data, params: &impl InFit) -> Vec<f64> {
     let m = model.n_parts();
     if m == 0 || model.labels.len() != data.n_vertices || model.labels.iter().any(|&l| l as usize >= m) {
         return Vec::new();
@@ -77,7 +77,8 @@ pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64
     // also gives the next cycle 1 its members
     let mut members = Members::new();
     let mut prev = label_members(data, &labels, &comps, &mut members);
-    let floor = crate::mfa::aecm::floor_for(data, params);
+    let params = &crate::mfa::aecm::floor_for(data, params);
+    let floor = params.floor();
     for it in 0..params.max_iter {
         // With the labels fixed, cycle 1 reads only the members (γ = 1, in layout order) and the data: from the
         // second iteration on it writes the same π and b again, bit for bit (cycle 2 changes neither), and the
@@ -111,11 +112,13 @@ pub fn fit_to_labels(model: &mut Model, data: &Data, params: &Params) -> Vec<f64
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mfa::Params;
     use crate::synth::{generate, Preset, Spec};
 
     fn fitted(spec: &Spec) -> (crate::synth::Generated, Model) {
         let g = generate(spec).unwrap();
-        let params = Params { refine: false, parts: g.n_parts(), ..Params::default() };
+        let mut params = Params { refine: false, ..Params::default() };
+        params.algorithm1.parts = g.n_parts();
         let r = super::super::hierarchy::fit(&g.population, &params, &mut |_| true).unwrap();
         (g, r.model)
     }
@@ -152,7 +155,7 @@ mod tests {
         let once: Vec<_> = comps.iter().map(|c| (c.weight, c.translations.clone())).collect();
         label_members(&data, &model.labels, &comps, &mut members);
         let p = Params::default();
-        cm::cycle2(&data, &members, &mut comps, p.lambda_rule, p.floor(), p.px_em);
+        cm::cycle2(&data, &members, &mut comps, p.lambda_rule, p.variance_floor, p.px_em);
         assert_eq!(comps.iter().map(|c| (c.weight, c.translations.clone())).collect::<Vec<_>>(), once);
         label_members(&data, &model.labels, &comps, &mut members);
         cm::cycle1(&data, &members, &mut comps);

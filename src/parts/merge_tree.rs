@@ -268,16 +268,14 @@ impl MergeTree {
         MergeTree { leaves, n_leaves, merges, typical, middle }
     }
 
-    /// What merging two pieces of one part typically costs: the mean rise of the tree's cheapest merges, from
-    /// the patches down to a quarter of them (on a mesh of a few tens of parts these join pieces of one part);
-    /// on a tree of fewer than 400 patches, down to [`PART_NODES`] nodes or half of the merges, whichever takes
-    /// more (the same count at 400). The same quantity as the scores, averaged over hundreds of merges, so a cut
-    /// against it moves little with the data (the patches' median variance, [`MergeTree::typical`], moved 1.9x
-    /// over the lion's poses dropped in turn; this 1.3x). Why not a quarter on every tree: a smaller tree's
-    /// patches are larger against its parts, and its third quarter of merges joins parts across their joints. On
-    /// skinned characters of 460-1 138 vertices (76-189 patches, 18 parts) that quarter lifted the mean to 4.5
-    /// times its median, the start kept 6-15 parts and the fit ended at 6-15 (adjusted Rand against the skeleton
-    /// 0.42-0.92; now 0.70-0.97, docs/part-count.md).
+    /// What merging two pieces of one part typically costs: the mean rise of the tree's cheapest merges, from the
+    /// patches down to a quarter of them (on a mesh of a few tens of parts these join pieces of one part); on a tree of
+    /// fewer than 400 patches, down to [`PART_NODES`] nodes or half of the merges, whichever takes more (the same count
+    /// at 400). The same quantity as the scores, averaged over hundreds of merges, so a cut against it moves little
+    /// with the data (less than the patches' median variance, [`MergeTree::typical`], with a pose dropped). Why not a
+    /// quarter on every tree: a smaller tree's patches are larger against its parts, and its third quarter of merges
+    /// joins parts across their joints, which lifts the mean far above its median and leaves the start, and the fit,
+    /// with too few parts (the figures of both: docs/decisions.md, "Figures behind src/parts").
     pub fn merge_yardstick(&self) -> f64 {
         let k = yardstick_merges(self.merges.len());
         if k == 0 {
@@ -292,10 +290,9 @@ impl MergeTree {
     }
 
     /// The part rule's yardstick on the tree of a fit's parts: [`MergeTree::middle`]. The median
-    /// ([`MergeTree::typical`]) falls where the parts' variances climb steeply, so a small change of the data
-    /// moves it far: on horse-gallop with each pose dropped in turn it moved 1.09-1.67e-6 and the count split
-    /// into two families (23-24 and 26-28 parts). The mean of the logs over the middle 40 % of vertices averages
-    /// across that climb: 25-28 parts, and the lion's 20-23 became 20-22 (docs/decisions.md). Its level is the
+    /// ([`MergeTree::typical`]) falls where the parts' variances climb steeply, so a small change of the data moves it
+    /// far, and the count with it. The mean of the logs over the middle 40 % of vertices averages across that climb
+    /// (the counts with a pose dropped, both ways: docs/decisions.md, "Figures behind src/parts"). Its level is the
     /// median's where the logs are spread evenly around it.
     pub fn middle_typical(&self) -> f64 {
         self.middle

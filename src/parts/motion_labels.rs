@@ -66,7 +66,7 @@ const BOUND_SHAPES: usize = 8;
 /// Relabels every vertex by [`motion_residual`] among its own part and the parts adjacent to it on the mesh;
 /// returns how many vertices moved. A neighbour whose residual on a few evenly spaced shapes alone
 /// ([`motion_residual_bound`]) already reaches the best so far is passed over: the same labels, with most
-/// neighbours judged on those shapes only (87 % of them on the subdivided horse-gallop's last labelling).
+/// neighbours judged on those shapes only (most of them: docs/decisions.md, "Figures behind src/parts").
 pub fn label_by_motion(model: &mut Model, pop: &Population) -> usize {
     let m = model.n_parts();
     if m < 2 {

@@ -15,7 +15,7 @@ use crate::mfa::aecm::Fit;
 use crate::mfa::component::Component;
 use crate::mfa::data::{to_frame, Data};
 use crate::mfa::estep::e_step_pruned;
-use crate::mfa::params::Params;
+use crate::mfa::params::InFit;
 use crate::mfa::result::Model;
 
 /// Vertex ids (ascending) of about `target` well-spread vertices (see the module doc); all vertices when the
@@ -91,7 +91,7 @@ pub fn labels_everywhere(full: &Data, comps: &[Component]) -> Vec<u32> {
 /// A stage's model of a subset carried to every vertex: its components (unit-box translations) with the
 /// E-step on the whole population (labels, responsibilities, latent shape of all vertices); the trace,
 /// iterations and convergence stay the subset run's.
-pub fn model_everywhere(pop: &Population, sub: &Model, params: &Params) -> Model {
+pub fn model_everywhere(pop: &Population, sub: &Model, params: &impl InFit) -> Model {
     let full = Data::from_population(pop);
     let comps = to_frame(&full, &sub.parts);
     let mut model = Fit::from_components(full, comps, params).model();
@@ -147,7 +147,12 @@ mod tests {
                     .collect()
             })
             .collect();
-        let pop = Population::from_unit_shapes(vec!["a".into(), "b".into()], vec![[0, 1, 2]], shapes).unwrap();
+        let pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces: vec![[0, 1, 2]],
+            shapes,
+        })
+        .unwrap();
         let s = spread_subset(&pop, 1000);
         assert!(s.len() >= 900 && s.len() <= 1000, "{}", s.len());
         assert!(s.windows(2).all(|w| w[0] < w[1]));

@@ -18,7 +18,7 @@
 //! the vertices involved. Every part's component (and motion) is fitted to its own vertices in closed form
 //! ([`crate::mfa::init::component_from_points`], the start the AECM uses). Splits were once chosen by the
 //! log-likelihood gain too, with the 2-means cuts: the drop of the pair-blend residual and the AECM's cuts rig
-//! horse-gallop at 30 bones at E_RMS 0.522 instead of 0.613 (docs/decisions.md, "The 30-bone rig's splits").
+//! better at many bones (docs/decisions.md, "The 30-bone rig's splits").
 //! Every step keeps every part one connected piece: a merge joins two adjacent pieces, a split leaves two
 //! connected halves.
 //!
@@ -35,7 +35,7 @@ use crate::mfa::aecm::Fit;
 use crate::mfa::component::Component;
 use crate::mfa::data::Data;
 use crate::mfa::init::{component_from_points, kmeans};
-use crate::mfa::params::Params;
+use crate::mfa::params::{InFit, RunParams};
 use std::collections::{BTreeSet, HashMap};
 
 /// Checks that `n` parts of at least `min_part_vertices` vertices can exist on `n_vertices` vertices.
@@ -77,7 +77,7 @@ struct Cut {
 struct Counter<'a> {
     pop: &'a Population,
     data: &'a Data,
-    params: &'a Params,
+    params: &'a RunParams,
     /// The part count asked for (for the error messages).
     target: usize,
     /// Vertices of every part; None once merged away.
@@ -319,9 +319,9 @@ pub fn labels_with_count(
     pop: &Population,
     labels: &[u32],
     n: usize,
-    params: &Params,
+    params: &impl InFit,
 ) -> Result<(Vec<u32>, CountChange)> {
-    let params = &params.for_radius(pop.mean_squared_radius());
+    let params = &params.in_fit(|| pop.mean_squared_radius());
     check_target(n, pop.n_vertices(), params.min_part_vertices)?;
     if labels.len() != pop.n_vertices() {
         return Err(Error::Request(format!("{} labels for {} vertices", labels.len(), pop.n_vertices())));
@@ -366,7 +366,7 @@ pub fn labels_with_count(
 
 /// Labels 0 / 1 of a 2-component AECM on `data` (a part's vertices) started from `start`, as Algorithm 1's
 /// refinement fits a split sub-part; None when the fit fails or leaves one half empty.
-fn refine_cut(data: &Data, start: &[u32], params: &Params) -> Option<Vec<u32>> {
+fn refine_cut(data: &Data, start: &[u32], params: &RunParams) -> Option<Vec<u32>> {
     let mut fit = Fit::from_labels(data.clone(), start, params).ok()?;
     fit.run(&mut |_| true);
     let labels = fit.labels();
@@ -385,7 +385,7 @@ mod tests {
         let (upper, forearm) =
             (part_index(Preset::Arm, "upper_arm").unwrap() as u32, part_index(Preset::Arm, "forearm").unwrap() as u32);
         let merged: Vec<u32> = g.part_of_vertex.iter().map(|&l| if l == forearm { upper } else { l }).collect();
-        let (labels, change) = labels_with_count(&g.population, &merged, 3, &Params::default()).unwrap();
+        let (labels, change) = labels_with_count(&g.population, &merged, 3, &crate::mfa::Params::default()).unwrap();
         assert_eq!((change.from, change.splits, change.merges), (2, 1, 0));
         let ari = crate::metrics::adjusted_rand_index(&labels, &g.part_of_vertex);
         assert!(ari > 0.95, "ari {ari}");
@@ -402,7 +402,7 @@ mod tests {
         let merged: Vec<u32> =
             g.part_of_vertex.iter().map(|&l| pairs.iter().find(|p| p.1 == l).map_or(l, |p| p.0)).collect();
         let n = g.n_parts();
-        let (labels, change) = labels_with_count(&g.population, &merged, n, &Params::default()).unwrap();
+        let (labels, change) = labels_with_count(&g.population, &merged, n, &crate::mfa::Params::default()).unwrap();
         assert_eq!((change.splits, change.merges), (2, 0));
         // each merged leg cut in two: most of its upper part's vertices in one part, most of its lower's in another
         let most = |t: u32| {

@@ -303,8 +303,12 @@ mod tests {
         let shape = |s: f64| -> Vec<[f64; 3]> {
             (0..150).map(|j| [(j / 3) as f64 / 50.0, (j % 3) as f64 * 0.01 * s, 0.0]).collect()
         };
-        let pop =
-            Population::from_unit_shapes(vec!["a".into(), "b".into()], faces, vec![shape(1.0), shape(2.0)]).unwrap();
+        let pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces,
+            shapes: vec![shape(1.0), shape(2.0)],
+        })
+        .unwrap();
         let (owner, seeds) = seeded_patches(&pop, 10, false);
         assert_eq!(seeds.len(), 50);
         assert!(owner.iter().all(|&o| (o as usize) < seeds.len()));
@@ -325,9 +329,12 @@ mod tests {
         let shape = |s: f64| -> Vec<[f64; 3]> {
             (0..nv).map(|j| [j as f64 / nv as f64, (j % 2) as f64 * 0.1 * s, 0.0]).collect()
         };
-        let pop =
-            Population::from_unit_shapes(vec!["a".into(), "b".into()], faces.clone(), vec![shape(1.0), shape(2.0)])
-                .unwrap();
+        let pop = Population::new(crate::mesh::Sources::UnitShapes {
+            names: vec!["a".into(), "b".into()],
+            faces: faces.clone(),
+            shapes: vec![shape(1.0), shape(2.0)],
+        })
+        .unwrap();
         let mut adj = vec![Vec::new(); nv];
         for f in &faces {
             for s in 0..3 {

@@ -105,7 +105,7 @@ impl Variant {
             .collect();
         // names that keep this order under the natural sort
         let names = (0..shapes.len()).map(|k| format!("pose{k:04}")).collect();
-        Population::from_unit_shapes(names, pop.faces.to_vec(), shapes)
+        Population::new(crate::mesh::Sources::UnitShapes { names, faces: pop.faces.to_vec(), shapes })
     }
 }
 
@@ -155,10 +155,12 @@ pub fn agreement(runs: &[Run]) -> Agreement {
     }
 }
 
-/// Fits every variant with `params` (the seed set per variant) and returns the runs.
+/// Fits every variant with `params` (the seed set per variant) from `start` (every variant has the same
+/// vertices) and returns the runs.
 pub fn run_variants(
     pop: &Population,
     params: &crate::mfa::Params,
+    start: &crate::mfa::FitStart,
     variants: &[Variant],
     mut each: impl FnMut(&Run),
 ) -> crate::Result<Vec<Run>> {
@@ -167,7 +169,7 @@ pub fn run_variants(
         let p = v.apply(pop)?;
         let params = crate::mfa::Params { seed: v.seed(), ..params.clone() };
         let t0 = crate::clock::now_ms();
-        let fit = super::hierarchy::fit(&p, &params, &mut |_| true)?;
+        let fit = super::hierarchy::fit_from(&p, &params, start, &mut |_| true)?;
         let seconds = (crate::clock::now_ms() - t0) / 1000.0;
         let run = Run {
             variant: v.name(),
@@ -233,8 +235,9 @@ mod tests {
         let ratio = original(&moved) / original(pop) / (7.3f64 * 7.3);
         assert!((ratio - 1.0).abs() < 1e-5, "{ratio}");
         // scaled once only: parameters scaled already keep their scale
+        use crate::mfa::InFit;
         let once = crate::mfa::Params::default().for_radius(0.18);
-        assert!((once.for_radius(0.045).floor() - 2e-7).abs() < 1e-18, "{}", once.floor());
+        assert!((once.in_fit(|| 0.045).floor() - 2e-7).abs() < 1e-18, "{}", once.floor());
     }
 
     #[test]

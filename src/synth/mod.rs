@@ -40,7 +40,7 @@ pub enum Preset {
     Arm,
     /// 8 parts `seg1` (tail tip) .. `seg8` (head) along one tube; the root is `seg4`.
     Snake,
-    /// A bean-shaped closed surface (a swept ellipse with round ends, about 1.5 : 1) bent along its length
+    /// A bean-shaped closed surface (a swept ellipse, its ends rounded, about 1.5 : 1) bent along its length
     /// in a random plane and twisted about its axis, both smoothly (no rigid parts). Ground truth: one part
     /// `blob`, its rotation the best rigid (Procrustes) fit of each pose to the rest shape.
     Blob,
@@ -339,7 +339,11 @@ pub fn generate(spec: &Spec) -> Result<Generated> {
         .map(|(ts, rs)| ts.iter().zip(rs).map(|(&t, r)| scale(sub(add(mat_vec(r, lo), t), lo), 1.0 / side)).collect())
         .collect();
 
-    let population = Population::from_unit_shapes(shape_names(spec.poses), mesh.faces, shapes)?;
+    let population = Population::new(crate::mesh::Sources::UnitShapes {
+        names: shape_names(spec.poses),
+        faces: mesh.faces,
+        shapes,
+    })?;
     debug_assert_eq!(population.normalization, crate::mesh::Normalization::IDENTITY);
     Ok(Generated {
         spec: spec.clone(),
@@ -362,7 +366,7 @@ fn bounds<'a>(sets: impl Iterator<Item = &'a Vec<Vec3>>) -> (Vec3, Vec3) {
 /// The population as OBJ files: (`pose01.obj`, text), ... in order. Coordinates are in original units,
 /// i.e. `population.normalization.to_original` of the unit-box shapes; for a generated population that
 /// normalisation is the identity, so they are exactly the unit-box coordinates, and loading the files with
-/// [`Population::from_files`] gives back the same numbers bit for bit.
+/// [`Population::read`] of them gives back the same numbers bit for bit.
 pub fn obj_files(generated: &Generated) -> Vec<(String, String)> {
     let pop = &generated.population;
     let spec = &generated.spec;

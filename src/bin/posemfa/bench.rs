@@ -13,6 +13,7 @@ pub struct Args {
 
 pub fn run(o: Args) -> Result<(), String> {
     let t_load = posemfa::clock::now_ms();
+    let start = o.fit.start()?;
     let (params, pop, truth) = o.fit.load()?;
     let load_ms = posemfa::clock::now_ms() - t_load;
     // the kernels right after each fit, so that each fraction compares two measurements of one moment
@@ -22,7 +23,7 @@ pub fn run(o: Args) -> Result<(), String> {
     let mut result = None;
     for _ in 0..o.run.repeat() {
         let t0 = posemfa::clock::now_ms();
-        let r = run_fit(&params, &pop, o.run.quiet)?;
+        let r = run_fit(&params, &start, &pop, o.run.quiet)?;
         totals.push(posemfa::clock::now_ms() - t0);
         limits.push(posemfa::mfa::limit::limit_report(&data, &r.model.parts, &r.stats, 200.0));
         result = Some(r);

@@ -21,15 +21,17 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
+    let start = a.fit.start()?;
     let (params, pop, _truth) = a.fit.load()?;
     let mut g = a.rig.options(&pop)?;
     if !a.rig.weights_given() {
         g.weights = Weights::Fitted;
     }
     let opts = g.rig_options();
-    let folds =
-        crossval(&pop, &params, &opts, &mut |i, n| eprintln!("fold {}/{n}: leaving out {}", i + 1, pop.names[i]))
-            .map_err(|e| e.to_string())?;
+    let folds = crossval(&pop, &params, &start, &opts, &mut |i, n| {
+        eprintln!("fold {}/{n}: leaving out {}", i + 1, pop.names[i])
+    })
+    .map_err(|e| e.to_string())?;
     for f in &folds {
         out!(
             "{}: in sample {:.4}, held out {:.4}, ratio {:.3} ({} bones, fit {:.0} ms, solve {:.1} ms)",

@@ -46,12 +46,13 @@ pub fn run(o: Args) -> Result<(), String> {
             (saved, f.truth, load_ms)
         }
         None => {
+            let start = o.fit.start()?;
             let (params, pop, truth) = o.fit.load()?;
             let load_ms = posemfa::clock::now_ms() - t_load;
             let mut result = None;
             for _ in 0..o.run.repeat() {
                 let t0 = posemfa::clock::now_ms();
-                result = Some(run_fit(&params, &pop, o.run.quiet)?);
+                result = Some(run_fit(&params, &start, &pop, o.run.quiet)?);
                 totals.push(posemfa::clock::now_ms() - t0);
             }
             let result = result.ok_or("no fit ran")?;
@@ -109,7 +110,7 @@ pub fn run(o: Args) -> Result<(), String> {
             result.part_curve.len() - 1,
             result.part_curve[0].parts,
             last.score,
-            params.distinct_ratio
+            params.distinct.distinct_ratio
         );
     }
     for st in &result.stats {

@@ -35,14 +35,15 @@ pub fn run(a: Args) -> Result<(), String> {
     let mut timings = serde_json::Map::new();
     let t = std::time::Instant::now();
     // the poses, and with --model the fit too (without it the fit is made below, unless --glb gives the rig)
-    let (params, pop, mut saved, saved_rig) = match &a.fit.input.model {
+    let (params, pop, mut saved, saved_rig, start) = match &a.fit.input.model {
         Some(_) => {
             let f = a.fit.fitted_with_data("rig-report")?;
-            (f.params, f.pop, Some(f.result), f.saved_rig)
+            (f.params, f.pop, Some(f.result), f.saved_rig, posemfa::mfa::FitStart::default())
         }
         None => {
+            let start = a.fit.start()?;
             let (params, pop, _truth) = a.fit.load()?;
-            (params, pop, None, None)
+            (params, pop, None, None, start)
         }
     };
     timings.insert("read".into(), ms(t).into());
@@ -58,7 +59,7 @@ pub fn run(a: Args) -> Result<(), String> {
                 Some(result) => result,
                 None => {
                     let t = std::time::Instant::now();
-                    let result = crate::shared::run_fit(&params, &pop, true)?;
+                    let result = crate::shared::run_fit(&params, &start, &pop, true)?;
                     timings.insert("fit".into(), ms(t).into());
                     result
                 }

@@ -30,6 +30,7 @@ pub struct Args {
 }
 
 pub fn run(o: Args) -> Result<(), String> {
+    let start = o.fit.start()?;
     let (params, pop, generated) = o.fit.load()?;
     let truth: Option<Vec<u32>> = match &o.truth {
         Some(path) => {
@@ -53,7 +54,7 @@ pub fn run(o: Args) -> Result<(), String> {
         let t = score(&r.labels).map_or(String::new(), |a| format!("  ARI vs truth {a:.3}"));
         out!("  {:<15} {:>3} parts  RMSE {:.5}  {:>6.2} s{t}", r.variant, r.parts, r.rmse, r.seconds);
     };
-    let runs = run_variants(&pop, &params, &Variant::standard(o.seeds), show).map_err(|e| e.to_string())?;
+    let runs = run_variants(&pop, &params, &start, &Variant::standard(o.seeds), show).map_err(|e| e.to_string())?;
     let a = agreement(&runs);
     let line = |a: &posemfa::parts::robustness::Agreement| {
         format!(
@@ -73,7 +74,7 @@ pub fn run(o: Args) -> Result<(), String> {
             None
         } else {
             out!("each pose dropped in turn ({} runs, seed 0):", each_variants.len());
-            let runs = run_variants(&pop, &params, &each_variants, show).map_err(|e| e.to_string())?;
+            let runs = run_variants(&pop, &params, &start, &each_variants, show).map_err(|e| e.to_string())?;
             let e = agreement(&runs);
             out!("each pose dropped: {}", line(&e));
             Some((runs, e))

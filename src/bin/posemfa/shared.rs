@@ -6,7 +6,7 @@ use clap::ValueHint;
 use posemfa::export::gltf::{GltfOptions, Joints, Morphs, Weights};
 use posemfa::mesh::gltf::PoseSource;
 use posemfa::mesh::Population;
-use posemfa::mfa::{LambdaRule, Params, PartRule};
+use posemfa::mfa::{Algorithm1Params, DistinctParams, FitStart, LambdaRule, Params, PartRule, TreeParams};
 use posemfa::model_file::ModelFile;
 use posemfa::parts::hierarchy::{FitResult, Pipeline, Progress, Stage};
 
@@ -52,7 +52,7 @@ fn field<T>(v: &str, name: &str, get: impl Fn(&Params) -> T) -> Result<T, String
 }
 
 fn parts_value(v: &str) -> Result<usize, String> {
-    field(v, "parts", |p| p.parts)
+    field(v, "parts", |p| p.algorithm1.parts)
 }
 
 fn seed_value(v: &str) -> Result<u64, String> {
@@ -181,8 +181,9 @@ impl FitArgs {
     /// The fit these options ask for (see [`Fitted`]).
     pub fn fitted(&self, quiet: bool) -> Result<Fitted, String> {
         let Some(path) = &self.input.model else {
+            let start = self.start()?;
             let (params, pop, truth) = self.load()?;
-            let result = run_fit(&params, &pop, quiet)?;
+            let result = run_fit(&params, &start, &pop, quiet)?;
             return Ok(Fitted { params, pop, result, truth, stand_in: false, saved_summary: None, saved_rig: None });
         };
         let mut saved = read_model(path)?;
@@ -225,7 +226,7 @@ impl FitArgs {
 pub struct FitArgs {
     /// Algorithm 1's coarse parts (--part-rule distinct or threshold, --no-refine); the default merge tree
     /// ignores it
-    #[arg(long, value_name = "M", default_value_t = Params::default().parts, value_parser = parts_value)]
+    #[arg(long, value_name = "M", default_value_t = Params::default().algorithm1.parts, value_parser = parts_value)]
     parts: usize,
     /// Algorithm 1's k-means++ seed; the default merge tree draws nothing at random and ignores it
     #[arg(long, value_name = "S", default_value_t = Params::default().seed, value_parser = seed_value)]
@@ -253,17 +254,17 @@ pub struct FitArgs {
     #[arg(long, value_name = "RULE", value_parser = choice(PART_RULES))]
     part_rule: Option<PartRule>,
     /// Part rules tree and distinct: a joint must explain K times a typical part's variance to keep two parts
-    #[arg(long, value_name = "K", default_value_t = Params::default().distinct_ratio)]
+    #[arg(long, value_name = "K", default_value_t = Params::default().distinct.distinct_ratio)]
     pub distinct_ratio: f64,
     /// Part rules tree and distinct: a part moving as a fixed blend of two neighbours to within B is flesh
-    #[arg(long, value_name = "B", default_value_t = Params::default().blend_ratio)]
+    #[arg(long, value_name = "B", default_value_t = Params::default().distinct.blend_ratio)]
     blend_ratio: f64,
     /// The paper's part rule: stop splitting a part below this mean variance [default: 1e-5] (implies
     /// --part-rule threshold)
     #[arg(long, value_name = "E")]
     refine_threshold: Option<f64>,
     /// Algorithm 1: most sub-parts per coarse part
-    #[arg(long, value_name = "N", default_value_t = Params::default().max_subparts)]
+    #[arg(long, value_name = "N", default_value_t = Params::default().algorithm1.max_subparts)]
     max_subparts: usize,
     /// Tolerance of the coarse and refinement AECM runs
     #[arg(long, value_name = "T", default_value_t = Params::default().refine_tol)]
@@ -274,11 +275,11 @@ pub struct FitArgs {
     no_refine: bool,
     /// With at least 5N vertices: coarse and refinement stages on about N well-spread vertices, final AECM on
     /// all (0 = all)
-    #[arg(long, value_name = "N", default_value_t = Params::default().subset_vertices)]
+    #[arg(long, value_name = "N", default_value_t = Params::default().algorithm1.subset_vertices)]
     subset: usize,
     /// With at least 2N vertices: the part decisions on a coarse mesh of about N vertices, the last AECM on all
     /// (N x 20 / poses with fewer than 20 poses; 0 = decide on all vertices)
-    #[arg(long, value_name = "N", default_value_t = Params::default().coarse_vertices)]
+    #[arg(long, value_name = "N", default_value_t = Params::default().tree.coarse_vertices)]
     coarse: usize,
     /// Exact part count: auto (the part rule's own count) or N (split / merge until N)
     #[arg(long, value_name = "N", default_value = "auto", value_parser = bones)]
@@ -309,24 +310,24 @@ fn read_labels(path: &std::path::Path) -> Result<Vec<u32>, String> {
 impl FitArgs {
     /// The fit parameters asked for (the library's defaults for the rest).
     pub fn params(&self) -> Result<Params, String> {
+        let d = Params::default();
         let mut p = Params {
-            parts: self.parts,
             seed: self.seed,
             tol: self.tol,
             max_iter: self.max_iter,
             variance_floor: self.floor,
-            distinct_ratio: self.distinct_ratio,
-            blend_ratio: self.blend_ratio,
-            max_subparts: self.max_subparts,
             refine_tol: self.refine_tol,
-            subset_vertices: self.subset,
-            coarse_vertices: self.coarse,
             target_parts: self.bones.0,
-            ..Params::default()
+            tree: TreeParams { coarse_vertices: self.coarse },
+            distinct: DistinctParams { distinct_ratio: self.distinct_ratio, blend_ratio: self.blend_ratio },
+            algorithm1: Algorithm1Params {
+                parts: self.parts,
+                max_subparts: self.max_subparts,
+                subset_vertices: self.subset,
+                ..d.algorithm1.clone()
+            },
+            ..d
         };
-        if let Some(path) = &self.start_labels {
-            p.start_labels = Some(read_labels(path)?);
-        }
         if self.literal_eq18 {
             p.lambda_rule = LambdaRule::PaperEq18;
         }
@@ -343,10 +344,15 @@ impl FitArgs {
                     "--refine-threshold is the paper's part rule (threshold): leave out --part-rule {name}"
                 ));
             }
-            p.refine_threshold = e;
+            p.algorithm1.threshold.refine_threshold = e;
             p.part_rule = PartRule::Threshold;
         }
         Ok(p)
+    }
+
+    /// Where the fit starts: the partition of --start-labels, if given.
+    pub fn start(&self) -> Result<FitStart, String> {
+        Ok(FitStart { labels: self.start_labels.as_deref().map(read_labels).transpose()? })
     }
 
     /// The parameters (checked) and the population (and its truth when generated).
@@ -395,7 +401,9 @@ fn load_inputs(
             return Ok((g.population.clone(), Some(g)));
         }
     }
-    Ok((Population::from_paths_with(inputs, gltf).map_err(|e| e.to_string())?, None))
+    let options = posemfa::mesh::ReadOptions { gltf: gltf.clone() };
+    let pop = Population::read(posemfa::mesh::Sources::paths(inputs), &options).map_err(|e| e[0].to_string())?;
+    Ok((pop, None))
 }
 
 // ---------------------------------------------------------------- fit output (fit, bench)
@@ -431,9 +439,9 @@ fn stage_name(s: &Stage) -> String {
     }
 }
 
-/// Fits `pop` with `params`; with `quiet` false, each stage's name goes to stderr as it starts.
-pub fn run_fit(params: &Params, pop: &Population, quiet: bool) -> Result<FitResult, String> {
-    let mut pipe = Pipeline::new(pop, params).map_err(|e| e.to_string())?;
+/// Fits `pop` with `params` from `start`; with `quiet` false, each stage's name goes to stderr as it starts.
+pub fn run_fit(params: &Params, start: &FitStart, pop: &Population, quiet: bool) -> Result<FitResult, String> {
+    let mut pipe = Pipeline::starting(pop, params, start).map_err(|e| e.to_string())?;
     let mut last_stage = String::new();
     let mut observer = |p: &Progress| {
         let name = stage_name(&p.stage);

@@ -6,12 +6,10 @@
 //! ([`Pipeline::refine_next`], [`Pipeline::algorithm1_next`]).
 //!
 //! What decides the count besides the part rule's own numbers (listed in `tree_rule`'s module documentation,
-//! which the scale-free rule [`PartRule::Distinct`] shares): the coarse parts m (`Params::parts`, 11), the seed
-//! of the k-means++ draw (`Params::seed`, 0) and its restarts (`Params::restarts`, 4), the refinement's stops
-//! (`Params::max_subparts` 6, `Params::refine_min_gain` 0.1, `Params::refine_max_iter` 60,
-//! `Params::refine_tol` 1e-2), the paper's threshold ([`PartRule::Threshold`]: `Params::refine_threshold` 1e-5,
-//! `Params::merge_ratio` 0.25), and multi-resolution (`Params::subset_vertices` 2 000, from [`SUBSET_FACTOR`]
-//! times as many vertices).
+//! which the scale-free rule [`PartRule::Distinct`] shares): its own parameters, in
+//! [`crate::mfa::Algorithm1Params`] with their defaults (the coarse parts m, the refinement's stops, the paper's
+//! threshold, multi-resolution's subset, used from [`SUBSET_FACTOR`] times as many vertices), and the seed and
+//! restarts of the k-means++ draw ([`Params`]).
 
 use super::rounds::Tail;
 use super::{lay_out, FinalRun, Pipeline, StageStats, State};
@@ -20,16 +18,15 @@ use crate::mesh::Population;
 use crate::mfa::aecm::Fit;
 use crate::mfa::data::Data;
 use crate::mfa::estep::Blocked;
-use crate::mfa::params::{Params, PartRule};
+use crate::mfa::params::{Params, PartRule, RunParams};
 use crate::mfa::result::Model;
 use crate::parts::labels::compact;
 
-/// Multi-resolution runs only on populations with at least this many times `subset_vertices` vertices (10 000
-/// at the default 2 000). A subset of more than a fifth of the mesh saves little and costs accuracy: on
-/// horse-gallop (8 431 vertices) a 2 000-vertex subset saved a quarter of the fit's time but gave 20 parts and
-/// RMSE 0.00450 against 21 and 0.00395 without it, and on the 3 000-vertex quadruped example a subset lost a tail
-/// piece on some seeds (`examples/speed_accuracy.rs`). Without a subset the fit does not depend on the frame the
-/// file is written in (the subset's grid is axis-aligned; every other step uses distances only).
+/// Multi-resolution runs only on populations with at least this many times `subset_vertices` vertices (10 000 at the
+/// default 2 000). A subset of more than a fifth of the mesh saves little and costs accuracy (fewer parts, a larger
+/// RMSE, a small part lost on some seeds: docs/decisions.md, "Figures behind src/parts", `examples/speed_accuracy.rs`).
+/// Without a subset the fit does not depend on the frame the file is written in (the subset's grid is axis-aligned;
+/// every other step uses distances only).
 pub const SUBSET_FACTOR: usize = 5;
 
 pub(super) struct Refinement {
@@ -128,22 +125,24 @@ fn residual_ss(fit: &Fit, vertices: &[usize]) -> f64 {
 impl Pipeline {
     /// Algorithm 1's start: the coarse AECM from k-means++ on all vertices, or with multi-resolution on a
     /// well-spread subset of them ([`SUBSET_FACTOR`]).
-    pub(super) fn from_algorithm1(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
+    pub(super) fn from_algorithm1(pop: &Population, params: &RunParams, t0: f64) -> Result<Pipeline> {
         // the coarse and refinement runs stop at a loose tolerance and only pass labels on: they run plain AECM
         // (SQUAREM would move where they stop); the final run is accelerated
         let coarse = if params.refine {
-            Params { tol: params.refine_tol, accelerate: false, ..params.clone() }
+            params.map(|p| {
+                p.tol = p.refine_tol;
+                p.accelerate = false;
+            })
         } else {
             params.clone()
         };
-        let subset =
-            (params.refine && params.subset_vertices > 0 && pop.n_vertices() >= SUBSET_FACTOR * params.subset_vertices)
-                .then(|| crate::parts::multires::spread_subset(pop, params.subset_vertices));
+        let a = &params.algorithm1;
+        let subset = (params.refine && a.subset_vertices > 0 && pop.n_vertices() >= SUBSET_FACTOR * a.subset_vertices)
+            .then(|| crate::parts::multires::spread_subset(pop, a.subset_vertices));
         let data = match &subset {
             Some(s) => {
                 // the final stage runs on every vertex: the budget is checked for all of them first
-                let most =
-                    crate::memory::max_components(params.parts, params.refine, params.max_subparts, pop.n_vertices());
+                let most = crate::memory::max_components(a.parts, params.refine, a.max_subparts, pop.n_vertices());
                 crate::memory::check(pop.n_vertices(), pop.n_shapes(), most, crate::memory::budget_bytes()?)?;
                 Data::from_population_subset(pop, s)
             }
@@ -153,6 +152,7 @@ impl Pipeline {
         Ok(Pipeline {
             pop: pop.clone(),
             params: params.clone(),
+            start_labels: None,
             state: State::Coarse(fit),
             coarse: None,
             coarse_labels: Vec::new(),
@@ -179,7 +179,7 @@ impl Pipeline {
         })
     }
 
-    pub(super) fn sub_params(&self) -> Params {
+    pub(super) fn sub_params(&self) -> RunParams {
         self.params.for_refinement()
     }
 
@@ -242,23 +242,23 @@ impl Pipeline {
         }
         let improved = match &r.best {
             None => true,
-            Some(b) => !died && err < (1.0 - self.params.refine_min_gain) * b.err,
+            Some(b) => !died && err < (1.0 - self.params.algorithm1.refine_min_gain) * b.err,
         };
         let n_members = r.members[r.part].len();
-        let room = r.sub_parts < self.params.max_subparts
+        let room = r.sub_parts < self.params.algorithm1.max_subparts
             && n_members >= (r.sub_parts + 1) * 2 * self.params.min_part_vertices;
         let best_parts = improved.then(|| (done.labels(), worst_component(&done)));
         // the trial's data and layout serve the next trial on this part
         r.laid = Some(done.into_laid_out());
         if let Some((raw, worst)) = best_parts {
             let local = compact(&raw);
-            let ratio = self.params.distinct_ratio;
+            let ratio = self.params.distinct.distinct_ratio;
             if distinct && r.kept.as_ref().is_none_or(|k| err * ratio <= k.0 || split_gain >= ratio) {
                 r.kept = Some((err, local.clone()));
             }
             r.best = Some(Best { err, local, raw, worst });
             r.retried = false;
-            if (distinct || err >= self.params.refine_threshold) && room {
+            if (distinct || err >= self.params.algorithm1.threshold.refine_threshold) && room {
                 let labels = self.split(&r, SplitRule::Positions);
                 r.sub_parts += 1;
                 r.fit = self.sub_fit(&mut r, &labels)?;
@@ -377,7 +377,7 @@ pub(super) fn placeholder_fit() -> Fit {
 /// would not have been split had they started in one coarse part). Merges the pair with the smallest joint err first,
 /// until no pair qualifies. Keeps over-segmentation (a rigid piece cut in two by an unlucky coarse start or
 /// split) out of the final stage. Labels are renumbered 0..
-pub fn merge_rigid_neighbours(pop: &Population, labels: &[u32], params: &Params) -> Vec<u32> {
+pub fn merge_rigid_neighbours(pop: &Population, labels: &[u32], params: &RunParams) -> Vec<u32> {
     let mut labels = compact(labels);
     let err_of = |members: &[usize]| crate::parts::distinct::rigid_variance(pop, members, params);
     let mut cache: std::collections::HashMap<(u32, u32), f64> = std::collections::HashMap::new();
@@ -404,7 +404,8 @@ pub fn merge_rigid_neighbours(pop: &Population, labels: &[u32], params: &Params)
                 union.extend_from_slice(&members[b as usize]);
                 err_of(&union)
             });
-            if err < params.merge_ratio * params.refine_threshold && best.is_none_or(|x| err < x.1) {
+            let t = &params.algorithm1.threshold;
+            if err < t.merge_ratio * t.refine_threshold && best.is_none_or(|x| err < x.1) {
                 best = Some((key, err));
             }
         }

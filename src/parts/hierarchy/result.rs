@@ -129,11 +129,13 @@ pub struct FitResult {
     /// exact (what auto would have kept), for the diagnosis ([`crate::parts::diagnosis::diagnose_fit`]).
     pub decided_labels: Option<Vec<u32>>,
     /// The part count is the user's own, with no rule behind it (`refine` off: Algorithm 1's coarse stage alone,
-    /// m = `parts`; or a partition given to start from, [`Params::start_labels`]), so too few parts cannot be
+    /// m = `parts`; or a partition given to start from, [`crate::mfa::FitStart`]), so too few parts cannot be
     /// told from a shape that is no articulated one ([`crate::parts::diagnosis::diagnose_fit`]).
     pub count_unjudged: bool,
     /// The exact part count asked for (`target_parts`), if one was.
     pub parts_asked: Option<usize>,
+    /// The partition the fit started from ([`crate::mfa::FitStart`]), if one was given.
+    pub start_labels: Option<Vec<u32>>,
     /// What the rule that decided the parts reports of itself (the fields above both rules fill).
     pub rule: RuleReport,
 }

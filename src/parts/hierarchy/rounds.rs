@@ -64,7 +64,7 @@ impl Pipeline {
         // rule 1 judges each part by the motion of its own labelled vertices (the mixture's component of a
         // short band part leans toward its neighbours' vertices; see label_fit)
         self.fit_to_labels(model);
-        let dissolved = crate::parts::distinct::dissolve_flesh(model, &self.pop, self.params.blend_ratio);
+        let dissolved = crate::parts::distinct::dissolve_flesh(model, &self.pop, self.params.distinct.blend_ratio);
         if dissolved > 0 {
             crate::parts::islands::connect_parts(model, &self.pop, false, self.params.min_part_vertices);
         }

@@ -3,6 +3,7 @@
 use super::tree_rule::{dissolve_start_flesh, tree_start};
 use super::*;
 use crate::metrics::adjusted_rand_index;
+use crate::mfa::TreeParams;
 use crate::synth::{generate, part_index, Preset, Spec};
 
 #[test]
@@ -21,7 +22,8 @@ fn the_start_loses_a_band_slice_and_keeps_the_limbs() {
     }
     assert!(sliced.iter().filter(|&&l| l == 3).count() >= 20);
     let data = Data::from_population(pop);
-    let params = Params::default();
+    // (the floor as given: the reference radius scales it by 1)
+    let params = Params::default().for_radius(crate::mfa::params::REFERENCE_SQUARED_RADIUS);
     let start = dissolve_start_flesh(pop, &data, &sliced, &params);
     assert_eq!(start.iter().max(), Some(&2), "the slice went to its sides");
     // (a wide band's middle is about as near one side's motion as the other's)
@@ -37,7 +39,12 @@ fn the_start_loses_a_band_slice_and_keeps_the_limbs() {
 fn the_start_over_segments_a_generated_creature_inside_its_parts() {
     let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
     let pop = &g.population;
-    let (cut, start) = tree_start(pop, &Data::from_population(pop), &Params::default()).unwrap();
+    let (cut, start) = tree_start(
+        pop,
+        &Data::from_population(pop),
+        &Params::default().for_radius(crate::mfa::params::REFERENCE_SQUARED_RADIUS),
+    )
+    .unwrap();
     let count = |l: &[u32]| l.iter().map(|&x| x as usize + 1).max().unwrap_or(0);
     let truth = count(&g.part_of_vertex);
     assert!(
@@ -61,7 +68,7 @@ fn the_start_over_segments_a_generated_creature_inside_its_parts() {
 
 #[test]
 fn parts_the_rule_leaves_alone_go_on_from_the_loose_run() {
-    // a generated quadruped: the part rule's first round keeps the first run's parts as they are
+    // a generated quadruped: the part rule's opening round keeps the first run's parts as they are
     let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 10, ..Spec::default() }).unwrap();
     let mut pipe = Pipeline::new(&g.population, &Params::default()).unwrap();
     let mut runs: Vec<Vec<f64>> = vec![Vec::new()];
@@ -73,7 +80,7 @@ fn parts_the_rule_leaves_alone_go_on_from_the_loose_run() {
         }
     }
     let names: Vec<&str> = pipe.stats.iter().map(|s| s.name.as_str()).collect();
-    assert_eq!(names, ["tree", "final", "final"], "the first round removed nothing");
+    assert_eq!(names, ["tree", "final", "final"], "the opening round removed nothing");
     // the second run starts where the first stopped (its components), so AECM's monotonicity carries over
     // from one run to the next; a start again from labels begins below it
     let (first, second) = (&runs[0], &runs[1]);
@@ -131,12 +138,11 @@ fn a_refine_from_the_merge_trees_partition_keeps_that_partition() {
     // vertices and on a coarse mesh (each coarse vertex takes its seed's part)
     let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 20, ..Spec::default() }).unwrap();
     for coarse_vertices in [0, 1000] {
-        let base = Params { coarse_vertices, ..Params::default() };
+        let base = Params { tree: TreeParams { coarse_vertices }, ..Params::default() };
         let auto = fit(&g.population, &base, &mut |_| true).unwrap();
         let n = auto.model.n_parts() - 4;
         let start = auto.merge_tree().expect("the tree rule's tree").labels_at(n);
-        let params = Params { start_labels: Some(start.clone()), ..base.clone() };
-        let refined = fit(&g.population, &params, &mut |_| true).unwrap();
+        let refined = fit_from(&g.population, &base, &FitStart { labels: Some(start.clone()) }, &mut |_| true).unwrap();
         assert_eq!(refined.model.n_parts(), n, "coarse {coarse_vertices}");
         // every part is one of the partition shown: more than half of each in the other
         let (a, b) = (&refined.model.labels, &start);
@@ -154,29 +160,26 @@ fn a_refine_from_the_merge_trees_partition_keeps_that_partition() {
         assert!(ari > 0.9, "coarse {coarse_vertices}: the refit moved away from the partition shown ({ari:.3})");
     }
     // what is not a start is refused, naming the field
-    let short = Params { start_labels: Some(vec![0; 10]), ..Params::default() };
-    let e = Pipeline::new(&g.population, &short).err().expect("refused").to_string();
+    let short = FitStart { labels: Some(vec![0; 10]) };
+    let e = Pipeline::starting(&g.population, &Params::default(), &short).err().expect("refused").to_string();
     assert!(e.contains("startLabels has 10 labels for a population of"), "{e}");
-    let distinct = Params {
-        part_rule: PartRule::Distinct,
-        start_labels: Some(vec![0; g.population.n_vertices()]),
-        ..Params::default()
-    };
-    let e = Pipeline::new(&g.population, &distinct).err().expect("refused").to_string();
+    let distinct = Params { part_rule: PartRule::Distinct, ..Params::default() };
+    let all_one = FitStart { labels: Some(vec![0; g.population.n_vertices()]) };
+    let e = Pipeline::starting(&g.population, &distinct, &all_one).err().expect("refused").to_string();
     assert!(e.contains("startLabels needs the merge tree's part rule"), "{e}");
 }
 
 #[test]
 fn an_exact_count_is_made_on_the_coarse_mesh() {
     let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 20, ..Spec::default() }).unwrap();
-    let params = Params { coarse_vertices: 1000, target_parts: Some(12), ..Params::default() };
+    let params = Params { tree: TreeParams { coarse_vertices: 1000 }, target_parts: Some(12), ..Params::default() };
     let result = fit(&g.population, &params, &mut |_| true).unwrap();
     assert_eq!(result.model.n_parts(), 12);
     let names: Vec<&str> = result.stats.iter().map(|s| s.name.as_str()).collect();
     let (parts, all) = (names.iter().position(|&n| n == "parts"), names.iter().position(|&n| n == "all vertices"));
     assert!(parts.is_some() && parts < all, "the count on the coarse mesh, then all vertices: {names:?}");
     // a count the coarse mesh cannot hold (4 vertices a part) is made on all vertices
-    let many = Params { coarse_vertices: 1000, target_parts: Some(300), ..Params::default() };
+    let many = Params { tree: TreeParams { coarse_vertices: 1000 }, target_parts: Some(300), ..Params::default() };
     assert!(!Pipeline::new(&g.population, &many).unwrap().on_coarse_mesh());
 }
 
@@ -209,7 +212,7 @@ fn a_population_is_judged_on_all_its_vertices_not_the_coarse_mesh() {
         }
     }
     pop.set_shapes(&shapes);
-    let params = Params { coarse_vertices: 1000, ..Params::default() };
+    let params = Params { tree: TreeParams { coarse_vertices: 1000 }, ..Params::default() };
     let pipe = Pipeline::new(&pop, &params).expect("the population moves");
     assert!(pipe.on_coarse_mesh());
 }
@@ -221,7 +224,7 @@ fn parts_decided_on_a_coarse_mesh_are_the_parts_of_all_vertices() {
     let g = generate(&Spec { preset: Preset::Quadruped, vertices: 3000, poses: 20, ..Spec::default() }).unwrap();
     let pop = &g.population;
     let nv = pop.n_vertices();
-    let params = Params { coarse_vertices: 1000, ..Params::default() };
+    let params = Params { tree: TreeParams { coarse_vertices: 1000 }, ..Params::default() };
     let mut pipe = Pipeline::new(pop, &params).unwrap();
     assert!(pipe.on_coarse_mesh());
     assert_eq!(pipe.population().n_vertices(), nv);
@@ -256,7 +259,8 @@ fn parts_decided_on_a_coarse_mesh_are_the_parts_of_all_vertices() {
     assert_eq!(tree.leaves.len(), nv);
     assert_eq!((result.coarse_labels.len(), result.refined_labels.len()), (nv, nv));
     // the parts: the creature's, as the decisions on all vertices find them
-    let all = fit(pop, &Params { coarse_vertices: 0, ..Params::default() }, &mut |_| true).unwrap();
+    let all =
+        fit(pop, &Params { tree: TreeParams { coarse_vertices: 0 }, ..Params::default() }, &mut |_| true).unwrap();
     assert_eq!(result.model.n_parts(), all.model.n_parts());
     let truth = adjusted_rand_index(&result.model.labels, &g.part_of_vertex);
     let same = adjusted_rand_index(&result.model.labels, &all.model.labels);

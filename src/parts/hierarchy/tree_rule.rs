@@ -8,8 +8,8 @@
 //!
 //! | what | value | where |
 //! |---|---|---|
-//! | a joint must explain this many typical variances (rule 2, the tree's cut) | 4 | `Params::distinct_ratio` |
-//! | a part moving as a fixed blend of two neighbours within this fraction is flesh (rule 1) | 0.1 | `Params::blend_ratio` |
+//! | a joint must explain this many typical variances (rule 2, the tree's cut) | 4 | `DistinctParams::distinct_ratio` |
+//! | a part moving as a fixed blend of two neighbours within this fraction is flesh (rule 1) | 0.1 | `DistinctParams::blend_ratio` |
 //! | a part needs this many vertices | 4 | `Params::min_part_vertices` |
 //! | the start: the patches' tree cut at this many merge yardsticks | 28 | [`TREE_START_RATIO`] |
 //! | the start with an exact count asked for: cut at this many typical variances | 64 | [`TREE_COUNT_START_RATIO`] |
@@ -23,7 +23,7 @@
 //! | an island this fraction of its part's largest piece becomes a part | 0.25 | [`crate::parts::islands::SPLIT_FRACTION`] |
 //! | rounds of the part rule / of the exact count | 3 / 3 | `rounds::DECIDE_ROUNDS`, `rounds::COUNT_ROUNDS` |
 //! | decided on a coarse mesh: from this many times its size / with fewer poses it grows | 2 / 20 | [`COARSE_FACTOR`], [`COARSE_POSES`] |
-//! | the coarse mesh's vertices | 8 000 | `Params::coarse_vertices` |
+//! | the coarse mesh's vertices | 8 000 | `TreeParams::coarse_vertices` |
 
 use super::rounds::Tail;
 use super::{lay_out, FinalRun, Fine, Pipeline, State};
@@ -31,26 +31,25 @@ use crate::error::{Error, Result};
 use crate::mesh::Population;
 use crate::mfa::aecm::{Fit, StageStats};
 use crate::mfa::data::Data;
-use crate::mfa::params::{Params, PartRule};
+use crate::mfa::params::{Params, PartRule, RunParams};
 use crate::mfa::result::Model;
 use crate::parts::labels::compact;
 
 /// [`PartRule::Tree`] decides on a coarse mesh ([`crate::parts::coarse_mesh`]) only on populations with at least
 /// this many times its size ([`coarse_target`]; 16 000 vertices at the default 8 000 and 20 poses or more):
-/// below that the decisions on all vertices cost little more, and horse-gallop (8 431 vertices), the lion and the
-/// generated 12 000-vertex creatures decide on every vertex.
+/// below that the decisions on all vertices cost little more (which populations decide on every vertex:
+/// docs/decisions.md, "Figures behind src/parts").
 pub const COARSE_FACTOR: usize = 2;
 
 /// With fewer poses than this, the coarse mesh has more vertices ([`coarse_target`]).
 pub const COARSE_POSES: usize = 20;
 
-/// The coarse mesh's size for `coarse_vertices` ([`Params::coarse_vertices`]) and `n_shapes` poses: at least
-/// `coarse_vertices x COARSE_POSES` vertex-poses, i.e. `coarse_vertices` from 20 poses on and more below (16 000
-/// at 10 poses by default). The decisions read the poses' motion at the coarse vertices, and a population of few
-/// poses gives them less to read per vertex; the runs' cost goes with the vertex-poses, so it stays bounded. On
-/// 10-11 poses at 8 000 vertices the decisions moved more than on all vertices over the 9 standard runs of
-/// `posemfa robustness` (the lion subdivided twice 18-22 parts, once 17-20, horse-poses subdivided 23-26); at
-/// this size 19-20, 19-20 (on all vertices: under 2 x 16 000) and 26-27.
+/// The coarse mesh's size for `coarse_vertices` ([`crate::mfa::TreeParams::coarse_vertices`]) and `n_shapes` poses: at
+/// least `coarse_vertices x COARSE_POSES` vertex-poses, i.e. `coarse_vertices` from 20 poses on and more below (16 000
+/// at 10 poses by default). The decisions read the poses' motion at the coarse vertices, and a population of few poses
+/// gives them less to read per vertex; the runs' cost goes with the vertex-poses, so it stays bounded. A fixed 8 000
+/// vertices on 10-11 poses made the decisions move more than on all vertices over the standard runs of `posemfa
+/// robustness` (the counts: docs/decisions.md, "Figures behind src/parts").
 pub fn coarse_target(coarse_vertices: usize, n_shapes: usize) -> usize {
     if n_shapes >= COARSE_POSES {
         coarse_vertices
@@ -62,21 +61,21 @@ pub fn coarse_target(coarse_vertices: usize, n_shapes: usize) -> usize {
 /// [`PartRule::Tree`]'s start when the part rule chooses the count: the patches' tree is cut where a merge first
 /// costs the smaller side, per vertex, this many times what merging two pieces of one part typically costs
 /// ([`MergeTree::merge_yardstick`]). A generous over-segmentation: the part rule decides after the first AECM.
-/// With every pose dropped in turn, the lion's start then moves by 4 parts where the patches' typical variance
-/// as the yardstick (the median of 400 tiny fits, [`TREE_COUNT_START_RATIO`]) moved it by 22; 16, 24, 32 and 40
-/// were measured too (docs/decisions.md).
+/// The merges' yardstick, not the patches' typical variance (the median of a few hundred tiny fits,
+/// [`TREE_COUNT_START_RATIO`]): with a pose dropped it moves the start far less (the counts, and the other
+/// ratios tried: docs/decisions.md, "Figures behind src/parts").
 pub const TREE_START_RATIO: f64 = 28.0;
 
 /// [`PartRule::Tree`]'s start with an exact part count (`target_parts`): the cut where a merge first costs 64
 /// times the patches' typical variance ([`MergeTree::typical`]), and no flesh dissolved before the first AECM.
-/// The count's steadiness does not matter there, and this start rigs better than the part rule's at 10, 20 and
-/// 30 bones (horse-gallop's E_RMS: docs/decisions.md).
+/// The count's steadiness does not matter there, and this start rigs better than the part rule's at the bone
+/// counts asked for (the rigs' errors: docs/decisions.md, "Figures behind src/parts").
 pub const TREE_COUNT_START_RATIO: f64 = 64.0;
 
-/// A patch tree with fewer leaves than this (a mesh of under about 384 vertices) starts from every patch, uncut.
-/// There a patch of about 6 vertices spans much of a part, so most patches straddle a joint and their typical
-/// variance is not a rigid patch's: on Blender's 174-vertex skinned character the cut at [`TREE_START_RATIO`]
-/// kept a few patches and the fit lost most of its 18 parts, from every patch it finds them (docs/decisions.md).
+/// A patch tree with fewer leaves than this (a mesh of under about 384 vertices) starts from every patch, uncut. There
+/// a patch of about 6 vertices spans much of a part, so most patches straddle a joint and their typical variance is not
+/// a rigid patch's, and a cut at [`TREE_START_RATIO`] can keep so few patches that the fit loses most of the parts;
+/// from every patch it finds them (the character it was measured on: docs/decisions.md, "Figures behind src/parts").
 /// The AECM from at most 63 parts on so few vertices is cheap.
 pub const TREE_CUT_LEAVES: usize = 64;
 
@@ -89,10 +88,10 @@ impl Pipeline {
     /// where a merge first costs the smaller side [`TREE_START_RATIO`] times the tree's typical merge within a
     /// part; the start's flesh goes ([`dissolve_start_flesh`]) and the final AECM runs from what is left. With
     /// an exact part count, the cut at [`TREE_COUNT_START_RATIO`] instead, flesh and all.
-    pub(super) fn from_tree(pop: &Population, params: &Params, t0: f64) -> Result<Pipeline> {
+    pub(super) fn from_tree(pop: &Population, params: &RunParams, start: Option<&[u32]>, t0: f64) -> Result<Pipeline> {
         // (an exact count the coarse mesh cannot hold is made on all vertices)
-        let target = coarse_target(params.coarse_vertices, pop.n_shapes());
-        let on_coarse = params.coarse_vertices > 0
+        let target = coarse_target(params.tree.coarse_vertices, pop.n_shapes());
+        let on_coarse = params.tree.coarse_vertices > 0
             && pop.n_vertices() >= COARSE_FACTOR * target
             && params
                 .target_parts
@@ -118,7 +117,7 @@ impl Pipeline {
         if full.is_none() {
             crate::mfa::aecm::check_population(&data, 1, 1)?;
         }
-        let (cut, labels) = match &params.start_labels {
+        let (cut, labels) = match start {
             // on the coarse mesh each coarse vertex takes its seed's part (a part no seed holds is made again by
             // the exact count's split)
             Some(start) => {
@@ -141,6 +140,7 @@ impl Pipeline {
         let mut p = Pipeline {
             pop: work,
             params: params.clone(),
+            start_labels: start.map(<[u32]>::to_vec),
             state: State::Done,
             coarse: None,
             coarse_labels: cut,
@@ -188,7 +188,7 @@ impl Pipeline {
         // whether the parts were fitted to the motion labels in this call (a model the rule leaves as it is
         // stays fitted)
         let mut fitted = false;
-        if self.count_rounds == 0 && self.decide_rounds == 0 && self.params.start_labels.is_some() {
+        if self.count_rounds == 0 && self.decide_rounds == 0 && self.start_labels.is_some() {
             self.decide_rounds += 1;
             self.fit_to_labels(&mut model);
             fitted = true;
@@ -228,18 +228,19 @@ impl Pipeline {
         }
     }
 
-    /// [`PartRule::Tree`]'s rule 2: the merge tree of the fitted parts ([`crate::parts::merge_tree::MergeTree::from_leaves`],
-    /// every merge down to one part), cut where a merge first scores `distinct_ratio`. The first round's tree is
-    /// the one kept in the result (its leaves are the parts of the first final AECM). Returns the labels at the
-    /// count read off the tree and the curve of decisions (as [`crate::parts::distinct::merge_indistinct`]'s).
+    /// [`PartRule::Tree`]'s rule 2: the merge tree of the fitted parts
+    /// ([`crate::parts::merge_tree::MergeTree::from_leaves`], every merge down to one part), cut where a merge first
+    /// scores `distinct_ratio`. The opening round's tree is the one kept in the result (its leaves are the parts of the
+    /// first final AECM). Returns the labels at the count read off the tree and the curve of decisions (as
+    /// [`crate::parts::distinct::merge_indistinct`]'s).
     pub(super) fn decide_on_tree(&mut self, labels: &[u32]) -> (Vec<u32>, Vec<crate::parts::distinct::CurvePoint>) {
         let leaves = compact(labels);
         let mut tree = crate::parts::merge_tree::MergeTree::from_leaves(&self.pop, leaves, self.params.floor());
-        // the first round's typical variance stays the yardstick: a refit's larger parts have larger variances,
+        // the opening round's typical variance stays the yardstick: a refit's larger parts have larger variances,
         // and with its own yardstick every round would merge a few more (lion-poses: 43 -> 40 -> 36 -> 34)
         let yardstick = self.merge_tree.as_ref().map_or_else(|| tree.middle_typical(), |first| first.typical);
         tree.rescore(yardstick);
-        let count = tree.decided_count(self.params.distinct_ratio);
+        let count = tree.decided_count(self.params.distinct.distinct_ratio);
         let merged = tree.labels_at(count);
         let curve = tree.curve(count);
         if self.merge_tree.is_none() {
@@ -258,8 +259,8 @@ impl Pipeline {
     }
 }
 
-/// The number of parts of [`Params::start_labels`], once they are found to be a start for `pop`: one label per
-/// vertex, with the merge tree's part rule.
+/// The number of parts of a start's labels ([`crate::mfa::FitStart`]), once they are found to be a start for `pop`: one
+/// label per vertex, with the merge tree's part rule.
 pub(super) fn check_start_labels(start: &[u32], pop: &Population, params: &Params) -> Result<usize> {
     if start.len() != pop.n_vertices() {
         return Err(Error::Params(format!(
@@ -281,7 +282,7 @@ pub(super) fn check_start_labels(start: &[u32], pop: &Population, params: &Param
 /// [`MergeTree::merge_yardstick`] (with `target_parts`: at [`TREE_COUNT_START_RATIO`] times its typical variance),
 /// not cut when it has fewer than [`TREE_CUT_LEAVES`] patches; then, when the part rule decides the count, the
 /// start's flesh dissolved ([`dissolve_start_flesh`]). Returns the cut and the start (compact labels).
-pub(super) fn tree_start(pop: &Population, data: &Data, params: &Params) -> Result<(Vec<u32>, Vec<u32>)> {
+pub(super) fn tree_start(pop: &Population, data: &Data, params: &RunParams) -> Result<(Vec<u32>, Vec<u32>)> {
     // the patches' own yardstick, not the variance floor: on clean data the patches fit far below the floor,
     // and the floor as the yardstick merged the generated hand's fingertips before the AECM
     let t0 = crate::clock::now_ms();
@@ -318,11 +319,11 @@ pub(super) fn tree_start(pop: &Population, data: &Data, params: &Params) -> Resu
 /// small changes of the data (a frame dropped), and the decided count with them (docs/decisions.md). Dissolved on
 /// the start, the AECM starts with fewer components and the rounds after it find next to no flesh. Compact
 /// labels.
-pub(super) fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &Params) -> Vec<u32> {
+pub(super) fn dissolve_start_flesh(pop: &Population, data: &Data, labels: &[u32], params: &RunParams) -> Vec<u32> {
     let t0 = crate::clock::now_ms();
     let comps = crate::mfa::init::components_from_labels(data, labels, params.floor());
     let mut model = crate::mfa::aecm::model_of(data, &comps, compact(labels));
-    let dissolved = crate::parts::distinct::dissolve_flesh(&mut model, pop, params.blend_ratio);
+    let dissolved = crate::parts::distinct::dissolve_flesh(&mut model, pop, params.distinct.blend_ratio);
     if dissolved > 0 {
         crate::parts::islands::connect_parts(&mut model, pop, false, params.min_part_vertices);
     }
