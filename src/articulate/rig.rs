@@ -51,6 +51,14 @@
 //!   motion, every other bone's subtree the rotation about the bone's joint, that best carries the subtree's
 //!   share of every vertex onto what the rest leaves of the target (a Procrustes problem again, exact, so the
 //!   error never grows), alternating with the weights and bind positions.
+//! - **bone scale** ([`RigOptions::bone_scale`], fitted weights with free joints): every bone's motion is
+//!   x -> R Q S Qᵀ x + t, Q a fixed rotation per bone (the principal axes of its vertices' w²-weighted bind
+//!   positions, from the MFA start), S = diag(s) per pose, 9 numbers per bone and pose instead of 6. The bone step
+//!   alternates R (the best rotation of C Q S Qᵀ) and s (s_a = (Qᵀ Rᵀ C Q)_aa / (Qᵀ G Q)_aa, G = Σ w² (u - ū)(u - ū)ᵀ,
+//!   clamped to [0.5, 2]), each exact with the other fixed, starting from the pose's current s, so it never raises
+//!   the error. The weights and bind positions take the general linear part as they are. In the .glb each bone
+//!   gets a leaf node under its joint with the fixed rotation to Q and the animated scale (a scale on the joint
+//!   itself would reach its children).
 //!
 //! All in unit-box coordinates; the .glb writer ([`crate::export::gltf`]) converts.
 
@@ -112,6 +120,9 @@ pub struct RigOptions {
     pub smoothness: f64,
     /// Fitted weights: the bind positions are solved too (module doc). Default true.
     pub fit_rest: bool,
+    /// Fitted weights with free joints: every bone also scales along three fixed axes of its own, per pose
+    /// ([`BoneScale`]). Default false.
+    pub bone_scale: bool,
 }
 
 impl Default for RigOptions {
@@ -126,6 +137,7 @@ impl Default for RigOptions {
             rings: 1,
             smoothness: 1e-4,
             fit_rest: true,
+            bone_scale: false,
         }
     }
 }
@@ -156,6 +168,11 @@ impl RigOptions {
                 self.tol
             )));
         }
+        if self.bone_scale && (self.weights != RigWeights::Fitted || self.joints != Joints::Free) {
+            return Err(Error::Params(
+                "bone scale needs fitted weights and free joints (--weights fitted --joints free)".into(),
+            ));
+        }
         if self.iterations > 10_000 {
             return Err(Error::Params(format!("iterations = {} must be at most 10000", self.iterations)));
         }
@@ -179,6 +196,29 @@ pub struct Rig {
     pub joints: Joints,
     /// Sum of squared errors after each alternation (fitted weights), unit box.
     pub trace: Vec<f64>,
+    /// With [`RigOptions::bone_scale`]: each bone's scale axes and factors. `bones[i][k].rotation` is then
+    /// R Q S Qᵀ (a rotation after a scaling along the axes), not a rotation.
+    pub scale: Option<BoneScale>,
+}
+
+/// Per-bone scale channels: bone k's skin motion in pose i is x -> R (Q_k S_ki Q_kᵀ x) + t, Q_k a rotation
+/// whose columns are the bone's scale axes (bind pose, fixed), S_ki = diag(`factors[i][k]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoneScale {
+    pub axes: Vec<Mat3>,
+    pub factors: Vec<Vec<Vec3>>,
+}
+
+impl BoneScale {
+    /// Q S Qᵀ of bone k in pose i.
+    pub fn stretch(&self, i: usize, k: usize) -> Mat3 {
+        stretch(&self.axes[k], self.factors[i][k])
+    }
+}
+
+/// Q diag(s) Qᵀ.
+fn stretch(q: &Mat3, s: Vec3) -> Mat3 {
+    q * Mat3::from_diagonal(&nalgebra::Vector3::new(s[0], s[1], s[2])) * q.transpose()
 }
 
 impl Rig {
@@ -364,7 +404,16 @@ pub fn build(art: &Articulation, opts: &RigOptions) -> Result<Rig> {
         RigWeights::Smooth => (art.shape(bind), art.smooth_weights.capped(opts.influences)),
         RigWeights::Fitted => (art.rigid(bind), art.rigid_weights.clone()),
     };
-    let mut rig = Rig { rest, weights, bones: mfa_bones, tree, joint_points, joints: opts.joints, trace: Vec::new() };
+    let mut rig = Rig {
+        rest,
+        weights,
+        bones: mfa_bones,
+        tree,
+        joint_points,
+        joints: opts.joints,
+        trace: Vec::new(),
+        scale: None,
+    };
     if opts.weights == RigWeights::Fitted {
         fit(&mut rig, art, opts);
     } else if opts.joints == Joints::Fixed {
@@ -615,7 +664,56 @@ impl Solver {
 
     /// One pass of the bone solve over every pose (module doc); the bind pose's bones stay the identity.
     fn bones(&self, rig: &mut Rig) {
-        bone_pass(&self.by_vertex, self.ns, Some(self.bind), &rig.rest, &rig.weights, &rig.tree.order, &mut rig.bones);
+        match rig.scale.as_mut() {
+            None => bone_pass(
+                &self.by_vertex,
+                self.ns,
+                Some(self.bind),
+                &rig.rest,
+                &rig.weights,
+                &rig.tree.order,
+                &mut rig.bones,
+            ),
+            Some(sc) => {
+                let sums = BoneSums::new(
+                    &self.by_vertex,
+                    self.ns,
+                    &rig.rest,
+                    &rig.weights,
+                    &rig.tree.order,
+                    rig.bones[0].len(),
+                );
+                for i in 0..self.ns {
+                    if i != self.bind {
+                        sums.step_scaled(i, &rig.tree.order, &mut rig.bones[i], &sc.axes, &mut sc.factors[i]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Each bone's scale axes: the principal axes of its vertices' bind positions weighted by w² (the bone
+    /// step's own Gram matrix), identity scale in every pose.
+    fn start_scale(&self, rig: &mut Rig) {
+        let n_parts = rig.bones[0].len();
+        let sums = BoneSums::new(&self.by_vertex, self.ns, &rig.rest, &rig.weights, &rig.tree.order, n_parts);
+        let axes = sums
+            .gram
+            .iter()
+            .map(|g| {
+                let e = Mat3::from_row_slice(g).symmetric_eigen();
+                let mut q = e.eigenvectors;
+                if q.determinant() < 0.0 {
+                    q.column_mut(2).neg_mut();
+                }
+                if q.iter().all(|x| x.is_finite()) {
+                    q
+                } else {
+                    crate::geometry::IDENTITY
+                }
+            })
+            .collect();
+        rig.scale = Some(BoneScale { axes, factors: vec![vec![[1.0; 3]; n_parts]; self.ns] });
     }
 }
 
@@ -650,6 +748,8 @@ pub(crate) struct BoneSums {
     pairs: Vec<Vec<(usize, PairSums)>>,
     /// Target sums per bone and pose: [C | Σ w y] row-major (3 x 4), bone k pose i at k ns + i.
     sums: Vec<[f64; 12]>,
+    /// Per bone: G = Σ w² (u - ū)(u - ū)ᵀ, row-major (the scaled step's quadratic term).
+    gram: Vec<[f64; 9]>,
 }
 
 impl BoneSums {
@@ -678,6 +778,22 @@ impl BoneSums {
                     m = add(m, scale(rest[v as usize], w * w));
                 }
                 (if w2 > 0.0 { scale(m, 1.0 / w2) } else { m }, w2)
+            })
+            .collect();
+        let gram: Vec<[f64; 9]> = support
+            .iter()
+            .zip(&stats)
+            .map(|(s, &(ubar, _))| {
+                let mut g = [0.0; 9];
+                for &(v, w) in s {
+                    let d = sub(rest[v as usize], ubar);
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            g[a * 3 + b] += w * w * d[a] * d[b];
+                        }
+                    }
+                }
+                g
             })
             .collect();
         // The step of bone k in pose i needs C = Σ_v w_k r_v (u_v - ū_k)ᵀ and Σ_v w_k r_v with
@@ -726,7 +842,45 @@ impl BoneSums {
                 T::bone_target_sums(by_vertex, ns, rest, &support[k], stats[k].0, &mut sums[k * ns..(k + 1) * ns]);
             }
         }
-        BoneSums { ns, stats, pairs, sums }
+        BoneSums { ns, stats, pairs, sums, gram }
+    }
+
+    /// [`BoneSums::step`] with scale channels: bone k's linear part is R Q_k S Qᵀ_k, R and S alternating
+    /// (each exact with the other fixed: R the best rotation of C Q S Qᵀ, S's diagonal (Qᵀ Rᵀ C Q)_aa /
+    /// (Qᵀ G Q)_aa), starting from the current S, so the step never raises the error.
+    pub(crate) fn step_scaled(
+        &self,
+        i: usize,
+        order: &[usize],
+        bones: &mut [RigidMotion],
+        axes: &[Mat3],
+        s: &mut [Vec3],
+    ) {
+        for &k in order {
+            let (ubar, w2) = self.stats[k];
+            if w2 <= 0.0 {
+                continue;
+            }
+            let (c, wr) = bone_cross(&self.sums[k * self.ns + i], &self.pairs[k], bones);
+            let q = &axes[k];
+            let g = Mat3::from_row_slice(&self.gram[k]);
+            let gq = q.transpose() * g * q;
+            let mut f = s[k];
+            let mut rot = best_rotation(&(c * stretch(q, f)));
+            for _ in 0..3 {
+                let cq = q.transpose() * rot.transpose() * c * q;
+                for a in 0..3 {
+                    // a direction the bone's vertices do not spread along keeps its scale
+                    if gq[(a, a)] > 1e-9 * gq.trace().max(f64::MIN_POSITIVE) {
+                        f[a] = (cq[(a, a)] / gq[(a, a)]).clamp(SCALE_MIN, SCALE_MAX);
+                    }
+                }
+                rot = best_rotation(&(c * stretch(q, f)));
+            }
+            s[k] = f;
+            let a = rot * stretch(q, f);
+            bones[k] = RigidMotion { rotation: a, translation: sub(scale(wr, 1.0 / w2), mat_vec(&a, ubar)) };
+        }
     }
 
     /// One bone step for pose i: every bone of `order` in turn, the others at their current motions in `bones`.
@@ -1020,6 +1174,30 @@ avx2_fn! {
     fn bone_target_sums_f64(by_vertex: &[Vec3], ns: usize, rest: &[Vec3], support: &[(u32, f64)], ubar: Vec3, out: &mut [[f64; 12]]) {
         bone_target_sums_of(by_vertex, ns, rest, support, ubar, out)
     }
+}
+
+/// The scale factors a bone may take (a clamp: the least squares would otherwise flip or blow up a bone whose
+/// vertices barely constrain it).
+const SCALE_MIN: f64 = 0.5;
+const SCALE_MAX: f64 = 2.0;
+
+/// The cross-covariance C and Σ w r of [`bone_step`].
+fn bone_cross(sums: &[f64; 12], pairs: &[(usize, PairSums)], bones: &[RigidMotion]) -> (Mat3, Vec3) {
+    let mut c = [sums[0], sums[1], sums[2], sums[4], sums[5], sums[6], sums[8], sums[9], sums[10]];
+    let mut wr = [sums[3], sums[7], sums[11]];
+    for (l, ps) in pairs {
+        let m = &bones[*l];
+        let r = &m.rotation;
+        let t = m.translation;
+        for a in 0..3 {
+            for b in 0..3 {
+                c[a * 3 + b] -=
+                    r[(a, 0)] * ps.s[b] + r[(a, 1)] * ps.s[3 + b] + r[(a, 2)] * ps.s[6 + b] + t[a] * ps.d[b];
+            }
+            wr[a] -= r[(a, 0)] * ps.g[0] + r[(a, 1)] * ps.g[1] + r[(a, 2)] * ps.g[2] + t[a] * ps.m;
+        }
+    }
+    (Mat3::from_row_slice(&c), wr)
 }
 
 /// One bone's weighted Procrustes step of [`Solver::bones`] for one pose (module doc), from its target sums and
@@ -1375,6 +1553,9 @@ fn fit(rig: &mut Rig, art: &Articulation, opts: &RigOptions) {
     // the MFA motions map the rigid reconstruction; the bind shape itself differs by its residual
     solver.bones(rig);
     rig.trace.push(solver.sse(rig));
+    if opts.bone_scale && opts.joints == Joints::Free {
+        solver.start_scale(rig);
+    }
     let free_iters = if opts.joints == Joints::Fixed { opts.iterations / 2 } else { opts.iterations };
     let mut done = 0;
     while done < free_iters {
@@ -1451,5 +1632,65 @@ mod tests {
             }
             assert!(got <= best + 1e-9, "qp {got} > grid {best}");
         }
+    }
+
+    /// One bone, exact data y = R Q S Qᵀ u + t in pose 1 (pose 0 the identity): repeated scaled steps from S = 1
+    /// never raise the error and recover S and the map; the rigid step cannot fit it.
+    #[test]
+    fn scaled_bone_step_recovers_a_stretch() {
+        let mut seed = 11u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let rest: Vec<Vec3> = (0..200).map(|_| [2.0 * rnd(), rnd(), 0.5 * rnd()]).collect();
+        let q = crate::geometry::rotation::axis_angle([0.0, 0.0, 1.0], 0.3);
+        let r = crate::geometry::rotation::axis_angle([1.0, 2.0, 0.5], 0.9);
+        let f = [1.3, 0.8, 1.1];
+        let a = r * stretch(&q, f);
+        let t = [0.2, -0.1, 0.4];
+        let ns = 2;
+        let mut by_vertex = Vec::new();
+        for &u in &rest {
+            by_vertex.push(u);
+            by_vertex.push(add(mat_vec(&a, u), t));
+        }
+        let weights = SkinWeights { influences: vec![vec![(0, 1.0)]; rest.len()] };
+        let sums = BoneSums::new(&by_vertex, ns, &rest, &weights, &[0], 1);
+        let err = |m: &RigidMotion| -> f64 {
+            rest.iter()
+                .map(|&u| {
+                    let d = sub(m.apply(u), add(mat_vec(&a, u), t));
+                    dot(d, d)
+                })
+                .sum()
+        };
+        let mut rigid = vec![RigidMotion::IDENTITY];
+        sums.step(1, &[0], &mut rigid);
+        let mut bones = vec![RigidMotion::IDENTITY];
+        let mut s = vec![[1.0; 3]];
+        let mut last = f64::INFINITY;
+        for _ in 0..30 {
+            sums.step_scaled(1, &[0], &mut bones, &[q], &mut s);
+            let e = err(&bones[0]);
+            assert!(e <= last * (1.0 + 1e-12) + 1e-18, "the error rose: {last} -> {e}");
+            last = e;
+        }
+        assert!(err(&rigid[0]) > 1.0, "the rigid step fits a stretch: {}", err(&rigid[0]));
+        assert!(last < 1e-16, "{last}");
+        for d in 0..3 {
+            assert!((s[0][d] - f[d]).abs() < 1e-6, "{:?} vs {f:?}", s[0]);
+        }
+        // a scale past the clamp stays at the clamp
+        let mut bones = vec![RigidMotion::IDENTITY];
+        let far = [f[0] * 3.0, f[1], f[2]];
+        let a3 = r * stretch(&q, far);
+        let by3: Vec<Vec3> = rest.iter().flat_map(|&u| [u, add(mat_vec(&a3, u), t)]).collect();
+        let sums3 = BoneSums::new(&by3, ns, &rest, &weights, &[0], 1);
+        let mut s3 = vec![[1.0; 3]];
+        for _ in 0..10 {
+            sums3.step_scaled(1, &[0], &mut bones, &[q], &mut s3);
+        }
+        assert_eq!(s3[0][0], SCALE_MAX);
     }
 }

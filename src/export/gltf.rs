@@ -14,6 +14,11 @@
 //! - the mesh is bound in pose `bind_pose`: its rigid reconstruction (eq 22) with rigid weights, so that the
 //!   clip reproduces every training pose's rigid reconstruction exactly; the training shape itself with
 //!   smooth weights (glTF blends linearly: at other poses the result is linear blend skinning of it).
+//! - with bone scale ([`RigOptions::bone_scale`]): after the joints, one leaf node `part k scale` per joint, its
+//!   child, with the fixed rotation Rb_kᵀ Q_k (Rb_k the joint's bind rotation, Q_k the bone's scale axes) and the
+//!   scale S_k^i animated; the leaves are the skin's joints (inverse bind matrices (Q_k at the joint point)^-1),
+//!   so a bone's skin matrix is the joint's rigid motion after Q S Qᵀ about the joint point, and no scale
+//!   reaches a child joint;
 //! - clip `training poses`: keyframe i at time i s (0-based), one per training shape;
 //!   clip `interpolated`: the articulation's own interpolation (anchor root, exact ends) through the poses in
 //!   order, `samples_per_second` samples per second.
@@ -66,6 +71,11 @@ pub struct GltfOptions {
     pub samples_per_second: usize,
     /// Interpolation options of the `interpolated` clip (skin and residual do not apply: glTF moves joints).
     pub interpolation: Options,
+    /// Fitted weights, free joints: scale channels per bone ([`RigOptions::bone_scale`]). Default false.
+    pub bone_scale: bool,
+    /// Fitted weights: rings of the part graph that give a vertex's candidate bones, 1..=3
+    /// ([`RigOptions::rings`]). Default 1.
+    pub rings: usize,
 }
 
 impl Default for GltfOptions {
@@ -78,6 +88,8 @@ impl Default for GltfOptions {
             bind_pose: 0,
             samples_per_second: 10,
             interpolation: Options::default(),
+            bone_scale: false,
+            rings: 1,
         }
     }
 }
@@ -90,6 +102,8 @@ impl GltfOptions {
             influences: self.influences,
             joints: self.joints,
             bind_pose: self.bind_pose,
+            bone_scale: self.bone_scale,
+            rings: self.rings,
             ..RigOptions::default()
         }
     }
@@ -366,9 +380,14 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
 
     // Inverse bind matrices: (B_k)^-1 x (x -> (x - offset) * scale).
     let placements = bind_placements(art, rig, opts.bind_pose);
+    let scaled = rig.scale.as_ref();
     let mut ibm: Vec<f32> = Vec::with_capacity(16 * n_joints);
     for &k in &tree.order {
-        let gi = placements[k].inverse();
+        // with scale channels the skin's joint is the bone's leaf node (its scale axes Q_k at the joint point)
+        let gi = match scaled {
+            None => placements[k].inverse(),
+            Some(sc) => RigidMotion { rotation: sc.axes[k], translation: placements[k].translation }.inverse(),
+        };
         let s = norm.scale;
         let a = gi.rotation.map(|x| x * s);
         let c = sub(gi.translation, mat_vec(&a, norm.offset));
@@ -383,7 +402,31 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
     let mut animations = Vec::new();
     let keys: Vec<usize> = (0..ns).collect();
     let mut clips: Vec<(&str, Vec<f64>, Vec<Vec<RigidMotion>>)> = Vec::new();
-    clips.push(("training poses", (0..ns).map(|i| i as f64).collect(), rig.bones.iter().map(|b| world(b)).collect()));
+    // With scale channels a bone's skin motion x -> A x + b, A = R Q S Qᵀ, is its joint's rigid motion after the
+    // leaf's scaling about the joint point p: x -> R (p + Q S Qᵀ (x - p)) + t', so t' = b - R (p - Q S Qᵀ p).
+    let rigid_bones = |i: usize| -> Vec<RigidMotion> {
+        match scaled {
+            None => rig.bones[i].clone(),
+            Some(sc) => (0..art.n_parts())
+                .map(|k| {
+                    let m = &rig.bones[i][k];
+                    let f = sc.factors[i][k];
+                    let inv = sc.axes[k]
+                        * Mat3::from_diagonal(&nalgebra::Vector3::new(1.0 / f[0], 1.0 / f[1], 1.0 / f[2]))
+                        * sc.axes[k].transpose();
+                    let r = m.rotation * inv;
+                    let p = placements[k].translation;
+                    let moved = mat_vec(&sc.stretch(i, k), p);
+                    RigidMotion { rotation: r, translation: sub(m.translation, mat_vec(&r, sub(p, moved))) }
+                })
+                .collect(),
+        }
+    };
+    clips.push((
+        "training poses",
+        (0..ns).map(|i| i as f64).collect(),
+        (0..ns).map(|i| world(&rigid_bones(i))).collect(),
+    ));
     let mfa_motions = opts.weights != Weights::Fitted && opts.joints == Joints::Free;
     if mfa_motions {
         let steps = (ns - 1) * opts.samples_per_second;
@@ -439,6 +482,12 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             let out =
                 bin.floats(&rot, json::accessor::Type::Vec4, 4, false, None, &format!("{name}: part {k} rotation"));
             clip.add(out, 2 + slot as u32, json::animation::Property::Rotation);
+            if let (Some(sc), "training poses") = (scaled, name) {
+                let sv: Vec<f32> = sc.factors.iter().flat_map(|f| f[k].map(|c| c as f32)).collect();
+                let out =
+                    bin.floats(&sv, json::accessor::Type::Vec3, 3, false, None, &format!("{name}: part {k} scale"));
+                clip.add(out, (2 + n_joints + slot) as u32, json::animation::Property::Scale);
+            }
         }
         if name == "training poses" && !targets.is_empty() {
             let mut w = vec![0f32; ns * ns];
@@ -481,6 +530,7 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             .enumerate()
             .filter(|(_, &c)| tree.parent[c] == Some(k))
             .map(|(s, _)| json::Index::new(2 + s as u32))
+            .chain(scaled.map(|_| json::Index::new((2 + n_joints + slot) as u32)))
             .collect();
         let (t, q) = rest[slot];
         nodes.push(json::Node {
@@ -491,6 +541,21 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             ..Default::default()
         });
     }
+    if let Some(sc) = scaled {
+        // one leaf per bone: a fixed rotation to its scale axes (Q'_k = Rb_kᵀ Q_k, Rb_k the joint's bind
+        // rotation), the scale animated; the skin's joints
+        for &k in &tree.order {
+            let q = to_quat(&(placements[k].rotation.transpose() * sc.axes[k]));
+            let f = sc.factors[opts.bind_pose][k];
+            nodes.push(json::Node {
+                name: Some(format!("part {} scale", k + 1)),
+                rotation: Some(json::scene::UnitQuaternion([q.i, q.j, q.k, q.w].map(|c| c as f32))),
+                scale: Some(f.map(|c| c as f32)),
+                ..Default::default()
+            });
+        }
+    }
+    let skin_joint0 = if scaled.is_some() { 2 + n_joints } else { 2 };
     while bin.data.len() % 4 != 0 {
         bin.data.push(0);
     }
@@ -541,7 +606,7 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             extensions: Default::default(),
             extras: Default::default(),
             inverse_bind_matrices: Some(ibm_acc),
-            joints: (0..n_joints).map(|s| json::Index::new(2 + s as u32)).collect(),
+            joints: (0..n_joints).map(|s| json::Index::new((skin_joint0 + s) as u32)).collect(),
             name: Some("parts".into()),
             skeleton: Some(json::Index::new(2)),
         }],

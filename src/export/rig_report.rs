@@ -6,6 +6,13 @@
 //! the clip's keyframes and d the diagonal of the bounding box of the rest pose (the training pose the rig
 //! is bound in, as given: the same d as for any other tool's rig of the same data, whatever bind positions
 //! the rig chose). The same for one pose gives the per-pose figure; the overall E_RMS² is their mean square.
+//!
+//! `e_rms_his_centred_half_diagonal`: the same figure as Hyperspectral Inverse Skinning (Liu et al. 2020)
+//! computes it in `recover_poses.py` (CraGL/Hyperspectral-Inverse-Skinning): every pose, the truth's and the
+//! rig's, centred on its own vertex mean before the difference is taken, and the error divided by half the
+//! rest pose's diagonal, not the whole: 1000 · ||C(V) - C(V')||_F / sqrt(3 n_v n_poses) / (d / 2), C the
+//! centring. Their published tables are in this measure; it is about twice E_RMS (less whatever the poses'
+//! mean offsets carried).
 
 use super::gltf::{GlbPlayback, GltfOptions, Joints, Morphs, Weights};
 use crate::articulate::pose::e_rms;
@@ -28,6 +35,9 @@ pub struct PoseError {
 #[derive(Debug, Clone, Serialize)]
 pub struct RigError {
     pub e_rms: f64,
+    /// E_RMS as Hyperspectral Inverse Skinning measures it (module doc): every pose centred, divided by half
+    /// the rest pose's diagonal.
+    pub e_rms_his_centred_half_diagonal: f64,
     /// Largest vertex distance over all poses, original units.
     pub max_error: f64,
     /// `max_error` / `diagonal`.
@@ -71,6 +81,8 @@ struct ErrorSum<'a> {
     diagonal: f64,
     poses: Vec<PoseError>,
     total: f64,
+    /// Sum over the poses of the squared error after centring both poses (HIS's measure).
+    total_centred: f64,
     max_error: f64,
 }
 
@@ -87,7 +99,14 @@ impl<'a> ErrorSum<'a> {
         if !(diagonal > 0.0) {
             return Err(Error::Data("the rest pose has an empty bounding box".into()));
         }
-        Ok(ErrorSum { pop, diagonal, poses: Vec::with_capacity(pop.n_shapes()), total: 0.0, max_error: 0.0 })
+        Ok(ErrorSum {
+            pop,
+            diagonal,
+            poses: Vec::with_capacity(pop.n_shapes()),
+            total: 0.0,
+            total_centred: 0.0,
+            max_error: 0.0,
+        })
     }
 
     /// Frame `i` (original units), after frames 0..i.
@@ -96,14 +115,33 @@ impl<'a> ErrorSum<'a> {
         if i != self.poses.len() || i >= pop.n_shapes() {
             return Err(Error::Data(format!("keyframe {i} of a clip for {} training poses", pop.n_shapes())));
         }
+        if frame.len() != pop.n_vertices() {
+            return Err(Error::Data(format!(
+                "keyframe {i} has {} vertices, the population {}",
+                frame.len(),
+                pop.n_vertices()
+            )));
+        }
         let mut sq = 0.0;
         let mut worst: f64 = 0.0;
+        // the mean difference: centring both poses subtracts it from every vertex's difference
+        let mut mean = [0.0; 3];
         for (x, u) in frame.iter().zip(pop.shape(i).iter()) {
-            let d = norm(sub(*x, pop.normalization.to_original(u)));
+            let e = sub(*x, pop.normalization.to_original(u));
+            let d = norm(e);
             sq += d * d;
             worst = worst.max(d);
+            mean = crate::geometry::add(mean, e);
+        }
+        let mean = crate::geometry::scale(mean, 1.0 / frame.len().max(1) as f64);
+        // Σ|e - ē|², a second pass rather than Σ|e|² - n|ē|² (no cancellation when the offset dominates)
+        let mut centred = 0.0;
+        for (x, u) in frame.iter().zip(pop.shape(i).iter()) {
+            let e = sub(sub(*x, pop.normalization.to_original(u)), mean);
+            centred += crate::geometry::dot(e, e);
         }
         self.total += sq;
+        self.total_centred += centred;
         self.max_error = self.max_error.max(worst);
         self.poses.push(PoseError {
             name: pop.names[i].clone(),
@@ -114,8 +152,10 @@ impl<'a> ErrorSum<'a> {
     }
 
     fn finish(self) -> RigError {
+        let points = self.pop.n_vertices() * self.pop.n_shapes();
         RigError {
-            e_rms: e_rms(self.total, self.pop.n_vertices() * self.pop.n_shapes(), self.diagonal),
+            e_rms: e_rms(self.total, points, self.diagonal),
+            e_rms_his_centred_half_diagonal: e_rms(self.total_centred, points, self.diagonal / 2.0),
             max_error: self.max_error,
             max_error_over_diagonal: self.max_error / self.diagonal,
             diagonal: self.diagonal,
@@ -286,5 +326,48 @@ mod field_tests {
         assert_eq!(bad[0].field, "influences");
         assert!(!bad[0].message.contains("= 0"), "{}", bad[0].message);
         assert_eq!(RigRequest::default().with_fields(&[("influences", "2")]).unwrap().influences, Some(2));
+    }
+}
+
+#[cfg(test)]
+mod measure_tests {
+    use super::*;
+    use crate::mesh::Mesh;
+
+    /// Two poses of four vertices; the rest pose's box is 2 x 2 x 1 (diagonal 3). Keyframe 0 is exact,
+    /// keyframe 1 is off by (1, 1, 1) everywhere plus ±0.4 along x on vertices 0 and 1.
+    #[test]
+    fn his_measure_centres_each_pose_and_halves_the_diagonal() {
+        let rest = vec![[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 1.0]];
+        let faces = vec![[0, 1, 2], [0, 1, 3]];
+        let named = vec![
+            ("p0".to_string(), Mesh { positions: rest.clone(), faces: faces.clone() }),
+            ("p1".to_string(), Mesh { positions: rest.clone(), faces }),
+        ];
+        let pop = Population::from_meshes(named).unwrap();
+        let extra = [[0.4, 0.0, 0.0], [-0.4, 0.0, 0.0], [0.0; 3], [0.0; 3]];
+        let off: Vec<Vec3> =
+            rest.iter().zip(extra).map(|(p, e)| [p[0] + 1.0 + e[0], p[1] + 1.0 + e[1], p[2] + 1.0 + e[2]]).collect();
+        let play = GlbPlayback {
+            rest: rest.clone(),
+            frames: vec![rest.clone(), off],
+            joint_positions: vec![vec![], vec![]],
+            joint_parent: vec![],
+            clips: vec!["training poses".into()],
+        };
+        let err = rig_error(&pop, &play, 0).unwrap();
+        // Kavan: every coordinate of the offset counts; 3 n_v n_poses = 24; d = 3
+        let kavan = 1000.0 * ((1.4f64.powi(2) + 2.0 + 0.6f64.powi(2) + 2.0 + 3.0 + 3.0) / 24.0).sqrt() / 3.0;
+        assert!((err.e_rms - kavan).abs() < 1e-6 * kavan, "{} vs {kavan}", err.e_rms);
+        // HIS: the mean offset (1, 1, 1) goes with the centring, ±0.4 is left; d / 2 = 1.5
+        let his = 1000.0 * (2.0 * 0.16f64 / 24.0).sqrt() / 1.5;
+        assert!(
+            (err.e_rms_his_centred_half_diagonal - his).abs() < 1e-6 * his,
+            "{}",
+            err.e_rms_his_centred_half_diagonal
+        );
+        // a keyframe of the wrong size is an error, not a silent truncation
+        let short = GlbPlayback { frames: vec![rest.clone(), rest[..3].to_vec()], ..play };
+        assert!(rig_error(&pop, &short, 0).is_err());
     }
 }

@@ -36,6 +36,13 @@ pub struct SavedRig {
 impl SavedRig {
     /// Builds the rig of `model` on `pop` with `band` and `options`.
     pub fn build(model: &Model, pop: &Population, band: f64, options: RigOptions) -> Result<SavedRig> {
+        if options.bone_scale {
+            return Err(crate::error::Error::Params(
+                "a rig with bone scale is not kept in the model file (its motions are not rotations): \
+                 build it with export-gltf or rig-report instead"
+                    .into(),
+            ));
+        }
         let art = Articulation::with_band(model, pop, band)?;
         let rig = crate::articulate::rig::build(&art, &options)?;
         Ok(SavedRig { band, options, poses: poses_fingerprint(pop), rig })
@@ -197,6 +204,7 @@ pub(super) fn read(file: &str, h: RigHeader, a: &Arrays, nv: usize, ns: usize, n
         joint_points: joint_points.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         joints: h.joints,
         trace: h.trace,
+        scale: None,
     };
     Ok(SavedRig { band: h.band, options: h.options, poses, rig })
 }

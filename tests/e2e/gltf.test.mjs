@@ -139,14 +139,16 @@ before(() => {
   posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'fitted8.glb'), '--weights', 'fitted', '--influences', '8');
   posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'fixed-morphs.glb'), '--weights', 'fitted',
     '--joints', 'fixed', '--morphs', 'residual');
+  posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'fitted-scale.glb'), '--weights', 'fitted',
+    '--bone-scale');
 });
 
 after(() => {
   if (dir) rmSync(dir, { recursive: true, force: true });
 });
 
-test('the Khronos validator reports 0 errors and 0 warnings (rigid, smooth, fitted weights; 8 influences; fixed joints and residual morphs)', async () => {
-  for (const f of ['rigid.glb', 'smooth.glb', 'fitted.glb', 'fitted8.glb', 'fixed-morphs.glb']) {
+test('the Khronos validator reports 0 errors and 0 warnings (rigid, smooth, fitted weights; 8 influences; fixed joints and residual morphs; bone scale)', async () => {
+  for (const f of ['rigid.glb', 'smooth.glb', 'fitted.glb', 'fitted8.glb', 'fixed-morphs.glb', 'fitted-scale.glb']) {
     const r = await validateFile(path.join(dir, f));
     assert.equal(r.errors, 0, `${f}: ${JSON.stringify(r.messages)}`);
     assert.equal(r.warnings, 0, `${f}: ${JSON.stringify(r.messages)}`);
@@ -245,7 +247,7 @@ async function threeErms(file) {
 
 test('fitted weights: three.js plays the E_RMS that rig-report prints (within 1 %), below rigid weights', async () => {
   const report = (f) => JSON.parse(posemfa('rig-report', path.join(dir, 'pop'), '--glb', path.join(dir, f)));
-  for (const f of ['rigid.glb', 'fitted.glb', 'fitted8.glb']) {
+  for (const f of ['rigid.glb', 'fitted.glb', 'fitted8.glb', 'fitted-scale.glb']) {
     const three = await threeErms(path.join(dir, f));
     const ours = report(f);
     assert.ok(Math.abs(three.eRms - ours.e_rms) <= 0.01 * ours.e_rms, `${f}: three.js ${three.eRms}, rig-report ${ours.e_rms}`);
@@ -253,6 +255,12 @@ test('fitted weights: three.js plays the E_RMS that rig-report prints (within 1 
   const rigid = report('rigid.glb').e_rms;
   const fitted = report('fitted.glb').e_rms;
   assert.ok(fitted < 0.8 * rigid, `fitted ${fitted} vs rigid ${rigid}`);
+  // scale channels: the skin's joints are the bones' leaf nodes, whose scale the clip animates
+  const bytes = readFileSync(path.join(dir, 'fitted-scale.glb'));
+  const scaled = JSON.parse(bytes.subarray(20, 20 + bytes.readUInt32LE(12)).toString());
+  const paths = scaled.animations[0].channels.map((c) => c.target.path);
+  assert.ok(paths.includes('scale'), `channels ${[...new Set(paths)]}`);
+  assert.ok(report('fitted-scale.glb').e_rms <= fitted * 1.001, `bone scale ${report('fitted-scale.glb').e_rms} vs fitted ${fitted}`);
 });
 
 test('fixed joints and residual morphs: in three.js every bone keeps its length and every pose is reproduced within 1e-5 of the diagonal', async () => {

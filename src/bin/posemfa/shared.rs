@@ -577,6 +577,14 @@ pub struct RigArgs {
     /// Pose the mesh is bound in (default: the file named reference.obj if any, else 1)
     #[arg(long, value_name = "N", value_parser = pose_number)]
     bind: Option<usize>,
+    /// Fitted weights, free joints: every bone also scales along three axes of its own (a scale channel on a
+    /// leaf node per bone)
+    #[arg(long)]
+    bone_scale: bool,
+    /// Fitted weights: a vertex's candidate bones are its part's and those within N steps of it in the part
+    /// graph, 1 to 3 (default 1)
+    #[arg(long, value_name = "N")]
+    candidate_rings: Option<usize>,
 }
 
 impl RigArgs {
@@ -601,8 +609,12 @@ impl RigArgs {
             joints: self.joints.unwrap_or_default(),
             morphs: self.morphs.unwrap_or_default(),
             bind_pose: self.bind(pop)?,
+            bone_scale: self.bone_scale,
             ..Default::default()
         };
+        if let Some(r) = self.candidate_rings {
+            g.rings = r;
+        }
         if let Some(k) = self.influences {
             g.influences = k;
         }
