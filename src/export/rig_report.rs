@@ -344,7 +344,7 @@ mod measure_tests {
             ("p0".to_string(), Mesh { positions: rest.clone(), faces: faces.clone() }),
             ("p1".to_string(), Mesh { positions: rest.clone(), faces }),
         ];
-        let pop = Population::from_meshes(named).unwrap();
+        let pop = Population::new(crate::mesh::population::Sources::Meshes(named)).unwrap();
         let extra = [[0.4, 0.0, 0.0], [-0.4, 0.0, 0.0], [0.0; 3], [0.0; 3]];
         let off: Vec<Vec3> =
             rest.iter().zip(extra).map(|(p, e)| [p[0] + 1.0 + e[0], p[1] + 1.0 + e[1], p[2] + 1.0 + e[2]]).collect();
