@@ -173,6 +173,242 @@ pub fn central_root(tree: &Tree, labels: &[u32], faces: &[[u32; 3]], positions: 
     best.map_or(tree.root, |b| b.1)
 }
 
+/// Every edge of the triangles once, as (smaller, larger) vertex index, sorted.
+pub fn mesh_edges(faces: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let mut e: Vec<[u32; 2]> = faces
+        .iter()
+        .flat_map(|f| [[f[0], f[1]], [f[1], f[2]], [f[2], f[0]]])
+        .filter(|e| e[0] != e[1])
+        .map(|e| if e[0] < e[1] { e } else { [e[1], e[0]] })
+        .collect();
+    e.sort_unstable();
+    e.dedup();
+    e
+}
+
+/// Each vertex's neighbours in the mesh's edge graph (compressed rows): `of(v)` lists (neighbour, index of
+/// the edge in the `edges` it was built from).
+pub struct VertexNeighbours {
+    start: Vec<usize>,
+    list: Vec<(u32, usize)>,
+}
+
+impl VertexNeighbours {
+    /// From `edges` (e.g. [`mesh_edges`]) over `n_vertices` vertices.
+    pub fn new(edges: &[[u32; 2]], n_vertices: usize) -> VertexNeighbours {
+        let mut start = vec![0usize; n_vertices + 1];
+        for e in edges {
+            start[e[0] as usize + 1] += 1;
+            start[e[1] as usize + 1] += 1;
+        }
+        for v in 0..n_vertices {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut list = vec![(0u32, 0usize); start[n_vertices]];
+        for (i, e) in edges.iter().enumerate() {
+            for (a, b) in [(e[0], e[1]), (e[1], e[0])] {
+                list[fill[a as usize]] = (b, i);
+                fill[a as usize] += 1;
+            }
+        }
+        VertexNeighbours { start, list }
+    }
+
+    pub fn of(&self, v: usize) -> &[(u32, usize)] {
+        &self.list[self.start[v]..self.start[v + 1]]
+    }
+}
+
+fn key(a: usize, b: usize) -> (usize, usize) {
+    if a < b {
+        (a, b)
+    } else {
+        (b, a)
+    }
+}
+
+/// Area of triangle (a, b, c).
+pub fn triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f64 {
+    0.5 * norm(crate::geometry::cross(sub(b, a), sub(c, a)))
+}
+
+struct Dsu(Vec<usize>);
+impl Dsu {
+    fn find(&mut self, x: usize) -> usize {
+        let mut r = x;
+        while self.0[r] != r {
+            r = self.0[r];
+        }
+        let mut y = x;
+        while self.0[y] != r {
+            let n = self.0[y];
+            self.0[y] = r;
+            y = n;
+        }
+        r
+    }
+    fn union(&mut self, a: usize, b: usize) {
+        let (a, b) = (self.find(a), self.find(b));
+        if a != b {
+            self.0[a] = b;
+        }
+    }
+}
+
+impl PartGraph {
+    /// Builds the graph from the labels (one per vertex, < `n_parts`), the triangles, and one pose of the
+    /// mesh (`positions`, used for patch areas and to place virtual contacts).
+    pub fn new(labels: &[u32], faces: &[[u32; 3]], n_parts: usize, positions: &[Vec3]) -> PartGraph {
+        let mut vertex_count = vec![0usize; n_parts];
+        for &l in labels {
+            vertex_count[l as usize] += 1;
+        }
+        let mut strength: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        for e in mesh_edges(faces) {
+            let (a, b) = (labels[e[0] as usize] as usize, labels[e[1] as usize] as usize);
+            if a != b {
+                *strength.entry(key(a, b)).or_default() += 1;
+            }
+        }
+        // Triangles touching two parts, per pair.
+        let mut tri_of_pair: BTreeMap<(usize, usize), Vec<usize>> = BTreeMap::new();
+        for (t, f) in faces.iter().enumerate() {
+            let l = f.map(|v| labels[v as usize] as usize);
+            let mut pairs = vec![key(l[0], l[1]), key(l[1], l[2]), key(l[0], l[2])];
+            pairs.sort_unstable();
+            pairs.dedup();
+            for p in pairs {
+                if p.0 != p.1 {
+                    tri_of_pair.entry(p).or_default().push(t);
+                }
+            }
+        }
+        let mut contacts = BTreeMap::new();
+        for (pair, tris) in tri_of_pair {
+            contacts.insert(pair, Contact::Triangles(largest_patch(&tris, faces, positions)));
+        }
+        let mut graph = PartGraph { n_parts, vertex_count, neighbors: vec![Vec::new(); n_parts], contacts, strength };
+        graph.join_pieces(labels, positions);
+        for &(a, b) in graph.contacts.keys() {
+            graph.neighbors[a].push(b);
+            graph.neighbors[b].push(a);
+        }
+        for n in &mut graph.neighbors {
+            n.sort_unstable();
+            n.dedup();
+        }
+        graph
+    }
+
+    /// Adds virtual contacts until the used parts form one connected graph.
+    fn join_pieces(&mut self, labels: &[u32], positions: &[Vec3]) {
+        let used: Vec<usize> = (0..self.n_parts).filter(|&k| self.vertex_count[k] > 0).collect();
+        if used.len() < 2 {
+            return;
+        }
+        loop {
+            let mut dsu = Dsu((0..self.n_parts).collect());
+            for &(a, b) in self.contacts.keys() {
+                dsu.union(a, b);
+            }
+            let main = dsu.find(used[0]);
+            // The first used part outside the main piece, and the whole piece it is in.
+            let Some(&other) = used.iter().find(|&&k| dsu.find(k) != main) else { return };
+            let other_root = dsu.find(other);
+            let in_main: Vec<bool> = (0..self.n_parts).map(|k| dsu.find(k) == main).collect();
+            let in_other: Vec<bool> = (0..self.n_parts).map(|k| dsu.find(k) == other_root).collect();
+            let centroid = |inside: &[bool]| {
+                let (mut c, mut n) = ([0.0; 3], 0.0);
+                for (j, &l) in labels.iter().enumerate() {
+                    if inside[l as usize] {
+                        c = add(c, positions[j]);
+                        n += 1.0;
+                    }
+                }
+                scale(c, 1.0 / n)
+            };
+            let nearest = |inside: &[bool], to: Vec3| {
+                (0..labels.len())
+                    .filter(|&j| inside[labels[j] as usize])
+                    .min_by(|&a, &b| norm(sub(positions[a], to)).total_cmp(&norm(sub(positions[b], to))))
+                    .expect("piece has vertices")
+            };
+            // Alternate nearest-point searches from the other piece's centroid: a cheap closest pair.
+            let mut vo = nearest(&in_other, centroid(&in_main));
+            let mut vm = nearest(&in_main, positions[vo]);
+            for _ in 0..3 {
+                vo = nearest(&in_other, positions[vm]);
+                vm = nearest(&in_main, positions[vo]);
+            }
+            let (a, b) = (labels[vm] as usize, labels[vo] as usize);
+            let (va, vb) = if a < b { (vm as u32, vo as u32) } else { (vo as u32, vm as u32) };
+            self.contacts.insert(key(a, b), Contact::Virtual(va, vb));
+            self.strength.insert(key(a, b), 1);
+        }
+    }
+
+    pub fn contact(&self, a: usize, b: usize) -> Option<&Contact> {
+        self.contacts.get(&key(a, b))
+    }
+
+    pub fn strength(&self, a: usize, b: usize) -> usize {
+        self.strength.get(&key(a, b)).copied().unwrap_or(0)
+    }
+
+    /// Parts that label at least one vertex.
+    pub fn used_parts(&self) -> Vec<usize> {
+        (0..self.n_parts).filter(|&k| self.vertex_count[k] > 0).collect()
+    }
+
+    /// The tree over the used parts grown from `root` by `rule`.
+    pub fn tree(&self, root: usize, rule: TreeRule) -> Tree {
+        let mut parent = vec![None; self.n_parts];
+        let mut seen = vec![false; self.n_parts];
+        let mut order = vec![root];
+        seen[root] = true;
+        match rule {
+            TreeRule::BreadthFirst => {
+                let mut queue = VecDeque::from([root]);
+                while let Some(c) = queue.pop_front() {
+                    for &k in &self.neighbors[c] {
+                        if !seen[k] {
+                            seen[k] = true;
+                            parent[k] = Some(c);
+                            order.push(k);
+                            queue.push_back(k);
+                        }
+                    }
+                }
+            }
+            TreeRule::Strongest => loop {
+                // Strongest contact from the tree to a part outside; ties: smaller tree index, then part.
+                let mut best: Option<(usize, usize, usize)> = None;
+                for (pos, &c) in order.iter().enumerate() {
+                    for &k in &self.neighbors[c] {
+                        if seen[k] {
+                            continue;
+                        }
+                        let s = self.strength(c, k);
+                        let better = match best {
+                            None => true,
+                            Some((bs, bpos, bk)) => s > bs || (s == bs && (pos, k) < (bpos, bk)),
+                        };
+                        if better {
+                            best = Some((s, pos, k));
+                        }
+                    }
+                }
+                let Some((_, pos, k)) = best else { break };
+                seen[k] = true;
+                parent[k] = Some(order[pos]);
+                order.push(k);
+            },
+        }
+        Tree { root, order, parent }
+    }
+}
+
 /// The connected patch (triangles sharing a vertex) with the largest area, triangles in index order.
 fn largest_patch(tris: &[usize], faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<usize> {
     if tris.len() <= 1 {
