@@ -572,7 +572,7 @@ mod tests {
         assert_eq!(r.parent[6], None);
         assert_eq!((r.parent[0], r.parent[1], r.parent[2]), (Some(6), Some(0), Some(1)));
         assert_eq!((r.parent[3], r.parent[7]), (Some(2), Some(0)));
-        let mut edges = |t: &Tree| {
+        let edges = |t: &Tree| {
             let mut e: Vec<(usize, usize)> =
                 t.order.iter().filter_map(|&k| t.parent[k].map(|p| (p.min(k), p.max(k)))).collect();
             e.sort();
