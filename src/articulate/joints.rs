@@ -114,6 +114,9 @@ pub fn joints<S: AsRef<[Vec3]>>(
 pub fn pivot(child: &[RigidMotion], parent: &[RigidMotion], contact: Vec3, radius: f64) -> Vec3 {
     let (mu_rel, turn, guard) = (PIVOT_MU_REL, PIVOT_TURN, PIVOT_GUARD);
     let n = child.len().min(parent.len());
+    if n == 0 {
+        return contact;
+    }
     let mut a = [0.0; 9];
     let mut b = [0.0; 3];
     for (mk, mp) in child.iter().zip(parent).take(n) {
