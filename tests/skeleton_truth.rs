@@ -36,7 +36,9 @@ fn a_rig_of_the_clip_finds_the_skeleton_that_made_it() {
     assert_eq!(s["fitted_to_artist"]["joints"].as_array().unwrap().len(), fitted);
     let median = s["artist_to_fitted"]["median"].as_f64().unwrap();
     let back = s["fitted_to_artist"]["median"].as_f64().unwrap();
-    assert!(median < 0.01 && back < 0.01, "joints a median {median} / {back} of the diagonal away");
+    // (the fixture's joints are posemfa's own nodes of the time, at the contact centroids; the rig's nodes are
+    // now at the pivots, about 1 % away: issue 59's bar, 1.5 %)
+    assert!(median < 0.015 && back < 0.015, "joints a median {median} / {back} of the diagonal away");
     for side in ["artist_to_fitted", "fitted_to_artist"] {
         let d = &s[side];
         let (m, x, any) =
@@ -110,17 +112,6 @@ fn real_characters_when_fetched() {
     let back = s["artist"].as_array().unwrap().iter().find(|j| j["name"] == "Spine_Back01").unwrap();
     assert_eq!(back["parent"], serde_json::Value::Null);
     assert_eq!(back["part"], "Spine_Front01", "{back}");
-}
-
-/// The median and largest joint distances both ways, as fractions of the diagonal.
-fn distances(s: &serde_json::Value) -> [f64; 4] {
-    let g = |side: &str, k: &str| s[side][k].as_f64().unwrap_or(f64::NAN);
-    [
-        g("artist_to_fitted", "median"),
-        g("artist_to_fitted", "max"),
-        g("fitted_to_artist", "median"),
-        g("fitted_to_artist", "max"),
-    ]
 }
 
 /// Issue 59's joint bars on the real characters of `scripts/fixtures/rigged-characters.sh` where docs/rig.md's
