@@ -116,7 +116,9 @@ dual_test! {
         let change_fixed = bone_length_change(&p_fixed, e_fixed.diagonal);
         let change_free = bone_length_change(&p_free, e_free.diagonal);
         assert!(change_fixed <= 1e-5, "fixed joints: a bone length changes by {change_fixed} of the diagonal");
-        assert!(change_free > 1e-3, "free joints: bone lengths change by {change_free} only");
+        // free joints' nodes sit at their pivots (articulate::joints::pivot), where parent and child move most
+        // alike: the bones still stretch, less than when the nodes sat at the contact centroids (> 1e-3)
+        assert!(change_free > 1e-4, "free joints: bone lengths change by {change_free} only");
         // the constraint costs something, but the rig still beats rigid weights
         let (rigid, _) = exported(&pop, &art, &GltfOptions::default());
         assert!(e_fixed.e_rms >= e_free.e_rms * 0.999 && e_fixed.e_rms < rigid.e_rms, "fixed {} free {} rigid {}", e_fixed.e_rms, e_free.e_rms, rigid.e_rms);

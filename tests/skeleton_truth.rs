@@ -36,7 +36,9 @@ fn a_rig_of_the_clip_finds_the_skeleton_that_made_it() {
     assert_eq!(s["fitted_to_artist"]["joints"].as_array().unwrap().len(), fitted);
     let median = s["artist_to_fitted"]["median"].as_f64().unwrap();
     let back = s["fitted_to_artist"]["median"].as_f64().unwrap();
-    assert!(median < 0.01 && back < 0.01, "joints a median {median} / {back} of the diagonal away");
+    // (the fixture's joints are posemfa's own nodes of the time, at the contact centroids; the rig's nodes are
+    // now at the pivots, about 1 % away: issue 59's bar, 1.5 %)
+    assert!(median < 0.015 && back < 0.015, "joints a median {median} / {back} of the diagonal away");
     for side in ["artist_to_fitted", "fitted_to_artist"] {
         let d = &s[side];
         let (m, x, any) =
@@ -110,4 +112,42 @@ fn real_characters_when_fetched() {
     let back = s["artist"].as_array().unwrap().iter().find(|j| j["name"] == "Spine_Back01").unwrap();
     assert_eq!(back["parent"], serde_json::Value::Null);
     assert_eq!(back["part"], "Spine_Front01", "{back}");
+}
+
+/// Issue 59's joint bars on the real characters of `scripts/fixtures/rigged-characters.sh` where docs/rig.md's
+/// table says they are met: the man meets all (median at most 1.5 %, largest at most 5 % of the diagonal, both
+/// ways, the root on his pelvis); Mr. Fixit (assimp-testmodels' IQM folder) the medians, the converse's largest
+/// against every artist joint that holds vertices, and the root on his hips; the Minetest player (minetest-data)
+/// its root on the body. Skipped with a message when the characters have not been fetched.
+#[test]
+fn joints_where_the_artist_put_them_when_fetched() {
+    let dir = std::env::var("POSEMFA_CHARACTERS")
+        .unwrap_or_else(|_| format!("{}/target/rigged-characters", env!("CARGO_MANIFEST_DIR")));
+    let [bcn, fixit, minetest] =
+        ["bcn_epileptic.glb", "mrfixit.glb", "minetest_character.glb"].map(|f| format!("{dir}/{f}"));
+    if let Some(f) = [&bcn, &fixit, &minetest].into_iter().find(|f| !std::path::Path::new(f).exists()) {
+        eprintln!("skipped: no {f}; run scripts/fixtures/rigged-characters.sh to fetch the characters");
+        return;
+    }
+    let skeleton = |f: &str| -> serde_json::Value {
+        let r = posemfa(&["rig-report", f, "--truth", f, "--weights", "fitted"]);
+        assert!(r.status.success(), "{f}: {}", text(&r.stderr));
+        let v: serde_json::Value = serde_json::from_str(&text(&r.stdout)).expect("rig-report prints JSON");
+        v["skeleton"].clone()
+    };
+    let g = |s: &serde_json::Value, side: &str, k: &str| s[side][k].as_f64().unwrap_or(f64::NAN);
+    let s = skeleton(&bcn);
+    let (am, ax) = (g(&s, "artist_to_fitted", "median"), g(&s, "artist_to_fitted", "max"));
+    let (fm, fx) = (g(&s, "fitted_to_artist", "median"), g(&s, "fitted_to_artist", "max"));
+    assert!(am <= 0.015 && fm <= 0.015 && ax <= 0.05 && fx <= 0.05, "the man: {am} / {ax}, {fm} / {fx}");
+    assert_eq!(s["root"]["on_central_part"], true, "the man: {}", s["root"]);
+    assert!(s["parts_ari"].as_f64().unwrap() >= 0.9, "{}", s["parts_ari"]);
+    let s = skeleton(&fixit);
+    let (am, fm) = (g(&s, "artist_to_fitted", "median"), g(&s, "fitted_to_artist", "median"));
+    let fx = g(&s, "fitted_to_any_artist", "max");
+    assert!(am <= 0.015 && fm <= 0.015 && fx <= 0.05, "Mr. Fixit: {am}, {fm}, any {fx}");
+    assert!(g(&s, "fitted_to_any_artist", "median") <= fm, "more artist joints, no farther");
+    assert_eq!(s["root"]["on_central_part"], true, "Mr. Fixit: {}", s["root"]);
+    let s = skeleton(&minetest);
+    assert_eq!(s["root"]["on_central_part"], true, "the Minetest player: {}", s["root"]);
 }

@@ -79,6 +79,98 @@ impl Tree {
     pub fn contains(&self, part: usize) -> bool {
         self.order.contains(&part)
     }
+
+    /// The same tree (the same edges) rooted at `root`: the parent relations on the path between the two roots
+    /// reversed, the order breadth-first from `root` along the tree's edges. Itself when `root` is not in it.
+    pub fn rerooted(&self, root: usize) -> Tree {
+        if !self.contains(root) || root == self.root {
+            return self.clone();
+        }
+        let n = self.parent.len();
+        let mut adjacent: Vec<Vec<usize>> = vec![Vec::new(); n];
+        // children in the old order, then the old parent: a deterministic order of the new tree
+        for &k in &self.order {
+            if let Some(p) = self.parent[k] {
+                adjacent[p].push(k);
+            }
+        }
+        for &k in &self.order {
+            if let Some(p) = self.parent[k] {
+                adjacent[k].push(p);
+            }
+        }
+        let mut parent = vec![None; n];
+        let mut seen = vec![false; n];
+        let mut order = vec![root];
+        seen[root] = true;
+        let mut at = 0;
+        while at < order.len() {
+            let c = order[at];
+            at += 1;
+            for &k in &adjacent[c] {
+                if !seen[k] {
+                    seen[k] = true;
+                    parent[k] = Some(c);
+                    order.push(k);
+                }
+            }
+        }
+        Tree { root, order, parent }
+    }
+}
+
+/// The part of `tree` where an artist roots a skeleton: among the parts where the tree branches (at least
+/// three tree neighbours, or the most any part has when no part has three), the one whose centroid in
+/// `positions` is nearest the area-weighted centroid of the whole mesh; ties to the smaller index. The pelvis
+/// of a biped (legs and spine) rather than the chest it joins the arms at, when the pelvis is nearer the
+/// centre; a quadruped's or a man's hips rather than a hoof or a hand. Each part's area is its vertices' share
+/// of their triangles (a third of each); `labels`: each vertex's part. The tree's own root when the mesh has no
+/// area (issue 59; measured in docs/rig.md#joints-against-artists-skeletons).
+pub fn central_root(tree: &Tree, labels: &[u32], faces: &[[u32; 3]], positions: &[Vec3]) -> usize {
+    let n = tree.parent.len();
+    let mut area = vec![0.0; n];
+    let mut moment = vec![[0.0; 3]; n];
+    let (mut total, mut total_moment) = (0.0, [0.0; 3]);
+    for f in faces {
+        let [a, b, c] = f.map(|v| v as usize);
+        if a >= positions.len() || b >= positions.len() || c >= positions.len() {
+            continue;
+        }
+        let t = triangle_area(positions[a], positions[b], positions[c]) / 3.0;
+        if !t.is_finite() {
+            continue;
+        }
+        for v in [a, b, c] {
+            let Some(l) = labels.get(v).map(|&l| l as usize).filter(|&l| l < n) else { continue };
+            area[l] += t;
+            moment[l] = add(moment[l], scale(positions[v], t));
+            total += t;
+            total_moment = add(total_moment, scale(positions[v], t));
+        }
+    }
+    if !(total > 0.0) {
+        return tree.root;
+    }
+    let centre = scale(total_moment, 1.0 / total);
+    let mut degree = vec![0usize; n];
+    for &k in &tree.order {
+        if let Some(p) = tree.parent[k] {
+            degree[k] += 1;
+            degree[p] += 1;
+        }
+    }
+    let most = tree.order.iter().map(|&k| degree[k]).max().unwrap_or(0);
+    let mut best: Option<(f64, usize)> = None;
+    for &k in &tree.order {
+        if degree[k] < most.min(3) || !(area[k] > 0.0) {
+            continue;
+        }
+        let d = norm(sub(scale(moment[k], 1.0 / area[k]), centre));
+        if best.is_none_or(|(bd, bk)| d < bd || (d == bd && k < bk)) {
+            best = Some((d, k));
+        }
+    }
+    best.map_or(tree.root, |b| b.1)
 }
 
 /// Every edge of the triangles once, as (smaller, larger) vertex index, sorted.
@@ -430,6 +522,98 @@ pub fn colour_parts_like(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A stick biped: parts 0 pelvis, 1 spine, 2 chest, 3-4 arms, 5 head, 6-7 legs; each part one unit
+    /// triangle placed at its centre.
+    fn biped(anchor: usize) -> (Tree, Vec<u32>, Vec<[u32; 3]>, Vec<Vec3>) {
+        let centres = [
+            [0.0, 0.0, 0.0],
+            [0.0, 0.6, 0.0],
+            [0.0, 1.2, 0.0],
+            [-0.8, 1.3, 0.0],
+            [0.8, 1.3, 0.0],
+            [0.0, 1.7, 0.0],
+            [-0.2, -0.9, 0.0],
+            [0.2, -0.9, 0.0],
+        ];
+        let (mut pos, mut labels, mut faces) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, c) in centres.iter().enumerate() {
+            let s = match k {
+                2 => 0.6,     // the chest the largest part (the anchor today)
+                6 | 7 => 0.5, // long legs
+                _ => 0.3,
+            };
+            let v = pos.len() as u32;
+            pos.extend([add(*c, [-s, -s, 0.0]), add(*c, [s, -s, 0.0]), add(*c, [0.0, s, 0.0])]);
+            labels.extend([k as u32; 3]);
+            faces.push([v, v + 1, v + 2]);
+        }
+        let mut g = PartGraph {
+            n_parts: 8,
+            vertex_count: vec![3; 8],
+            neighbors: vec![Vec::new(); 8],
+            contacts: BTreeMap::new(),
+            strength: BTreeMap::new(),
+        };
+        for (a, b) in [(0, 1), (1, 2), (2, 3), (2, 4), (2, 5), (0, 6), (0, 7)] {
+            g.neighbors[a].push(b);
+            g.neighbors[b].push(a);
+            g.contacts.insert((a, b), Contact::Virtual(0, 0));
+            g.strength.insert((a, b), 1);
+        }
+        (g.tree(anchor, TreeRule::Strongest), labels, faces, pos)
+    }
+
+    #[test]
+    fn rerooting_keeps_the_edges_and_reverses_the_path() {
+        let (tree, ..) = biped(2);
+        let r = tree.rerooted(6);
+        assert_eq!(r.root, 6);
+        assert_eq!(r.parent[6], None);
+        assert_eq!((r.parent[0], r.parent[1], r.parent[2]), (Some(6), Some(0), Some(1)));
+        assert_eq!((r.parent[3], r.parent[7]), (Some(2), Some(0)));
+        let edges = |t: &Tree| {
+            let mut e: Vec<(usize, usize)> =
+                t.order.iter().filter_map(|&k| t.parent[k].map(|p| (p.min(k), p.max(k)))).collect();
+            e.sort();
+            e
+        };
+        assert_eq!(edges(&tree), edges(&r));
+        let mut seen = vec![false; 8];
+        for &k in &r.order {
+            assert!(r.parent[k].is_none_or(|p| seen[p]), "parents first");
+            seen[k] = true;
+        }
+        assert_eq!(r.order.len(), 8);
+        assert_eq!(tree.rerooted(2), tree);
+        assert_eq!(tree.rerooted(99), tree);
+    }
+
+    #[test]
+    fn the_root_is_the_branching_part_nearest_the_centre() {
+        // rooted on the chest (the largest part), the rule picks the pelvis: both branch, the pelvis is nearer
+        // the centre of area (legs heavy)
+        let (tree, labels, faces, pos) = biped(2);
+        assert_eq!(central_root(&tree, &labels, &faces, &pos), 0);
+        // arms and head raised far: the chest comes nearer the centre than the pelvis
+        let mut raised = pos.clone();
+        for (v, &l) in labels.iter().enumerate() {
+            if l == 3 || l == 4 || l == 5 {
+                raised[v] = add(raised[v], [0.0, 3.0, 0.0]);
+            }
+        }
+        assert_eq!(central_root(&tree, &labels, &faces, &raised), 2);
+        // a chain (no part branches): the most connected, nearest the centre
+        let chain = Tree { root: 0, order: vec![0, 1, 2], parent: vec![None, Some(0), Some(1)] };
+        let labels3 = vec![0, 0, 0, 1, 1, 1, 2, 2, 2];
+        let tri = |x: f64| [[x, 0.0, 0.0], [x + 1.0, 0.0, 0.0], [x, 1.0, 0.0]];
+        let pos3: Vec<Vec3> = [0.0, 2.0, 4.0].iter().flat_map(|&x| tri(x)).collect();
+        let faces3 = vec![[0, 1, 2], [3, 4, 5], [6, 7, 8]];
+        assert_eq!(central_root(&chain, &labels3, &faces3, &pos3), 1);
+        // no area, or bad indices: the tree's own root, no panic
+        assert_eq!(central_root(&chain, &labels3, &[[0, 0, 0]], &pos3), 0);
+        assert_eq!(central_root(&chain, &labels3, &[[0, 1, 99]], &pos3), 0);
+    }
 
     // A strip of quads (two triangles each) along x, `n` columns; labels by column.
     fn quad_strip(columns: usize) -> (Vec<[u32; 3]>, usize) {

@@ -11,7 +11,8 @@
 //! that mismatch in the parent's latent frame; blending it in t makes Algorithm 2 reproduce both end poses.
 
 use super::graph::{triangle_area, Contact, PartGraph};
-use crate::geometry::{add, mat_t_vec, scale, sub, Vec3};
+use super::RigidMotion;
+use crate::geometry::{add, mat_t_vec, norm, scale, sub, Vec3};
 use crate::mfa::Model;
 use std::collections::BTreeMap;
 
@@ -100,6 +101,139 @@ pub fn joints<S: AsRef<[Vec3]>>(
         .collect()
 }
 
+/// Where a free joint's node goes: the point that parent and child move most alike over the poses (the pivot),
+/// pulled toward `contact` (the contact centroid) the more, the less the joint turns, and kept within `radius`
+/// of it. `child`, `parent`: the two bones' motions from the bind pose, one per pose.
+///
+/// Minimises Σ_i |(R_c^i - R_p^i) x + t_c^i - t_p^i|² + μ |x - contact|² with μ = μ_rel tr/3 + μ_abs n: tr/3 is
+/// the mean eigenvalue of Σ_i ΔR_iᵀΔR_i (a hinge leaves its axis undetermined; μ_rel ties it to the contact),
+/// and μ_abs n is what n poses that each turn [`PIVOT_TURN`] would give, so a joint that turns much less than
+/// that stays near the contact and one that turns much more goes to its pivot. The answer is then drawn back
+/// along the line to `contact` to at most `radius` from it (a pivot the poses leave undetermined can fall far
+/// outside the body). `contact` itself when the motions are empty or the system singular.
+pub fn pivot(child: &[RigidMotion], parent: &[RigidMotion], contact: Vec3, radius: f64) -> Vec3 {
+    let (mu_rel, turn, guard) = (PIVOT_MU_REL, PIVOT_TURN, PIVOT_GUARD);
+    let n = child.len().min(parent.len());
+    if n == 0 {
+        return contact;
+    }
+    let mut a = [0.0; 9];
+    let mut b = [0.0; 3];
+    for (mk, mp) in child.iter().zip(parent).take(n) {
+        let dr = mk.rotation - mp.rotation;
+        let dt = sub(mk.translation, mp.translation);
+        for r in 0..3 {
+            for c in 0..3 {
+                a[r * 3 + c] += (0..3).map(|m| dr[(m, r)] * dr[(m, c)]).sum::<f64>();
+            }
+            b[r] -= (0..3).map(|m| dr[(m, r)] * dt[m]).sum::<f64>();
+        }
+    }
+    let tr = a[0] + a[4] + a[8];
+    // |R - I|_F² = 4 (1 - cos θ) for a turn θ
+    let mu = mu_rel * tr / 3.0 + n as f64 * 4.0 * (1.0 - turn.cos()) + 1e-12;
+    for r in 0..3 {
+        a[r * 3 + r] += mu;
+        b[r] += mu * contact[r];
+    }
+    let Some(x) = solve3(a, b) else { return contact };
+    if !x.iter().all(|c| c.is_finite()) {
+        return contact;
+    }
+    let d = sub(x, contact);
+    let len = norm(d);
+    let limit = guard * radius.max(0.0);
+    if len > limit {
+        if len > 0.0 && limit > 0.0 {
+            return add(contact, scale(d, limit / len));
+        }
+        return contact;
+    }
+    x
+}
+
+/// [`pivot`]'s pull relative to the mean eigenvalue.
+pub const PIVOT_MU_REL: f64 = 0.1;
+/// [`pivot`]'s turn (radians): a joint turning this much in every pose is pulled as much as it is free.
+pub const PIVOT_TURN: f64 = 5.0 * std::f64::consts::PI / 180.0;
+/// [`pivot`]'s guard, in contact radii.
+pub const PIVOT_GUARD: f64 = 1.0;
+
+/// 3 x 3 solve by Cramer's rule; None when singular.
+fn solve3(a: [f64; 9], b: [f64; 3]) -> Option<Vec3> {
+    let det = |m: &[f64; 9]| {
+        m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6])
+    };
+    let d = det(&a);
+    if !(d.abs() > 1e-300) || !d.is_finite() {
+        return None;
+    }
+    let mut x = [0.0; 3];
+    for (c, xc) in x.iter_mut().enumerate() {
+        let mut m = a;
+        for r in 0..3 {
+            m[r * 3 + c] = b[r];
+        }
+        *xc = det(&m) / d;
+    }
+    Some(x)
+}
+
+/// The radius of a contact in `positions`: the largest distance of its vertices from `centre`; for a virtual
+/// contact, that of the child part's vertices (`child_vertices`) from their own centroid, halved.
+pub fn contact_radius(
+    contact: &Contact,
+    faces: &[[u32; 3]],
+    positions: &[Vec3],
+    centre: Vec3,
+    child_vertices: &[usize],
+) -> f64 {
+    match contact {
+        Contact::Triangles(t) => t
+            .iter()
+            .flat_map(|&t| faces.get(t).copied().unwrap_or([0; 3]))
+            .filter_map(|v| positions.get(v as usize))
+            .map(|&p| norm(sub(p, centre)))
+            .fold(0.0, f64::max),
+        Contact::Virtual(..) => {
+            let pts: Vec<Vec3> = child_vertices.iter().filter_map(|&v| positions.get(v).copied()).collect();
+            if pts.is_empty() {
+                return 0.0;
+            }
+            let c = scale(pts.iter().fold([0.0; 3], |s, &p| add(s, p)), 1.0 / pts.len() as f64);
+            0.5 * pts.iter().map(|&p| norm(sub(p, c))).fold(0.0, f64::max)
+        }
+    }
+}
+
+/// A fitted rig's free joints placed as an artist would: the skeleton re-rooted on its central part
+/// ([`super::graph::central_root`]), each non-root joint at its [`pivot`] (from the fitted bones), the root at
+/// its part's centroid. Changes neither bones nor weights: what the rig plays is the same.
+pub fn place_free_joints(art: &super::Articulation, rig: &mut super::rig::Rig, bind: usize) {
+    let rest = &rig.rest;
+    let labels = &art.model.labels;
+    let root = super::graph::central_root(&rig.tree, labels, &art.faces, rest);
+    let tree = rig.tree.rerooted(root);
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); rig.joint_points.len()];
+    for (v, &l) in labels.iter().enumerate() {
+        if let Some(m) = members.get_mut(l as usize) {
+            m.push(v);
+        }
+    }
+    let ns = rig.bones.len();
+    for &k in &tree.order {
+        let contact = art.training_motion(k, bind).apply(art.node_offset(&tree, k));
+        rig.joint_points[k] = contact;
+        let Some(p) = tree.parent[k] else { continue };
+        let Some(c) = art.graph.contacts.get(&(p.min(k), p.max(k))) else { continue };
+        let radius = contact_radius(c, &art.faces, rest, contact, &members[k]);
+        let child: Vec<RigidMotion> = (0..ns).map(|i| rig.bones[i][k]).collect();
+        let parent: Vec<RigidMotion> = (0..ns).map(|i| rig.bones[i][p]).collect();
+        rig.joint_points[k] = pivot(&child, &parent, contact, radius);
+    }
+    rig.tree = tree;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -124,5 +258,53 @@ mod tests {
         let flat = vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
         let c = area_centroid(&[0], &[[0, 1, 2]], &flat);
         assert!((c[0] - 1.0).abs() < 1e-12);
+    }
+
+    /// A rotation by `deg` degrees about axis `axis` (unit) through `centre`.
+    fn turn_about(axis: Vec3, deg: f64, centre: Vec3) -> RigidMotion {
+        let r = *nalgebra::Rotation3::from_axis_angle(
+            &nalgebra::Unit::new_normalize(nalgebra::Vector3::new(axis[0], axis[1], axis[2])),
+            deg.to_radians(),
+        )
+        .matrix();
+        let m = RigidMotion { rotation: r, translation: [0.0; 3] };
+        // x -> R (x - c) + c
+        RigidMotion { rotation: r, translation: sub(centre, m.apply(centre)) }
+    }
+
+    #[test]
+    fn a_joint_that_turns_goes_to_its_pivot_and_one_that_barely_turns_stays() {
+        let pivot_at = [0.3, -0.2, 0.5];
+        let contact = [0.35, -0.1, 0.5];
+        let parent = vec![RigidMotion::IDENTITY; 6];
+        // turns about two axes through the pivot: the pivot is determined
+        let child: Vec<RigidMotion> = (0..6)
+            .map(|i| {
+                turn_about(if i % 2 == 0 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] }, 40.0 + 5.0 * i as f64, pivot_at)
+            })
+            .collect();
+        let x = pivot(&child, &parent, contact, 1.0);
+        // (the contact is 0.11 away; the pull leaves 0.011 of it)
+        assert!(norm(sub(x, pivot_at)) < 0.02, "{x:?}");
+        // the parent moving too: only the relative motion counts
+        let lift = RigidMotion { rotation: crate::geometry::IDENTITY, translation: [0.0, 2.0, 0.0] };
+        let child2: Vec<RigidMotion> = child.iter().map(|m| lift.then_after(m)).collect();
+        let x2 = pivot(&child2, &vec![lift; 6], contact, 1.0);
+        assert!(norm(sub(x2, x)) < 1e-9, "{x2:?} {x:?}");
+        // the guard: no further than radius from the contact, on the line toward the pivot
+        let g = pivot(&child, &parent, contact, 0.05);
+        assert!((norm(sub(g, contact)) - 0.05).abs() < 1e-9, "{g:?}");
+        // a joint that turns a fraction of a degree, with noise the size of its turn: it stays at the contact
+        let child3: Vec<RigidMotion> = (0..6)
+            .map(|i| {
+                let mut m = turn_about([0.0, 0.0, 1.0], 0.2, [5.0, 0.0, 0.0]);
+                m.translation = add(m.translation, [0.0, 0.0, 1e-3 * i as f64]);
+                m
+            })
+            .collect();
+        let y = pivot(&child3, &parent, contact, 10.0);
+        assert!(norm(sub(y, contact)) < 0.05, "{y:?}");
+        // nothing to go on: the contact
+        assert_eq!(pivot(&[], &[], contact, 1.0), contact);
     }
 }

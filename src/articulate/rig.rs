@@ -416,6 +416,10 @@ pub fn build(art: &Articulation, opts: &RigOptions) -> Result<Rig> {
     };
     if opts.weights == RigWeights::Fitted {
         fit(&mut rig, art, opts);
+        if opts.joints == Joints::Free {
+            // the root and the joints' nodes where an artist puts them; bones and weights as fitted
+            super::joints::place_free_joints(art, &mut rig, bind);
+        }
     } else if opts.joints == Joints::Fixed {
         // rigid or smooth weights with fixed joints: the bones are refitted with the constraint, weights kept
         let solver = Solver::new(art, &rig, opts);

@@ -12,7 +12,9 @@
 //! - **Joint distances.** Every moving non-root artist joint is matched to the non-root fitted joint whose
 //!   distance to it, over the poses, has the smallest median; its figures are the median and the largest of
 //!   that distance over the poses, divided by `diagonal`. The converse matches every non-root fitted joint to
-//!   the moving non-root artist joints alike. Roots are left out both ways: a fitted root's joint is its part's
+//!   the moving non-root artist joints alike; `fitted_to_any_artist` matches it to every artist joint but the
+//!   main root that is dominant on a vertex, moving or not (a fitted joint at a knee that the clip turns 5° is
+//!   where the artist put a joint). Roots are left out both ways: a fitted root's joint is its part's
 //!   centroid, not a joint between two parts. Summaries: the median and the largest over the joints of their
 //!   median distances, and the largest distance at any pose.
 //! - **Root placement.** The fitted root part's vertices vote with their dominant artist joint; the winner,
@@ -381,6 +383,10 @@ pub struct SkeletonMatch {
     pub fitted_joints: usize,
     pub artist_to_fitted: Distances,
     pub fitted_to_artist: Distances,
+    /// The converse against every non-root artist joint that is dominant on at least one vertex, whether the
+    /// clip turns it [`MOVING_DEGREES`] or not: a fitted joint at an artist joint that this clip turns a few
+    /// degrees (Mr. Fixit's knees in his idle clip) is where the artist put a joint.
+    pub fitted_to_any_artist: Distances,
     pub root: RootPlacement,
     pub parents: ParentAgreement,
     /// Adjusted Rand index of the fitted labels against the artist parts.
@@ -528,6 +534,14 @@ fn compare_rooted(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f6
     };
     let forward = nearest(&moving, &artist.positions, &fitted_joints, &fitted.positions, diagonal);
     let backward = nearest(&fitted_joints, &fitted.positions, &moving, &artist.positions, diagonal);
+    let holding: Vec<usize> = {
+        let mut own = vec![false; na];
+        for j in artist.dominant.iter().flatten() {
+            own[*j] = true;
+        }
+        (0..na).filter(|&j| own[j] && Some(j) != main_root).collect()
+    };
+    let backward_any = nearest(&fitted_joints, &fitted.positions, &holding, &artist.positions, diagonal);
 
     // the central artist part: the main root's, else the shallowest part holding vertices (larger on a tie)
     let depth = {
@@ -620,6 +634,7 @@ fn compare_rooted(artist: &ArtistSkeleton, fitted: &FittedSkeleton, diagonal: f6
         fitted_joints: fitted_joints.len(),
         artist_to_fitted: summary(&forward, &artist.names, &fitted.names, Some(&turns)),
         fitted_to_artist: summary(&backward, &fitted.names, &artist.names, None),
+        fitted_to_any_artist: summary(&backward_any, &fitted.names, &artist.names, None),
         root: root_placement,
         parents: agreement,
         parts_ari: crate::metrics::adjusted_rand_index(&labels, &truth),
@@ -698,6 +713,11 @@ mod tests {
         assert_eq!(a.merged(&t), vec![0, 1, 1, 3]);
         let m = compare(&a, &same(&a), 4.0).unwrap();
         assert_eq!((m.artist_joints, m.moving_joints, m.artist_parts), (4, 2, 3));
+        // the fitted joint at the still joint 2 is one segment (1 / 4 of the diagonal) from the moving ones, and
+        // on an artist joint that holds vertices
+        assert!((m.fitted_to_artist.max.unwrap() - 0.25).abs() < 1e-9, "{:?}", m.fitted_to_artist.max);
+        assert_eq!(m.fitted_to_any_artist.max, Some(0.0));
+        assert_eq!(m.fitted_to_any_artist.joints.len(), 3);
     }
 
     #[test]
