@@ -189,9 +189,11 @@ pub struct Rig {
     pub weights: SkinWeights,
     /// `bones[i][k]`: part k's motion from the bind pose to training pose i.
     pub bones: Vec<Vec<RigidMotion>>,
-    /// The skeleton (parts as bones, anchor-rooted, strongest contacts).
+    /// The skeleton (parts as bones, strongest contacts): rooted at the anchor while the bones are fitted; with
+    /// fitted weights and free joints, re-rooted afterwards on the central part ([`super::joints::place_free_joints`]).
     pub tree: Tree,
-    /// Each bone's joint point in the bind pose: with its parent, or the root's centroid.
+    /// Each bone's joint point in the bind pose: with its parent (the contact's centroid, or with fitted weights and
+    /// free joints the pivot where parent and child move most alike), or the root's centroid.
     pub joint_points: Vec<Vec3>,
     pub joints: Joints,
     /// Sum of squared errors after each alternation (fitted weights), unit box.

@@ -5,8 +5,10 @@
 //! Layout:
 //! - node 0 `mesh`: the skinned mesh (a root node without transform, as glTF wants);
 //! - node 1 `skeleton`: carries the unit box -> original units map (scale 1/s, translation = offset);
-//! - nodes 2..: one joint per used part, arranged as the anchor-rooted part tree. Part k's joint sits, in
-//!   k's latent frame, at its contact with its parent (its centroid for the root): world matrix
+//! - nodes 2..: one joint per used part, arranged as the rig's part tree ([`crate::articulate::rig::Rig::tree`]:
+//!   the anchor-rooted tree, or with fitted weights and free joints the same tree rooted on the central part).
+//!   Part k's joint sits, in k's latent frame, at its joint point with its parent (its centroid for the root;
+//!   [`crate::articulate::rig::Rig::joint_points`]): world matrix
 //!   G_k^i = [R_k^i | R_k^i o_k + b_k^i] in pose i. Animation channels hold the local transforms
 //!   G_p^-1 G_k (rotation + translation).
 //! - inverse bind matrices (G_k^bind)^-1 x (unit box <- original units), so that joint world x inverse
