@@ -125,7 +125,7 @@ impl Tree {
 /// of a biped (legs and spine) rather than the chest it joins the arms at, when the pelvis is nearer the
 /// centre; a quadruped's or a man's hips rather than a hoof or a hand. Each part's area is its vertices' share
 /// of their triangles (a third of each); `labels`: each vertex's part. The tree's own root when the mesh has no
-/// area (issue 59; measured in docs/rig.md#joints-against-artists-skeletons).
+/// area (measured against artists' skeletons in docs/rig.md#joints-against-artists-skeletons).
 pub fn central_root(tree: &Tree, labels: &[u32], faces: &[[u32; 3]], positions: &[Vec3]) -> usize {
     let n = tree.parent.len();
     let mut area = vec![0.0; n];
