@@ -106,6 +106,21 @@ dual_test! {
         );
     }
 
+    /// usd_read target (byte 0: the options, then a .usda): 654 bytes of a mangled stage whose property metadata
+    /// nests arrays about 40 deep. openusd formats an array of arrays as the escaped text of its elements, which
+    /// doubles per level: the read ran for minutes and took gigabytes (the fuzzer's 20 s timeout). Now the text is
+    /// refused before openusd parses it (src/mesh/usd.rs, `USDA_MAX_ARRAY_NESTING`).
+    fn usda_arrays_nested_past_the_limit_are_refused_at_once() {
+        let data = include_bytes!("fuzz_regressions/usd_read-nested-metadata-arrays.usda");
+        let (_, file) = data.split_first().expect("not empty");
+        let e = usd_error("fuzz.usda", file);
+        assert!(
+            e.starts_with("file fuzz.usda: cannot read the USDA text: line ")
+                && e.contains("its arrays nest deeper than 16 levels"),
+            "{e}"
+        );
+    }
+
     /// Hand-mutated copies of usd-core's .usdc (tests/fixtures/usd/arm-pointcache.usdc: TOC at byte 26014,
     /// TOKENS at 25216, SPECS at 25936): each refused by the check with what is wrong, none reaching openusd.
     fn usdc_with_damaged_structure_is_refused() {

@@ -47,12 +47,28 @@ fn crate_layer(file: &str, bytes: &[u8], what: &str) -> Result<Box<dyn AbstractD
 /// the process (or trap the page's worker) instead of being refused.
 pub const USDA_MAX_NESTING: usize = 128;
 
-/// The first place where `text`'s brackets (`{ ( [`) nest deeper than [`USDA_MAX_NESTING`]: its line, or None.
-/// Brackets inside strings (`"..."`, `'...'`, triple-quoted), asset paths (`@...@`, `@@@...@@@`) and comments
-/// (`#` to the end of the line) do not count.
-fn usda_too_deep(text: &str) -> Option<usize> {
+/// Deepest nesting of arrays (`[`) a USDA layer may have. Real stages nest arrays two or three deep (an array of
+/// tuples); openusd writes an array of arrays in metadata as the escaped text of its elements, so the text
+/// doubles with every level: a 654-byte file nesting arrays 40 deep (found by the fuzzer) ran for minutes and
+/// took gigabytes. At 16 levels it takes milliseconds.
+pub const USDA_MAX_ARRAY_NESTING: usize = 16;
+
+/// Where `text`'s brackets nest too deep ([`usda_too_deep`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct TooDeep {
+    line: usize,
+    /// "brackets" (all of `{ ( [`) or "arrays" (`[`).
+    what: &'static str,
+    limit: usize,
+}
+
+/// The first place where `text`'s brackets (`{ ( [`) nest deeper than [`USDA_MAX_NESTING`], or its arrays
+/// (`[`) deeper than [`USDA_MAX_ARRAY_NESTING`]; None when neither does. Brackets inside strings (`"..."`,
+/// `'...'`, triple-quoted), asset paths (`@...@`, `@@@...@@@`) and comments (`#` to the end of the line) do not
+/// count.
+fn usda_too_deep(text: &str) -> Option<TooDeep> {
     let b = text.as_bytes();
-    let (mut i, mut depth, mut line) = (0usize, 0usize, 1usize);
+    let (mut i, mut depth, mut arrays, mut line) = (0usize, 0usize, 0usize, 1usize);
     // the end of a quoted run opening at `i` with delimiter `q` (`len` 1 or 3), escapes skipped; lines counted
     let skip = |mut i: usize, q: &[u8], line: &mut usize| -> usize {
         i += q.len();
@@ -85,15 +101,22 @@ fn usda_too_deep(text: &str) -> Option<usize> {
                 let delim: &[u8] = if b[i..].starts_with(&triple) { &triple } else { &triple[..1] };
                 i = skip(i, delim, &mut line);
             }
-            b'{' | b'(' | b'[' => {
+            c @ (b'{' | b'(' | b'[') => {
                 depth += 1;
+                arrays += usize::from(c == b'[');
                 if depth > USDA_MAX_NESTING {
-                    return Some(line);
+                    return Some(TooDeep { line, what: "brackets", limit: USDA_MAX_NESTING });
+                }
+                if arrays > USDA_MAX_ARRAY_NESTING {
+                    return Some(TooDeep { line, what: "arrays", limit: USDA_MAX_ARRAY_NESTING });
                 }
                 i += 1;
             }
-            b'}' | b')' | b']' => {
+            c @ (b'}' | b')' | b']') => {
                 depth = depth.saturating_sub(1);
+                if c == b']' {
+                    arrays = arrays.saturating_sub(1);
+                }
                 i += 1;
             }
             _ => i += 1,
@@ -104,11 +127,11 @@ fn usda_too_deep(text: &str) -> Option<usize> {
 
 /// A USDA layer: its nesting checked ([`usda_too_deep`]), then read by openusd.
 fn text_layer(file: &str, text: &str, what: &str) -> Result<Box<dyn AbstractData>> {
-    if let Some(line) = usda_too_deep(text) {
+    if let Some(TooDeep { line, what: nested, limit }) = usda_too_deep(text) {
         return Err(err(
             file,
             format!(
-                "cannot read the {what}: line {line}: its brackets nest deeper than {USDA_MAX_NESTING} levels, \
+                "cannot read the {what}: line {line}: its {nested} nest deeper than {limit} levels, \
                  far deeper than a stage nests prims and values; the file is damaged, or not a stage a USD tool \
                  wrote: export it again"
             ),
@@ -590,7 +613,8 @@ mod tests {
     #[test]
     fn brackets_nested_past_the_limit_are_refused_by_line_not_by_a_stack_overflow() {
         assert_eq!(usda_too_deep(&nested(USDA_MAX_NESTING)), None);
-        assert_eq!(usda_too_deep(&nested(USDA_MAX_NESTING + 1)), Some(USDA_MAX_NESTING + 2));
+        let deep = usda_too_deep(&nested(USDA_MAX_NESTING + 1)).unwrap();
+        assert_eq!((deep.line, deep.what), (USDA_MAX_NESTING + 2, "brackets"));
         // 100 000 levels: natively several times the main thread's stack if parsed
         let e = match layer("deep.usda", nested(100_000).as_bytes()) {
             Err(e) => e.to_string(),
@@ -614,6 +638,28 @@ mod tests {
             assert_eq!(usda_too_deep(&text), None, "{quoted}");
         }
         let text = format!("#usda 1.0\n(\n    doc = \"a\"\n)\n{open}\n");
-        assert_eq!(usda_too_deep(&text), Some(5));
+        assert_eq!(usda_too_deep(&text).map(|d| d.line), Some(5));
+    }
+
+    /// Metadata arrays nested 40 deep: openusd doubles their text per level (minutes and gigabytes before
+    /// this limit); 16 deep is read at once.
+    #[test]
+    fn arrays_nested_past_their_limit_are_refused_before_openusd_formats_them() {
+        let stage = |n: usize| {
+            format!(
+                "#usda 1.0\n\ndef Xform \"World\"\n{{\n    float a = 1 (\n        foo = {}\"x\"{}\n    )\n}}\n",
+                "[".repeat(n),
+                "]".repeat(n)
+            )
+        };
+        assert_eq!(usda_too_deep(&stage(USDA_MAX_ARRAY_NESTING)), None);
+        assert!(layer("ok.usda", stage(USDA_MAX_ARRAY_NESTING).as_bytes()).is_ok());
+        let deep = usda_too_deep(&stage(40)).unwrap();
+        assert_eq!((deep.line, deep.what, deep.limit), (6, "arrays", USDA_MAX_ARRAY_NESTING));
+        let e = match layer("arrays.usda", stage(40).as_bytes()) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("arrays nested 40 deep were read"),
+        };
+        assert!(e.contains("arrays.usda") && e.contains("line 6: its arrays nest deeper than 16 levels"), "{e}");
     }
 }
