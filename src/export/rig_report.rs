@@ -363,8 +363,7 @@ mod measure_tests {
         ];
         let pop = Population::new(crate::mesh::population::Sources::Meshes(named)).unwrap();
         let extra = [[0.4, 0.0, 0.0], [-0.4, 0.0, 0.0], [0.0; 3], [0.0; 3]];
-        let rest_off: Vec<Vec3> =
-            rest.iter().zip([0.0, 0.0, 0.2, -0.2]).map(|(p, e)| [p[0], p[1] + e, p[2]]).collect();
+        let rest_off: Vec<Vec3> = rest.iter().zip([0.0, 0.0, 0.2, -0.2]).map(|(p, e)| [p[0], p[1] + e, p[2]]).collect();
         let off: Vec<Vec3> =
             rest.iter().zip(extra).map(|(p, e)| [p[0] + 1.0 + e[0], p[1] + 1.0 + e[1], p[2] + 1.0 + e[2]]).collect();
         let play = GlbPlayback {
