@@ -1210,21 +1210,7 @@ fn bone_cross(sums: &[f64; 12], pairs: &[(usize, PairSums)], bones: &[RigidMotio
 /// the pair sums with the bones it shares vertices with, at their current motions `bones`.
 #[inline(never)]
 fn bone_step(sums: &[f64; 12], pairs: &[(usize, PairSums)], bones: &[RigidMotion], ubar: Vec3, w2: f64) -> RigidMotion {
-    let mut c = [sums[0], sums[1], sums[2], sums[4], sums[5], sums[6], sums[8], sums[9], sums[10]];
-    let mut wr = [sums[3], sums[7], sums[11]];
-    for (l, ps) in pairs {
-        let m = &bones[*l];
-        let r = &m.rotation;
-        let t = m.translation;
-        for a in 0..3 {
-            for b in 0..3 {
-                c[a * 3 + b] -=
-                    r[(a, 0)] * ps.s[b] + r[(a, 1)] * ps.s[3 + b] + r[(a, 2)] * ps.s[6 + b] + t[a] * ps.d[b];
-            }
-            wr[a] -= r[(a, 0)] * ps.g[0] + r[(a, 1)] * ps.g[1] + r[(a, 2)] * ps.g[2] + t[a] * ps.m;
-        }
-    }
-    let cm = Mat3::from_row_slice(&c);
+    let (cm, wr) = bone_cross(sums, pairs, bones);
     let rot = best_rotation(&cm);
     RigidMotion { rotation: rot, translation: sub(scale(wr, 1.0 / w2), mat_vec(&rot, ubar)) }
 }
