@@ -5,6 +5,11 @@
 //! here from a generated population and the committed Blender / USD fixtures.
 #![cfg(not(target_arch = "wasm32"))]
 
+#[macro_use]
+#[allow(unused_macros)]
+mod common;
+
+use common::glb::{container, join, split};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -160,66 +165,22 @@ fn pc2(frames: &[Vec<[f32; 3]>], count: Option<i32>) -> Vec<u8> {
     b
 }
 
-fn glb_split(glb: &[u8]) -> (Value, Vec<u8>) {
-    let jlen = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
-    let doc: Value = serde_json::from_slice(&glb[20..20 + jlen]).unwrap();
-    let at = 20 + jlen;
-    let blen = u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
-    (doc, glb[at + 8..at + 8 + blen].to_vec())
-}
-
-fn glb_join(doc: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut text = serde_json::to_vec(doc).unwrap();
-    while text.len() % 4 != 0 {
-        text.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
-}
-
 /// A .glb of `doc` with `more` written in place of its JSON text's closing brace (text a JSON value could not
 /// hold without recursing as deep as it nests).
 fn glb_with_text(doc: &Value, bin: &[u8], more: &str) -> Vec<u8> {
     let text = serde_json::to_string(doc).unwrap();
-    let text = format!("{}{more}", text.strip_suffix('}').unwrap());
-    let mut out = glb_join(&json!({}), bin);
-    let mut t = text.into_bytes();
-    while t.len() % 4 != 0 {
-        t.push(b' ');
-    }
-    // the same container around the new text
-    let bin_chunk = out.split_off(12 + 8 + 4);
-    out.truncate(12);
-    out.extend((t.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(t);
-    out.extend(bin_chunk);
-    let total = out.len() as u32;
-    out[8..12].copy_from_slice(&total.to_le_bytes());
-    out
+    container(format!("{}{more}", text.strip_suffix('}').unwrap()).into_bytes(), bin.to_vec())
 }
 
 /// The Blender glb with its first POSITION's y of vertex 5 set to `y`.
 fn glb_with_y(y: f32) -> Vec<u8> {
-    let (doc, mut bin) = glb_split(&fixture("blender/quadruped-shapekeys.glb"));
+    let (doc, mut bin) = split(&fixture("blender/quadruped-shapekeys.glb"));
     let pos = doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize;
     let a = &doc["accessors"][pos];
     let v = &doc["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
     let at = v["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
     bin[at + 12 * 5 + 4..at + 12 * 5 + 8].copy_from_slice(&y.to_le_bytes());
-    glb_join(&doc, &bin)
+    join(doc, bin)
 }
 
 /// A binary FBX 7.4 of `depth` nodes named N, each the only child of the one before.
@@ -285,7 +246,7 @@ fn hostile_inputs_are_refused_by_name_or_read_never_a_crash() {
     let number_end = first + usda[first..].find(',').unwrap();
     let usda_x = |x: &str| format!("{}{x}{}", &usda[..first], &usda[number_end..]);
     let glb = fixture("blender/quadruped-shapekeys.glb");
-    let (doc, bin) = glb_split(&glb);
+    let (doc, bin) = split(&glb);
     let pos = doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize;
     let mut huge = doc.clone();
     huge["accessors"][pos]["count"] = json!(4_000_000_000u64);
@@ -360,7 +321,7 @@ fn hostile_inputs_are_refused_by_name_or_read_never_a_crash() {
         ("glb cut in half", one("a.glb", glb[..glb.len() / 2].to_vec()), Expect::Refused(&["a.glb", "cut"])),
         (
             "glb POSITION count 4e9",
-            one("a.glb", glb_join(&huge, &bin)),
+            one("a.glb", join(huge, bin.clone())),
             Expect::Refused(&["a.glb", "4000000000", "past the end"]),
         ),
         (
@@ -373,7 +334,7 @@ fn hostile_inputs_are_refused_by_name_or_read_never_a_crash() {
             one("a.glb", glb_with_y(f32::INFINITY)),
             Expect::Refused(&["a.glb", "not a finite number"]),
         ),
-        ("glb a chain of 100 000 nodes", one("a.glb", glb_join(&deep, &bin)), Expect::Read),
+        ("glb a chain of 100 000 nodes", one("a.glb", join(deep, bin.clone())), Expect::Read),
         (
             "glb extras nested 100 000 deep",
             one(

@@ -6,6 +6,11 @@
 //! refused with an error that names the file, never a panic.
 #![cfg(not(target_arch = "wasm32"))]
 
+#[macro_use]
+#[allow(unused_macros)]
+mod common;
+
+use common::glb::{join, split};
 use posemfa::export::gltf::play_glb_clip;
 use posemfa::export::pose_glb::read_rig;
 use serde_json::{json, Value};
@@ -39,36 +44,6 @@ fn rig_and_frames(dir: &Path, influences: &str) -> (PathBuf, PathBuf) {
 }
 
 /// The JSON document and BIN chunk of a .glb.
-fn split(glb: &[u8]) -> (Value, Vec<u8>) {
-    let jlen = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
-    let doc: Value = serde_json::from_slice(&glb[20..20 + jlen]).unwrap();
-    let at = 20 + jlen;
-    let blen = u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
-    (doc, glb[at + 8..at + 8 + blen].to_vec())
-}
-
-/// A .glb of a JSON document and a BIN chunk (lengths padded to 4, buffer 0's byteLength set).
-fn join(mut doc: Value, mut bin: Vec<u8>) -> Vec<u8> {
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    doc["buffers"][0]["byteLength"] = json!(bin.len());
-    let mut text = serde_json::to_vec(&doc).unwrap();
-    while text.len() % 4 != 0 {
-        text.push(b' ');
-    }
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
-}
-
 fn component_size(c: u64) -> usize {
     match c {
         5120 | 5121 => 1,

@@ -23,6 +23,10 @@ macro_rules! dual_test {
 #[allow(dead_code)]
 pub mod blender;
 
+/// A .glb taken apart and put together (tests/rig_glb_input.rs, tests/hostile_inputs.rs).
+#[allow(dead_code)]
+pub mod glb;
+
 #[allow(dead_code)]
 pub fn shared_dir(rel: &str, test: &str) -> Option<std::path::PathBuf> {
     use std::io::Write;
