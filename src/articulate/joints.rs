@@ -101,6 +101,27 @@ pub fn joints<S: AsRef<[Vec3]>>(
         .collect()
 }
 
+/// The normal equations of the point x that a child and its parent bone move most alike over the poses,
+/// min Σ_i |(R_c^i - R_p^i) x + t_c^i - t_p^i|²: (Σ ΔRᵀΔR, -Σ ΔRᵀ Δt), row-major, one (child, parent) pair of
+/// motions per pose. [`pivot`] and the fixed joints' points ([`super::rig`]) add their own pull to them.
+pub(crate) fn joint_normal_equations<'a>(
+    pairs: impl Iterator<Item = (&'a RigidMotion, &'a RigidMotion)>,
+) -> ([f64; 9], [f64; 3]) {
+    let mut a = [0.0; 9];
+    let mut b = [0.0; 3];
+    for (mk, mp) in pairs {
+        let dr = mk.rotation - mp.rotation;
+        let dt = sub(mk.translation, mp.translation);
+        for r in 0..3 {
+            for c in 0..3 {
+                a[r * 3 + c] += (0..3).map(|m| dr[(m, r)] * dr[(m, c)]).sum::<f64>();
+            }
+            b[r] -= (0..3).map(|m| dr[(m, r)] * dt[m]).sum::<f64>();
+        }
+    }
+    (a, b)
+}
+
 /// Where a free joint's node goes: the point that parent and child move most alike over the poses (the pivot),
 /// pulled toward `contact` (the contact centroid) the more, the less the joint turns, and kept within `radius`
 /// of it. `child`, `parent`: the two bones' motions from the bind pose, one per pose.
@@ -117,18 +138,7 @@ pub fn pivot(child: &[RigidMotion], parent: &[RigidMotion], contact: Vec3, radiu
     if n == 0 {
         return contact;
     }
-    let mut a = [0.0; 9];
-    let mut b = [0.0; 3];
-    for (mk, mp) in child.iter().zip(parent).take(n) {
-        let dr = mk.rotation - mp.rotation;
-        let dt = sub(mk.translation, mp.translation);
-        for r in 0..3 {
-            for c in 0..3 {
-                a[r * 3 + c] += (0..3).map(|m| dr[(m, r)] * dr[(m, c)]).sum::<f64>();
-            }
-            b[r] -= (0..3).map(|m| dr[(m, r)] * dt[m]).sum::<f64>();
-        }
-    }
+    let (mut a, mut b) = joint_normal_equations(child.iter().zip(parent).take(n));
     let tr = a[0] + a[4] + a[8];
     // |R - I|_F² = 4 (1 - cos θ) for a turn θ
     let mu = mu_rel * tr / 3.0 + n as f64 * 4.0 * (1.0 - turn.cos()) + 1e-12;

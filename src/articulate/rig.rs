@@ -1491,20 +1491,9 @@ fn fit_joint_points(rig: &mut Rig) {
         let Some(p) = rig.tree.parent[k] else { continue };
         let p0 = rig.joint_points[k];
         // Σ_i |ΔR_i x + Δt_i|² + μ |x - p0|²: (Σ ΔRᵀΔR + μ I) x = -Σ ΔRᵀ Δt + μ p0
-        let mut a = [0.0; 9];
-        let mut b = [0.0; 3];
+        let (mut a, mut b) =
+            super::joints::joint_normal_equations(rig.bones.iter().take(ns).map(|pose| (&pose[k], &pose[p])));
         let mut tr = 0.0;
-        for i in 0..ns {
-            let (mk, mp) = (rig.bones[i][k], rig.bones[i][p]);
-            let dr = mk.rotation - mp.rotation;
-            let dt = sub(mk.translation, mp.translation);
-            for r in 0..3 {
-                for c in 0..3 {
-                    a[r * 3 + c] += (0..3).map(|m| dr[(m, r)] * dr[(m, c)]).sum::<f64>();
-                }
-                b[r] -= (0..3).map(|m| dr[(m, r)] * dt[m]).sum::<f64>();
-            }
-        }
         for r in 0..3 {
             tr += a[r * 3 + r];
         }
