@@ -118,7 +118,7 @@ fn real_characters_when_fetched() {
 /// table says they are met: the man meets all (median at most 1.5 %, largest at most 5 % of the diagonal, both
 /// ways, the root on his pelvis); Mr. Fixit (assimp-testmodels' IQM folder) the medians, the converse's largest
 /// against every artist joint that holds vertices, and the root on his hips; the Minetest player (minetest-data)
-/// its root on the body. Skipped with a message when the characters have not been fetched.
+/// its root on the body, its parts and the parents of four of its five moving joints. Skipped with a message when the characters have not been fetched.
 #[test]
 fn joints_where_the_artist_put_them_when_fetched() {
     let dir = std::env::var("POSEMFA_CHARACTERS")
@@ -150,4 +150,10 @@ fn joints_where_the_artist_put_them_when_fetched() {
     assert_eq!(s["root"]["on_central_part"], true, "Mr. Fixit: {}", s["root"]);
     let s = skeleton(&minetest);
     assert_eq!(s["root"]["on_central_part"], true, "the Minetest player: {}", s["root"]);
+    // its head, keyed to turn 10 degrees, reads 9.999997 from the file's f32 rotations: it moves
+    assert_eq!(s["moving_joints"].as_u64(), Some(5), "{s}");
+    // six separate boxes, each a part, joined where they move least apart: every limb on the body but one leg,
+    // which moves more like the other leg (the clip sits and lies with both legs together) than like the body
+    assert!(s["parts_ari"].as_f64().unwrap() >= 0.99, "{}", s["parts_ari"]);
+    assert!(s["parents"]["agreeing"].as_u64().unwrap() >= 4, "{}", s["parents"]);
 }

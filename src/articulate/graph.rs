@@ -11,10 +11,13 @@
 //! paper's plain breadth-first tree is [`TreeRule::BreadthFirst`]. On a clean segmentation whose part graph
 //! is itself a tree the two are the same tree.
 //!
-//! Parts in different connected pieces of the part graph (a mesh made of several pieces) are joined by a
-//! virtual contact between the closest pair of vertices found from the pieces' centroids, so that every used
-//! part is in one tree. Parts that label no vertex are in no tree.
+//! Parts in different connected pieces of the part graph (a mesh made of several pieces) are joined by virtual
+//! contacts, each between the closest vertices of two parts, so that every used part is in one tree: a minimum
+//! spanning tree over the pieces whose cost is the gap plus how far the smaller part moves relative to the
+//! other over the poses ([`piece_join_score`]): a character's separate arm box joins the torso it swings about,
+//! not the leg box beside it. Parts that label no vertex are in no tree.
 
+use super::RigidMotion;
 use crate::geometry::{add, norm, scale, sub, Vec3};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, VecDeque};
@@ -233,6 +236,78 @@ pub fn triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f64 {
     0.5 * norm(crate::geometry::cross(sub(b, a), sub(c, a)))
 }
 
+/// The closest pair of vertices between two vertex sets (non-empty), by alternating nearest-point searches from
+/// the second set's centroid (exact for convex pieces; a cheap, close pair otherwise).
+fn closest_pair(a: &[usize], b: &[usize], positions: &[Vec3]) -> (usize, usize) {
+    let nearest = |set: &[usize], to: Vec3| {
+        *set.iter()
+            .min_by(|&&x, &&y| norm(sub(positions[x], to)).total_cmp(&norm(sub(positions[y], to))))
+            .expect("a used part has vertices")
+    };
+    let centroid = scale(b.iter().fold([0.0; 3], |s, &v| add(s, positions[v])), 1.0 / b.len() as f64);
+    let mut va = nearest(a, centroid);
+    let mut vb = nearest(b, positions[va]);
+    for _ in 0..3 {
+        va = nearest(a, positions[vb]);
+        vb = nearest(b, positions[va]);
+    }
+    (va, vb)
+}
+
+/// The first two moments of a set of points: count, Σ p, Σ p pᵀ (row-major).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Moments {
+    pub n: f64,
+    pub sum: Vec3,
+    pub outer: [f64; 9],
+}
+
+impl Moments {
+    pub fn of(points: impl IntoIterator<Item = Vec3>) -> Moments {
+        let mut m = Moments::default();
+        for p in points {
+            m.n += 1.0;
+            m.sum = add(m.sum, p);
+            for r in 0..3 {
+                for c in 0..3 {
+                    m.outer[r * 3 + c] += p[r] * p[c];
+                }
+            }
+        }
+        m
+    }
+}
+
+/// How well two parts of different mesh pieces are joined by a contact between their closest vertices `pa`, `pb`
+/// (a length; smaller is better): the gap |pa - pb| plus how far the smaller part (`child`, its points'
+/// moments) moves relative to the other, the root mean square of |M_a^i p - M_b^i p| over its points p and the
+/// poses i (M^i: the parts' motions in pose i, in the frame of the points). An arm box beside a torso box moves
+/// relative to it by its swing; relative to the leg box it also touches, by its swing and the leg's; a leg
+/// relative to the other leg by twice its swing; an eye relative to its head, not at all. The gap alone without
+/// motions.
+pub fn piece_join_score(ma: &[RigidMotion], mb: &[RigidMotion], pa: Vec3, pb: Vec3, child: &Moments) -> f64 {
+    let gap = norm(sub(pa, pb));
+    let n = ma.len().min(mb.len());
+    if n == 0 || child.n == 0.0 {
+        return gap;
+    }
+    // Σ_p |ΔR p + Δt|² = tr(ΔRᵀΔR Σ p pᵀ) + 2 Δt · ΔR Σ p + n |Δt|²
+    let mut total = 0.0;
+    for (p, q) in ma.iter().zip(mb).take(n) {
+        let dr = p.rotation - q.rotation;
+        let dt = sub(p.translation, q.translation);
+        for r in 0..3 {
+            for c in 0..3 {
+                let g: f64 = (0..3).map(|m| dr[(m, r)] * dr[(m, c)]).sum();
+                total += g * child.outer[c * 3 + r];
+            }
+        }
+        let drs = crate::geometry::mat_vec(&dr, child.sum);
+        total += 2.0 * crate::geometry::dot(dt, drs) + child.n * crate::geometry::dot(dt, dt);
+    }
+    gap + (total / (n as f64 * child.n)).max(0.0).sqrt()
+}
+
 struct Dsu(Vec<usize>);
 impl Dsu {
     fn find(&mut self, x: usize) -> usize {
@@ -259,7 +334,15 @@ impl Dsu {
 impl PartGraph {
     /// Builds the graph from the labels (one per vertex, < `n_parts`), the triangles, and one pose of the
     /// mesh (`positions`, used for patch areas and to place virtual contacts).
-    pub fn new(labels: &[u32], faces: &[[u32; 3]], n_parts: usize, positions: &[Vec3]) -> PartGraph {
+    /// `motions[k][i]`: part k's motion from `positions` to pose i, used to choose where disconnected pieces
+    /// join ([`piece_join_score`]); empty: by distance alone.
+    pub fn new(
+        labels: &[u32],
+        faces: &[[u32; 3]],
+        n_parts: usize,
+        positions: &[Vec3],
+        motions: &[Vec<RigidMotion>],
+    ) -> PartGraph {
         let mut vertex_count = vec![0usize; n_parts];
         for &l in labels {
             vertex_count[l as usize] += 1;
@@ -289,7 +372,7 @@ impl PartGraph {
             contacts.insert(pair, Contact::Triangles(largest_patch(&tris, faces, positions)));
         }
         let mut graph = PartGraph { n_parts, vertex_count, neighbors: vec![Vec::new(); n_parts], contacts, strength };
-        graph.join_pieces(labels, positions);
+        graph.join_pieces(labels, positions, motions);
         for &(a, b) in graph.contacts.keys() {
             graph.neighbors[a].push(b);
             graph.neighbors[b].push(a);
@@ -301,50 +384,45 @@ impl PartGraph {
         graph
     }
 
-    /// Adds virtual contacts until the used parts form one connected graph.
-    fn join_pieces(&mut self, labels: &[u32], positions: &[Vec3]) {
+    /// Adds virtual contacts until the used parts form one connected graph: a minimum spanning tree over the
+    /// pieces (parts joined by real contacts), each pair of parts in different pieces scored by
+    /// [`piece_join_score`], the contact between the pair's closest vertices.
+    fn join_pieces(&mut self, labels: &[u32], positions: &[Vec3], motions: &[Vec<RigidMotion>]) {
         let used: Vec<usize> = (0..self.n_parts).filter(|&k| self.vertex_count[k] > 0).collect();
         if used.len() < 2 {
             return;
         }
-        loop {
-            let mut dsu = Dsu((0..self.n_parts).collect());
-            for &(a, b) in self.contacts.keys() {
-                dsu.union(a, b);
-            }
-            let main = dsu.find(used[0]);
-            // The first used part outside the main piece, and the whole piece it is in.
-            let Some(&other) = used.iter().find(|&&k| dsu.find(k) != main) else { return };
-            let other_root = dsu.find(other);
-            let in_main: Vec<bool> = (0..self.n_parts).map(|k| dsu.find(k) == main).collect();
-            let in_other: Vec<bool> = (0..self.n_parts).map(|k| dsu.find(k) == other_root).collect();
-            let centroid = |inside: &[bool]| {
-                let (mut c, mut n) = ([0.0; 3], 0.0);
-                for (j, &l) in labels.iter().enumerate() {
-                    if inside[l as usize] {
-                        c = add(c, positions[j]);
-                        n += 1.0;
-                    }
+        let mut dsu = Dsu((0..self.n_parts).collect());
+        for &(a, b) in self.contacts.keys() {
+            dsu.union(a, b);
+        }
+        let mut members: Vec<Vec<usize>> = vec![Vec::new(); self.n_parts];
+        for (v, &l) in labels.iter().enumerate() {
+            members[l as usize].push(v);
+        }
+        let mut candidates = Vec::new();
+        for (i, &a) in used.iter().enumerate() {
+            for &b in &used[i + 1..] {
+                if dsu.find(a) == dsu.find(b) {
+                    continue;
                 }
-                scale(c, 1.0 / n)
-            };
-            let nearest = |inside: &[bool], to: Vec3| {
-                (0..labels.len())
-                    .filter(|&j| inside[labels[j] as usize])
-                    .min_by(|&a, &b| norm(sub(positions[a], to)).total_cmp(&norm(sub(positions[b], to))))
-                    .expect("piece has vertices")
-            };
-            // Alternate nearest-point searches from the other piece's centroid: a cheap closest pair.
-            let mut vo = nearest(&in_other, centroid(&in_main));
-            let mut vm = nearest(&in_main, positions[vo]);
-            for _ in 0..3 {
-                vo = nearest(&in_other, positions[vm]);
-                vm = nearest(&in_main, positions[vo]);
+                let (va, vb) = closest_pair(&members[a], &members[b], positions);
+                let none = Vec::new();
+                let (ma, mb) = (motions.get(a).unwrap_or(&none), motions.get(b).unwrap_or(&none));
+                // the smaller part moves relative to the larger (the leg to the body), ties the later one
+                let child = if members[a].len() < members[b].len() { a } else { b };
+                let moments = Moments::of(members[child].iter().map(|&v| positions[v]));
+                let score = piece_join_score(ma, mb, positions[va], positions[vb], &moments);
+                candidates.push((score, a, b, va as u32, vb as u32));
             }
-            let (a, b) = (labels[vm] as usize, labels[vo] as usize);
-            let (va, vb) = if a < b { (vm as u32, vo as u32) } else { (vo as u32, vm as u32) };
-            self.contacts.insert(key(a, b), Contact::Virtual(va, vb));
-            self.strength.insert(key(a, b), 1);
+        }
+        candidates.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+        for (_, a, b, va, vb) in candidates {
+            if dsu.find(a) != dsu.find(b) {
+                dsu.union(a, b);
+                self.contacts.insert((a, b), Contact::Virtual(va, vb));
+                self.strength.insert((a, b), 1);
+            }
         }
     }
 
@@ -771,7 +849,7 @@ mod tests {
     fn chain_adjacency_contacts_and_trees() {
         // parts 0 | 1 | 2 along the strip, part 3 unused
         let (labels, faces, pos) = strip(9, |i| (i / 4).min(2) as u32);
-        let g = PartGraph::new(&labels, &faces, 4, &pos);
+        let g = PartGraph::new(&labels, &faces, 4, &pos, &[]);
         assert_eq!(g.neighbors, vec![vec![1], vec![0, 2], vec![1], vec![]]);
         assert_eq!(g.used_parts(), vec![0, 1, 2]);
         // columns 3|4: one quad (2 triangles) and 3 crossing edges (two horizontal, one diagonal)
@@ -803,7 +881,7 @@ mod tests {
             }
         });
         labels[10] = 2; // vertex (2, 0)
-        let g = PartGraph::new(&labels, &faces, 3, &pos);
+        let g = PartGraph::new(&labels, &faces, 3, &pos, &[]);
         assert_eq!(g.neighbors[0], vec![1, 2]);
         assert!(g.strength(0, 2) < g.strength(1, 2));
         assert_eq!(g.tree(0, TreeRule::BreadthFirst).parent[2], Some(0));
@@ -823,7 +901,7 @@ mod tests {
                 p[1] *= 3.0;
             }
         }
-        let g = PartGraph::new(&labels, &faces, 2, &pos);
+        let g = PartGraph::new(&labels, &faces, 2, &pos, &[]);
         let Some(Contact::Triangles(t)) = g.contact(0, 1) else { panic!() };
         // patch at columns 7|8 = quad 7 = triangles 14, 15
         assert_eq!(t, &vec![14, 15]);
@@ -838,7 +916,7 @@ mod tests {
         let labels: Vec<u32> = l1.iter().copied().chain(std::iter::repeat(1).take(p2.len())).collect();
         let faces: Vec<[u32; 3]> = f1.iter().copied().chain(f2.iter().map(|f| f.map(|v| v + n))).collect();
         let pos: Vec<Vec3> = p1.iter().copied().chain(p2.iter().map(|p| [p[0], p[1] + 5.0, p[2]])).collect();
-        let g = PartGraph::new(&labels, &faces, 2, &pos);
+        let g = PartGraph::new(&labels, &faces, 2, &pos, &[]);
         assert_eq!(g.neighbors, vec![vec![1], vec![0]]);
         let Some(&Contact::Virtual(a, b)) = g.contact(0, 1) else { panic!("{:?}", g.contacts) };
         assert_eq!(labels[a as usize], 0);
@@ -846,5 +924,42 @@ mod tests {
         // the closest pair: a vertex at y = 1 of the first strip and one at y = 5 of the second
         assert!((norm(sub(pos[a as usize], pos[b as usize])) - 4.0).abs() < 1e-12);
         assert_eq!(g.tree(0, TreeRule::Strongest).order, vec![0, 1]);
+    }
+    #[test]
+    fn separate_pieces_join_where_they_move_least_apart() {
+        // three separate strips: a body (x 0..3, y 0..1), an arm above it (x 0..3, y 1.6..2.6; gap 0.6) and a leg
+        // beside the arm (x 4..7, y 1.6..2.6; 1.0 from the arm, 1.17 from the body's corner)
+        let piece = |label: u32, offset: [f64; 2], base: u32| {
+            let (_, f, p) = strip(3, move |_| label);
+            (
+                f.iter().map(|t| t.map(|v| v + base)).collect::<Vec<_>>(),
+                p.iter().map(|q| [q[0] + offset[0], q[1] + offset[1], q[2]]).collect::<Vec<_>>(),
+            )
+        };
+        let (f1, p1) = piece(0, [0.0, 0.0], 0);
+        let n = p1.len();
+        let (f2, p2) = piece(1, [0.0, 1.6], n as u32);
+        let (f3, p3) = piece(2, [4.0, 1.6], 2 * n as u32);
+        let labels: Vec<u32> = (0..3 * n).map(|v| (v / n) as u32).collect();
+        let faces: Vec<[u32; 3]> = f1.iter().chain(&f2).chain(&f3).copied().collect();
+        let pos: Vec<Vec3> = p1.iter().chain(&p2).chain(&p3).copied().collect();
+        let keys = |g: &PartGraph| g.contacts.keys().copied().collect::<Vec<_>>();
+        // by distance alone: body-arm and arm-leg
+        let g = PartGraph::new(&labels, &faces, 3, &pos, &[]);
+        assert_eq!(keys(&g), vec![(0, 1), (1, 2)]);
+        let Some(&Contact::Virtual(a, b)) = g.contact(0, 1) else { panic!() };
+        assert!((norm(sub(pos[a as usize], pos[b as usize])) - 0.6).abs() < 1e-12);
+        // the leg moves with the body and the arm swings about its foot: the leg joins the body, not the arm
+        let still = vec![RigidMotion::IDENTITY; 4];
+        let swing: Vec<RigidMotion> = (0..4)
+            .map(|i| {
+                let r = crate::geometry::rotation::axis_angle([0.0, 0.0, 1.0], 0.3 * i as f64);
+                let pivot = [1.5, 1.6, 0.0];
+                RigidMotion { rotation: r, translation: sub(pivot, crate::geometry::mat_vec(&r, pivot)) }
+            })
+            .collect();
+        let g = PartGraph::new(&labels, &faces, 3, &pos, &[still.clone(), swing, still]);
+        assert_eq!(keys(&g), vec![(0, 1), (0, 2)]);
+        assert_eq!(g.tree(0, TreeRule::Strongest).parent, vec![None, Some(0), Some(0)]);
     }
 }

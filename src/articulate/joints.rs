@@ -190,7 +190,8 @@ fn solve3(a: [f64; 9], b: [f64; 3]) -> Option<Vec3> {
 }
 
 /// The radius of a contact in `positions`: the largest distance of its vertices from `centre`; for a virtual
-/// contact, that of the child part's vertices (`child_vertices`) from their own centroid, halved.
+/// contact (two vertices of separate pieces, which say little of where the joint is), that of the child part's
+/// vertices (`child_vertices`) from their own centroid.
 pub fn contact_radius(
     contact: &Contact,
     faces: &[[u32; 3]],
@@ -211,7 +212,7 @@ pub fn contact_radius(
                 return 0.0;
             }
             let c = scale(pts.iter().fold([0.0; 3], |s, &p| add(s, p)), 1.0 / pts.len() as f64);
-            0.5 * pts.iter().map(|&p| norm(sub(p, c))).fold(0.0, f64::max)
+            pts.iter().map(|&p| norm(sub(p, c))).fold(0.0, f64::max)
         }
     }
 }

@@ -222,7 +222,20 @@ impl Articulation {
         let n_parts = model.parts.len();
         // the shapes one at a time in f64 (a copy of them all would be 24 bytes per vertex-pose at once)
         let shapes = || pop.shapes().map(|s| s.to_vec());
-        let graph = PartGraph::new(&model.labels, pop.graph_faces(), n_parts, &pop.shape(0).to_vec());
+        // every part's motion from shape 0 (the graph's positions) to each shape: where separate pieces join
+        let from_first: Vec<Vec<RigidMotion>> = model
+            .parts
+            .iter()
+            .map(|c| {
+                let first = RigidMotion { rotation: c.rotations[0], translation: c.translations[0] }.inverse();
+                (0..model.n_shapes)
+                    .map(|i| {
+                        RigidMotion { rotation: c.rotations[i], translation: c.translations[i] }.then_after(&first)
+                    })
+                    .collect()
+            })
+            .collect();
+        let graph = PartGraph::new(&model.labels, pop.graph_faces(), n_parts, &pop.shape(0).to_vec(), &from_first);
         let joints = joints::joints(&graph, model, pop.graph_faces(), shapes());
         let mut part_area = vec![0.0; n_parts];
         for s in shapes() {

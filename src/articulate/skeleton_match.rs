@@ -32,8 +32,14 @@ use crate::error::{Error, Result};
 use crate::geometry::{norm, sub, Mat3, Vec3};
 use serde::Serialize;
 
-/// The least turn (degrees, over the clip, relative to the parent) of a joint that moves.
+/// The least turn (degrees, over the clip, relative to the parent) of a joint that moves, to within
+/// [`TURN_ROUNDING`].
 pub const MOVING_DEGREES: f64 = 10.0;
+
+/// How far a turn read from a file's f32 rotations can fall short of the turn its animator keyed (degrees): a
+/// quaternion component carries an error of about 6e-8, a few millionths of a degree once composed; the Minetest
+/// player's head, keyed to turn 10°, reads 9.999997°.
+pub const TURN_ROUNDING: f64 = 1e-3;
 
 /// An artist's skeleton over a clip, in the poses' own units.
 #[derive(Debug, Clone)]
@@ -187,7 +193,7 @@ impl ArtistSkeleton {
         }
         for j in order {
             match (self.reference(j, main), turns[j]) {
-                (Some(p), Some(t)) if t < MOVING_DEGREES => kept[j] = kept[p],
+                (Some(p), Some(t)) if t < MOVING_DEGREES - TURN_ROUNDING => kept[j] = kept[p],
                 _ => {}
             }
         }

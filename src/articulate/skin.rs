@@ -477,7 +477,7 @@ mod tests {
             faces.push([a, c, b]);
             faces.push([b, c, d]);
         }
-        let graph = PartGraph::new(&labels, &faces, 2, &pos);
+        let graph = PartGraph::new(&labels, &faces, 2, &pos, &[]);
         let radii = part_radii(&labels, &pos, 2);
         // RMS radius of 11 (10) unit-spaced columns about their middle: sqrt(10) (sqrt(99 / 12))
         assert!(
