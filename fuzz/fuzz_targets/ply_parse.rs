@@ -6,6 +6,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use posemfa::mesh::ply::parse_ply;
+use posemfa::error::Format;
 use posemfa::Error;
 use posemfa_fuzz::check_mesh;
 
@@ -17,11 +18,11 @@ fuzz_target!(|data: &[u8]| {
             // Every vertex takes at least one byte (a 1-byte property, or a character and a separator).
             assert!(mesh.positions.len() <= data.len(), "{} vertices from {} bytes", mesh.positions.len(), data.len());
         }
-        Err(Error::Obj { file, line, message }) => {
+        Err(Error::Mesh { format: Format::Ply, file, line, message }) => {
             assert_eq!(file, "fuzz.ply");
             assert!(!message.is_empty());
             assert!(line <= lines, "error on line {line} of a {lines}-line file: {message}");
         }
-        Err(e) => panic!("parse_ply returned a non-Obj error: {e:?}"),
+        Err(e) => panic!("parse_ply returned an error that is not a PLY reader's: {e:?}"),
     }
 });

@@ -10,6 +10,7 @@
 use libfuzzer_sys::fuzz_target;
 use posemfa::mesh::cache::{parse_mdd, parse_pc2, write_pc2};
 use posemfa::mesh::load::load;
+use posemfa::error::Format;
 use posemfa::Error;
 
 const BASE: &[u8] = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
@@ -27,11 +28,11 @@ fuzz_target!(|data: &[u8]| {
             let again = parse_pc2("again.pc2", &write_pc2(&cache.frames)).expect("a cache written back reads");
             assert_eq!(again.frames, cache.frames);
         }
-        Err(Error::Obj { file, message, .. }) => {
+        Err(Error::Mesh { format: Format::PointCache, file, message, .. }) => {
             assert_eq!(file, name);
             assert!(!message.is_empty());
         }
-        Err(e) => panic!("the point cache reader returned a non-Obj error: {e:?}"),
+        Err(e) => panic!("the point cache reader returned an error that is not a point cache reader's: {e:?}"),
     }
     let loaded = load(vec![(name.to_string(), file.to_vec()), ("base.obj".to_string(), BASE.to_vec())]);
     match (parsed, loaded) {

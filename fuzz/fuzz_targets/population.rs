@@ -35,7 +35,9 @@ fuzz_target!(|data: &[u8]| {
             assert!(!errors.is_empty());
             for err in errors {
                 match err {
-                    Error::Obj { file, message, .. } | Error::Population { file, message } => {
+                    Error::Obj { file, message, .. }
+                    | Error::Mesh { file, message, .. }
+                    | Error::Population { file, message } => {
                         assert!(files.iter().any(|(n, _)| n == file) || file == "(none)", "unknown file {file}");
                         assert!(!message.is_empty());
                     }
