@@ -38,7 +38,7 @@ use serde::{Deserialize, Serialize};
 use serde::{Deserializer, Serializer};
 
 mod rig;
-pub use rig::{poses_fingerprint, SavedRig};
+pub use rig::{kept_or_built, poses_fingerprint, RigSource, SavedRig};
 
 /// The first eight bytes of every model file.
 pub const MAGIC: &[u8; 8] = b"POSEMFA\0";

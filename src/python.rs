@@ -479,6 +479,8 @@ pub struct PyModel {
     pop: Population,
     has_data: bool,
     summary: std::sync::OnceLock<Summary>,
+    /// The rig kept in the model file it was read from, if any (`rig_glb` takes it when it is the one asked for).
+    rig: Option<crate::model_file::SavedRig>,
     /// Built on first use (interpolate, export).
     art: std::sync::OnceLock<crate::articulate::Articulation>,
 }
@@ -491,6 +493,7 @@ impl PyModel {
             pop,
             has_data: true,
             summary: std::sync::OnceLock::new(),
+            rig: None,
             art: std::sync::OnceLock::new(),
         }
     }
@@ -504,6 +507,7 @@ impl PyModel {
             pop: f.population,
             has_data: f.has_data,
             summary,
+            rig: f.rig,
             art: std::sync::OnceLock::new(),
         }
     }
@@ -762,9 +766,11 @@ impl PyModel {
         let g = rig_options(self.pop(), weights, influences, joints, morphs, bind)?;
         let art = self.articulation()?;
         let pop = self.pop();
-        let out = core(py.detach(|| crate::export::rig_report::export_rig(art, pop, &g)))?;
+        let kept = self.rig.as_ref();
+        let out = core(py.detach(|| crate::export::rig_report::export_rig(art, pop, &g, kept)))?;
         let d = PyDict::new(py);
         d.set_item("e_rms", out.error.e_rms)?;
+        d.set_item("rig_source", out.source.word())?;
         d.set_item("bones", out.bones)?;
         d.set_item("bind", g.bind_pose)?;
         d.set_item("report", serde_json::to_string(&out.error).map_err(err)?)?;

@@ -403,7 +403,7 @@ impl Fitter {
 
     /// The result so far (final model when done; otherwise the best available).
     pub fn result(&self) -> FitModel {
-        let about = Rc::new(About { params: (*self.params).clone(), saved: None, has_data: true });
+        let about = Rc::new(About { params: (*self.params).clone(), saved: None, has_data: true, rig: None });
         FitModel { result: Rc::new(self.pipe.result()), pop: self.pop.clone(), about }
     }
 }
@@ -423,6 +423,9 @@ struct About {
     params: Params,
     saved: Option<crate::model_file::Summary>,
     has_data: bool,
+    /// The rig a model file kept (`fit --save --with-rig`): the Rig panel and pose mode take it when it is the
+    /// one they ask for, instead of solving its weights again.
+    rig: Option<crate::model_file::SavedRig>,
 }
 
 impl FitModel {
@@ -780,7 +783,7 @@ pub fn open_model(names: Vec<String>, files: Vec<Uint8Array>, animation: Option<
     }
     let has_data = saved.has_data;
     let pop = Rc::new(saved.population);
-    let about = Rc::new(About { params: saved.params, saved: Some(saved.summary), has_data });
+    let about = Rc::new(About { params: saved.params, saved: Some(saved.summary), has_data, rig: saved.rig });
     let params = to_js(&about.params)?;
     let model = FitModel { result: Rc::new(saved.result), pop: pop.clone(), about };
     let obj = js_sys::Object::new();
@@ -1022,7 +1025,7 @@ impl FitModel {
         self.needs_data("the rig (its weights are fitted and its error measured on the poses)")?;
         let req: crate::export::rig_report::RigRequest = from_js(opts, "rig options")?;
         let g = req.options(&self.pop)?;
-        let r = crate::export::rig_report::export_rig(&*self.articulation()?, &self.pop, &g)?;
+        let r = crate::export::rig_report::export_rig(&*self.articulation()?, &self.pop, &g, self.about.rig.as_ref())?;
         let obj = js_sys::Object::new();
         let set =
             |k: &str, v: &JsValue| js_sys::Reflect::set(&obj, &k.into(), v).map(|_| ()).map_err(|_| js_err("reflect"));
@@ -1031,6 +1034,7 @@ impl FitModel {
         set("bones", &JsValue::from(r.bones as u32))?;
         set("clips", &to_js(&r.clips)?)?;
         set("eRms", &JsValue::from(r.error.e_rms))?;
+        set("source", &JsValue::from_str(r.source.word()))?;
         set("maxError", &JsValue::from(r.error.max_error))?;
         set("maxErrorOverDiagonal", &JsValue::from(r.error.max_error_over_diagonal))?;
         set("diagonal", &JsValue::from(r.error.diagonal))?;
@@ -1052,7 +1056,7 @@ impl FitModel {
             req.weights = crate::export::gltf::Weights::Fitted;
         }
         let g = req.options(&self.pop)?;
-        let p = crate::export::pose_glb::Poser::new(&*self.articulation()?, &self.pop, &g)?;
+        let p = crate::export::pose_glb::Poser::new(&*self.articulation()?, &self.pop, &g, self.about.rig.as_ref())?;
         Ok(WasmPoser { inner: p, names: self.pop.names.clone(), bind_pose: g.bind_pose })
     }
 

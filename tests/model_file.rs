@@ -234,6 +234,18 @@ dual_test! {
         let kept = saved.for_request(&read.population, band, &g.rig_options()).expect("the rig asked for");
         let glb = posemfa::export::gltf::write_glb(&art, kept, &g).unwrap();
         assert!(glb == to_glb(&art, &g).unwrap(), "the kept rig's .glb is the built rig's, byte for byte");
+        // what the page's Rig panel, Python's rig_glb and pose mode call: the kept rig when it is the one asked for
+        use posemfa::export::rig_report::export_rig;
+        use posemfa::model_file::RigSource;
+        let from_file = export_rig(&art, &read.population, &g, Some(saved)).unwrap();
+        let built = export_rig(&art, &read.population, &g, None).unwrap();
+        assert_eq!((from_file.source, built.source), (RigSource::ModelFile, RigSource::Built));
+        assert!(from_file.glb == built.glb && from_file.error.e_rms == built.error.e_rms);
+        let three_built = export_rig(&art, &read.population, &GltfOptions { influences: 3, ..g }, Some(saved)).unwrap();
+        assert_eq!(three_built.source, RigSource::Built, "other options build their own rig");
+        let poser = |kept| posemfa::export::pose_glb::Poser::new(&art, &read.population, &g, kept).unwrap();
+        let (a, b) = (poser(Some(saved)), poser(None));
+        assert!(a.bone_of_vertex == b.bone_of_vertex && a.diagonal == b.diagonal);
         // other options, another band or other poses: not that rig
         let three = GltfOptions { influences: 3, ..g };
         assert!(saved.for_request(&read.population, band, &three.rig_options()).is_none());

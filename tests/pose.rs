@@ -203,7 +203,7 @@ dual_test! {
     fn a_posers_training_angles_are_each_bones_largest_over_its_training_poses() {
         let g = creature(6, 3);
         let (art, _) = fitted(&g.population);
-        let mut poser = posemfa::export::pose_glb::Poser::new(&art, &g.population, &GltfOptions::default()).unwrap();
+        let mut poser = posemfa::export::pose_glb::Poser::new(&art, &g.population, &GltfOptions::default(), None).unwrap();
         let most = poser.training_angles();
         assert_eq!(most.len(), poser.rig.rig.n_bones());
         let mut reached = vec![false; most.len()];

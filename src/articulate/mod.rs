@@ -189,6 +189,8 @@ pub struct Articulation {
     pub rigid_weights: SkinWeights,
     /// Smooth weights ([`skin::smooth_weights`] with [`skin::DEFAULT_BAND`]).
     pub smooth_weights: SkinWeights,
+    /// The smooth weights' band it was built with ([`Articulation::with_band`]).
+    pub band: f64,
 }
 
 impl Articulation {
@@ -273,6 +275,7 @@ impl Articulation {
             anchor,
             rigid_weights,
             smooth_weights,
+            band,
         })
     }
 

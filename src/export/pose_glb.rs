@@ -467,13 +467,15 @@ pub struct Poser {
 }
 
 impl Poser {
-    /// From a fitted model's articulation: the rig of `opts` ([`super::gltf::write_glb`]) and the population.
+    /// From a fitted model's articulation: the rig of `opts` ([`super::gltf::write_glb`]; `kept`, a model file's
+    /// rig, when it is that very rig) and the population.
     pub fn new(
         art: &crate::articulate::Articulation,
         pop: &crate::mesh::Population,
         opts: &super::gltf::GltfOptions,
+        kept: Option<&crate::model_file::SavedRig>,
     ) -> Result<Poser> {
-        let rig = crate::articulate::rig::build(art, &opts.rig_options())?;
+        let (rig, _) = crate::model_file::kept_or_built(kept, art, pop, &opts.rig_options())?;
         let glb = super::gltf::write_glb(art, &rig, opts)?;
         // (the training poses in original units one at a time, into the frame solve's own copy)
         let mut p = Poser::from_glb("rig.glb", &glb, pop.shapes().map(|s| art.to_original(&s.to_vec())))?;

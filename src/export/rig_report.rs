@@ -287,17 +287,25 @@ pub struct RigExport {
     /// The file's animation clips by name: `training poses`, and `interpolated` when the rig moves its parts
     /// by the fit's own motions (rigid or smooth weights with free joints: [`super::gltf`]).
     pub clips: Vec<String>,
+    /// Whether the rig was kept in a model file or built now ([`crate::model_file::kept_or_built`]).
+    pub source: crate::model_file::RigSource,
     /// Milliseconds: building the rig (weights, bones), writing the .glb, playing and measuring it.
     pub rig_ms: f64,
     pub write_ms: f64,
     pub evaluate_ms: f64,
 }
 
-/// Builds the rig of `art` ([`crate::articulate::rig::build`]), writes it ([`super::gltf::write_glb`]) and
-/// measures the file ([`rig_error`] of [`super::gltf::play_glb`]), bound in `opts.bind_pose`.
-pub fn export_rig(art: &Articulation, pop: &Population, opts: &GltfOptions) -> Result<RigExport> {
+/// Builds the rig of `art` ([`crate::articulate::rig::build`]; `kept`, a model file's rig, when it is that very
+/// rig: [`crate::model_file::kept_or_built`]), writes it ([`super::gltf::write_glb`]) and measures the file
+/// ([`rig_error`] of [`super::gltf::play_glb`]), bound in `opts.bind_pose`.
+pub fn export_rig(
+    art: &Articulation,
+    pop: &Population,
+    opts: &GltfOptions,
+    kept: Option<&crate::model_file::SavedRig>,
+) -> Result<RigExport> {
     let t = crate::clock::now_ms();
-    let rig = crate::articulate::rig::build(art, &opts.rig_options())?;
+    let (rig, source) = crate::model_file::kept_or_built(kept, art, pop, &opts.rig_options())?;
     let t1 = crate::clock::now_ms();
     let glb = super::gltf::write_glb(art, &rig, opts)?;
     let t2 = crate::clock::now_ms();
@@ -312,6 +320,7 @@ pub fn export_rig(art: &Articulation, pop: &Population, opts: &GltfOptions) -> R
         error,
         bones: played.joint_parent.len(),
         clips: played.clips,
+        source,
         rig_ms: t1 - t,
         write_ms: t2 - t1,
         evaluate_ms: t3 - t2,

@@ -55,6 +55,39 @@ impl SavedRig {
     }
 }
 
+/// Where a rig came from ([`kept_or_built`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RigSource {
+    /// Kept in the model file (`fit --save --with-rig`).
+    ModelFile,
+    /// Built now from the fit.
+    Built,
+}
+
+impl RigSource {
+    /// "model file" or "built", as the CLI's JSON and the page say it.
+    pub fn word(self) -> &'static str {
+        match self {
+            RigSource::ModelFile => "model file",
+            RigSource::Built => "built",
+        }
+    }
+}
+
+/// The rig of `art` (built from `pop`) with `options`: the one kept in a model file (`saved`) when it is that
+/// very rig ([`SavedRig::for_request`], with the articulation's band), else built now; and which of the two.
+pub fn kept_or_built(
+    saved: Option<&SavedRig>,
+    art: &Articulation,
+    pop: &Population,
+    options: &RigOptions,
+) -> Result<(Rig, RigSource)> {
+    match saved.and_then(|s| s.for_request(pop, art.band, options)) {
+        Some(rig) => Ok((rig.clone(), RigSource::ModelFile)),
+        None => Ok((crate::articulate::rig::build(art, options)?, RigSource::Built)),
+    }
+}
+
 /// FNV-1a (64 bits) over the counts and every point's f32 bits, pose after pose: two populations with the same
 /// fingerprint hold the same numbers (up to a collision, one in 2^64).
 pub fn poses_fingerprint(pop: &Population) -> u64 {

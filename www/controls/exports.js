@@ -89,8 +89,11 @@ function showRig(r, opts) {
   const fit = Number.isFinite(own) ? `; the fit's rigid parts alone: ${eRmsText(own)}` : '';
   const per = opts.weights === 'rigid' ? 'one bone per vertex (rigid)' : `at most ${opts.influences} bone${opts.influences === 1 ? '' : 's'} per vertex`;
   const clips = r.clips ? `; ${r.clips.length} clip${r.clips.length === 1 ? '' : 's'}: ${r.clips.map((c) => CLIPS[c] ?? `“${c}”`).join('; ')}` : '';
-  out.textContent = `${eRmsText(r.eRms)} (${ERMS_UNIT}; ${r.bones} bones, ${per}; max error ${percentText(r.maxErrorOverDiagonal)} % of the diagonal${fit}${clips})`;
+  // (a model file saved with its rig gives it back when these are its options: no weight solve)
+  const kept = r.source === 'model file' ? '; the rig kept in the model file' : '';
+  out.textContent = `${eRmsText(r.eRms)} (${ERMS_UNIT}; ${r.bones} bones, ${per}; max error ${percentText(r.maxErrorOverDiagonal)} % of the diagonal${fit}${kept}${clips})`;
   out.dataset.clips = (r.clips ?? []).join('|');
+  out.dataset.source = r.source ?? '';
   out.dataset.erms = String(r.eRms);
   out.dataset.bones = String(r.bones);
   out.dataset.ms = String(r.rigMs + r.writeMs + r.evaluateMs);

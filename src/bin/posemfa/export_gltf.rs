@@ -30,7 +30,7 @@ pub fn run(a: Args) -> Result<(), String> {
         g.samples_per_second = s;
     }
     // (a model file's own rig when it is this one: the same bytes as building it, without the weight solve)
-    let (rig, source) = rig_of(&pop, &art, saved_rig.as_ref(), &a.band, &g.rig_options())?;
+    let (rig, source) = rig_of(&pop, &art, saved_rig.as_ref(), &g.rig_options())?;
     let glb = posemfa::export::gltf::write_glb(&art, &rig, &g).map_err(|e| e.to_string())?;
     std::fs::write(out, &glb).map_err(|e| format!("cannot write {out}: {e}"))?;
     out!(

@@ -69,7 +69,7 @@ pub fn run(a: Args) -> Result<(), String> {
             timings.insert("articulate".into(), ms(t).into());
             let g = a.rig.options(&pop)?;
             let t = std::time::Instant::now();
-            let (rig, source) = crate::shared::rig_of(&pop, &art, saved_rig.as_ref(), &a.band, &g.rig_options())?;
+            let (rig, source) = crate::shared::rig_of(&pop, &art, saved_rig.as_ref(), &g.rig_options())?;
             info.insert("rig_source".into(), source.word().into());
             timings.insert("rig".into(), ms(t).into());
             let t = std::time::Instant::now();

@@ -509,38 +509,18 @@ pub fn articulate_fit_rig(
     Ok((f.pop, art, f.saved_rig))
 }
 
-/// The rig of `art` (built from `pop` with `band`) with `options`: the one kept in the model file when it is that
-/// very rig ([`posemfa::model_file::SavedRig::for_request`]), else built now; and which of the two.
+/// The rig of `art` (built from `pop`) with `options`: the one kept in the model file when it is that very rig,
+/// else built now; and which of the two ([`posemfa::model_file::kept_or_built`]).
 pub fn rig_of(
     pop: &Population,
     art: &posemfa::articulate::Articulation,
     saved: Option<&posemfa::model_file::SavedRig>,
-    band: &BandArgs,
     options: &posemfa::articulate::rig::RigOptions,
 ) -> Result<(posemfa::articulate::rig::Rig, RigSource), String> {
-    match saved.and_then(|s| s.for_request(pop, band.band, options)) {
-        Some(rig) => Ok((rig.clone(), RigSource::ModelFile)),
-        None => Ok((posemfa::articulate::rig::build(art, options).map_err(|e| e.to_string())?, RigSource::Built)),
-    }
+    posemfa::model_file::kept_or_built(saved, art, pop, options).map_err(|e| e.to_string())
 }
 
-/// Where a command's rig came from ([`rig_of`]).
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub enum RigSource {
-    /// Kept in the --model file (`fit --save --with-rig`).
-    ModelFile,
-    /// Built now from the fit.
-    Built,
-}
-
-impl RigSource {
-    pub fn word(self) -> &'static str {
-        match self {
-            RigSource::ModelFile => "model file",
-            RigSource::Built => "built",
-        }
-    }
-}
+pub use posemfa::model_file::RigSource;
 
 impl BandArgs {
     /// The articulated model of a fit.
