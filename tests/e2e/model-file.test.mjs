@@ -34,6 +34,7 @@ before(() => {
   poseFiles = readdirSync(posesDir).filter((n) => n.endsWith('.obj')).map((n) => ({ name: n, buffer: readFileSync(join(posesDir, n)) }));
   execFileSync(cli, ['fit', posesDir, '--quiet', '--save', join(dir, 'arm.posemfa'), '--json', join(dir, 'arm.json')]);
   execFileSync(cli, ['fit', '--model', join(dir, 'arm.posemfa'), '--quiet', '--save', join(dir, 'bare.posemfa'), '--without-poses']);
+  execFileSync(cli, ['fit', '--model', join(dir, 'arm.posemfa'), '--quiet', '--save', join(dir, 'rigged.posemfa'), '--with-rig']);
   withPoses = readFileSync(join(dir, 'arm.posemfa'));
   withoutPoses = readFileSync(join(dir, 'bare.posemfa'));
   fitJson = JSON.parse(readFileSync(join(dir, 'arm.json'), 'utf8'));
@@ -103,6 +104,35 @@ test('a model file opens without fitting, and every view works from it', async (
   assert.equal(await pick(page, [{ name: 'again.posemfa', buffer: saved }]), false);
   assert.deepEqual(await labels(page), fitJson.labels);
   assert.deepEqual(log.errors, [], 'no console errors');
+  await context.close();
+});
+
+test('a model file saved with its rig gives the Rig panel that rig; other options build their own', async () => {
+  const { page, log, context } = await fresh();
+  assert.equal(await pick(page, [{ name: 'rigged.posemfa', buffer: readFileSync(join(dir, 'rigged.posemfa')) }]), false);
+  const erms = page.locator('[data-testid=rig-erms]');
+  const press = async () => {
+    await page.evaluate(() => { delete document.querySelector('[data-testid=rig-erms]').dataset.erms; });
+    const download = page.waitForEvent('download', { timeout: 60000 });
+    await page.click('#export-gltf');
+    await download;
+    await page.waitForFunction(() => document.querySelector('[data-testid=rig-erms]').dataset.erms);
+  };
+  // --with-rig keeps the rig of fitted weights with the default options
+  await page.selectOption('#rig [name=weights]', 'fitted');
+  await page.fill('#rig [name=influences]', '4');
+  await press();
+  assert.equal(await erms.getAttribute('data-source'), 'model file');
+  assert.match(await erms.innerText(), /the rig kept in the model file/);
+  const kept = Number(await erms.getAttribute('data-erms'));
+  await page.fill('#rig [name=influences]', '3');
+  await press();
+  assert.equal(await erms.getAttribute('data-source'), 'built');
+  assert.doesNotMatch(await erms.innerText(), /kept in the model file/);
+  await page.fill('#rig [name=influences]', '4');
+  await press();
+  assert.equal(Number(await erms.getAttribute('data-erms')), kept, 'the kept rig measures as it did');
+  assert.deepEqual(log.errors, []);
   await context.close();
 });
 
