@@ -64,6 +64,31 @@ dual_test! {
         assert!(m.contains("triangle 2 is [2, 13, 130]") && m.contains("4 vertices"), "{m}");
     }
 
+    /// ply_parse target: a text PLY whose file ends on `end_header` (no newline, no data) while the header
+    /// says 4 vertices. The refusal named line 11 of a 10-line file and "1 bytes of data": it names the
+    /// `end_header` line and the 0 bytes that follow.
+    fn ply_header_ending_the_file_is_refused_at_a_line_it_has() {
+        let data = b"ply\nformat ascii 1.0\ncomment tiny_tet\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\nelement face 4\nproperty list uchar int vertex_indices\nend_header";
+        let e = posemfa::mesh::ply::parse_ply("fuzz.ply", data).unwrap_err();
+        assert!(matches!(e, Error::Mesh { line: 10, .. }), "{e:?}");
+        assert!(e.to_string().contains("only 0 bytes of data follow, room for at most 0"), "{e}");
+        // with the newline the data's line is the next one, which the file has
+        let e = posemfa::mesh::ply::parse_ply("fuzz.ply", &[&data[..], b"\n"].concat()).unwrap_err();
+        assert!(matches!(e, Error::Mesh { line: 11, .. }), "{e:?}");
+    }
+
+    /// shapes target: two shapes of 11 vertices that differ by less than the f32 rounding of the unit box
+    /// (1e-6, after centring) are refused by the fit as the same shapes, as `check_motion` documents; the
+    /// target's own test of that used 1e-9 and called the refusal a bug (its tolerance is now the fit's).
+    fn shapes_equal_to_the_unit_box_rounding_are_the_same_shapes() {
+        let data = b"\x21\x02\x00\x00\x00\x00\x00\x00\x00\x2c\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\xf0\x3f\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\xf0\x3f\x00\xfc\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x98\x32\xea\x0b\x00\x00\x00\x00\x00\xf0\x3f\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x08\x00\x00\x00\xf0\x3f\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\xf0\x3f\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\xf0\x3f";
+        let ShapesInput { cfg, names, faces, shapes } = decode_shapes(data).expect("long enough");
+        assert_eq!(shapes.len(), 2);
+        let pop = Population::new(posemfa::mesh::Sources::UnitShapes { names, faces, shapes }).unwrap();
+        let e = fit(&pop, &params_from(cfg), &mut |_| true).unwrap_err();
+        assert!(matches!(&e, Error::Data(m) if m.contains("all 2 shapes are the same")), "{e:?}");
+    }
+
     /// shapes target, before the fix: 7 vertices in 2 shapes, 3 parts with the refinement. A coarse part of 2
     /// vertices was refitted alone in the refinement and the fit failed with "2 vertices; at least 3 are
     /// needed" (the whole-population minimum applied to a part).

@@ -265,7 +265,9 @@ fn header(bytes: &[u8]) -> Res<Header> {
                 let Some(format) = format else {
                     return fail(line, "the header has no `format` line; export the file again");
                 };
-                return Ok(Header { format, elements, data_start: pos, data_line: line + 1 });
+                // (a file that ends on this line has no line after it for the data's messages to name)
+                let data_line = if end < rest.len() { line + 1 } else { line };
+                return Ok(Header { format, elements, data_start: pos, data_line });
             }
             other => {
                 return fail(
@@ -367,12 +369,13 @@ fn parse(bytes: &[u8]) -> Res<Mesh> {
     Ok(mesh)
 }
 
-/// Refuses a count that cannot fit in the bytes left: every element takes at least `min_bytes`.
-fn check_count(e: &Element, min_bytes: u64, left: usize, line: usize) -> Res<()> {
+/// Refuses a count that cannot fit in the `left` bytes that follow: every element takes at least `min_bytes`, of
+/// which the last may lack `slack`.
+fn check_count(e: &Element, min_bytes: u64, left: usize, slack: usize, line: usize) -> Res<()> {
     if min_bytes == 0 {
         return Ok(());
     }
-    let fits = left as u64 / min_bytes;
+    let fits = (left + slack) as u64 / min_bytes;
     if e.count > fits {
         return fail(
             line,
@@ -423,6 +426,9 @@ trait Values {
     const FIXED: bool;
     /// Bytes of data not read yet.
     fn left(&self) -> usize;
+    /// Bytes the data may lack at their end beyond [`Values::value_bytes`] per value (text: the last value
+    /// needs no separator after it).
+    const SLACK: usize;
     /// The fewest bytes a value of `ty` takes.
     fn value_bytes(ty: Scalar) -> u64;
     /// The fewest bytes an element takes (0: it has no properties).
@@ -455,6 +461,7 @@ impl Binary<'_> {
 
 impl Values for Binary<'_> {
     const FIXED: bool = true;
+    const SLACK: usize = 0;
 
     fn left(&self) -> usize {
         self.data.len().saturating_sub(self.pos)
@@ -547,9 +554,10 @@ impl<'a> Ascii<'a> {
 impl Values for Ascii<'_> {
     const FIXED: bool = false;
 
-    /// One more than the bytes left: the last value needs no separator after it.
+    const SLACK: usize = 1;
+
     fn left(&self) -> usize {
-        self.data.len().saturating_sub(self.pos) + 1
+        self.data.len().saturating_sub(self.pos)
     }
 
     /// A character and a separator.
@@ -597,7 +605,7 @@ fn read_element<V: Values>(
     if min == 0 {
         return Ok(()); // no properties: nothing to read
     }
-    check_count(e, min, r.left(), r.place(r.mark()).0)?;
+    check_count(e, min, r.left(), V::SLACK, r.place(r.mark()).0)?;
     let name = text(&e.name);
     let ended = |r: &V, mark: usize, i: u64| {
         let (line, at) = r.place(mark);
@@ -688,7 +696,7 @@ fn read_element<V: Values>(
                             );
                         }
                     };
-                    if n.saturating_mul(V::value_bytes(*item)) > r.left() as u64 {
+                    if n.saturating_mul(V::value_bytes(*item)) > (r.left() + V::SLACK) as u64 {
                         return Err(ended(r, mark, i));
                     }
                     if !matches!(role, Role::Face(l) if *l == k) {
