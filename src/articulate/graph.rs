@@ -400,6 +400,7 @@ impl PartGraph {
         for (v, &l) in labels.iter().enumerate() {
             members[l as usize].push(v);
         }
+        let moments: Vec<Moments> = members.iter().map(|m| Moments::of(m.iter().map(|&v| positions[v]))).collect();
         let mut candidates = Vec::new();
         for (i, &a) in used.iter().enumerate() {
             for &b in &used[i + 1..] {
@@ -411,8 +412,7 @@ impl PartGraph {
                 let (ma, mb) = (motions.get(a).unwrap_or(&none), motions.get(b).unwrap_or(&none));
                 // the smaller part moves relative to the larger (the leg to the body), ties the later one
                 let child = if members[a].len() < members[b].len() { a } else { b };
-                let moments = Moments::of(members[child].iter().map(|&v| positions[v]));
-                let score = piece_join_score(ma, mb, positions[va], positions[vb], &moments);
+                let score = piece_join_score(ma, mb, positions[va], positions[vb], &moments[child]);
                 candidates.push((score, a, b, va as u32, vb as u32));
             }
         }
