@@ -1,7 +1,8 @@
 //! `posemfa export-gltf DIR_OR_FILES... --out model.glb`: the fitted rig as binary glTF 2.0.
 
-use crate::shared::{articulate_fit_rig, rig_of, BandArgs, FitArgs, RigArgs};
+use crate::shared::{articulate_fit_rig, BandArgs, FitArgs, RigArgs};
 use clap::ValueHint;
+use posemfa::model_file::{kept_or_built, RigSource};
 
 /// Fit, then write binary glTF 2.0: mesh bound in one pose, skeleton, skin (rigid, smooth or fitted weights),
 /// clips "training poses" (one pose per second) and "interpolated" (rigid/smooth, free joints)
@@ -30,7 +31,7 @@ pub fn run(a: Args) -> Result<(), String> {
         g.samples_per_second = s;
     }
     // (a model file's own rig when it is this one: the same bytes as building it, without the weight solve)
-    let (rig, source) = rig_of(&pop, &art, saved_rig.as_ref(), &g.rig_options())?;
+    let (rig, source) = kept_or_built(saved_rig.as_ref(), &art, &pop, &g.rig_options()).map_err(|e| e.to_string())?;
     let glb = posemfa::export::gltf::write_glb(&art, &rig, &g).map_err(|e| e.to_string())?;
     std::fs::write(out, &glb).map_err(|e| format!("cannot write {out}: {e}"))?;
     out!(
@@ -38,7 +39,7 @@ pub fn run(a: Args) -> Result<(), String> {
         glb.len(),
         art.graph.used_parts().len(),
         pop.n_shapes(),
-        if source == crate::shared::RigSource::ModelFile { ", the rig kept in the model file" } else { "" }
+        if source == RigSource::ModelFile { ", the rig kept in the model file" } else { "" }
     );
     Ok(())
 }

@@ -69,7 +69,8 @@ pub fn run(a: Args) -> Result<(), String> {
             timings.insert("articulate".into(), ms(t).into());
             let g = a.rig.options(&pop)?;
             let t = std::time::Instant::now();
-            let (rig, source) = crate::shared::rig_of(&pop, &art, saved_rig.as_ref(), &g.rig_options())?;
+            let (rig, source) = posemfa::model_file::kept_or_built(saved_rig.as_ref(), &art, &pop, &g.rig_options())
+                .map_err(|e| e.to_string())?;
             info.insert("rig_source".into(), source.word().into());
             timings.insert("rig".into(), ms(t).into());
             let t = std::time::Instant::now();

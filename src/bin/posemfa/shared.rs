@@ -509,19 +509,6 @@ pub fn articulate_fit_rig(
     Ok((f.pop, art, f.saved_rig))
 }
 
-/// The rig of `art` (built from `pop`) with `options`: the one kept in the model file when it is that very rig,
-/// else built now; and which of the two ([`posemfa::model_file::kept_or_built`]).
-pub fn rig_of(
-    pop: &Population,
-    art: &posemfa::articulate::Articulation,
-    saved: Option<&posemfa::model_file::SavedRig>,
-    options: &posemfa::articulate::rig::RigOptions,
-) -> Result<(posemfa::articulate::rig::Rig, RigSource), String> {
-    posemfa::model_file::kept_or_built(saved, art, pop, options).map_err(|e| e.to_string())
-}
-
-pub use posemfa::model_file::RigSource;
-
 impl BandArgs {
     /// The articulated model of a fit.
     pub fn articulate(
