@@ -118,7 +118,7 @@ fn real_characters_when_fetched() {
 /// table says they are met: the man meets all (median at most 1.5 %, largest at most 5 % of the diagonal, both
 /// ways, the root on his pelvis); Mr. Fixit (assimp-testmodels' IQM folder) the medians, the converse's largest
 /// against every artist joint that holds vertices, and the root on his hips; the Minetest player (minetest-data)
-/// its root on the body, its parts and the parents of four of its five moving joints. Skipped with a message when the characters have not been fetched.
+/// its root on the body, its parts, the parents of four of its five moving joints and the joint bars. Skipped with a message when the characters have not been fetched.
 #[test]
 fn joints_where_the_artist_put_them_when_fetched() {
     let dir = std::env::var("POSEMFA_CHARACTERS")
@@ -156,4 +156,8 @@ fn joints_where_the_artist_put_them_when_fetched() {
     // which moves more like the other leg (the clip sits and lies with both legs together) than like the body
     assert!(s["parts_ari"].as_f64().unwrap() >= 0.99, "{}", s["parts_ari"]);
     assert!(s["parents"]["agreeing"].as_u64().unwrap() >= 4, "{}", s["parents"]);
+    // the boxes touch face to face: each joint at the middle of the child along its hinge's axis, from the face
+    let (am, ax) = (g(&s, "artist_to_fitted", "median"), g(&s, "artist_to_fitted", "max"));
+    let (fm, fx) = (g(&s, "fitted_to_artist", "median"), g(&s, "fitted_to_artist", "max"));
+    assert!(am <= 0.015 && fm <= 0.015 && ax <= 0.05 && fx <= 0.05, "the Minetest player: {am} / {ax}, {fm} / {fx}");
 }

@@ -12,10 +12,12 @@
 //! is itself a tree the two are the same tree.
 //!
 //! Parts in different connected pieces of the part graph (a mesh made of several pieces) are joined by virtual
-//! contacts, each between the closest vertices of two parts, so that every used part is in one tree: a minimum
-//! spanning tree over the pieces whose cost is the gap plus how far the smaller part moves relative to the
-//! other over the poses ([`piece_join_score`]): a character's separate arm box joins the torso it swings about,
-//! not the leg box beside it. Parts that label no vertex are in no tree.
+//! contacts, so that every used part is in one tree: a minimum spanning tree over the pieces whose cost is the
+//! gap between the closest vertices of two parts plus how far the smaller part moves relative to the other over
+//! the poses ([`piece_join_score`]): a character's separate arm box joins the torso it swings about, not the leg
+//! box beside it. Where the two parts lie against each other (faces on the other's surface) the contact is
+//! those faces ([`Contact::Touching`]), else the closest pair of vertices ([`Contact::Virtual`]). Parts that
+//! label no vertex are in no tree.
 
 use super::RigidMotion;
 use crate::geometry::{add, norm, scale, sub, Vec3};
@@ -40,6 +42,10 @@ pub enum Contact {
     Triangles(Vec<usize>),
     /// A virtual contact between two vertices (one per part) joining disconnected pieces of the mesh.
     Virtual(u32, u32),
+    /// Two disconnected pieces that lie against each other: the triangles of either part whose every corner is
+    /// on the other part's surface (within a tolerance), by triangle index. A box arm against a box torso
+    /// touches along the arm's inner face, whose centre is where an artist puts the joint.
+    Touching(Vec<usize>),
 }
 
 /// Parts, their contacts and sizes.
@@ -308,6 +314,25 @@ pub fn piece_join_score(ma: &[RigidMotion], mb: &[RigidMotion], pa: Vec3, pb: Ve
     gap + (total / (n as f64 * child.n)).max(0.0).sqrt()
 }
 
+/// How far a corner may lie off the other piece's surface and still touch it ([`touching_triangles`]), beyond
+/// the gap between the pieces' closest vertices: a fraction of the smaller part's root mean square radius.
+pub const TOUCHING_TOLERANCE: f64 = 0.01;
+
+/// The triangles of two separate pieces (`tris[0]`, `tris[1]`: each part's own triangles) that lie against the
+/// other: every corner within `tolerance` of one of the other's triangles. Both parts' triangles, sorted.
+pub fn touching_triangles(tris: [&[usize]; 2], faces: &[[u32; 3]], positions: &[Vec3], tolerance: f64) -> Vec<usize> {
+    use crate::geometry::surface_distance::SurfaceGrid;
+    let corners = |t: usize| faces[t].map(|v| positions[v as usize]);
+    let mut out = Vec::new();
+    for side in 0..2 {
+        let (own, other) = (tris[side], tris[1 - side]);
+        let grid = SurfaceGrid::new(other.iter().map(|&t| corners(t)).collect(), tolerance);
+        out.extend(own.iter().copied().filter(|&t| corners(t).iter().all(|&p| grid.near(p))));
+    }
+    out.sort_unstable();
+    out
+}
+
 struct Dsu(Vec<usize>);
 impl Dsu {
     fn find(&mut self, x: usize) -> usize {
@@ -372,7 +397,7 @@ impl PartGraph {
             contacts.insert(pair, Contact::Triangles(largest_patch(&tris, faces, positions)));
         }
         let mut graph = PartGraph { n_parts, vertex_count, neighbors: vec![Vec::new(); n_parts], contacts, strength };
-        graph.join_pieces(labels, positions, motions);
+        graph.join_pieces(labels, faces, positions, motions);
         for &(a, b) in graph.contacts.keys() {
             graph.neighbors[a].push(b);
             graph.neighbors[b].push(a);
@@ -386,8 +411,9 @@ impl PartGraph {
 
     /// Adds virtual contacts until the used parts form one connected graph: a minimum spanning tree over the
     /// pieces (parts joined by real contacts), each pair of parts in different pieces scored by
-    /// [`piece_join_score`], the contact between the pair's closest vertices.
-    fn join_pieces(&mut self, labels: &[u32], positions: &[Vec3], motions: &[Vec<RigidMotion>]) {
+    /// [`piece_join_score`], the contact the faces where they lie against each other ([`touching_triangles`]), or
+    /// where there are none, the pair's closest vertices.
+    fn join_pieces(&mut self, labels: &[u32], faces: &[[u32; 3]], positions: &[Vec3], motions: &[Vec<RigidMotion>]) {
         let used: Vec<usize> = (0..self.n_parts).filter(|&k| self.vertex_count[k] > 0).collect();
         if used.len() < 2 {
             return;
@@ -417,10 +443,25 @@ impl PartGraph {
             }
         }
         candidates.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+        let mut faces_of: Vec<Vec<usize>> = vec![Vec::new(); self.n_parts];
+        for (t, f) in faces.iter().enumerate() {
+            let l = labels[f[0] as usize];
+            if f.iter().all(|&v| labels[v as usize] == l) {
+                faces_of[l as usize].push(t);
+            }
+        }
         for (_, a, b, va, vb) in candidates {
             if dsu.find(a) != dsu.find(b) {
                 dsu.union(a, b);
-                self.contacts.insert((a, b), Contact::Virtual(va, vb));
+                let child = if members[a].len() < members[b].len() { a } else { b };
+                let m = &moments[child];
+                let mean = scale(m.sum, 1.0 / m.n);
+                let spread = (m.outer[0] + m.outer[4] + m.outer[8]) / m.n - crate::geometry::dot(mean, mean);
+                let gap = norm(sub(positions[va as usize], positions[vb as usize]));
+                let tolerance = gap + TOUCHING_TOLERANCE * spread.max(0.0).sqrt();
+                let touching = touching_triangles([&faces_of[a], &faces_of[b]], faces, positions, tolerance);
+                let contact = if touching.is_empty() { Contact::Virtual(va, vb) } else { Contact::Touching(touching) };
+                self.contacts.insert((a, b), contact);
                 self.strength.insert((a, b), 1);
             }
         }
@@ -925,6 +966,42 @@ mod tests {
         assert!((norm(sub(pos[a as usize], pos[b as usize])) - 4.0).abs() < 1e-12);
         assert_eq!(g.tree(0, TreeRule::Strongest).order, vec![0, 1]);
     }
+    /// The 12 triangles of the box from `lo` to `hi`, its 8 corners numbered from `base`.
+    fn cuboid(lo: Vec3, hi: Vec3, base: u32) -> (Vec<[u32; 3]>, Vec<Vec3>) {
+        let corner = |k: u32| {
+            [[lo[0], hi[0]][(k & 1) as usize], [lo[1], hi[1]][(k >> 1 & 1) as usize], [lo[2], hi[2]][(k >> 2) as usize]]
+        };
+        let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+        let faces =
+            quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]].map(|t| t.map(|v| v + base))).collect();
+        (faces, (0..8).map(corner).collect())
+    }
+
+    #[test]
+    fn separate_boxes_that_touch_join_at_the_face_between_them() {
+        // a torso box and an arm box beside it (x 1..1.5), touching on the arm's inner face, whose centre is
+        // (1, 1.25, 0); the arm's nearest corner to the torso is a corner of that face
+        let (f0, p0) = cuboid([-1.0, 0.0, -0.25], [1.0, 2.0, 0.25], 0);
+        let (f1, p1) = cuboid([1.0, 0.5, -0.25], [1.5, 2.0, 0.25], 8);
+        let labels: Vec<u32> = [0; 8].into_iter().chain([1; 8]).collect();
+        let (faces, pos) = ([f0, f1.clone()].concat(), [p0, p1.clone()].concat());
+        let g = PartGraph::new(&labels, &faces, 2, &pos, &[]);
+        let Some(Contact::Touching(t)) = g.contact(0, 1) else { panic!("{:?}", g.contacts) };
+        // the arm's inner face (x = 1), both its triangles; none of the torso's faces lies wholly on the arm
+        assert_eq!(t, &vec![12 + 8, 12 + 9]);
+        let c = crate::articulate::joints::area_centroid(t, &faces, &pos);
+        assert!(norm(sub(c, [1.0, 1.25, 0.0])) < 1e-12, "{c:?}");
+        // moved 0.2 away the faces still face each other across the gap: the same triangles
+        let moved = |d: Vec3| -> Vec<Vec3> {
+            pos.iter().enumerate().map(|(v, p)| if v < 8 { *p } else { add(*p, d) }).collect()
+        };
+        let g = PartGraph::new(&labels, &faces, 2, &moved([0.2, 0.0, 0.0]), &[]);
+        assert_eq!(g.contact(0, 1), Some(&Contact::Touching(vec![20, 21])));
+        // above and beside the torso only their corners are near: the closest corners
+        let g = PartGraph::new(&labels, &faces, 2, &moved([0.2, 1.7, 0.0]), &[]);
+        assert!(matches!(g.contact(0, 1), Some(Contact::Virtual(..))), "{:?}", g.contacts);
+    }
+
     #[test]
     fn separate_pieces_join_where_they_move_least_apart() {
         // three separate strips: a body (x 0..3, y 0..1), an arm above it (x 0..3, y 1.6..2.6; gap 0.6) and a leg

@@ -4,7 +4,8 @@
 //! J_pc^i: the area-weighted centroid of the contact triangles (those with vertices in both p and c) in
 //! shape i (docs/method.md, item 10). Its latent image in part k is Λ_k E_k[z | J_pc] (eq 23 mapped through Λ,
 //! item 4): the point of part k's latent shape that part k's rigid motions send closest to J_pc^i, all
-//! shapes together. For a virtual contact (disconnected mesh pieces) J^i is the midpoint of its two vertices.
+//! shapes together. For a virtual contact (disconnected mesh pieces) J^i is the midpoint of its two vertices; for
+//! pieces that touch, the area-weighted centroid of the triangles where they lie against each other.
 //!
 //! Eq 23 pins the child to the parent at that point. In a training shape the two parts do not meet there
 //! exactly: the parent places it at R_p^i e_p + b_p^i, the child at R_c^i e_c + b_c^i. [`Joint::offset`] is
@@ -84,7 +85,7 @@ pub fn joints<S: AsRef<[Vec3]>>(
         let s = s.as_ref();
         for (contact, p) in graph.contacts.values().zip(points.iter_mut()) {
             p.push(match contact {
-                Contact::Triangles(t) => area_centroid(t, faces, s),
+                Contact::Triangles(t) | Contact::Touching(t) => area_centroid(t, faces, s),
                 Contact::Virtual(u, v) => scale(add(s[*u as usize], s[*v as usize]), 0.5),
             });
         }
@@ -132,7 +133,12 @@ pub(crate) fn joint_normal_equations<'a>(
 /// that stays near the contact and one that turns much more goes to its pivot. The answer is then drawn back
 /// along the line to `contact` to at most `radius` from it (a pivot the poses leave undetermined can fall far
 /// outside the body). `contact` itself when the motions are empty or the system singular.
-pub fn pivot(child: &[RigidMotion], parent: &[RigidMotion], contact: Vec3, radius: f64) -> Vec3 {
+///
+/// `axial`: where along a hinge's axis the joint goes, when the contact does not say (two separate pieces that
+/// touch side by side: a box arm against a box torso swings about an axis through the contact face, and the
+/// artist's shoulder is on the arm's middle line, not on its face). The anchor then takes `axial`'s coordinate
+/// along the axis ([`hinge_anchor`]).
+pub fn pivot(child: &[RigidMotion], parent: &[RigidMotion], contact: Vec3, radius: f64, axial: Option<Vec3>) -> Vec3 {
     let (mu_rel, turn, guard) = (PIVOT_MU_REL, PIVOT_TURN, PIVOT_GUARD);
     let n = child.len().min(parent.len());
     if n == 0 {
@@ -142,9 +148,13 @@ pub fn pivot(child: &[RigidMotion], parent: &[RigidMotion], contact: Vec3, radiu
     let tr = a[0] + a[4] + a[8];
     // |R - I|_F² = 4 (1 - cos θ) for a turn θ
     let mu = mu_rel * tr / 3.0 + n as f64 * 4.0 * (1.0 - turn.cos()) + 1e-12;
+    let anchor = match axial {
+        Some(g) => hinge_anchor(&a, mu, contact, g),
+        None => contact,
+    };
     for r in 0..3 {
         a[r * 3 + r] += mu;
-        b[r] += mu * contact[r];
+        b[r] += mu * anchor[r];
     }
     let Some(x) = solve3(a, b) else { return contact };
     if !x.iter().all(|c| c.is_finite()) {
@@ -160,6 +170,29 @@ pub fn pivot(child: &[RigidMotion], parent: &[RigidMotion], contact: Vec3, radiu
         return contact;
     }
     x
+}
+
+/// The anchor of a hinge's undetermined axis: `contact` moved along the axis u (the eigenvector of the smallest
+/// eigenvalue λ₀ of Σ ΔRᵀΔR, `a` row-major) toward `axial`'s coordinate, by the weight (λ₁ - λ₀) / (λ₁ + μ), μ the
+/// pivot's pull: near 1 for a hinge (its turns share one axis, λ₀ ≈ 0) that turns well beyond the pull, so that
+/// the poses fix the other two directions; near 0 for a joint that turns about every axis (λ₀ ≈ λ₁) or turns
+/// little (λ₁ ≪ μ), which stays at its contact.
+pub fn hinge_anchor(a: &[f64; 9], mu: f64, contact: Vec3, axial: Vec3) -> Vec3 {
+    if !a.iter().chain(&axial).chain(&contact).all(|v| v.is_finite()) {
+        return contact;
+    }
+    let m = nalgebra::Matrix3::from_row_slice(a);
+    let eig = nalgebra::SymmetricEigen::new(m);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
+    let (l0, l1) = (eig.eigenvalues[order[0]].max(0.0), eig.eigenvalues[order[1]]);
+    if !(l1 > 0.0) || !l1.is_finite() {
+        return contact;
+    }
+    let weight = ((l1 - l0) / (l1 + mu)).clamp(0.0, 1.0);
+    let u = eig.eigenvectors.column(order[0]);
+    let u = [u[0], u[1], u[2]];
+    add(contact, scale(u, weight * crate::geometry::dot(u, sub(axial, contact))))
 }
 
 /// [`pivot`]'s pull relative to the mean eigenvalue.
@@ -200,7 +233,7 @@ pub fn contact_radius(
     child_vertices: &[usize],
 ) -> f64 {
     match contact {
-        Contact::Triangles(t) => t
+        Contact::Triangles(t) | Contact::Touching(t) => t
             .iter()
             .flat_map(|&t| faces.get(t).copied().unwrap_or([0; 3]))
             .filter_map(|v| positions.get(v as usize))
@@ -240,7 +273,12 @@ pub fn place_free_joints(art: &super::Articulation, rig: &mut super::rig::Rig, b
         let radius = contact_radius(c, &art.faces, rest, contact, &members[k]);
         let child: Vec<RigidMotion> = (0..ns).map(|i| rig.bones[i][k]).collect();
         let parent: Vec<RigidMotion> = (0..ns).map(|i| rig.bones[i][p]).collect();
-        rig.joint_points[k] = pivot(&child, &parent, contact, radius);
+        // separate pieces: a hinge's joint on the child's middle along the axis
+        let axial = matches!(c, Contact::Touching(_) | Contact::Virtual(..)).then(|| {
+            let sum = members[k].iter().fold([0.0; 3], |s, &v| add(s, rest[v]));
+            scale(sum, 1.0 / members[k].len().max(1) as f64)
+        });
+        rig.joint_points[k] = pivot(&child, &parent, contact, radius, axial);
     }
     rig.tree = tree;
 }
@@ -294,16 +332,16 @@ mod tests {
                 turn_about(if i % 2 == 0 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] }, 40.0 + 5.0 * i as f64, pivot_at)
             })
             .collect();
-        let x = pivot(&child, &parent, contact, 1.0);
+        let x = pivot(&child, &parent, contact, 1.0, None);
         // (the contact is 0.11 away; the pull leaves 0.011 of it)
         assert!(norm(sub(x, pivot_at)) < 0.02, "{x:?}");
         // the parent moving too: only the relative motion counts
         let lift = RigidMotion { rotation: crate::geometry::IDENTITY, translation: [0.0, 2.0, 0.0] };
         let child2: Vec<RigidMotion> = child.iter().map(|m| lift.then_after(m)).collect();
-        let x2 = pivot(&child2, &vec![lift; 6], contact, 1.0);
+        let x2 = pivot(&child2, &vec![lift; 6], contact, 1.0, None);
         assert!(norm(sub(x2, x)) < 1e-9, "{x2:?} {x:?}");
         // the guard: no further than radius from the contact, on the line toward the pivot
-        let g = pivot(&child, &parent, contact, 0.05);
+        let g = pivot(&child, &parent, contact, 0.05, None);
         assert!((norm(sub(g, contact)) - 0.05).abs() < 1e-9, "{g:?}");
         // a joint that turns a fraction of a degree, with noise the size of its turn: it stays at the contact
         let child3: Vec<RigidMotion> = (0..6)
@@ -313,9 +351,44 @@ mod tests {
                 m
             })
             .collect();
-        let y = pivot(&child3, &parent, contact, 10.0);
+        let y = pivot(&child3, &parent, contact, 10.0, None);
         assert!(norm(sub(y, contact)) < 0.05, "{y:?}");
         // nothing to go on: the contact
-        assert_eq!(pivot(&[], &[], contact, 1.0), contact);
+        assert_eq!(pivot(&[], &[], contact, 1.0, None), contact);
+    }
+
+    #[test]
+    fn a_hinge_beside_its_parent_takes_the_child_middle_along_its_axis() {
+        // a box arm beside a box torso swings about the x axis through (0, 1, 0); the pieces touch on the arm's
+        // inner face, whose centre (0.5, 0.4, 0) is the contact; the arm's middle is at x = 1
+        let (axis_point, contact, middle) = ([0.0, 1.0, 0.0], [0.5, 0.4, 0.0], [1.0, 0.4, 0.0]);
+        let parent = vec![RigidMotion::IDENTITY; 8];
+        let swing: Vec<RigidMotion> =
+            (0..8).map(|i| turn_about([1.0, 0.0, 0.0], -40.0 + 10.0 * i as f64, axis_point)).collect();
+        // without the middle: on the axis (drawn a little toward the contact), at the contact's x
+        let x0 = pivot(&swing, &parent, contact, 2.0, None);
+        assert!((x0[0] - 0.5).abs() < 1e-6 && (x0[1] - 1.0).abs() < 0.1 && x0[2].abs() < 1e-6, "{x0:?}");
+        // with it: the same point of the axis moved most of the way to the arm's middle x (all of it as the
+        // turns grow beyond the pull)
+        let x = pivot(&swing, &parent, contact, 2.0, Some(middle));
+        assert!(x[0] > 0.9 && x[0] <= 1.0 && (x[1] - x0[1]).abs() < 0.02 && x[2].abs() < 1e-6, "{x:?}");
+        // a joint turning about every axis is fixed by its poses, not by the middle
+        let pivot_at = [0.5, 0.9, 0.1];
+        let free: Vec<RigidMotion> = (0..8)
+            .map(|i| turn_about([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]][i % 3], 35.0, pivot_at))
+            .collect();
+        let with = pivot(&free, &parent, contact, 2.0, Some(middle));
+        let without = pivot(&free, &parent, contact, 2.0, None);
+        assert!(
+            norm(sub(with, without)) < 1e-3 && norm(sub(with, pivot_at)) < norm(sub(contact, pivot_at)) / 4.0,
+            "{with:?} {without:?}"
+        );
+        // a hinge turning a fraction of a degree stays at its contact
+        let small: Vec<RigidMotion> =
+            (0..8).map(|i| turn_about([1.0, 0.0, 0.0], 0.05 * i as f64, axis_point)).collect();
+        let x = pivot(&small, &parent, contact, 2.0, Some(middle));
+        assert!(norm(sub(x, contact)) < 0.02, "{x:?}");
+        // nothing finite to go on: the contact
+        assert_eq!(hinge_anchor(&[f64::NAN; 9], 1.0, contact, middle), contact);
     }
 }

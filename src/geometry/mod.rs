@@ -9,6 +9,7 @@
 
 pub mod procrustes;
 pub mod rotation;
+pub mod surface_distance;
 
 pub type Vec3 = [f64; 3];
 pub type Mat3 = nalgebra::Matrix3<f64>;
