@@ -55,12 +55,15 @@ pub fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 
 /// Triangles binned in a uniform grid of cubes, each triangle in every cell its bounding box (grown by the
 /// query distance) meets, so that the triangles within that distance of a point are all in the point's cell.
+/// A triangle that would meet more than [`SurfaceGrid::MAX_CELLS`] cells (one far larger than the others) is
+/// kept in a list that every query tests instead, so that memory stays bounded by the triangle count.
 pub struct SurfaceGrid {
     triangles: Vec<[Vec3; 3]>,
     origin: Vec3,
     cell: f64,
     within: f64,
     cells: HashMap<[i64; 3], Vec<u32>>,
+    large: Vec<u32>,
 }
 
 impl SurfaceGrid {
@@ -78,13 +81,19 @@ impl SurfaceGrid {
             .sum::<f64>()
             / triangles.len().max(1) as f64;
         let cell = mean_side.max(2.0 * within).max(1e-12);
-        let mut grid = SurfaceGrid { triangles: Vec::new(), origin, cell, within, cells: HashMap::new() };
+        let mut grid =
+            SurfaceGrid { triangles: Vec::new(), origin, cell, within, cells: HashMap::new(), large: Vec::new() };
         for (i, t) in triangles.iter().enumerate() {
             if !t.iter().flatten().all(|c| c.is_finite()) {
                 continue;
             }
             let (lo, hi) = super::bounds(t.iter());
             let (a, b) = (grid.index(sub(lo, [within; 3])), grid.index(add(hi, [within; 3])));
+            let count: i64 = (0..3).map(|d| b[d] - a[d] + 1).product();
+            if count > Self::MAX_CELLS {
+                grid.large.push(i as u32);
+                continue;
+            }
             for x in a[0]..=b[0] {
                 for y in a[1]..=b[1] {
                     for z in a[2]..=b[2] {
@@ -97,6 +106,9 @@ impl SurfaceGrid {
         grid
     }
 
+    /// The most cells one triangle is binned in.
+    pub const MAX_CELLS: i64 = 64;
+
     fn index(&self, p: Vec3) -> [i64; 3] {
         // clamped so that a far point (or a huge triangle) cannot ask for an absurd range of cells
         [0, 1, 2].map(|d| ((p[d] - self.origin[d]) / self.cell).floor().clamp(-1e6, 1e6) as i64)
@@ -107,8 +119,8 @@ impl SurfaceGrid {
         if !p.iter().all(|c| c.is_finite()) {
             return false;
         }
-        let Some(list) = self.cells.get(&self.index(p)) else { return false };
-        list.iter().any(|&i| {
+        let binned = self.cells.get(&self.index(p)).map(|l| l.as_slice()).unwrap_or(&[]);
+        binned.iter().chain(&self.large).any(|&i| {
             let [a, b, c] = self.triangles[i as usize];
             norm(sub(p, closest_point_on_triangle(p, a, b, c))) <= self.within
         })
@@ -184,6 +196,12 @@ mod tests {
                 assert_eq!(grid.near(p), every, "{p:?} within {within}");
             }
         }
+        // one triangle a million times the others' size: kept aside, still found, and no vast grid
+        let mut with_large = tris.clone();
+        with_large.push([[-1e6, -1e6, 5.0], [1e6, -1e6, 5.0], [0.0, 1e6, 5.0]]);
+        let grid = SurfaceGrid::new(with_large, 0.1);
+        assert_eq!(grid.large.len(), 1);
+        assert!(grid.near([3e5, 2e5, 5.05]) && !grid.near([3e5, 2e5, 5.2]) && grid.near(tris[3][0]));
         // a corner is on the surface at distance 0
         assert!(SurfaceGrid::new(tris.clone(), 0.0).near(tris[5][1]));
         assert!(!SurfaceGrid::new(Vec::new(), 1.0).near([0.0; 3]));
