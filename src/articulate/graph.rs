@@ -282,6 +282,16 @@ impl Moments {
         }
         m
     }
+
+    /// The root mean square distance of the points from their centroid (0 for no points).
+    pub fn rms_radius(&self) -> f64 {
+        if !(self.n > 0.0) {
+            return 0.0;
+        }
+        let mean = scale(self.sum, 1.0 / self.n);
+        let spread = (self.outer[0] + self.outer[4] + self.outer[8]) / self.n - crate::geometry::dot(mean, mean);
+        spread.max(0.0).sqrt()
+    }
 }
 
 /// How well two parts of different mesh pieces are joined by a contact between their closest vertices `pa`, `pb`
@@ -454,11 +464,8 @@ impl PartGraph {
             if dsu.find(a) != dsu.find(b) {
                 dsu.union(a, b);
                 let child = if members[a].len() < members[b].len() { a } else { b };
-                let m = &moments[child];
-                let mean = scale(m.sum, 1.0 / m.n);
-                let spread = (m.outer[0] + m.outer[4] + m.outer[8]) / m.n - crate::geometry::dot(mean, mean);
                 let gap = norm(sub(positions[va as usize], positions[vb as usize]));
-                let tolerance = gap + TOUCHING_TOLERANCE * spread.max(0.0).sqrt();
+                let tolerance = gap + TOUCHING_TOLERANCE * moments[child].rms_radius();
                 let touching = touching_triangles([&faces_of[a], &faces_of[b]], faces, positions, tolerance);
                 let contact = if touching.is_empty() { Contact::Virtual(va, vb) } else { Contact::Touching(touching) };
                 self.contacts.insert((a, b), contact);
@@ -966,6 +973,17 @@ mod tests {
         assert!((norm(sub(pos[a as usize], pos[b as usize])) - 4.0).abs() < 1e-12);
         assert_eq!(g.tree(0, TreeRule::Strongest).order, vec![0, 1]);
     }
+
+    #[test]
+    fn moments_give_the_rms_radius() {
+        let m = Moments::of(
+            [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [3.0, 2.0, 0.0], [3.0, -2.0, 0.0]].map(|p| add(p, [5.0, 5.0, 5.0])),
+        );
+        // centroid (1.5, 0, 0) + 5: distances 0.5, 2.5, 2.5, 2.5 -> mean square (0.25 + 3 * 6.25) / 4
+        assert!((m.rms_radius() - ((0.25 + 3.0 * 6.25) / 4.0f64).sqrt()).abs() < 1e-12);
+        assert_eq!(Moments::default().rms_radius(), 0.0);
+    }
+
     /// The 12 triangles of the box from `lo` to `hi`, its 8 corners numbered from `base`.
     fn cuboid(lo: Vec3, hi: Vec3, base: u32) -> (Vec<[u32; 3]>, Vec<Vec3>) {
         let corner = |k: u32| {
