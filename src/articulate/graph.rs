@@ -324,12 +324,16 @@ pub fn piece_join_score(ma: &[RigidMotion], mb: &[RigidMotion], pa: Vec3, pb: Ve
     gap + (total / (n as f64 * child.n)).max(0.0).sqrt()
 }
 
-/// How far a corner may lie off the other piece's surface and still touch it ([`touching_triangles`]), beyond
-/// the gap between the pieces' closest vertices: a fraction of the smaller part's root mean square radius.
+/// How far a corner may lie off the other piece's surface and still touch it ([`touching_triangles`]), as a
+/// fraction of the smaller part's root mean square radius. Pieces farther apart do not touch (their contact is
+/// their closest vertices); a small tolerance also keeps the search local (its grid's cells are no larger than
+/// the triangles or twice the tolerance). Not the gap between the closest vertices: a box's corner can lie on
+/// another box's face with no vertex of that face near it.
 pub const TOUCHING_TOLERANCE: f64 = 0.01;
 
 /// The triangles of two separate pieces (`tris[0]`, `tris[1]`: each part's own triangles) that lie against the
-/// other: every corner within `tolerance` of one of the other's triangles. Both parts' triangles, sorted.
+/// other: every corner within `tolerance` of one of the other's triangles. Both parts' triangles, sorted. The
+/// time grows with the triangles in reach of each corner, so `tolerance` should be small beside the parts.
 pub fn touching_triangles(tris: [&[usize]; 2], faces: &[[u32; 3]], positions: &[Vec3], tolerance: f64) -> Vec<usize> {
     use crate::geometry::surface_distance::SurfaceGrid;
     let corners = |t: usize| faces[t].map(|v| positions[v as usize]);
@@ -464,8 +468,7 @@ impl PartGraph {
             if dsu.find(a) != dsu.find(b) {
                 dsu.union(a, b);
                 let child = if members[a].len() < members[b].len() { a } else { b };
-                let gap = norm(sub(positions[va as usize], positions[vb as usize]));
-                let tolerance = gap + TOUCHING_TOLERANCE * moments[child].rms_radius();
+                let tolerance = TOUCHING_TOLERANCE * moments[child].rms_radius();
                 let touching = touching_triangles([&faces_of[a], &faces_of[b]], faces, positions, tolerance);
                 let contact = if touching.is_empty() { Contact::Virtual(va, vb) } else { Contact::Touching(touching) };
                 self.contacts.insert((a, b), contact);
@@ -1009,12 +1012,15 @@ mod tests {
         assert_eq!(t, &vec![12 + 8, 12 + 9]);
         let c = crate::articulate::joints::area_centroid(t, &faces, &pos);
         assert!(norm(sub(c, [1.0, 1.25, 0.0])) < 1e-12, "{c:?}");
-        // moved 0.2 away the faces still face each other across the gap: the same triangles
+        // moved a hair away (0.002, under 1 % of the arm's radius, 0.83) the faces still touch: the same triangles
         let moved = |d: Vec3| -> Vec<Vec3> {
             pos.iter().enumerate().map(|(v, p)| if v < 8 { *p } else { add(*p, d) }).collect()
         };
-        let g = PartGraph::new(&labels, &faces, 2, &moved([0.2, 0.0, 0.0]), &[]);
+        let g = PartGraph::new(&labels, &faces, 2, &moved([0.002, 0.0, 0.0]), &[]);
         assert_eq!(g.contact(0, 1), Some(&Contact::Touching(vec![20, 21])));
+        // 0.2 away they do not: the closest corners
+        let g = PartGraph::new(&labels, &faces, 2, &moved([0.2, 0.0, 0.0]), &[]);
+        assert!(matches!(g.contact(0, 1), Some(Contact::Virtual(..))), "{:?}", g.contacts);
         // above and beside the torso only their corners are near: the closest corners
         let g = PartGraph::new(&labels, &faces, 2, &moved([0.2, 1.7, 0.0]), &[]);
         assert!(matches!(g.contact(0, 1), Some(Contact::Virtual(..))), "{:?}", g.contacts);
