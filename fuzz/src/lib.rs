@@ -83,8 +83,8 @@ pub fn bounded_fit(pop: &Population, cfg: u8) {
     }
 }
 
-/// Every shape is the first one, up to a translation (compared after centring, within the 1e-6 of the unit box
-/// that the fit allows for the f32 storage of the coordinates: `check_motion` in src/mfa/aecm.rs).
+/// Every shape is the first one, up to a translation (compared after centring, within the tolerance the fit
+/// allows for the f32 storage of the coordinates, `posemfa::mfa::aecm::SAME_PLACE`).
 fn all_shapes_same(pop: &Population) -> bool {
     let centroid = |s: &[[f64; 3]]| {
         let n = s.len() as f64;
@@ -94,7 +94,9 @@ fn all_shapes_same(pop: &Population) -> bool {
     let c0 = centroid(&shapes[0]);
     shapes[1..].iter().all(|s| {
         let c = centroid(s);
-        s.iter().zip(&shapes[0]).all(|(p, q)| (0..3).all(|d| ((p[d] - c[d]) - (q[d] - c0[d])).abs() <= 1e-6))
+        s.iter()
+            .zip(&shapes[0])
+            .all(|(p, q)| (0..3).all(|d| ((p[d] - c[d]) - (q[d] - c0[d])).abs() <= posemfa::mfa::aecm::SAME_PLACE))
     })
 }
 

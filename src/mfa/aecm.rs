@@ -500,16 +500,18 @@ pub(crate) fn floor_for(data: &Data, params: &impl InFit) -> RunParams {
     params.in_fit(|| data.mean_squared_radius())
 }
 
+/// How far apart (unit-box units, per coordinate) two places of one vertex may be and still be the same place
+/// ([`check_motion`]): the coordinates are stored in f32 and centred on that grid, each rounding at most 6e-8.
+pub const SAME_PLACE: f64 = 1e-6;
+
 /// Refuses a population whose shapes are all the same point set (up to rounding, after each is centred on
 /// its centroid: identical shapes, or the whole mesh moved by a translation only): there is no motion, so no
 /// parts, to learn. Only for the whole population: a part that does not move is fine inside a fit.
 fn check_motion(data: &Data) -> Result<()> {
-    // unit-box units: the coordinates are stored in f32 and centred on that grid (each rounding at most 6e-8)
-    const SAME: f64 = 1e-6;
     for j in 0..data.n_vertices {
         let h = data.vertex(j);
         let first = h.get(0);
-        if h.iter().skip(1).any(|p| (0..3).any(|d| (p[d] - first[d]).abs() > SAME)) {
+        if h.iter().skip(1).any(|p| (0..3).any(|d| (p[d] - first[d]).abs() > SAME_PLACE)) {
             return Ok(());
         }
     }
