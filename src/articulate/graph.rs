@@ -423,7 +423,7 @@ impl PartGraph {
         graph
     }
 
-    /// Adds virtual contacts until the used parts form one connected graph: a minimum spanning tree over the
+    /// Adds contacts between pieces until the used parts form one connected graph: a minimum spanning tree over the
     /// pieces (parts joined by real contacts), each pair of parts in different pieces scored by
     /// [`piece_join_score`], the contact the faces where they lie against each other ([`touching_triangles`]), or
     /// where there are none, the pair's closest vertices.
@@ -453,7 +453,7 @@ impl PartGraph {
                 // the smaller part moves relative to the larger (the leg to the body), ties the later one
                 let child = if members[a].len() < members[b].len() { a } else { b };
                 let score = piece_join_score(ma, mb, positions[va], positions[vb], &moments[child]);
-                candidates.push((score, a, b, va as u32, vb as u32));
+                candidates.push((score, a, b, child, va as u32, vb as u32));
             }
         }
         candidates.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
@@ -464,10 +464,9 @@ impl PartGraph {
                 faces_of[l as usize].push(t);
             }
         }
-        for (_, a, b, va, vb) in candidates {
+        for (_, a, b, child, va, vb) in candidates {
             if dsu.find(a) != dsu.find(b) {
                 dsu.union(a, b);
-                let child = if members[a].len() < members[b].len() { a } else { b };
                 let tolerance = TOUCHING_TOLERANCE * moments[child].rms_radius();
                 let touching = touching_triangles([&faces_of[a], &faces_of[b]], faces, positions, tolerance);
                 let contact = if touching.is_empty() { Contact::Virtual(va, vb) } else { Contact::Touching(touching) };

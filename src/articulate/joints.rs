@@ -240,14 +240,17 @@ pub fn contact_radius(
             .map(|&p| norm(sub(p, centre)))
             .fold(0.0, f64::max),
         Contact::Virtual(..) => {
-            let pts: Vec<Vec3> = child_vertices.iter().filter_map(|&v| positions.get(v).copied()).collect();
-            if pts.is_empty() {
-                return 0.0;
-            }
-            let c = scale(pts.iter().fold([0.0; 3], |s, &p| add(s, p)), 1.0 / pts.len() as f64);
-            pts.iter().map(|&p| norm(sub(p, c))).fold(0.0, f64::max)
+            let Some(c) = vertex_centroid(child_vertices, positions) else { return 0.0 };
+            child_vertices.iter().filter_map(|&v| positions.get(v)).map(|&p| norm(sub(p, c))).fold(0.0, f64::max)
         }
     }
+}
+
+/// The mean of the `vertices`' positions that exist; None when there are none.
+fn vertex_centroid(vertices: &[usize], positions: &[Vec3]) -> Option<Vec3> {
+    let (sum, n) =
+        vertices.iter().filter_map(|&v| positions.get(v)).fold(([0.0; 3], 0usize), |(s, n), &p| (add(s, p), n + 1));
+    (n > 0).then(|| scale(sum, 1.0 / n as f64))
 }
 
 /// A fitted rig's free joints placed as an artist would: the skeleton re-rooted on its central part
@@ -274,10 +277,8 @@ pub fn place_free_joints(art: &super::Articulation, rig: &mut super::rig::Rig, b
         let child: Vec<RigidMotion> = (0..ns).map(|i| rig.bones[i][k]).collect();
         let parent: Vec<RigidMotion> = (0..ns).map(|i| rig.bones[i][p]).collect();
         // separate pieces: a hinge's joint on the child's middle along the axis
-        let axial = matches!(c, Contact::Touching(_) | Contact::Virtual(..)).then(|| {
-            let sum = members[k].iter().fold([0.0; 3], |s, &v| add(s, rest[v]));
-            scale(sum, 1.0 / members[k].len().max(1) as f64)
-        });
+        let separate = matches!(c, Contact::Touching(_) | Contact::Virtual(..));
+        let axial = if separate { vertex_centroid(&members[k], rest) } else { None };
         rig.joint_points[k] = pivot(&child, &parent, contact, radius, axial);
     }
     rig.tree = tree;
