@@ -140,12 +140,44 @@ dual_test! {
         }
     }
 
+    fn scaled_and_affine_bones_play_what_the_solver_fitted() {
+        let (pop, art) = quadruped();
+        let unit_diag = posemfa::export::rig_report::bbox_diagonal(&pop.unit_shapes()[0]);
+        let fitted = GltfOptions { weights: Weights::Fitted, ..Default::default() };
+        let (plain, _) = exported(&pop, &art, &fitted);
+        let mut errors = Vec::new();
+        for (scale, affine) in [(true, false), (false, true)] {
+            let opts = GltfOptions { bone_scale: scale, bone_affine: affine, ..fitted };
+            let rig = build(&art, &opts.rig_options()).unwrap();
+            let sc = rig.scale.as_ref().expect("scale channels");
+            assert_eq!(sc.turning.is_some(), affine);
+            let mut sq = 0.0;
+            for i in 0..pop.n_shapes() {
+                for (p, q) in rig.pose(i).iter().zip(&pop.unit_shapes()[i]) {
+                    let d = norm(sub(*p, *q));
+                    sq += d * d;
+                }
+            }
+            let e_fit = 1000.0 * (sq / (3 * pop.n_vertices() * pop.n_shapes()) as f64).sqrt() / unit_diag;
+            // the file's joints, scale leaves and (affine) turning leaves play the solver's A x + t
+            let (err, _) = exported(&pop, &art, &opts);
+            assert!((err.e_rms - e_fit).abs() <= 1e-3 * e_fit + 1e-4, "scale {scale} affine {affine}: glb {} vs fit {e_fit}", err.e_rms);
+            errors.push(err.e_rms);
+        }
+        // more freedom, no more error (each a few per cent either way of the others on this rigid quadruped)
+        assert!(errors[0] <= plain.e_rms * 1.02 && errors[1] <= errors[0] * 1.02, "rigid {} scale {} affine {}", plain.e_rms, errors[0], errors[1]);
+    }
+
     fn bad_rig_options_are_named() {
         let (_, art) = quadruped();
+        let fitted = GltfOptions { weights: Weights::Fitted, ..Default::default() };
         for (opts, word) in [
             (GltfOptions { influences: 0, ..Default::default() }, "influences"),
             (GltfOptions { influences: 9, ..Default::default() }, "influences"),
             (GltfOptions { bind_pose: 99, ..Default::default() }, "bind pose"),
+            (GltfOptions { bone_affine: true, ..Default::default() }, "affine bones need fitted weights"),
+            (GltfOptions { bone_affine: true, bone_scale: true, ..fitted }, "exclude each other"),
+            (GltfOptions { iterations: 0, ..fitted }, "alternations"),
         ] {
             let e = to_glb(&art, &opts).unwrap_err().to_string();
             assert!(e.contains(word), "{e}");

@@ -59,6 +59,13 @@
 //!   the error. The weights and bind positions take the general linear part as they are. In the .glb each bone
 //!   gets a leaf node under its joint with the fixed rotation to Q and the animated scale (a scale on the joint
 //!   itself would reach its children).
+//! - **affine bones** ([`RigOptions::bone_affine`], fitted weights with free joints): every bone's linear part is
+//!   any 3x3 matrix A with a positive determinant, 12 numbers per bone and pose, as Hyperspectral Inverse
+//!   Skinning's bones (Liu et al. 2020). The bone step is the least-squares A = C G⁻¹ (C and G as above, a ridge
+//!   of 1e-6 tr G), exact with the other bones fixed; where it would turn the bone inside out (det A <= 0) or
+//!   scale it beyond [0.5, 2] along some direction, the bone takes the scaled step instead. After the fit every
+//!   A is split by the polar decomposition A = R P, P = Q S Qᵀ (Q and S per pose), which the .glb plays as two
+//!   leaf nodes under the joint: rotation Q and scale S, then rotation Qᵀ.
 //!
 //! All in unit-box coordinates; the .glb writer ([`crate::export::gltf`]) converts.
 
@@ -123,6 +130,9 @@ pub struct RigOptions {
     /// Fitted weights with free joints: every bone also scales along three fixed axes of its own, per pose
     /// ([`BoneScale`]). Default false.
     pub bone_scale: bool,
+    /// Fitted weights with free joints: every bone's linear part is any 3x3 matrix of positive determinant, per
+    /// pose (module doc; [`BoneScale::turning`]). Default false.
+    pub bone_affine: bool,
 }
 
 impl Default for RigOptions {
@@ -138,6 +148,7 @@ impl Default for RigOptions {
             smoothness: 1e-4,
             fit_rest: true,
             bone_scale: false,
+            bone_affine: false,
         }
     }
 }
@@ -173,8 +184,21 @@ impl RigOptions {
                 "bone scale needs fitted weights and free joints (--weights fitted --joints free)".into(),
             ));
         }
-        if self.iterations > 10_000 {
-            return Err(Error::Params(format!("iterations = {} must be at most 10000", self.iterations)));
+        if self.bone_affine && (self.weights != RigWeights::Fitted || self.joints != Joints::Free) {
+            return Err(Error::Params(
+                "affine bones need fitted weights and free joints (--weights fitted --joints free)".into(),
+            ));
+        }
+        if self.bone_affine && self.bone_scale {
+            return Err(Error::Params(
+                "bone scale and affine bones exclude each other (affine bones scale too): ask for one".into(),
+            ));
+        }
+        if self.iterations > 10_000 || (self.iterations == 0 && self.weights == RigWeights::Fitted) {
+            return Err(Error::Params(format!(
+                "alternations (iterations) = {} must be between 1 and 10000 (default 30)",
+                self.iterations
+            )));
         }
         Ok(())
     }
@@ -198,23 +222,59 @@ pub struct Rig {
     pub joints: Joints,
     /// Sum of squared errors after each alternation (fitted weights), unit box.
     pub trace: Vec<f64>,
-    /// With [`RigOptions::bone_scale`]: each bone's scale axes and factors. `bones[i][k].rotation` is then
-    /// R Q S Qᵀ (a rotation after a scaling along the axes), not a rotation.
+    /// With [`RigOptions::bone_scale`] or [`RigOptions::bone_affine`]: each bone's scale axes and factors.
+    /// `bones[i][k].rotation` is then R Q S Qᵀ (a rotation after a scaling along the axes), not a rotation.
     pub scale: Option<BoneScale>,
 }
 
-/// Per-bone scale channels: bone k's skin motion in pose i is x -> R (Q_k S_ki Q_kᵀ x) + t, Q_k a rotation
-/// whose columns are the bone's scale axes (bind pose, fixed), S_ki = diag(`factors[i][k]`).
+/// Per-bone scale channels: bone k's skin motion in pose i is x -> R (Q_ki S_ki Q_kiᵀ x) + t, Q_ki a rotation
+/// whose columns are the bone's scale axes, S_ki = diag(`factors[i][k]`). With bone scale the axes are fixed
+/// (`axes[k]`, from the bind pose); with affine bones they turn from pose to pose (`turning[i][k]`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BoneScale {
     pub axes: Vec<Mat3>,
     pub factors: Vec<Vec<Vec3>>,
+    /// Affine bones: the scale axes Q of every pose and bone (the polar decomposition of each bone's A).
+    pub turning: Option<Vec<Vec<Mat3>>>,
 }
 
 impl BoneScale {
+    /// The scale axes Q of bone k in pose i.
+    pub fn axes_of(&self, i: usize, k: usize) -> &Mat3 {
+        match &self.turning {
+            Some(t) => &t[i][k],
+            None => &self.axes[k],
+        }
+    }
+
     /// Q S Qᵀ of bone k in pose i.
     pub fn stretch(&self, i: usize, k: usize) -> Mat3 {
-        stretch(&self.axes[k], self.factors[i][k])
+        stretch(self.axes_of(i, k), self.factors[i][k])
+    }
+
+    /// (Q S Qᵀ)⁻¹ of bone k in pose i.
+    pub fn stretch_inverse(&self, i: usize, k: usize) -> Mat3 {
+        stretch(self.axes_of(i, k), self.factors[i][k].map(|f| 1.0 / f))
+    }
+}
+
+/// The polar decomposition A = R Q S Qᵀ of a 3x3 matrix of positive determinant: (Q, S), Q a rotation whose
+/// columns are the principal axes of the stretch, S its factors (the singular values of A). None when det A <= 0.
+pub fn polar_stretch(a: &Mat3) -> Option<(Mat3, Vec3)> {
+    if !(a.determinant() > 0.0) {
+        return None;
+    }
+    // AᵀA = Q S² Qᵀ
+    let e = (a.transpose() * a).symmetric_eigen();
+    let mut q = e.eigenvectors;
+    if q.determinant() < 0.0 {
+        q.column_mut(2).neg_mut();
+    }
+    let s = [0, 1, 2].map(|c| e.eigenvalues[c].max(0.0).sqrt());
+    if s.iter().all(|x| x.is_finite() && *x > 0.0) && q.iter().all(|x| x.is_finite()) {
+        Some((q, s))
+    } else {
+        None
     }
 }
 
@@ -469,6 +529,8 @@ struct Solver {
     edge2: f64,
     /// The bind pose: its bones stay the identity (below).
     bind: usize,
+    /// Affine bones ([`RigOptions::bone_affine`]).
+    affine: bool,
 }
 
 /// Working memory of [`Solver::weights`], reused by every vertex and every pass.
@@ -641,6 +703,7 @@ impl Solver {
             influences: opts.influences,
             smoothness: opts.smoothness,
             edge2,
+            affine: opts.bone_affine,
         }
     }
 
@@ -690,7 +753,12 @@ impl Solver {
                     rig.bones[0].len(),
                 );
                 for i in 0..self.ns {
-                    if i != self.bind {
+                    if i == self.bind {
+                        continue;
+                    }
+                    if self.affine {
+                        sums.step_affine(i, &rig.tree.order, &mut rig.bones[i], &sc.axes, &mut sc.factors[i]);
+                    } else {
                         sums.step_scaled(i, &rig.tree.order, &mut rig.bones[i], &sc.axes, &mut sc.factors[i]);
                     }
                 }
@@ -719,7 +787,7 @@ impl Solver {
                 }
             })
             .collect();
-        rig.scale = Some(BoneScale { axes, factors: vec![vec![[1.0; 3]; n_parts]; self.ns] });
+        rig.scale = Some(BoneScale { axes, factors: vec![vec![[1.0; 3]; n_parts]; self.ns], turning: None });
     }
 }
 
@@ -868,23 +936,67 @@ impl BoneSums {
                 continue;
             }
             let (c, wr) = bone_cross(&self.sums[k * self.ns + i], &self.pairs[k], bones);
-            let q = &axes[k];
-            let g = Mat3::from_row_slice(&self.gram[k]);
-            let gq = q.transpose() * g * q;
-            let mut f = s[k];
-            let mut rot = best_rotation(&(c * stretch(q, f)));
-            for _ in 0..3 {
-                let cq = q.transpose() * rot.transpose() * c * q;
-                for a in 0..3 {
-                    // a direction the bone's vertices do not spread along keeps its scale
-                    if gq[(a, a)] > 1e-9 * gq.trace().max(f64::MIN_POSITIVE) {
-                        f[a] = (cq[(a, a)] / gq[(a, a)]).clamp(SCALE_MIN, SCALE_MAX);
-                    }
+            let a = self.scaled_linear(k, &c, &axes[k], &mut s[k]);
+            bones[k] = RigidMotion { rotation: a, translation: sub(scale(wr, 1.0 / w2), mat_vec(&a, ubar)) };
+        }
+    }
+
+    /// Bone k's linear part R Q S Qᵀ of [`BoneSums::step_scaled`] from its cross-covariance `c`, updating `f`.
+    fn scaled_linear(&self, k: usize, c: &Mat3, q: &Mat3, f: &mut Vec3) -> Mat3 {
+        let g = Mat3::from_row_slice(&self.gram[k]);
+        let gq = q.transpose() * g * q;
+        let mut rot = best_rotation(&(c * stretch(q, *f)));
+        for _ in 0..3 {
+            let cq = q.transpose() * rot.transpose() * c * q;
+            for a in 0..3 {
+                // a direction the bone's vertices do not spread along keeps its scale
+                if gq[(a, a)] > 1e-9 * gq.trace().max(f64::MIN_POSITIVE) {
+                    f[a] = (cq[(a, a)] / gq[(a, a)]).clamp(SCALE_MIN, SCALE_MAX);
                 }
-                rot = best_rotation(&(c * stretch(q, f)));
             }
-            s[k] = f;
-            let a = rot * stretch(q, f);
+            rot = best_rotation(&(c * stretch(q, *f)));
+        }
+        rot * stretch(q, *f)
+    }
+
+    /// [`BoneSums::step`] with affine bones: bone k's linear part is the least-squares A = C (G + ε tr G I)⁻¹
+    /// (ε = 1e-6), exact with the other bones fixed, when det A > 0 and every singular value of A is within
+    /// [0.5, 2]; else the best, by the bone's own squared error tr(A G Aᵀ) - 2 tr(A Cᵀ), of that A with its
+    /// singular values clamped, the scaled step's R Q S Qᵀ (its factors `s` are kept for that alone) and the
+    /// bone's current A, so the step never raises the error.
+    pub(crate) fn step_affine(
+        &self,
+        i: usize,
+        order: &[usize],
+        bones: &mut [RigidMotion],
+        axes: &[Mat3],
+        s: &mut [Vec3],
+    ) {
+        for &k in order {
+            let (ubar, w2) = self.stats[k];
+            if w2 <= 0.0 {
+                continue;
+            }
+            let (c, wr) = bone_cross(&self.sums[k * self.ns + i], &self.pairs[k], bones);
+            let g = Mat3::from_row_slice(&self.gram[k]);
+            let ridge = AFFINE_RIDGE * g.trace().max(f64::MIN_POSITIVE);
+            let least = (g + Mat3::identity() * ridge).try_inverse().map(|gi| c * gi);
+            let within =
+                |a: &Mat3| polar_stretch(a).is_some_and(|(_, f)| f.iter().all(|x| (SCALE_MIN..=SCALE_MAX).contains(x)));
+            let a = match least {
+                Some(a) if within(&a) => a,
+                _ => {
+                    let cost = |a: &Mat3| (a * g * a.transpose()).trace() - 2.0 * (a * c.transpose()).trace();
+                    let current = bones[k].rotation;
+                    let scaled = self.scaled_linear(k, &c, &axes[k], &mut s[k]);
+                    let clamped = least.and_then(|a| clamp_stretch(&a));
+                    [Some(scaled), clamped, within(&current).then_some(current)]
+                        .into_iter()
+                        .flatten()
+                        .min_by(|x, y| cost(x).total_cmp(&cost(y)))
+                        .unwrap_or(scaled)
+                }
+            };
             bones[k] = RigidMotion { rotation: a, translation: sub(scale(wr, 1.0 / w2), mat_vec(&a, ubar)) };
         }
     }
@@ -1186,6 +1298,8 @@ avx2_fn! {
 /// vertices barely constrain it).
 const SCALE_MIN: f64 = 0.5;
 const SCALE_MAX: f64 = 2.0;
+/// The ridge of the affine bone step, a fraction of tr G (a bone whose vertices lie in a plane keeps a finite A).
+const AFFINE_RIDGE: f64 = 1e-6;
 
 /// The cross-covariance C and Σ w r of [`bone_step`].
 fn bone_cross(sums: &[f64; 12], pairs: &[(usize, PairSums)], bones: &[RigidMotion]) -> (Mat3, Vec3) {
@@ -1534,7 +1648,7 @@ fn fit(rig: &mut Rig, art: &Articulation, opts: &RigOptions) {
     // the MFA motions map the rigid reconstruction; the bind shape itself differs by its residual
     solver.bones(rig);
     rig.trace.push(solver.sse(rig));
-    if opts.bone_scale && opts.joints == Joints::Free {
+    if (opts.bone_scale || opts.bone_affine) && opts.joints == Joints::Free {
         solver.start_scale(rig);
     }
     let free_iters = if opts.joints == Joints::Fixed { opts.iterations / 2 } else { opts.iterations };
@@ -1569,6 +1683,33 @@ fn fit(rig: &mut Rig, art: &Articulation, opts: &RigOptions) {
         solver.bones_fixed(rig);
         rig.trace.push(solver.sse(rig));
     }
+    if opts.bone_affine {
+        split_affine(rig);
+    }
+}
+
+/// A with its stretch factors clamped to [0.5, 2] (A = R Q S Qᵀ -> R Q clamp(S) Qᵀ); None when det A <= 0.
+fn clamp_stretch(a: &Mat3) -> Option<Mat3> {
+    let (q, f) = polar_stretch(a)?;
+    let r = a * stretch(&q, f.map(|x| 1.0 / x));
+    Some(r * stretch(&q, f.map(|x| x.clamp(SCALE_MIN, SCALE_MAX))))
+}
+
+/// Affine bones: every bone's A split as R Q S Qᵀ ([`polar_stretch`]) into the scale axes and factors the .glb
+/// plays ([`BoneScale::turning`]). The bone step keeps det A > 0, so every A splits.
+fn split_affine(rig: &mut Rig) {
+    let Some(sc) = rig.scale.as_mut() else { return };
+    let mut turning = Vec::with_capacity(rig.bones.len());
+    for (i, bones) in rig.bones.iter().enumerate() {
+        let mut axes = Vec::with_capacity(bones.len());
+        for (k, m) in bones.iter().enumerate() {
+            let (q, f) = polar_stretch(&m.rotation).unwrap_or((sc.axes[k], sc.factors[i][k]));
+            sc.factors[i][k] = f;
+            axes.push(q);
+        }
+        turning.push(axes);
+    }
+    sc.turning = Some(turning);
 }
 
 #[cfg(test)]
@@ -1673,5 +1814,87 @@ mod tests {
             sums3.step_scaled(1, &[0], &mut bones, &[q], &mut s3);
         }
         assert_eq!(s3[0][0], SCALE_MAX);
+    }
+
+    /// Points, a bone's rest positions, and their image under x -> a x + t (pose 1; pose 0 the rest).
+    fn moved(rest: &[Vec3], a: &Mat3, t: Vec3) -> Vec<Vec3> {
+        rest.iter().flat_map(|&u| [u, add(mat_vec(a, u), t)]).collect()
+    }
+
+    #[test]
+    fn polar_stretch_splits_a_rotation_after_a_stretch() {
+        let q = crate::geometry::rotation::axis_angle([1.0, -1.0, 0.5], 0.7);
+        let r = crate::geometry::rotation::axis_angle([0.2, 1.0, 0.1], -1.1);
+        let a = r * stretch(&q, [1.7, 0.6, 1.2]);
+        let (q2, f2) = polar_stretch(&a).expect("det > 0");
+        assert!((q2.determinant() - 1.0).abs() < 1e-12);
+        let p = stretch(&q2, f2);
+        let r2 = a * p.try_inverse().unwrap();
+        assert!((r2.transpose() * r2 - Mat3::identity()).norm() < 1e-12, "the rest of A is a rotation");
+        assert!((r2 * p - a).norm() < 1e-12);
+        let mut sorted = f2;
+        sorted.sort_by(f64::total_cmp);
+        assert!((sorted[0] - 0.6).abs() < 1e-12 && (sorted[2] - 1.7).abs() < 1e-12, "{f2:?}");
+        // a reflection is no stretch
+        assert!(polar_stretch(&(a * Mat3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, -1.0)))).is_none());
+    }
+
+    #[test]
+    fn affine_bone_step_recovers_a_shear_and_never_raises_the_error() {
+        let mut seed = 5u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let rest: Vec<Vec3> = (0..200).map(|_| [2.0 * rnd(), rnd(), 0.5 * rnd()]).collect();
+        let weights = SkinWeights { influences: vec![vec![(0, 1.0)]; rest.len()] };
+        let q = crate::geometry::rotation::axis_angle([0.0, 0.0, 1.0], 0.3);
+        let r = crate::geometry::rotation::axis_angle([1.0, 2.0, 0.5], 0.9);
+        let t = [0.2, -0.1, 0.4];
+        // a shear: no rotation after a stretch along fixed axes gives it, one affine step does
+        let shear = Mat3::new(1.0, 0.4, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        let a = r * shear;
+        let by_vertex = moved(&rest, &a, t);
+        let sums = BoneSums::new(&by_vertex, 2, &rest, &weights, &[0], 1);
+        let err = |m: &RigidMotion, a: &Mat3| -> f64 {
+            rest.iter()
+                .map(|&u| {
+                    let d = sub(m.apply(u), add(mat_vec(a, u), t));
+                    dot(d, d)
+                })
+                .sum()
+        };
+        let mut scaled = vec![RigidMotion::IDENTITY];
+        let mut s = vec![[1.0; 3]];
+        for _ in 0..30 {
+            sums.step_scaled(1, &[0], &mut scaled, &[q], &mut s);
+        }
+        let mut bones = vec![RigidMotion::IDENTITY];
+        let mut s = vec![[1.0; 3]];
+        sums.step_affine(1, &[0], &mut bones, &[q], &mut s);
+        assert!(err(&scaled[0], &a) > 0.1, "a stretch along fixed axes fits the shear: {}", err(&scaled[0], &a));
+        // exact but for the ridge (1e-6 of tr G)
+        assert!(err(&bones[0], &a) < 1e-6, "{}", err(&bones[0], &a));
+        // a stretch of 3 along one axis is past [0.5, 2]: the step takes the best allowed A, never a worse one
+        let far = r * stretch(&q, [3.0, 1.0, 0.9]);
+        let by_far = moved(&rest, &far, t);
+        let sums = BoneSums::new(&by_far, 2, &rest, &weights, &[0], 1);
+        let mut bones = vec![RigidMotion::IDENTITY];
+        let mut s = vec![[1.0; 3]];
+        let mut last = err(&bones[0], &far);
+        for _ in 0..10 {
+            sums.step_affine(1, &[0], &mut bones, &[q], &mut s);
+            let e = err(&bones[0], &far);
+            assert!(e <= last * (1.0 + 1e-12) + 1e-18, "the error rose: {last} -> {e}");
+            last = e;
+            let (_, f) = polar_stretch(&bones[0].rotation).expect("det > 0");
+            assert!(f.iter().all(|x| (SCALE_MIN - 1e-12..=SCALE_MAX + 1e-12).contains(x)), "{f:?}");
+        }
+        // the stretch held at 2 where 3 was asked for, and a fit far better than the start's
+        let (_, f) = polar_stretch(&bones[0].rotation).unwrap();
+        assert!(f.iter().any(|x| (x - SCALE_MAX).abs() < 1e-6), "{f:?}");
+        // and at least as good as the same motion with its stretch of 3 cut to 2
+        let cut = RigidMotion { rotation: r * stretch(&q, [SCALE_MAX, 1.0, 0.9]), translation: t };
+        assert!(last <= err(&cut, &far) * (1.0 + 1e-9), "{last} against {}", err(&cut, &far));
     }
 }

@@ -21,6 +21,11 @@
 //!   scale S_k^i animated; the leaves are the skin's joints (inverse bind matrices (Q_k at the joint point)^-1),
 //!   so a bone's skin matrix is the joint's rigid motion after Q S Qᵀ about the joint point, and no scale
 //!   reaches a child joint;
+//! - with affine bones ([`RigOptions::bone_affine`]): the axes Q_k^i turn from pose to pose, so two leaves per
+//!   joint: `part k stretch` (the joint's child) with the animated rotation Rb_kᵀ Q_k^i and scale S_k^i, and
+//!   under it `part k skin` with the animated rotation Q_k^iᵀ Rb_k, whose product is Rb_kᵀ Q S Qᵀ Rb_k; the
+//!   `part k skin` leaves are the skin's joints (inverse bind matrices those of the joints: the bind pose's
+//!   bones are the identity);
 //! - clip `training poses`: keyframe i at time i s (0-based), one per training shape;
 //!   clip `interpolated`: the articulation's own interpolation (anchor root, exact ends) through the poses in
 //!   order, `samples_per_second` samples per second.
@@ -75,6 +80,12 @@ pub struct GltfOptions {
     pub interpolation: Options,
     /// Fitted weights, free joints: scale channels per bone ([`RigOptions::bone_scale`]). Default false.
     pub bone_scale: bool,
+    /// Fitted weights, free joints: affine bones ([`RigOptions::bone_affine`]). Default false.
+    pub bone_affine: bool,
+    /// Fitted weights: most alternations ([`RigOptions::iterations`]). Default 30.
+    pub iterations: usize,
+    /// Fitted weights: the alternations' relative tolerance ([`RigOptions::tol`]). Default 1e-2.
+    pub tol: f64,
     /// Fitted weights: rings of the part graph that give a vertex's candidate bones, 1..=3
     /// ([`RigOptions::rings`]). Default 1.
     pub rings: usize,
@@ -91,6 +102,9 @@ impl Default for GltfOptions {
             samples_per_second: 10,
             interpolation: Options::default(),
             bone_scale: false,
+            bone_affine: false,
+            iterations: RigOptions::default().iterations,
+            tol: RigOptions::default().tol,
             rings: 1,
         }
     }
@@ -105,6 +119,9 @@ impl GltfOptions {
             joints: self.joints,
             bind_pose: self.bind_pose,
             bone_scale: self.bone_scale,
+            bone_affine: self.bone_affine,
+            iterations: self.iterations,
+            tol: self.tol,
             rings: self.rings,
             ..RigOptions::default()
         }
@@ -224,6 +241,20 @@ impl Bin {
 /// Local transforms (translation, rotation quaternion xyzw) of every joint of `tree` from world joint
 /// motions `world` (joint frame -> unit box): the root relative to the `skeleton` node, every other joint
 /// relative to its parent joint.
+/// A rotation's quaternion (x, y, z, w), its sign chosen to be on the side of the previous one (`prev`, then
+/// updated), so that a clip's keys interpolate the short way.
+fn continuous_quat(r: &Mat3, prev: &mut Option<[f64; 4]>) -> [f64; 4] {
+    let u = to_quat(r);
+    let mut q = [u.i, u.j, u.k, u.w];
+    if let Some(p) = prev {
+        if p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3] < 0.0 {
+            q = q.map(|c| -c);
+        }
+    }
+    *prev = Some(q);
+    q
+}
+
 fn locals(tree: &Tree, world: &[RigidMotion]) -> Vec<(Vec3, [f64; 4])> {
     tree.order
         .iter()
@@ -383,12 +414,15 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
     // Inverse bind matrices: (B_k)^-1 x (x -> (x - offset) * scale).
     let placements = bind_placements(art, rig, opts.bind_pose);
     let scaled = rig.scale.as_ref();
+    let turning = scaled.is_some_and(|sc| sc.turning.is_some());
     let mut ibm: Vec<f32> = Vec::with_capacity(16 * n_joints);
     for &k in &tree.order {
         // with scale channels the skin's joint is the bone's leaf node (its scale axes Q_k at the joint point)
         let gi = match scaled {
-            None => placements[k].inverse(),
-            Some(sc) => RigidMotion { rotation: sc.axes[k], translation: placements[k].translation }.inverse(),
+            Some(sc) if !turning => {
+                RigidMotion { rotation: sc.axes[k], translation: placements[k].translation }.inverse()
+            }
+            _ => placements[k].inverse(),
         };
         let s = norm.scale;
         let a = gi.rotation.map(|x| x * s);
@@ -412,11 +446,7 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             Some(sc) => (0..art.n_parts())
                 .map(|k| {
                     let m = &rig.bones[i][k];
-                    let f = sc.factors[i][k];
-                    let inv = sc.axes[k]
-                        * Mat3::from_diagonal(&nalgebra::Vector3::new(1.0 / f[0], 1.0 / f[1], 1.0 / f[2]))
-                        * sc.axes[k].transpose();
-                    let r = m.rotation * inv;
+                    let r = m.rotation * sc.stretch_inverse(i, k);
                     let p = placements[k].translation;
                     let moved = mat_vec(&sc.stretch(i, k), p);
                     RigidMotion { rotation: r, translation: sub(m.translation, mat_vec(&r, sub(p, moved))) }
@@ -489,6 +519,31 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
                 let out =
                     bin.floats(&sv, json::accessor::Type::Vec3, 3, false, None, &format!("{name}: part {k} scale"));
                 clip.add(out, (2 + n_joints + slot) as u32, json::animation::Property::Scale);
+                if turning {
+                    // the stretch leaf turns to the pose's axes, the skin leaf back
+                    let rb = placements[k].rotation;
+                    let mut there: Vec<f32> = Vec::with_capacity(4 * ns);
+                    let mut back: Vec<f32> = Vec::with_capacity(4 * ns);
+                    let (mut p0, mut p1): (Option<[f64; 4]>, Option<[f64; 4]>) = (None, None);
+                    for i in 0..ns {
+                        let q = rb.transpose() * sc.axes_of(i, k);
+                        there.extend(continuous_quat(&q, &mut p0).map(|c| c as f32));
+                        back.extend(continuous_quat(&q.transpose(), &mut p1).map(|c| c as f32));
+                    }
+                    for (values, node, what) in
+                        [(there, 2 + n_joints + slot, "stretch"), (back, 2 + 2 * n_joints + slot, "skin")]
+                    {
+                        let out = bin.floats(
+                            &values,
+                            json::accessor::Type::Vec4,
+                            4,
+                            false,
+                            None,
+                            &format!("{name}: part {k} {what} rotation"),
+                        );
+                        clip.add(out, node as u32, json::animation::Property::Rotation);
+                    }
+                }
             }
         }
         if name == "training poses" && !targets.is_empty() {
@@ -545,19 +600,36 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
     }
     if let Some(sc) = scaled {
         // one leaf per bone: a fixed rotation to its scale axes (Q'_k = Rb_kᵀ Q_k, Rb_k the joint's bind
-        // rotation), the scale animated; the skin's joints
-        for &k in &tree.order {
-            let q = to_quat(&(placements[k].rotation.transpose() * sc.axes[k]));
-            let f = sc.factors[opts.bind_pose][k];
+        // rotation), the scale animated; the skin's joints. Affine bones: the bind pose's axes, and under each
+        // a second leaf turning back (the skin's joints)
+        let b = opts.bind_pose;
+        for (slot, &k) in tree.order.iter().enumerate() {
+            let q = to_quat(&(placements[k].rotation.transpose() * sc.axes_of(b, k)));
+            let f = sc.factors[b][k];
             nodes.push(json::Node {
-                name: Some(format!("part {} scale", k + 1)),
+                name: Some(format!("part {} {}", k + 1, if turning { "stretch" } else { "scale" })),
                 rotation: Some(json::scene::UnitQuaternion([q.i, q.j, q.k, q.w].map(|c| c as f32))),
                 scale: Some(f.map(|c| c as f32)),
+                children: turning.then(|| vec![json::Index::new((2 + 2 * n_joints + slot) as u32)]),
                 ..Default::default()
             });
         }
+        if turning {
+            for &k in &tree.order {
+                let q = to_quat(&(sc.axes_of(b, k).transpose() * placements[k].rotation));
+                nodes.push(json::Node {
+                    name: Some(format!("part {} skin", k + 1)),
+                    rotation: Some(json::scene::UnitQuaternion([q.i, q.j, q.k, q.w].map(|c| c as f32))),
+                    ..Default::default()
+                });
+            }
+        }
     }
-    let skin_joint0 = if scaled.is_some() { 2 + n_joints } else { 2 };
+    let skin_joint0 = match scaled {
+        None => 2,
+        Some(_) if turning => 2 + 2 * n_joints,
+        Some(_) => 2 + n_joints,
+    };
     while bin.data.len() % 4 != 0 {
         bin.data.push(0);
     }

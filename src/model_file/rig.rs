@@ -36,9 +36,9 @@ pub struct SavedRig {
 impl SavedRig {
     /// Builds the rig of `model` on `pop` with `band` and `options`.
     pub fn build(model: &Model, pop: &Population, band: f64, options: RigOptions) -> Result<SavedRig> {
-        if options.bone_scale {
+        if options.bone_scale || options.bone_affine {
             return Err(crate::error::Error::Params(
-                "a rig with bone scale is not kept in the model file (its motions are not rotations): \
+                "a rig with bone scale or affine bones is not kept in the model file (its motions are not rotations): \
                  build it with export-gltf or rig-report instead"
                     .into(),
             ));

@@ -141,14 +141,16 @@ before(() => {
     '--joints', 'fixed', '--morphs', 'residual');
   posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'fitted-scale.glb'), '--weights', 'fitted',
     '--bone-scale');
+  posemfa('export-gltf', path.join(dir, 'pop'), '--out', path.join(dir, 'fitted-affine.glb'), '--weights', 'fitted',
+    '--bone-affine');
 });
 
 after(() => {
   if (dir) rmSync(dir, { recursive: true, force: true });
 });
 
-test('the Khronos validator reports 0 errors and 0 warnings (rigid, smooth, fitted weights; 8 influences; fixed joints and residual morphs; bone scale)', async () => {
-  for (const f of ['rigid.glb', 'smooth.glb', 'fitted.glb', 'fitted8.glb', 'fixed-morphs.glb', 'fitted-scale.glb']) {
+test('the Khronos validator reports 0 errors and 0 warnings (rigid, smooth, fitted weights; 8 influences; fixed joints and residual morphs; bone scale; affine bones)', async () => {
+  for (const f of ['rigid.glb', 'smooth.glb', 'fitted.glb', 'fitted8.glb', 'fixed-morphs.glb', 'fitted-scale.glb', 'fitted-affine.glb']) {
     const r = await validateFile(path.join(dir, f));
     assert.equal(r.errors, 0, `${f}: ${JSON.stringify(r.messages)}`);
     assert.equal(r.warnings, 0, `${f}: ${JSON.stringify(r.messages)}`);
@@ -247,7 +249,7 @@ async function threeErms(file) {
 
 test('fitted weights: three.js plays the E_RMS that rig-report prints (within 1 %), below rigid weights', async () => {
   const report = (f) => JSON.parse(posemfa('rig-report', path.join(dir, 'pop'), '--glb', path.join(dir, f)));
-  for (const f of ['rigid.glb', 'fitted.glb', 'fitted8.glb', 'fitted-scale.glb']) {
+  for (const f of ['rigid.glb', 'fitted.glb', 'fitted8.glb', 'fitted-scale.glb', 'fitted-affine.glb']) {
     const three = await threeErms(path.join(dir, f));
     const ours = report(f);
     assert.ok(Math.abs(three.eRms - ours.e_rms) <= 0.01 * ours.e_rms, `${f}: three.js ${three.eRms}, rig-report ${ours.e_rms}`);
@@ -261,6 +263,11 @@ test('fitted weights: three.js plays the E_RMS that rig-report prints (within 1 
   const paths = scaled.animations[0].channels.map((c) => c.target.path);
   assert.ok(paths.includes('scale'), `channels ${[...new Set(paths)]}`);
   assert.ok(report('fitted-scale.glb').e_rms <= fitted * 1.001, `bone scale ${report('fitted-scale.glb').e_rms} vs fitted ${fitted}`);
+  // affine bones: two leaves per bone, the scale axes turning (rotation channels on both leaves)
+  const affineBytes = readFileSync(path.join(dir, 'fitted-affine.glb'));
+  const affine = JSON.parse(affineBytes.subarray(20, 20 + affineBytes.readUInt32LE(12)).toString());
+  assert.equal(affine.skins[0].joints.every((j) => affine.nodes[j].name.endsWith(' skin')), true);
+  assert.ok(report('fitted-affine.glb').e_rms <= report('fitted-scale.glb').e_rms * 1.02, `affine ${report('fitted-affine.glb').e_rms} vs bone scale ${report('fitted-scale.glb').e_rms}`);
 });
 
 test('fixed joints and residual morphs: in three.js every bone keeps its length and every pose is reproduced within 1e-5 of the diagonal', async () => {

@@ -548,10 +548,21 @@ pub struct RigArgs {
     /// leaf node per bone)
     #[arg(long)]
     bone_scale: bool,
+    /// Fitted weights, free joints: every bone's motion is affine (rotation, scale along axes that turn from
+    /// pose to pose, translation: two leaf nodes per bone), as Hyperspectral Inverse Skinning's bones
+    #[arg(long)]
+    bone_affine: bool,
     /// Fitted weights: a vertex's candidate bones are its part's and those within N steps of it in the part
     /// graph, 1 to 3 (default 1)
     #[arg(long, value_name = "N")]
     candidate_rings: Option<usize>,
+    /// Fitted weights: most alternations of the weight, bone and bind-position solves (default 30)
+    #[arg(long, value_name = "N")]
+    alternations: Option<usize>,
+    /// Fitted weights: the alternations stop once one lowers the squared error by less than this fraction
+    /// (default 0.01; 0 runs every one of --alternations)
+    #[arg(long, value_name = "T")]
+    alternation_tol: Option<f64>,
 }
 
 impl RigArgs {
@@ -577,10 +588,17 @@ impl RigArgs {
             morphs: self.morphs.unwrap_or_default(),
             bind_pose: self.bind(pop)?,
             bone_scale: self.bone_scale,
+            bone_affine: self.bone_affine,
             ..Default::default()
         };
         if let Some(r) = self.candidate_rings {
             g.rings = r;
+        }
+        if let Some(n) = self.alternations {
+            g.iterations = n;
+        }
+        if let Some(t) = self.alternation_tol {
+            g.tol = t;
         }
         if let Some(k) = self.influences {
             g.influences = k;
