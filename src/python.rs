@@ -548,13 +548,13 @@ impl PyModel {
     }
 }
 
+/// The rig's options from rig_glb's arguments (`bones` the bone motion, `more` the candidate rings and the most
+/// alternations), checked.
 fn rig_options(
     pop: &Population,
-    weights: &str,
-    influences: usize,
-    joints: &str,
-    morphs: &str,
-    bind: Option<usize>,
+    (weights, influences, joints, morphs, bind): (&str, usize, &str, &str, Option<usize>),
+    bones: &str,
+    (rings, alternations): (usize, usize),
 ) -> PyResult<GltfOptions> {
     let weights = match weights {
         "rigid" => Weights::Rigid,
@@ -578,7 +578,24 @@ fn rig_options(
         Some(b) if b < n => b,
         Some(b) => return Err(err(format!("bind = {b}: poses are numbered 0 to {}", n - 1))),
     };
-    let g = GltfOptions { weights, influences, joints, morphs, bind_pose, ..Default::default() };
+    let (bone_scale, bone_affine) = match bones {
+        "rigid" => (false, false),
+        "scale" => (true, false),
+        "affine" => (false, true),
+        other => return Err(err(format!("bone_motion = '{other}': use 'rigid', 'scale' or 'affine'"))),
+    };
+    let g = GltfOptions {
+        weights,
+        influences,
+        joints,
+        morphs,
+        bind_pose,
+        bone_scale,
+        bone_affine,
+        rings,
+        iterations: alternations,
+        ..Default::default()
+    };
     core(g.rig_options().validate(n))?;
     Ok(g)
 }
@@ -752,7 +769,9 @@ impl PyModel {
     }
 
     /// The rigged .glb (`posemfa export-gltf`): its bytes and the figures rig-report measures on it.
-    #[pyo3(signature = (weights="rigid", influences=4, joints="free", morphs="none", bind=None))]
+    #[pyo3(signature = (weights="rigid", influences=4, joints="free", morphs="none", bind=None,
+                        bone_motion="rigid", candidate_rings=1, alternations=30))]
+    #[allow(clippy::too_many_arguments)]
     fn rig_glb<'py>(
         &self,
         py: Python<'py>,
@@ -761,9 +780,17 @@ impl PyModel {
         joints: &str,
         morphs: &str,
         bind: Option<usize>,
+        bone_motion: &str,
+        candidate_rings: usize,
+        alternations: usize,
     ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyDict>)> {
         self.needs_data("a rig (its weights and error are fitted to the poses)")?;
-        let g = rig_options(self.pop(), weights, influences, joints, morphs, bind)?;
+        let g = rig_options(
+            self.pop(),
+            (weights, influences, joints, morphs, bind),
+            bone_motion,
+            (candidate_rings, alternations),
+        )?;
         let art = self.articulation()?;
         let pop = self.pop();
         let kept = self.rig.as_ref();

@@ -185,17 +185,19 @@ class Model:
         return Model(native)
 
     def rig_glb(self, *, weights="rigid", bones=None, influences=4, joints="free", morphs="none", bind=None,
-                progress=None):
+                bone_motion="rigid", candidate_rings=1, alternations=30, progress=None):
         """The rig's .glb bytes and what ``posemfa rig-report`` measures on them: (bytes, info) with info
-        ``e_rms``, ``bones``, ``bind`` and ``report`` (dict: per pose errors). Options as :meth:`export_gltf`."""
+        ``e_rms``, ``bones``, ``bind`` and ``report`` (dict: per pose errors, and
+        ``e_rms_his_centred_half_diagonal``). Options as :meth:`export_gltf`."""
         m = self._rigged(bones, progress)
-        glb, info = m._m.rig_glb(weights, int(influences), joints, morphs, bind)
+        glb, info = m._m.rig_glb(weights, int(influences), joints, morphs, bind, bone_motion, int(candidate_rings),
+                                 int(alternations))
         info = dict(info)
         info["report"] = json.loads(info["report"])
         return glb, info
 
     def export_gltf(self, path, *, weights="rigid", bones=None, influences=4, joints="free", morphs="none",
-                    bind=None, progress=None):
+                    bind=None, bone_motion="rigid", candidate_rings=1, alternations=30, progress=None):
         """Writes the rigged .glb (``posemfa export-gltf``) and returns what rig-report measures on it (dict:
         e_rms, bones, bind, report).
 
@@ -203,9 +205,14 @@ class Model:
         model's parts; another N fits the poses again with bones=N, as ``export-gltf --bones N`` does);
         influences: most joints per vertex, 1-8 (default 4); joints: 'free' (default) or 'fixed' (constant bone
         lengths); morphs: 'none' (default) or 'residual' (one morph target per pose); bind: the pose the mesh is
-        bound in, 0-based (default the pose named 'reference' if any, else 0)."""
+        bound in, 0-based (default the pose named 'reference' if any, else 0). With fitted weights and free joints:
+        bone_motion 'rigid' (default), 'scale' (``--bone-scale``: a scale along three fixed axes per bone) or
+        'affine' (``--bone-affine``: any linear map of positive determinant, two leaf nodes per bone; Blender's
+        bones cannot hold its shear); candidate_rings 1-3 (``--candidate-rings``, default 1); alternations (most
+        alternations of the weight and bone solves, default 30)."""
         glb, info = self.rig_glb(weights=weights, bones=bones, influences=influences, joints=joints,
-                                 morphs=morphs, bind=bind, progress=progress)
+                                 morphs=morphs, bind=bind, bone_motion=bone_motion,
+                                 candidate_rings=candidate_rings, alternations=alternations, progress=progress)
         try:
             with open(path, "wb") as f:
                 f.write(glb)

@@ -115,15 +115,18 @@ class Model:
     def interpolate(self, i: int, j: int, t: float) -> npt.NDArray[np.float64]:
         """(n_vertices, 3): the shape at t between poses i and j (0-based; negative counts from the end)."""
     def rig_glb(self, *, weights: str = "rigid", bones: Optional[int] = None, influences: int = 4,
-                joints: str = "free", morphs: str = "none", bind: Optional[int] = None,
+                joints: str = "free", morphs: str = "none", bind: Optional[int] = None, bone_motion: str = "rigid",
+                candidate_rings: int = 1, alternations: int = 30,
                 progress: Optional[Callable[[Step], bool]] = None) -> Tuple[bytes, Dict[str, Any]]:
         """The rig's .glb bytes and rig-report's figures (e_rms, bones, bind, report)."""
     def export_gltf(self, path: PathLike, *, weights: str = "rigid", bones: Optional[int] = None,
                     influences: int = 4, joints: str = "free", morphs: str = "none", bind: Optional[int] = None,
+                    bone_motion: str = "rigid", candidate_rings: int = 1, alternations: int = 30,
                     progress: Optional[Callable[[Step], bool]] = None) -> Dict[str, Any]:
         """Writes the rigged .glb. weights 'rigid' | 'smooth' | 'fitted'; bones None = this model's parts (N refits
         with bones=N); influences 1-8; joints 'free' | 'fixed'; morphs 'none' | 'residual'; bind default the pose
-        named 'reference', else 0. Returns e_rms, bones, bind, report."""
+        named 'reference', else 0; bone_motion 'rigid' | 'scale' | 'affine' and candidate_rings 1-3 (fitted weights,
+        free joints); alternations 1-10000. Returns e_rms, bones, bind, report."""
     def to_bytes(self, with_poses: bool = True) -> bytes: ...
     def save(self, path: PathLike, with_poses: bool = True) -> None:
         """Writes the model file (.posemfa)."""

@@ -82,6 +82,25 @@ def test_rig_played_from_the_file_matches_rig_report(model, poses, tmp_path, qua
     assert rig.animated_translation.sum() == 1 and rig.parents[rig.animated_translation][0] == -1
 
 
+def test_affine_bones_play_from_the_file_and_beat_rigid_ones(model, poses, tmp_path):
+    rigid = model.export_gltf(tmp_path / "rigid.glb", weights="fitted")
+    info = model.export_gltf(tmp_path / "affine.glb", weights="fitted", bone_motion="affine", candidate_rings=2,
+                             influences=8)
+    # the skin's joints are the leaves under each joint; the file plays what rig-report measured
+    rig = Rig((tmp_path / "affine.glb").read_bytes())
+    assert all(n.endswith(" skin") for n in rig.names) and len(rig.names) == info["bones"]
+    played = np.stack([rig.play(k) for k in range(rig.n_keys)])
+    assert e_rms(poses.points, played, info["bind"]) == pytest.approx(info["e_rms"], rel=1e-3)
+    assert info["e_rms"] < rigid["e_rms"], (info["e_rms"], rigid["e_rms"])
+    assert info["report"]["e_rms_his_centred_half_diagonal"] > 0
+    with pytest.raises(posemfa.Error, match="bone_motion = 'shear': use 'rigid', 'scale' or 'affine'"):
+        model.rig_glb(weights="fitted", bone_motion="shear")
+    with pytest.raises(posemfa.Error, match="affine bones need fitted weights"):
+        model.rig_glb(bone_motion="affine")
+    with pytest.raises(posemfa.Error, match="alternations"):
+        model.rig_glb(weights="fitted", alternations=0)
+
+
 def test_rig_with_another_bone_count_refits(model, tmp_path):
     info = model.export_gltf(tmp_path / "six.glb", bones=6)
     assert info["bones"] == 6
