@@ -238,14 +238,9 @@ impl Bin {
     }
 }
 
-/// Local transforms (translation, rotation quaternion xyzw) of every joint of `tree` from world joint
-/// motions `world` (joint frame -> unit box): the root relative to the `skeleton` node, every other joint
-/// relative to its parent joint.
-/// A rotation's quaternion (x, y, z, w), its sign chosen to be on the side of the previous one (`prev`, then
-/// updated), so that a clip's keys interpolate the short way.
-fn continuous_quat(r: &Mat3, prev: &mut Option<[f64; 4]>) -> [f64; 4] {
-    let u = to_quat(r);
-    let mut q = [u.i, u.j, u.k, u.w];
+/// Quaternion `q` (x, y, z, w) or its negative, whichever is on the side of the previous key's (`prev`, then
+/// updated to it), so that a clip's keys interpolate the short way.
+fn same_side(mut q: [f64; 4], prev: &mut Option<[f64; 4]>) -> [f64; 4] {
     if let Some(p) = prev {
         if p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3] < 0.0 {
             q = q.map(|c| -c);
@@ -255,6 +250,15 @@ fn continuous_quat(r: &Mat3, prev: &mut Option<[f64; 4]>) -> [f64; 4] {
     q
 }
 
+/// A rotation matrix's quaternion (x, y, z, w).
+fn quat_xyzw(r: &Mat3) -> [f64; 4] {
+    let u = to_quat(r);
+    [u.i, u.j, u.k, u.w]
+}
+
+/// Local transforms (translation, rotation quaternion xyzw) of every joint of `tree` from world joint
+/// motions `world` (joint frame -> unit box): the root relative to the `skeleton` node, every other joint
+/// relative to its parent joint.
 fn locals(tree: &Tree, world: &[RigidMotion]) -> Vec<(Vec3, [f64; 4])> {
     tree.order
         .iter()
@@ -263,8 +267,7 @@ fn locals(tree: &Tree, world: &[RigidMotion]) -> Vec<(Vec3, [f64; 4])> {
                 None => world[k],
                 Some(p) => world[p].inverse().then_after(&world[k]),
             };
-            let q = to_quat(&local.rotation);
-            (local.translation, [q.i, q.j, q.k, q.w])
+            (local.translation, quat_xyzw(&local.rotation))
         })
         .collect()
 }
@@ -489,15 +492,9 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
             let mut rot: Vec<f32> = Vec::with_capacity(4 * frames.len());
             let mut prev: Option<[f64; 4]> = None;
             for f in &per_frame {
-                let (t, mut q) = f[slot];
-                if let Some(p) = prev {
-                    if p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3] < 0.0 {
-                        q = q.map(|c| -c);
-                    }
-                }
-                prev = Some(q);
+                let (t, q) = f[slot];
                 tr.extend(t.map(|c| c as f32));
-                rot.extend(q.map(|c| c as f32));
+                rot.extend(same_side(q, &mut prev).map(|c| c as f32));
             }
             // with fixed joints only the root's translation moves: the others keep their rest translation
             if opts.joints == Joints::Free || tree.parent[k].is_none() {
@@ -527,8 +524,8 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
                     let (mut p0, mut p1): (Option<[f64; 4]>, Option<[f64; 4]>) = (None, None);
                     for i in 0..ns {
                         let q = rb.transpose() * sc.axes_of(i, k);
-                        there.extend(continuous_quat(&q, &mut p0).map(|c| c as f32));
-                        back.extend(continuous_quat(&q.transpose(), &mut p1).map(|c| c as f32));
+                        there.extend(same_side(quat_xyzw(&q), &mut p0).map(|c| c as f32));
+                        back.extend(same_side(quat_xyzw(&q.transpose()), &mut p1).map(|c| c as f32));
                     }
                     for (values, node, what) in
                         [(there, 2 + n_joints + slot, "stretch"), (back, 2 + 2 * n_joints + slot, "skin")]
@@ -604,11 +601,11 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
         // a second leaf turning back (the skin's joints)
         let b = opts.bind_pose;
         for (slot, &k) in tree.order.iter().enumerate() {
-            let q = to_quat(&(placements[k].rotation.transpose() * sc.axes_of(b, k)));
+            let q = quat_xyzw(&(placements[k].rotation.transpose() * sc.axes_of(b, k)));
             let f = sc.factors[b][k];
             nodes.push(json::Node {
                 name: Some(format!("part {} {}", k + 1, if turning { "stretch" } else { "scale" })),
-                rotation: Some(json::scene::UnitQuaternion([q.i, q.j, q.k, q.w].map(|c| c as f32))),
+                rotation: Some(json::scene::UnitQuaternion(q.map(|c| c as f32))),
                 scale: Some(f.map(|c| c as f32)),
                 children: turning.then(|| vec![json::Index::new((2 + 2 * n_joints + slot) as u32)]),
                 ..Default::default()
@@ -616,10 +613,10 @@ pub fn write_glb(art: &Articulation, rig: &Rig, opts: &GltfOptions) -> Result<Ve
         }
         if turning {
             for &k in &tree.order {
-                let q = to_quat(&(sc.axes_of(b, k).transpose() * placements[k].rotation));
+                let q = quat_xyzw(&(sc.axes_of(b, k).transpose() * placements[k].rotation));
                 nodes.push(json::Node {
                     name: Some(format!("part {} skin", k + 1)),
-                    rotation: Some(json::scene::UnitQuaternion([q.i, q.j, q.k, q.w].map(|c| c as f32))),
+                    rotation: Some(json::scene::UnitQuaternion(q.map(|c| c as f32))),
                     ..Default::default()
                 });
             }
@@ -946,8 +943,7 @@ fn decompose(m: &[f64; 16]) -> Option<(Vec3, [f64; 4], Vec3)> {
     if (r.transpose() * r - Mat3::identity()).norm() > 1e-4 || r.determinant() < 0.0 {
         return None;
     }
-    let q = crate::geometry::rotation::to_quat(&r);
-    Some(([m[12], m[13], m[14]], [q.i, q.j, q.k, q.w], sc))
+    Some(([m[12], m[13], m[14]], quat_xyzw(&r), sc))
 }
 
 /// Evaluates the `training poses` clip of a .glb written by [`to_glb`] at every keyframe ([`play_glb`]) and
