@@ -200,6 +200,18 @@ pub fn fit_e_rms(pop: &Population, model: &crate::mfa::Model) -> f64 {
     e_rms(model.rmse(pop).powi(2) * points as f64, points, diagonal)
 }
 
+/// How a bone moves (fitted weights with free joints; the page's Bones field): rigidly (the default), with a scale
+/// along three fixed axes of its own ([`crate::articulate::rig::RigOptions::bone_scale`]), or by any linear map
+/// of positive determinant ([`crate::articulate::rig::RigOptions::bone_affine`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoneMotion {
+    #[default]
+    Rigid,
+    Scale,
+    Affine,
+}
+
 /// A rig as asked for by the page (camelCase, unknown fields refused); missing fields take
 /// [`GltfOptions`]' defaults, except the bind pose: [`default_bind_pose`].
 #[derive(Debug, Clone, Default, PartialEq, serde::Deserialize)]
@@ -212,6 +224,8 @@ pub struct RigRequest {
     pub morphs: Morphs,
     /// 0-based; default [`default_bind_pose`].
     pub bind_pose: Option<usize>,
+    /// Default rigid.
+    pub bones: BoneMotion,
 }
 
 /// What the rig panel's Influences field allows, in its messages.
@@ -253,6 +267,8 @@ impl RigRequest {
             joints: self.joints,
             morphs: self.morphs,
             bind_pose: self.bind_pose.unwrap_or_else(|| default_bind_pose(pop)),
+            bone_scale: self.bones == BoneMotion::Scale,
+            bone_affine: self.bones == BoneMotion::Affine,
             ..d
         };
         g.rig_options().validate(pop.n_shapes())?;

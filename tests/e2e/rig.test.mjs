@@ -2,7 +2,8 @@
 // with "Parts in the end" = 9, exported from the export panel (fitted weights, 4 influences); the E_RMS the page
 // shows equals (within 1 %) what `posemfa rig-report --bones 9 --weights fitted` computes natively for the same files (the
 // same fit and rig, in wasm and natively), and the downloaded .glb, measured by `posemfa rig-report --glb`, gives
-// the page's figure. Runs the CLI (debug build, built here if needed).
+// the page's figure; the Bones field's affine bones are the CLI's --bone-affine. Runs the CLI (debug build, built
+// here if needed).
 // Run: npm run build && node --test tests/e2e/rig.test.mjs
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
@@ -69,6 +70,21 @@ test('the export panel writes the rig the CLI writes: same part count, same E_RM
   assert.ok(Math.abs(pageErms - cli.e_rms) <= 1e-2 * cli.e_rms, `page ${pageErms}, CLI ${cli.e_rms}`);
   const file = JSON.parse(posemfa('rig-report', pop, '--glb', glb));
   assert.ok(Math.abs(file.e_rms - pageErms) <= 1e-9 * pageErms, `file ${file.e_rms}, page ${pageErms}`);
+  // affine bones (the Bones field): the CLI's --bone-affine rig, below the rigid bones' figure
+  await page.selectOption('#rig select[name=bones]', 'affine');
+  const [affineFile] = await Promise.all([page.waitForEvent('download', { timeout: 120000 }), page.click('#export-gltf')]);
+  assert.match(affineFile.suggestedFilename(), /-affine-bones\.glb$/);
+  await page.waitForFunction(() => document.querySelector('[data-testid=rig-erms]').dataset.erms);
+  const affine = Number(await page.evaluate(() => document.querySelector('[data-testid=rig-erms]').dataset.erms));
+  assert.match(await page.locator('[data-testid=rig-erms]').innerText(), /at most 4 bones per vertex, affine bones;/);
+  const cliAffine = JSON.parse(posemfa('rig-report', pop, '--bones', '9', '--weights', 'fitted', '--bone-affine'));
+  assert.ok(Math.abs(affine - cliAffine.e_rms) <= 1e-2 * cliAffine.e_rms, `page ${affine}, CLI ${cliAffine.e_rms}`);
+  assert.ok(affine < pageErms, `affine ${affine}, rigid bones ${pageErms}`);
+  // the field applies to fitted weights with free joints only
+  await page.selectOption('#rig select[name=joints]', 'fixed');
+  assert.equal(await page.locator('#rig select[name=bones]').isDisabled(), true);
+  await page.selectOption('#rig select[name=joints]', 'free');
+  await page.selectOption('#rig select[name=bones]', 'rigid');
   // rigid weights play the fit's own reconstructions: the rig's figure is the result's (f32 storage only)
   await page.selectOption('#rig select[name=weights]', 'rigid');
   await Promise.all([page.waitForEvent('download', { timeout: 120000 }), page.click('#export-gltf')]);

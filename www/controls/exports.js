@@ -42,8 +42,11 @@ const WEIGHTS_NOTE = {
   fitted: 'Fitted: weights fitted to the poses, at most Influences bones per vertex.',
 };
 function showWeights() {
-  const rigid = $('rig').elements.weights.value === 'rigid';
-  $('rig').elements.influences.disabled = rigid;
+  const f = $('rig').elements;
+  const rigid = f.weights.value === 'rigid';
+  f.influences.disabled = rigid;
+  // a bone's own motion is fitted only with fitted weights and free joints
+  f.bones.disabled = f.weights.value !== 'fitted' || f.joints.value !== 'free';
   $('rig-weights-note').textContent = WEIGHTS_NOTE[$('rig').elements.weights.value] ?? '';
   if (rigid) showFieldProblem(null);
 }
@@ -58,12 +61,14 @@ function showFieldProblem(message) {
   else input.removeAttribute('aria-invalid');
 }
 
-/** The rig options of the export panel ({weights, influences, joints, morphs}: src/export/rig_report.rs), the
- * Influences field checked by the core as typed; null when it cannot be used (said beside the field, which gets
- * the focus). Rigid weights leave it out (one bone per vertex). */
+/** The rig options of the export panel ({weights, influences, joints, morphs, bones}: src/export/rig_report.rs),
+ * the Influences field checked by the core as typed; null when it cannot be used (said beside the field, which
+ * gets the focus). Rigid weights leave it out (one bone per vertex); Bones only with fitted weights and free
+ * joints. */
 export async function rigOptions({ show = true } = {}) {
   const f = $('rig').elements;
   const opts = { weights: f.weights.value, joints: f.joints.value, morphs: f.morphs.value };
+  if (!f.bones.disabled) opts.bones = f.bones.value;
   if (opts.weights === 'rigid') return opts;
   const { problems } = await query('rigFields', { influences: f.influences.value });
   showFieldProblem(problems[0]?.message ?? null);
@@ -82,12 +87,15 @@ const CLIPS = {
   interpolated: '“interpolated”, the fit\'s own part-wise interpolation through the poses in order (written for rigid and smooth weights with free joints)',
 };
 
+// What a bone's own motion adds to the caption (rigid: nothing).
+const BONES = { scale: ', bones that scale', affine: ', affine bones' };
+
 function showRig(r, opts) {
   const out = $('rig-erms');
   // E_RMS (www/erms.js) beside the fit's own figure in the same measure (its rigid parts alone: what rigid weights play)
   const own = state.model?.summary?.eRms;
   const fit = Number.isFinite(own) ? `; the fit's rigid parts alone: ${eRmsText(own)}` : '';
-  const per = opts.weights === 'rigid' ? 'one bone per vertex (rigid)' : `at most ${opts.influences} bone${opts.influences === 1 ? '' : 's'} per vertex`;
+  const per = opts.weights === 'rigid' ? 'one bone per vertex (rigid)' : `at most ${opts.influences} bone${opts.influences === 1 ? '' : 's'} per vertex${BONES[opts.bones] ?? ''}`;
   const clips = r.clips ? `; ${r.clips.length} clip${r.clips.length === 1 ? '' : 's'}: ${r.clips.map((c) => CLIPS[c] ?? `“${c}”`).join('; ')}` : '';
   // (a model file saved with its rig gives it back when these are its options: no weight solve)
   const kept = r.source === 'model file' ? '; the rig kept in the model file' : '';
@@ -154,7 +162,7 @@ export function installExports() {
       throw e;
     }
     showRig(r, opts);
-    const extras = `${opts.joints === 'fixed' ? '-fixed-joints' : ''}${opts.morphs !== 'none' ? `-${opts.morphs}-morphs` : ''}`;
+    const extras = `${opts.joints === 'fixed' ? '-fixed-joints' : ''}${opts.morphs !== 'none' ? `-${opts.morphs}-morphs` : ''}${opts.bones && opts.bones !== 'rigid' ? `-${opts.bones}-bones` : ''}`;
     download(`posemfa-${populationStem()}-rig-${opts.weights}-${r.bones}bones${extras}.glb`, r.glb, 'model/gltf-binary');
   }));
   // The fit as a model file (src/model_file.rs): the page, the embed and `posemfa --model` open it without fitting.
