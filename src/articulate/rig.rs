@@ -930,13 +930,26 @@ impl BoneSums {
         axes: &[Mat3],
         s: &mut [Vec3],
     ) {
+        self.step_linear(i, order, bones, |k, c, _| self.scaled_linear(k, c, &axes[k], &mut s[k]));
+    }
+
+    /// One bone step for pose i over the bones of `order`, each bone's linear part A given by
+    /// `linear(k, C, its current A)` (C its cross-covariance with the other bones at their current motions), its
+    /// translation the best for that A: Σ w r / Σ w² - A ū.
+    fn step_linear(
+        &self,
+        i: usize,
+        order: &[usize],
+        bones: &mut [RigidMotion],
+        mut linear: impl FnMut(usize, &Mat3, &Mat3) -> Mat3,
+    ) {
         for &k in order {
             let (ubar, w2) = self.stats[k];
             if w2 <= 0.0 {
                 continue;
             }
             let (c, wr) = bone_cross(&self.sums[k * self.ns + i], &self.pairs[k], bones);
-            let a = self.scaled_linear(k, &c, &axes[k], &mut s[k]);
+            let a = linear(k, &c, &bones[k].rotation);
             bones[k] = RigidMotion { rotation: a, translation: sub(scale(wr, 1.0 / w2), mat_vec(&a, ubar)) };
         }
     }
@@ -972,33 +985,26 @@ impl BoneSums {
         axes: &[Mat3],
         s: &mut [Vec3],
     ) {
-        for &k in order {
-            let (ubar, w2) = self.stats[k];
-            if w2 <= 0.0 {
-                continue;
-            }
-            let (c, wr) = bone_cross(&self.sums[k * self.ns + i], &self.pairs[k], bones);
+        let within =
+            |a: &Mat3| polar_stretch(a).is_some_and(|(_, f)| f.iter().all(|x| (SCALE_MIN..=SCALE_MAX).contains(x)));
+        self.step_linear(i, order, bones, |k, c, current| {
             let g = Mat3::from_row_slice(&self.gram[k]);
             let ridge = AFFINE_RIDGE * g.trace().max(f64::MIN_POSITIVE);
             let least = (g + Mat3::identity() * ridge).try_inverse().map(|gi| c * gi);
-            let within =
-                |a: &Mat3| polar_stretch(a).is_some_and(|(_, f)| f.iter().all(|x| (SCALE_MIN..=SCALE_MAX).contains(x)));
-            let a = match least {
+            match least {
                 Some(a) if within(&a) => a,
                 _ => {
                     let cost = |a: &Mat3| (a * g * a.transpose()).trace() - 2.0 * (a * c.transpose()).trace();
-                    let current = bones[k].rotation;
-                    let scaled = self.scaled_linear(k, &c, &axes[k], &mut s[k]);
+                    let scaled = self.scaled_linear(k, c, &axes[k], &mut s[k]);
                     let clamped = least.and_then(|a| clamp_stretch(&a));
-                    [Some(scaled), clamped, within(&current).then_some(current)]
+                    [Some(scaled), clamped, within(current).then_some(*current)]
                         .into_iter()
                         .flatten()
                         .min_by(|x, y| cost(x).total_cmp(&cost(y)))
                         .unwrap_or(scaled)
                 }
-            };
-            bones[k] = RigidMotion { rotation: a, translation: sub(scale(wr, 1.0 / w2), mat_vec(&a, ubar)) };
-        }
+            }
+        });
     }
 
     /// One bone step for pose i: every bone of `order` in turn, the others at their current motions in `bones`.
