@@ -63,7 +63,8 @@
 //!   any 3x3 matrix A with a positive determinant, 12 numbers per bone and pose, as Hyperspectral Inverse
 //!   Skinning's bones (Liu et al. 2020). The bone step is the least-squares A = C G⁻¹ (C and G as above, a ridge
 //!   of 1e-6 tr G), exact with the other bones fixed; where it would turn the bone inside out (det A <= 0) or
-//!   scale it beyond [0.5, 2] along some direction, the bone takes the scaled step instead. After the fit every
+//!   scale it beyond [0.5, 2] along some direction, the bone takes the best by its own error of that A clamped,
+//!   the scaled step and its current A, so the step never raises the error. After the fit every
 //!   A is split by the polar decomposition A = R P, P = Q S Qᵀ (Q and S per pose), which the .glb plays as two
 //!   leaf nodes under the joint: rotation Q and scale S, then rotation Qᵀ.
 //!
