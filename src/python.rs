@@ -578,24 +578,18 @@ fn rig_options(
         Some(b) if b < n => b,
         Some(b) => return Err(err(format!("bind = {b}: poses are numbered 0 to {}", n - 1))),
     };
-    let (bone_scale, bone_affine) = match bones {
-        "rigid" => (false, false),
-        "scale" => (true, false),
-        "affine" => (false, true),
-        other => return Err(err(format!("bone_motion = '{other}': use 'rigid', 'scale' or 'affine'"))),
-    };
-    let g = GltfOptions {
+    let bones = crate::export::rig_report::BoneMotion::from_word(bones).map_err(err)?;
+    let mut g = GltfOptions {
         weights,
         influences,
         joints,
         morphs,
         bind_pose,
-        bone_scale,
-        bone_affine,
         rings,
         iterations: alternations,
         ..Default::default()
     };
+    bones.apply(&mut g);
     core(g.rig_options().validate(n))?;
     Ok(g)
 }

@@ -1767,23 +1767,14 @@ mod tests {
     /// never raise the error and recover S and the map; the rigid step cannot fit it.
     #[test]
     fn scaled_bone_step_recovers_a_stretch() {
-        let mut seed = 11u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
-        let rest: Vec<Vec3> = (0..200).map(|_| [2.0 * rnd(), rnd(), 0.5 * rnd()]).collect();
+        let rest = box_points(11);
         let q = crate::geometry::rotation::axis_angle([0.0, 0.0, 1.0], 0.3);
         let r = crate::geometry::rotation::axis_angle([1.0, 2.0, 0.5], 0.9);
         let f = [1.3, 0.8, 1.1];
         let a = r * stretch(&q, f);
         let t = [0.2, -0.1, 0.4];
         let ns = 2;
-        let mut by_vertex = Vec::new();
-        for &u in &rest {
-            by_vertex.push(u);
-            by_vertex.push(add(mat_vec(&a, u), t));
-        }
+        let by_vertex = moved(&rest, &a, t);
         let weights = SkinWeights { influences: vec![vec![(0, 1.0)]; rest.len()] };
         let sums = BoneSums::new(&by_vertex, ns, &rest, &weights, &[0], 1);
         let err = |m: &RigidMotion| -> f64 {
@@ -1814,13 +1805,22 @@ mod tests {
         let mut bones = vec![RigidMotion::IDENTITY];
         let far = [f[0] * 3.0, f[1], f[2]];
         let a3 = r * stretch(&q, far);
-        let by3: Vec<Vec3> = rest.iter().flat_map(|&u| [u, add(mat_vec(&a3, u), t)]).collect();
+        let by3 = moved(&rest, &a3, t);
         let sums3 = BoneSums::new(&by3, ns, &rest, &weights, &[0], 1);
         let mut s3 = vec![[1.0; 3]];
         for _ in 0..10 {
             sums3.step_scaled(1, &[0], &mut bones, &[q], &mut s3);
         }
         assert_eq!(s3[0][0], SCALE_MAX);
+    }
+
+    /// 200 pseudo-random bind positions in a 4 x 2 x 1 box (a bone's vertices spread unevenly along its axes).
+    fn box_points(mut seed: u64) -> Vec<Vec3> {
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        (0..200).map(|_| [2.0 * rnd(), rnd(), 0.5 * rnd()]).collect()
     }
 
     /// Points, a bone's rest positions, and their image under x -> a x + t (pose 1; pose 0 the rest).
@@ -1848,12 +1848,7 @@ mod tests {
 
     #[test]
     fn affine_bone_step_recovers_a_shear_and_never_raises_the_error() {
-        let mut seed = 5u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
-        let rest: Vec<Vec3> = (0..200).map(|_| [2.0 * rnd(), rnd(), 0.5 * rnd()]).collect();
+        let rest = box_points(5);
         let weights = SkinWeights { influences: vec![vec![(0, 1.0)]; rest.len()] };
         let q = crate::geometry::rotation::axis_angle([0.0, 0.0, 1.0], 0.3);
         let r = crate::geometry::rotation::axis_angle([1.0, 2.0, 0.5], 0.9);

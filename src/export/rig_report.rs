@@ -212,6 +212,24 @@ pub enum BoneMotion {
     Affine,
 }
 
+impl BoneMotion {
+    /// The bone motion a word names ("rigid", "scale", "affine"), or what is allowed.
+    pub fn from_word(word: &str) -> std::result::Result<BoneMotion, String> {
+        match word {
+            "rigid" => Ok(BoneMotion::Rigid),
+            "scale" => Ok(BoneMotion::Scale),
+            "affine" => Ok(BoneMotion::Affine),
+            other => Err(format!("bone_motion = '{other}': use 'rigid', 'scale' or 'affine'")),
+        }
+    }
+
+    /// Sets these bones on export options ([`GltfOptions::bone_scale`], [`GltfOptions::bone_affine`]).
+    pub fn apply(self, g: &mut GltfOptions) {
+        g.bone_scale = self == BoneMotion::Scale;
+        g.bone_affine = self == BoneMotion::Affine;
+    }
+}
+
 /// A rig as asked for by the page (camelCase, unknown fields refused); missing fields take
 /// [`GltfOptions`]' defaults, except the bind pose: [`default_bind_pose`].
 #[derive(Debug, Clone, Default, PartialEq, serde::Deserialize)]
@@ -261,16 +279,15 @@ impl RigRequest {
     /// The export options for `pop`, validated.
     pub fn options(&self, pop: &Population) -> Result<GltfOptions> {
         let d = GltfOptions::default();
-        let g = GltfOptions {
+        let mut g = GltfOptions {
             weights: self.weights,
             influences: self.influences.unwrap_or(d.influences),
             joints: self.joints,
             morphs: self.morphs,
             bind_pose: self.bind_pose.unwrap_or_else(|| default_bind_pose(pop)),
-            bone_scale: self.bones == BoneMotion::Scale,
-            bone_affine: self.bones == BoneMotion::Affine,
             ..d
         };
+        self.bones.apply(&mut g);
         g.rig_options().validate(pop.n_shapes())?;
         Ok(g)
     }
